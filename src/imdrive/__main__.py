@@ -1,0 +1,3 @@
+from imdrive.cli import main
+
+raise SystemExit(main())

@@ -1,0 +1,127 @@
+"""The ``imdrive`` command.
+
+Bad input (an unknown preset, key or type, a value that breaks a rule) prints one line naming
+the field and the rule on stderr and exits with code 2, with nothing written. A run that
+diverges writes its partial results, marked ``"diverged": true`` in summary.json, and exits 1.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from imdrive.errors import ConfigError
+
+EXIT_OK = 0
+EXIT_DIVERGED = 1
+EXIT_BAD_INPUT = 2
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # argparse's own errors: one line, exit 2, like ours
+        self.print_usage(sys.stderr)
+        print(f"imdrive: error: {message}", file=sys.stderr)
+        raise SystemExit(EXIT_BAD_INPUT)
+
+
+def _cmd_presets(args) -> int:
+    from imdrive.machine import machine_presets
+    from imdrive.scenario import Scenario, preset_names
+
+    print("scenario presets:")
+    for name in preset_names():
+        sc = Scenario.read(name)
+        print(f"  {name:<22} {sc.description}")
+    print("machine parameter sets ([machine] preset = ...):")
+    for name, desc in machine_presets().items():
+        print(f"  {name:<22} {desc}")
+    return EXIT_OK
+
+
+def _cmd_show(args) -> int:
+    from imdrive.scenario import preset_text
+
+    sys.stdout.write(preset_text(args.preset))
+    return EXIT_OK
+
+
+def _cmd_run(args) -> int:
+    from imdrive.scenario import Scenario
+    from imdrive.simulate import simulate
+
+    scenario = Scenario.read(args.scenario, args.set or [])
+    out = Path(args.out) if args.out else Path("out") / scenario.name
+    if out.exists() and not out.is_dir():
+        raise ConfigError("--out", f"{out} exists and is not a folder")
+    if not args.quiet:
+        print(
+            f"imdrive: running {scenario.name} ({scenario.simulation.t_end_s:g} s) ...",
+            file=sys.stderr,
+        )
+    res = simulate(scenario)
+    res.save(out)
+    s = res.summary()
+    if res.diverged:
+        print(
+            f"imdrive: error: {res.divergence_message}; partial results in {out}", file=sys.stderr
+        )
+        return EXIT_DIVERGED
+    if not args.quiet:
+        fin = s["final"]
+        print(
+            f"imdrive: done in {res.wall_time_s:.3f} s wall "
+            f"({s['real_time_factor']:.0f}x real time); final speed {fin['speed_rpm']:.2f} rpm, "
+            f"torque {fin['torque_Nm']:.3f} N m -> {out}",
+            file=sys.stderr,
+        )
+    return EXIT_OK
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="imdrive", description="Simulate sensorless induction-motor drives.")
+    p.add_argument("--version", action="version", version=_version())
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    r = sub.add_parser("run", help="run a preset or scenario file")
+    r.add_argument("scenario", metavar="PRESET_OR_FILE")
+    r.add_argument("--out", metavar="DIR", help="output folder (default out/NAME)")
+    r.add_argument(
+        "--set",
+        action="append",
+        metavar="KEY.PATH=VALUE",
+        help="override a scenario value, e.g. --set simulation.t_end_s=2 (repeatable)",
+    )
+    r.add_argument("-q", "--quiet", action="store_true")
+    r.set_defaults(func=_cmd_run)
+
+    ps = sub.add_parser("presets", help="list the built-in presets")
+    ps.set_defaults(func=_cmd_presets)
+
+    sh = sub.add_parser("show", help="print a preset's TOML, to copy and edit")
+    sh.add_argument("preset")
+    sh.set_defaults(func=_cmd_show)
+    return p
+
+
+def _version() -> str:
+    from imdrive import __version__
+
+    return f"imdrive {__version__}"
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args)
+    except ConfigError as exc:
+        print(f"imdrive: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print("imdrive: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,831 @@
+"""Fuzzy-logic rotor-resistance compensator: quantisation, inference and the lookup table (§4).
+
+The paper's compensator (Fig. 3) quantises the d-axis flux error ``E = e_d0`` and its change
+``DE`` into 13 levels −6 … 6 (Tables I and II), infers the change of the resistance estimate
+``CR`` from 49 rules ``if E is A and DE is B then CR is C`` with min-inference (eq. 11) and
+centre-of-gravity defuzzification (eq. 12), and stores the result as a 13 × 13 lookup table
+(Table III). The drive kernel only ever sees that table, through :func:`lookup`.
+
+This module holds
+
+* the paper's data: :data:`THRESHOLDS`, :data:`MEMBERSHIP`, :data:`PAPER_TABLE_III`;
+* the inference (:func:`infer`) and table compilation (:func:`compile_table`), in two variants
+  (see :func:`infer` for the difference): ``"rules"`` — eq. (12) read literally, the default —
+  and ``"universe"`` — the textbook Mamdani max-aggregation over the 13-level universe;
+* a search for the unprinted rule base that best reproduces Table III
+  (:func:`fit_rules_to_table`, result cached as :data:`FITTED_RULES`);
+* helpers to compare and print tables, and the numba-compiled :func:`quantize` / :func:`lookup`.
+
+Levels are integers −6 … 6 and are stored at array index ``level + 6``; fuzzy sets are indexed
+0 … 6 in the order of :data:`SET_NAMES`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from imdrive.errors import ConfigError
+
+__all__ = [
+    "THRESHOLDS",
+    "LEVELS",
+    "SET_NAMES",
+    "SET_PEAKS",
+    "MEMBERSHIP",
+    "PAPER_TABLE_III",
+    "METHODS",
+    "DEFAULT_FIT_STARTS",
+    "FITTED_RULES",
+    "FitResult",
+    "quantize",
+    "quantize_array",
+    "infer",
+    "compile_table_float",
+    "round_level",
+    "compile_table",
+    "default_rules",
+    "table_score",
+    "fit_rules_to_table",
+    "table_diff",
+    "format_table",
+    "format_rules",
+    "lookup",
+    "fuzzy_table",
+]
+
+# --------------------------------------------------------------------------------------------
+# Paper data (Tables I-III)
+
+#: Quantisation thresholds of Tables I/II, dimensionless. The paper's values are in units of
+#: 1e-6 (of an unstated flux unit); the caller multiplies e_d0 by an input scaling gain (e.g.
+#: 1e6 per Wb) before quantising, so the gain is a tuning parameter, not part of this table.
+THRESHOLDS = np.array([0.25, 1.0, 2.0, 3.0, 4.0, 5.0], dtype=np.float64)
+
+#: The 13 quantisation levels, in array-index order.
+LEVELS = np.arange(-6, 7, dtype=np.int64)
+
+#: The seven primary fuzzy sets on the universe U = {−6, …, 6}, in set-index order.
+SET_NAMES = ("NB", "NM", "NS", "ZE", "PS", "PM", "PB")
+
+#: Representative value w_n of each output set in eq. (12). The paper does not state it; we take
+#: the level at which the set's grade is 1.0 (its peak, Table I), which for these symmetric,
+#: evenly spaced sets is also the set's own centre of gravity over U.
+SET_PEAKS = np.array([-6.0, -4.0, -2.0, 0.0, 2.0, 4.0, 6.0])
+
+#: Membership grades u(level) of the seven sets, Table I as repaired in PAPER.md (the OCR repeats
+#: the rows of levels 0 and 1 at levels 2 and 3). Rows: level −6 … 6; columns: NB … PB.
+MEMBERSHIP = np.array(
+    [
+        [1.0, 0.3, 0.0, 0.0, 0.0, 0.0, 0.0],  # -6
+        [0.7, 0.7, 0.0, 0.0, 0.0, 0.0, 0.0],  # -5
+        [0.3, 1.0, 0.3, 0.0, 0.0, 0.0, 0.0],  # -4
+        [0.0, 0.7, 0.7, 0.0, 0.0, 0.0, 0.0],  # -3
+        [0.0, 0.3, 1.0, 0.3, 0.0, 0.0, 0.0],  # -2
+        [0.0, 0.0, 0.7, 0.7, 0.0, 0.0, 0.0],  # -1
+        [0.0, 0.0, 0.3, 1.0, 0.3, 0.0, 0.0],  # 0
+        [0.0, 0.0, 0.0, 0.7, 0.7, 0.0, 0.0],  # 1
+        [0.0, 0.0, 0.0, 0.3, 1.0, 0.3, 0.0],  # 2
+        [0.0, 0.0, 0.0, 0.0, 0.7, 0.7, 0.0],  # 3
+        [0.0, 0.0, 0.0, 0.0, 0.3, 1.0, 0.3],  # 4
+        [0.0, 0.0, 0.0, 0.0, 0.0, 0.7, 0.7],  # 5
+        [0.0, 0.0, 0.0, 0.0, 0.0, 0.3, 1.0],  # 6
+    ]
+)
+
+#: Table III as printed: output level of CR, rows E = −6 … 6, columns DE = −6 … 6.
+#: Repair: the OCR lost the first entry of row E = −6 (12 values survive); that row is taken equal
+#: to row −5, whose entries it matches position by position. Row −4 (non-monotone) and the
+#: departures from antisymmetry are kept as printed.
+PAPER_TABLE_III = np.array(
+    [
+        [-6, -6, -5, -5, -4, -4, -3, -3, -2, -2, -1, -1, 0],  # -6 (repaired: = row -5)
+        [-6, -6, -5, -5, -4, -4, -3, -3, -2, -2, -1, -1, 0],  # -5
+        [-4, -4, -4, -4, -3, -2, -2, -2, -1, -1, 0, 0, 0],  # -4
+        [-5, -5, -4, -4, -3, -3, -2, -2, -1, -1, 0, 0, 0],  # -3
+        [-4, -4, -3, -3, -2, -2, -1, -1, 0, 0, 0, 1, 1],  # -2
+        [-4, -4, -2, -2, -1, -1, -1, 0, 1, 1, 1, 2, 2],  # -1
+        [-3, -3, -2, -1, -1, 0, 0, 0, 1, 1, 2, 3, 3],  # 0
+        [-2, -2, -1, -1, 0, 1, 1, 1, 2, 3, 4, 4, 4],  # 1
+        [-1, -1, 0, 0, 0, 1, 1, 2, 2, 3, 3, 4, 4],  # 2
+        [0, 0, 0, 1, 1, 2, 2, 3, 3, 4, 4, 5, 5],  # 3
+        [0, 0, 1, 1, 2, 2, 2, 3, 4, 4, 4, 5, 5],  # 4
+        [0, 1, 1, 2, 2, 3, 3, 4, 4, 5, 5, 6, 6],  # 5
+        [0, 1, 1, 2, 2, 3, 3, 4, 4, 5, 5, 6, 6],  # 6
+    ],
+    dtype=np.int64,
+)
+
+#: Inference variants accepted by :func:`infer`, :func:`compile_table`, :func:`fit_rules_to_table`.
+METHODS = ("rules", "universe")
+
+# the jitted kernels take the method as an int
+_METHOD_CODE = {"rules": 0, "universe": 1}
+
+for _a in (THRESHOLDS, LEVELS, SET_PEAKS, MEMBERSHIP, PAPER_TABLE_III):
+    _a.flags.writeable = False  # shared module constants: a stray in-place edit must fail loudly
+
+
+# --------------------------------------------------------------------------------------------
+# Quantisation (Tables I/II)
+
+
+@njit(cache=True)
+def quantize(x: float) -> int:
+    """Quantise a scaled input to its level −6 … 6 (Tables I/II).
+
+    Intervals are closed on the side nearer zero's far end exactly as the paper prints them:
+    level 0 is ``−0.25 < x ≤ 0.25``, level k > 0 is ``t[k−1] < x ≤ t[k]`` and level −k is
+    ``−t[k] < x ≤ −t[k−1]`` with ``t = THRESHOLDS``; level 6 is ``x > 5`` and level −6 is
+    ``x ≤ −5``. Because every interval is open on the left and closed on the right, the map is
+    *not* odd at the thresholds: ``quantize(0.25) = 0`` but ``quantize(-0.25) = -1``.
+
+    Parameters
+    ----------
+    x : float
+        Input already multiplied by its scaling gain (dimensionless).
+
+    Returns
+    -------
+    int
+        Level in −6 … 6; NaN maps to 0 so a bad sample cannot move the estimate.
+    """
+    if x != x:  # NaN
+        return 0
+    n = 0
+    if x > 0.0:
+        for t in THRESHOLDS:  # positive side: count thresholds strictly below x
+            if x > t:
+                n += 1
+        return n
+    for t in THRESHOLDS:  # negative side: count thresholds with x <= -t
+        if x <= -t:
+            n += 1
+    return -n
+
+
+def quantize_array(x) -> np.ndarray:
+    """Vectorised :func:`quantize` (same intervals, NaN → 0) for arrays in Python code.
+
+    Parameters
+    ----------
+    x : array_like of float
+        Scaled inputs.
+
+    Returns
+    -------
+    numpy.ndarray of int64
+        Levels, same shape as ``x``.
+    """
+    x = np.asarray(x, dtype=np.float64)
+    # searchsorted 'left' counts t < v, 'right' counts t <= v: the two interval closures
+    pos = np.searchsorted(THRESHOLDS, x, side="left")
+    neg = -np.searchsorted(THRESHOLDS, -x, side="right")
+    out = np.where(x > 0.0, pos, neg)
+    return np.where(np.isnan(x), 0, out).astype(np.int64)
+
+
+# --------------------------------------------------------------------------------------------
+# Inference (eqs. 11, 12)
+
+
+@njit(cache=True)
+def _cell(i, j, rules, membership, peaks, method):
+    """CR at E index ``i``, DE index ``j`` (level + 6); NaN if no rule fires."""
+    if method == 0:
+        # eq. (12) literally: every fired rule contributes its grade times its set's value,
+        # so two rules with the same output set both count
+        num = 0.0
+        den = 0.0
+        for a in range(7):
+            ua = membership[i, a]
+            if ua <= 0.0:
+                continue
+            for b in range(7):
+                u = min(ua, membership[j, b])  # eq. (11)
+                if u > 0.0:
+                    num += u * peaks[rules[a, b]]
+                    den += u
+        if den <= 0.0:
+            return np.nan
+        return num / den
+    # Mamdani: clip each fired rule's output set at its grade, aggregate by max over U, then
+    # take the centre of gravity of the aggregated set over the 13 discrete levels
+    agg = np.zeros(13)
+    for a in range(7):
+        ua = membership[i, a]
+        if ua <= 0.0:
+            continue
+        for b in range(7):
+            u = min(ua, membership[j, b])
+            if u > 0.0:
+                c = rules[a, b]
+                for y in range(13):
+                    g = min(u, membership[y, c])
+                    if g > agg[y]:
+                        agg[y] = g
+    num = 0.0
+    den = 0.0
+    for y in range(13):
+        num += (y - 6) * agg[y]
+        den += agg[y]
+    if den <= 0.0:
+        return np.nan
+    return num / den
+
+
+@njit(cache=True)
+def _compile(rules, membership, peaks, method):
+    out = np.empty((13, 13))
+    for i in range(13):
+        for j in range(13):
+            out[i, j] = _cell(i, j, rules, membership, peaks, method)
+    return out
+
+
+def _method_code(method: str) -> int:
+    if method not in _METHOD_CODE:
+        raise ConfigError("fuzzy.method", f"must be one of {METHODS}, got {method!r}")
+    return _METHOD_CODE[method]
+
+
+def _check_rules(rules) -> np.ndarray:
+    r = np.asarray(rules)
+    if r.shape != (7, 7) or not np.issubdtype(r.dtype, np.integer):
+        raise ConfigError("fuzzy.rules", "must be a 7x7 integer array of set indices")
+    if r.min() < 0 or r.max() > 6:
+        raise ConfigError("fuzzy.rules", "set indices must lie in 0..6")
+    return np.ascontiguousarray(r, dtype=np.int64)
+
+
+def _check_membership(membership) -> np.ndarray:
+    m = np.ascontiguousarray(membership, dtype=np.float64)
+    if m.shape != (13, 7):
+        raise ConfigError("fuzzy.membership", "must be a 13x7 array (levels x sets)")
+    return m
+
+
+def infer(
+    e_level: int,
+    de_level: int,
+    rules,
+    membership=MEMBERSHIP,
+    method: str = "rules",
+) -> float:
+    """Crisp output CR for one pair of quantised inputs (eqs. 11 and 12).
+
+    A rule ``(A, B) -> C`` fires with grade ``u = min(u_A(E), u_B(DE))`` (eq. 11).
+
+    ``method="rules"`` (default) is eq. (12) as printed: ``CR = Σ u_n w_n / Σ u_n`` over the
+    fired rules n, ``w_n`` the representative value (:data:`SET_PEAKS`) of rule n's output set.
+    Several rules with the same output set are *summed*, each with its own grade — a weighted
+    average of singletons (what is now called a zero-order Sugeno / "weighted average"
+    defuzzifier).
+
+    ``method="universe"`` is the common Mamdani reading: each fired rule clips its output set at
+    ``u``, the clipped sets are combined by max over U, and CR is the centre of gravity
+    ``Σ y μ(y) / Σ μ(y)`` over the 13 levels y. Rules sharing an output set then count once (the
+    larger grade wins), and the output sets' shoulders move the result.
+
+    The paper's text ("Σ over the N fired rules", "w_n the representative value of that rule's
+    output set") describes the first; it is also the variant whose best rule base reproduces
+    Table III far more closely (see :data:`FITTED_RULES`), so it is the default.
+
+    Parameters
+    ----------
+    e_level, de_level : int
+        Quantised E and DE, −6 … 6.
+    rules : array_like of int, shape (7, 7)
+        ``rules[e_set, de_set]`` = output set index, sets in :data:`SET_NAMES` order.
+    membership : array_like, shape (13, 7)
+        Membership grades (rows level −6 … 6); also used for the output sets.
+    method : {"rules", "universe"}
+        Defuzzification variant, see above.
+
+    Returns
+    -------
+    float
+        CR in levels (−6 … 6); 0.0 if no rule fires.
+    """
+    if not (-6 <= e_level <= 6 and -6 <= de_level <= 6):
+        raise ConfigError("fuzzy.level", "levels must lie in -6..6")
+    v = _cell(
+        int(e_level) + 6,
+        int(de_level) + 6,
+        _check_rules(rules),
+        _check_membership(membership),
+        SET_PEAKS,
+        _method_code(method),
+    )
+    return 0.0 if np.isnan(v) else float(v)
+
+
+def compile_table_float(rules, method: str = "rules", membership=MEMBERSHIP) -> np.ndarray:
+    """Unrounded lookup table: :func:`infer` at every (E, DE) level pair.
+
+    Parameters
+    ----------
+    rules : array_like of int, shape (7, 7)
+        Rule base, see :func:`infer`.
+    method : {"rules", "universe"}
+        Defuzzification variant.
+    membership : array_like, shape (13, 7)
+        Membership grades.
+
+    Returns
+    -------
+    numpy.ndarray, shape (13, 13), float64
+        Rows E = −6 … 6, columns DE = −6 … 6; cells where nothing fires are 0.
+    """
+    t = _compile(
+        _check_rules(rules), _check_membership(membership), SET_PEAKS, _method_code(method)
+    )
+    return np.where(np.isnan(t), 0.0, t)
+
+
+def round_level(x) -> np.ndarray:
+    """Round CR values to the nearest integer level, halves away from zero.
+
+    Values are first rounded to 9 decimals so that a COG that is a half-integer in exact
+    arithmetic (e.g. 2.5 computed as 2.4999999999999996) rounds the same way on every platform.
+    Half away from zero keeps a table compiled from antisymmetric rules antisymmetric, which
+    round-half-to-even would not guarantee.
+
+    Parameters
+    ----------
+    x : array_like of float
+
+    Returns
+    -------
+    numpy.ndarray of int64
+    """
+    x = np.round(np.asarray(x, dtype=np.float64), 9)
+    return (np.sign(x) * np.floor(np.abs(x) + 0.5)).astype(np.int64)
+
+
+def compile_table(rules, method: str = "rules", membership=MEMBERSHIP) -> np.ndarray:
+    """Lookup table of output levels, like Table III: :func:`compile_table_float` rounded.
+
+    Parameters
+    ----------
+    rules : array_like of int, shape (7, 7)
+        Rule base, see :func:`infer`.
+    method : {"rules", "universe"}
+        Defuzzification variant.
+    membership : array_like, shape (13, 7)
+        Membership grades.
+
+    Returns
+    -------
+    numpy.ndarray, shape (13, 13), int64
+        Rows E = −6 … 6, columns DE = −6 … 6, rounded by :func:`round_level`.
+    """
+    return round_level(compile_table_float(rules, method, membership))
+
+
+def default_rules() -> np.ndarray:
+    """Classic diagonal rule base ``CR = clip(E + DE)`` in set-index terms.
+
+    With sets numbered −3 … 3 (NB … PB) the output set is ``clip(e + de, −3, 3)``; it contains
+    the paper's rules (1) NB, NB → NB and (2) PB, PB → PB, and is antisymmetric:
+    ``rules[6-a, 6-b] = 6 - rules[a, b]``.
+
+    Returns
+    -------
+    numpy.ndarray, shape (7, 7), int64
+        ``rules[e_set, de_set]`` = output set index 0 … 6.
+    """
+    a = np.arange(7)
+    return np.clip(a[:, None] + a[None, :] - 3, 0, 6).astype(np.int64)
+
+
+# --------------------------------------------------------------------------------------------
+# Fitting the unprinted rule base to Table III
+
+
+def table_score(table, target=PAPER_TABLE_III) -> tuple[int, int]:
+    """Distance of an integer table from a target: (differing cells, Σ |difference|).
+
+    Parameters
+    ----------
+    table, target : array_like of int, shape (13, 13)
+
+    Returns
+    -------
+    tuple of int
+        Number of cells that differ, and the sum of absolute differences.
+    """
+    d = np.abs(np.asarray(table, dtype=np.int64) - np.asarray(target, dtype=np.int64))
+    return int(np.count_nonzero(d)), int(d.sum())
+
+
+@njit(cache=True)
+def _round1(v):
+    # scalar twin of round_level (round to 9 decimals, then half away from zero)
+    v = np.round(v * 1e9) / 1e9
+    if v >= 0.0:
+        return np.floor(v + 0.5)
+    return -np.floor(-v + 0.5)
+
+
+@njit(cache=True)
+def _cell_cost(v, target):
+    # (differs, |diff|, squared unrounded residual) of one cell; NaN (nothing fired) counts as 0
+    if v != v:
+        v = 0.0
+    r = _round1(v)
+    d = abs(r - target)
+    return (1.0 if d > 0.0 else 0.0), d, (v - target) ** 2
+
+
+@njit(cache=True)
+def _better(a0, a1, a2, b0, b1, b2):
+    # lexicographic (cells, abs, sse) comparison with a tolerance on the float tie-breaker
+    if a0 != b0:
+        return a0 < b0
+    if a1 != b1:
+        return a1 < b1
+    return a2 < b2 - 1e-9
+
+
+@njit(cache=True)
+def _delta(rules, mask, vals, target, membership, peaks, method, newvals):
+    """Cost change if the cells in ``mask`` are recomputed with ``rules``; fills ``newvals``."""
+    d0 = 0.0
+    d1 = 0.0
+    d2 = 0.0
+    for i in range(13):
+        for j in range(13):
+            if mask[i, j]:
+                v = _cell(i, j, rules, membership, peaks, method)
+                newvals[i, j] = v
+                n0, n1, n2 = _cell_cost(v, target[i, j])
+                o0, o1, o2 = _cell_cost(vals[i, j], target[i, j])
+                d0 += n0 - o0
+                d1 += n1 - o1
+                d2 += n2 - o2
+    return d0, d1, d2
+
+
+@njit(cache=True)
+def _descend(rules, target, membership, peaks, method, use_pairs):
+    """Local search in place on ``rules``: single-rule moves, then pair moves of neighbours.
+
+    A rule (a, b) only changes cells where set a fires on E and set b fires on DE, so a move is
+    scored on those cells alone. Moves are tried in a fixed order and taken on strict
+    improvement of (differing cells, Σ|diff|, Σ residual²) — deterministic, and it terminates.
+    """
+    vals = _compile(rules, membership, peaks, method)
+    fire = membership > 0.0
+    mask = np.zeros((13, 13), dtype=np.bool_)
+    newvals = np.empty((13, 13))
+    improved = True
+    while improved:
+        improved = False
+        # single moves
+        for a in range(7):
+            for b in range(7):
+                mask[:, :] = False
+                for i in range(13):
+                    for j in range(13):
+                        mask[i, j] = fire[i, a] and fire[j, b]
+                old = rules[a, b]
+                best_v = old
+                b0 = 0.0
+                b1 = 0.0
+                b2 = 0.0
+                for v in range(7):
+                    if v == old:
+                        continue
+                    rules[a, b] = v
+                    d0, d1, d2 = _delta(
+                        rules, mask, vals, target, membership, peaks, method, newvals
+                    )
+                    if _better(d0, d1, d2, b0, b1, b2):
+                        b0, b1, b2 = d0, d1, d2
+                        best_v = v
+                rules[a, b] = best_v
+                if best_v != old:
+                    improved = True
+                    for i in range(13):
+                        for j in range(13):
+                            if mask[i, j]:
+                                vals[i, j] = _cell(i, j, rules, membership, peaks, method)
+        if improved or not use_pairs:
+            continue
+        # pair moves: two rules whose sets are adjacent share cells, so a change that helps
+        # only when both move together is invisible to single moves
+        for a in range(7):
+            for b in range(7):
+                for c in range(a, min(a + 2, 7)):
+                    for e in range(max(b - 1, 0), min(b + 2, 7)):
+                        if c == a and e <= b:
+                            continue
+                        mask[:, :] = False
+                        for i in range(13):
+                            for j in range(13):
+                                mask[i, j] = (fire[i, a] and fire[j, b]) or (
+                                    fire[i, c] and fire[j, e]
+                                )
+                        o1 = rules[a, b]
+                        o2 = rules[c, e]
+                        bv1 = o1
+                        bv2 = o2
+                        b0 = 0.0
+                        b1 = 0.0
+                        b2 = 0.0
+                        for v1 in range(7):
+                            for v2 in range(7):
+                                if v1 == o1 or v2 == o2:
+                                    continue  # single moves already covered
+                                rules[a, b] = v1
+                                rules[c, e] = v2
+                                d0, d1, d2 = _delta(
+                                    rules, mask, vals, target, membership, peaks, method, newvals
+                                )
+                                if _better(d0, d1, d2, b0, b1, b2):
+                                    b0, b1, b2 = d0, d1, d2
+                                    bv1 = v1
+                                    bv2 = v2
+                        rules[a, b] = bv1
+                        rules[c, e] = bv2
+                        if bv1 != o1:
+                            improved = True
+                            for i in range(13):
+                                for j in range(13):
+                                    if mask[i, j]:
+                                        vals[i, j] = _cell(i, j, rules, membership, peaks, method)
+    return rules
+
+
+def _half_rules() -> np.ndarray:
+    # CR set = (E set + DE set) / 2: Table III grows by about one level per two steps of E or DE
+    a = np.arange(7)
+    return round_level((a[:, None] + a[None, :]) / 2.0)
+
+
+#: Number of seeded random restarts :func:`fit_rules_to_table` uses by default.
+DEFAULT_FIT_STARTS = 8
+
+
+@dataclass(frozen=True)
+class FitResult:
+    """Outcome of :func:`fit_rules_to_table`.
+
+    Attributes
+    ----------
+    rules : numpy.ndarray, shape (7, 7), int64
+        Best rule base found.
+    table : numpy.ndarray, shape (13, 13), int64
+        Its compiled, rounded table.
+    n_diff : int
+        Cells where ``table`` differs from the target.
+    abs_diff : int
+        Σ |table − target|.
+    """
+
+    rules: np.ndarray
+    table: np.ndarray
+    n_diff: int
+    abs_diff: int
+
+
+def fit_rules_to_table(
+    target=PAPER_TABLE_III,
+    method: str = "rules",
+    membership=MEMBERSHIP,
+    n_starts: int = DEFAULT_FIT_STARTS,
+    n_kicks: int = 40,
+    seed: int = 0,
+    starts=None,
+) -> FitResult:
+    """Search the 49-rule base whose compiled table comes closest to ``target`` (Table III).
+
+    The paper prints Table III but not the 49 rules behind it. Each rule picks one of 7 output
+    sets (7^49 bases), so we run an iterated local search:
+
+    1. starts: the diagonal :func:`default_rules`, the "half" base ``(E + DE) / 2`` in set
+       indices (Table III rises about one level per two steps), any ``starts`` given, and
+       ``n_starts`` seeded random bases;
+    2. from each start, descend with single-rule moves and then moves of two neighbouring rules
+       (sets adjacent in E and DE) until neither improves; each move is scored only on the cells
+       the changed rules fire in;
+    3. then ``n_kicks`` times: randomly reassign 2-4 rules of the best base (seeded), descend,
+       and keep the result if it is better.
+
+    The objective is lexicographic: first the number of differing cells, then Σ |difference|,
+    then (tie-break only) the squared residual of the unrounded table. The result is fully
+    determined by the arguments.
+
+    With the defaults the result is :data:`FITTED_RULES`: 18 cells differ from the printed
+    Table III, Σ |difference| = 18 (every miss is by one level). For ``method="universe"`` the
+    best base found misses 39 cells (Σ |difference| = 40) — evidence that the paper used the
+    literal eq. (12).
+
+    Parameters
+    ----------
+    target : array_like of int, shape (13, 13)
+        Table to reproduce.
+    method : {"rules", "universe"}
+        Defuzzification variant used to compile candidate tables.
+    membership : array_like, shape (13, 7)
+        Membership grades.
+    n_starts : int
+        Seeded random starting bases, in addition to the two structured ones.
+    n_kicks : int
+        Perturbation rounds after the restarts.
+    seed : int
+        Seed of :func:`numpy.random.default_rng` for the random starts and kicks.
+    starts : iterable of array_like, optional
+        Extra starting rule bases.
+
+    Returns
+    -------
+    FitResult
+    """
+    code = _method_code(method)
+    m = _check_membership(membership)
+    tgt = np.ascontiguousarray(target, dtype=np.float64)
+    if tgt.shape != (13, 13):
+        raise ConfigError("fuzzy.target", "must be a 13x13 table")
+    rng = np.random.default_rng(seed)
+    cands = [default_rules(), _half_rules()]
+    cands += [_check_rules(s) for s in (starts or ())]
+    cands += [rng.integers(0, 7, size=(7, 7)).astype(np.int64) for _ in range(n_starts)]
+
+    def key(r):
+        v = _compile(r, m, SET_PEAKS, code)
+        v = np.where(np.isnan(v), 0.0, v)
+        nd, ad = table_score(round_level(v), tgt.astype(np.int64))
+        return nd, ad, round(float(((v - tgt) ** 2).sum()), 9)
+
+    best, best_key = None, None
+    for c in cands:
+        r = _descend(c.copy(), tgt, m, SET_PEAKS, code, True)
+        k = key(r)
+        if best_key is None or k < best_key:
+            best, best_key = r, k
+    for _ in range(n_kicks):
+        r = best.copy()
+        n = int(rng.integers(2, 5))
+        idx = rng.choice(49, size=n, replace=False)
+        r.flat[idx] = rng.integers(0, 7, size=n)
+        r = _descend(r, tgt, m, SET_PEAKS, code, True)
+        k = key(r)
+        if k < best_key:
+            best, best_key = r, k
+    table = compile_table(best, method, m)
+    return FitResult(best, table, best_key[0], best_key[1])
+
+
+#: Rule base fitted to Table III by ``fit_rules_to_table()`` (defaults, method "rules"), pasted
+#: here as data so importing the module costs nothing. ``FITTED_RULES[e_set, de_set]`` is the
+#: output set index; rows E = NB … PB, columns DE = NB … PB. Compiled with method "rules" it
+#: differs from the printed Table III in 18 cells, each by one level (see
+#: :func:`fit_rules_to_table`).
+FITTED_RULES = np.array(
+    [
+        [0, 0, 0, 1, 2, 2, 3],
+        [0, 0, 0, 1, 2, 2, 3],
+        [1, 1, 2, 2, 3, 3, 4],
+        [1, 1, 2, 3, 3, 4, 5],
+        [3, 3, 3, 4, 4, 5, 5],
+        [3, 3, 4, 4, 5, 5, 6],
+        [3, 4, 4, 5, 5, 6, 6],
+    ],
+    dtype=np.int64,
+)
+FITTED_RULES.flags.writeable = False
+
+
+# --------------------------------------------------------------------------------------------
+# Comparing, printing, using tables
+
+
+def table_diff(a, b) -> list[tuple[int, int, int, int]]:
+    """Cells where two 13 × 13 tables differ.
+
+    Parameters
+    ----------
+    a, b : array_like, shape (13, 13)
+
+    Returns
+    -------
+    list of tuple
+        ``(e_level, de_level, a_value, b_value)`` in row-major order, levels −6 … 6.
+    """
+    a = np.asarray(a)
+    b = np.asarray(b)
+    if a.shape != (13, 13) or b.shape != (13, 13):
+        raise ConfigError("fuzzy.table", "tables must be 13x13")
+    return [
+        (int(i) - 6, int(j) - 6, a[i, j].item(), b[i, j].item())
+        for i, j in zip(*np.nonzero(a != b), strict=True)
+    ]
+
+
+def format_table(table, fmt: str = "text") -> str:
+    r"""Render a 13 × 13 table with its E (rows) and DE (columns) levels.
+
+    Parameters
+    ----------
+    table : array_like, shape (13, 13)
+        Integer or float table.
+    fmt : {"text", "csv"}
+        ``"text"``: right-aligned grid with a ``E\DE`` header row and a rule under it;
+        ``"csv"``: header row ``E\DE,-6,...,6`` then one line per E level.
+
+    Returns
+    -------
+    str
+        Lines joined by ``\n``, with a trailing newline.
+    """
+    t = np.asarray(table)
+    if t.shape != (13, 13):
+        raise ConfigError("fuzzy.table", "table must be 13x13")
+
+    def cell(v):
+        if np.issubdtype(t.dtype, np.integer):
+            return str(int(v))
+        return f"{float(v):.3f}"
+
+    rows = [[cell(v) for v in row] for row in t]
+    if fmt == "csv":
+        lines = ["E\\DE," + ",".join(str(k) for k in LEVELS)]
+        lines += [f"{k}," + ",".join(r) for k, r in zip(LEVELS, rows, strict=True)]
+        return "\n".join(lines) + "\n"
+    if fmt != "text":
+        raise ConfigError("fuzzy.fmt", f"must be 'text' or 'csv', got {fmt!r}")
+    w = max(3, max(len(s) for r in rows for s in r))
+    head = "E\\DE |" + "".join(f" {k:>{w}d}" for k in LEVELS)
+    lines = [head, "-" * len(head)]
+    lines += [
+        f"{k:>4d} |" + "".join(f" {s:>{w}}" for s in r) for k, r in zip(LEVELS, rows, strict=True)
+    ]
+    return "\n".join(lines) + "\n"
+
+
+def format_rules(rules) -> str:
+    """Render a 7 × 7 rule base as a grid of set names (rows E, columns DE).
+
+    Parameters
+    ----------
+    rules : array_like of int, shape (7, 7)
+
+    Returns
+    -------
+    str
+    """
+    r = _check_rules(rules)
+    lines = ["E\\DE " + " ".join(f"{n:>2}" for n in SET_NAMES)]
+    for name, row in zip(SET_NAMES, r, strict=True):
+        lines.append(f"{name:>4} " + " ".join(f"{SET_NAMES[c]:>2}" for c in row))
+    return "\n".join(lines) + "\n"
+
+
+@njit(cache=True)
+def lookup(table, e_scaled, de_scaled):
+    """Table III lookup for the drive kernel: ``table[quantize(E) + 6, quantize(DE) + 6]``.
+
+    Parameters
+    ----------
+    table : float64[13, 13]
+        Lookup table, rows E, columns DE (levels −6 … 6).
+    e_scaled, de_scaled : float
+        E and DE already multiplied by their scaling gains.
+
+    Returns
+    -------
+    float
+        Output level CR; the caller scales it to a resistance change.
+    """
+    return table[quantize(e_scaled) + 6, quantize(de_scaled) + 6]
+
+
+def fuzzy_table(source: str = "paper", rules=None, method: str = "rules") -> np.ndarray:
+    """The lookup table a drive should use.
+
+    Parameters
+    ----------
+    source : {"paper", "rules"}
+        ``"paper"``: Table III as printed (row −6 repaired); ``"rules"``: compiled from
+        ``rules`` with ``method``.
+    rules : array_like of int, shape (7, 7), optional
+        Rule base for ``source="rules"``; defaults to :data:`FITTED_RULES`.
+    method : {"rules", "universe"}
+        Defuzzification variant for ``source="rules"``.
+
+    Returns
+    -------
+    numpy.ndarray, shape (13, 13), int64
+        A fresh, writable array.
+    """
+    if source == "paper":
+        if rules is not None:
+            raise ConfigError("fuzzy.rules", "only used with source='rules'")
+        return PAPER_TABLE_III.copy()
+    if source == "rules":
+        return compile_table(FITTED_RULES if rules is None else rules, method)
+    raise ConfigError("fuzzy.source", f"must be 'paper' or 'rules', got {source!r}")
