@@ -206,6 +206,7 @@ def run_drive(par, prof_t, prof_v, prof_n, table, x, c, n_steps, log, log_every)
 
         # --- estimator, controller
         w_ref = 0.0
+        theta_k = c[C_THETA_E]  # the controller's d-axis angle at this sample
         if mode == DRIVE_FOC:
             mras_step(par, c, i_meas_a, i_meas_b, Ts)
             w_ref = profile_at(prof_t, prof_v, prof_n, PR_SPEED_REF, t)
@@ -257,7 +258,7 @@ def run_drive(par, prof_t, prof_v, prof_n, table, x, c, n_steps, log, log_every)
                 row[L_E_D0] = c[C_E_D0]
                 row[L_E_Q0] = c[C_E_Q0]
                 row[L_FLUX] = math.sqrt(x[X_PSI_R_A] ** 2 + x[X_PSI_R_B] ** 2)
-                row[L_THETA_E] = c[C_THETA_E]
+                row[L_THETA_E] = theta_k
                 row[L_TH1] = x[X_TH1]
                 row[L_TH2] = x[X_TH2]
                 row[L_DEMOD] = c[C_DEMOD]

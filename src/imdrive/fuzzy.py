@@ -441,79 +441,94 @@ def _cell_cost(v, target):
 
 
 @njit(cache=True)
-def _better(a0, a1, a2, b0, b1, b2):
-    # lexicographic (cells, abs, sse) comparison with a tolerance on the float tie-breaker
-    if a0 != b0:
-        return a0 < b0
-    if a1 != b1:
-        return a1 < b1
-    return a2 < b2 - 1e-9
+def _violations(rules):
+    # total size of the steps where the output set decreases as E or DE grows
+    v = 0
+    for a in range(7):
+        for b in range(7):
+            if a < 6 and rules[a, b] > rules[a + 1, b]:
+                v += rules[a, b] - rules[a + 1, b]
+            if b < 6 and rules[a, b] > rules[a, b + 1]:
+                v += rules[a, b] - rules[a, b + 1]
+    return v
 
 
 @njit(cache=True)
-def _delta(rules, mask, vals, target, membership, peaks, method, newvals):
-    """Cost change if the cells in ``mask`` are recomputed with ``rules``; fills ``newvals``."""
-    d0 = 0.0
-    d1 = 0.0
-    d2 = 0.0
+def _better(d, best):
+    # lexicographic comparison of cost-change vectors; the last key (a float residual) with a
+    # tolerance so that rounding noise cannot make the search cycle
+    for k in range(d.size - 1):
+        if d[k] != best[k]:
+            return d[k] < best[k]
+    return d[-1] < best[-1] - 1e-9
+
+
+@njit(cache=True)
+def _delta(rules, mask, vals, target, membership, peaks, method, reg, viol0, out):
+    """Cost change of the current (modified) ``rules`` vs the state ``vals`` / ``viol0``.
+
+    Only the cells in ``mask`` are recomputed. ``out`` receives the change of the cost vector
+    (monotonicity violations if ``reg == 2``, differing cells, Σ|diff|, violations if
+    ``reg == 1``, Σ residual²).
+    """
+    out[:] = 0.0
     for i in range(13):
         for j in range(13):
             if mask[i, j]:
                 v = _cell(i, j, rules, membership, peaks, method)
-                newvals[i, j] = v
                 n0, n1, n2 = _cell_cost(v, target[i, j])
                 o0, o1, o2 = _cell_cost(vals[i, j], target[i, j])
-                d0 += n0 - o0
-                d1 += n1 - o1
-                d2 += n2 - o2
-    return d0, d1, d2
+                out[1] += n0 - o0
+                out[2] += n1 - o1
+                out[4] += n2 - o2
+    if reg > 0:
+        out[0 if reg == 2 else 3] = _violations(rules) - viol0
 
 
 @njit(cache=True)
-def _descend(rules, target, membership, peaks, method, use_pairs):
+def _descend(rules, target, membership, peaks, method, reg):
     """Local search in place on ``rules``: single-rule moves, then pair moves of neighbours.
 
     A rule (a, b) only changes cells where set a fires on E and set b fires on DE, so a move is
-    scored on those cells alone. Moves are tried in a fixed order and taken on strict
-    improvement of (differing cells, Σ|diff|, Σ residual²) — deterministic, and it terminates.
+    scored on those cells alone. Moves are tried in a fixed order; each rule (pair) takes its
+    best value if that strictly lowers the cost vector. Deterministic, and it terminates
+    because every accepted move lowers the cost.
     """
     vals = _compile(rules, membership, peaks, method)
+    viol = _violations(rules)
     fire = membership > 0.0
     mask = np.zeros((13, 13), dtype=np.bool_)
-    newvals = np.empty((13, 13))
+    d = np.zeros(5)
+    best = np.zeros(5)
     improved = True
     while improved:
         improved = False
         # single moves
         for a in range(7):
             for b in range(7):
-                mask[:, :] = False
                 for i in range(13):
                     for j in range(13):
                         mask[i, j] = fire[i, a] and fire[j, b]
                 old = rules[a, b]
                 best_v = old
-                b0 = 0.0
-                b1 = 0.0
-                b2 = 0.0
+                best[:] = 0.0
                 for v in range(7):
                     if v == old:
                         continue
                     rules[a, b] = v
-                    d0, d1, d2 = _delta(
-                        rules, mask, vals, target, membership, peaks, method, newvals
-                    )
-                    if _better(d0, d1, d2, b0, b1, b2):
-                        b0, b1, b2 = d0, d1, d2
+                    _delta(rules, mask, vals, target, membership, peaks, method, reg, viol, d)
+                    if _better(d, best):
+                        best[:] = d
                         best_v = v
                 rules[a, b] = best_v
                 if best_v != old:
                     improved = True
+                    viol = _violations(rules)
                     for i in range(13):
                         for j in range(13):
                             if mask[i, j]:
                                 vals[i, j] = _cell(i, j, rules, membership, peaks, method)
-        if improved or not use_pairs:
+        if improved:
             continue
         # pair moves: two rules whose sets are adjacent share cells, so a change that helps
         # only when both move together is invisible to single moves
@@ -523,7 +538,6 @@ def _descend(rules, target, membership, peaks, method, use_pairs):
                     for e in range(max(b - 1, 0), min(b + 2, 7)):
                         if c == a and e <= b:
                             continue
-                        mask[:, :] = False
                         for i in range(13):
                             for j in range(13):
                                 mask[i, j] = (fire[i, a] and fire[j, b]) or (
@@ -533,26 +547,34 @@ def _descend(rules, target, membership, peaks, method, use_pairs):
                         o2 = rules[c, e]
                         bv1 = o1
                         bv2 = o2
-                        b0 = 0.0
-                        b1 = 0.0
-                        b2 = 0.0
+                        best[:] = 0.0
                         for v1 in range(7):
                             for v2 in range(7):
                                 if v1 == o1 or v2 == o2:
                                     continue  # single moves already covered
                                 rules[a, b] = v1
                                 rules[c, e] = v2
-                                d0, d1, d2 = _delta(
-                                    rules, mask, vals, target, membership, peaks, method, newvals
+                                _delta(
+                                    rules,
+                                    mask,
+                                    vals,
+                                    target,
+                                    membership,
+                                    peaks,
+                                    method,
+                                    reg,
+                                    viol,
+                                    d,
                                 )
-                                if _better(d0, d1, d2, b0, b1, b2):
-                                    b0, b1, b2 = d0, d1, d2
+                                if _better(d, best):
+                                    best[:] = d
                                     bv1 = v1
                                     bv2 = v2
                         rules[a, b] = bv1
                         rules[c, e] = bv2
                         if bv1 != o1:
                             improved = True
+                            viol = _violations(rules)
                             for i in range(13):
                                 for j in range(13):
                                     if mask[i, j]:
@@ -565,6 +587,8 @@ def _half_rules() -> np.ndarray:
     a = np.arange(7)
     return round_level((a[:, None] + a[None, :]) / 2.0)
 
+
+_REGULARITY = {"none": 0, "tiebreak": 1, "monotone": 2}
 
 #: Number of seeded random restarts :func:`fit_rules_to_table` uses by default.
 DEFAULT_FIT_STARTS = 8
@@ -600,6 +624,7 @@ def fit_rules_to_table(
     n_kicks: int = 40,
     seed: int = 0,
     starts=None,
+    regularity: str = "none",
 ) -> FitResult:
     """Search the 49-rule base whose compiled table comes closest to ``target`` (Table III).
 
@@ -640,12 +665,19 @@ def fit_rules_to_table(
         Seed of :func:`numpy.random.default_rng` for the random starts and kicks.
     starts : iterable of array_like, optional
         Extra starting rule bases.
+    regularity : {"none", "tiebreak", "monotone"}
+        Use of the monotonicity violation V (total size of the steps where the output set
+        decreases as E or DE grows): ``"none"`` ignores it; ``"tiebreak"`` ranks it after
+        Σ |difference|; ``"monotone"`` ranks it first, i.e. searches monotone rule bases only.
 
     Returns
     -------
     FitResult
     """
     code = _method_code(method)
+    if regularity not in _REGULARITY:
+        raise ConfigError("fuzzy.regularity", f"must be one of {tuple(_REGULARITY)}")
+    reg = _REGULARITY[regularity]
     m = _check_membership(membership)
     tgt = np.ascontiguousarray(target, dtype=np.float64)
     if tgt.shape != (13, 13):
@@ -656,14 +688,17 @@ def fit_rules_to_table(
     cands += [rng.integers(0, 7, size=(7, 7)).astype(np.int64) for _ in range(n_starts)]
 
     def key(r):
+        # the same cost vector _descend works with, as a comparable tuple
         v = _compile(r, m, SET_PEAKS, code)
         v = np.where(np.isnan(v), 0.0, v)
         nd, ad = table_score(round_level(v), tgt.astype(np.int64))
-        return nd, ad, round(float(((v - tgt) ** 2).sum()), 9)
+        viol = int(_violations(r))
+        sse = round(float(((v - tgt) ** 2).sum()), 9)
+        return (viol if reg == 2 else 0, nd, ad, viol if reg == 1 else 0, sse)
 
     best, best_key = None, None
     for c in cands:
-        r = _descend(c.copy(), tgt, m, SET_PEAKS, code, True)
+        r = _descend(c.copy(), tgt, m, SET_PEAKS, code, reg)
         k = key(r)
         if best_key is None or k < best_key:
             best, best_key = r, k
@@ -672,12 +707,12 @@ def fit_rules_to_table(
         n = int(rng.integers(2, 5))
         idx = rng.choice(49, size=n, replace=False)
         r.flat[idx] = rng.integers(0, 7, size=n)
-        r = _descend(r, tgt, m, SET_PEAKS, code, True)
+        r = _descend(r, tgt, m, SET_PEAKS, code, reg)
         k = key(r)
         if k < best_key:
             best, best_key = r, k
     table = compile_table(best, method, m)
-    return FitResult(best, table, best_key[0], best_key[1])
+    return FitResult(best, table, best_key[1], best_key[2])
 
 
 #: Rule base fitted to Table III by ``fit_rules_to_table()`` (defaults, method "rules"), pasted

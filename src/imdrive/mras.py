@@ -21,8 +21,8 @@ exactly (it was held) and the current taken as the mean of its two end samples:
 
 * reference model increment ``(L2/M) [Ts (v - R1 i_mean) - sigma L1 (i_k - i_{k-1})]``; the
   ``p i`` term integrates exactly to a current difference, so no derivative is ever taken;
-* adjustable model: exact solution of the linear 2-D system over Ts for constant w_r_hat and
-  input ``i_mean`` (complex exponential);
+* adjustable model: exact solution of the linear 2-D system over Ts for constant w_r_hat and a
+  current varying linearly between its samples (complex exponentials);
 * the common filter ``1/(s + wc)`` of a derivative constant over the period: exact.
 """
 
@@ -59,16 +59,30 @@ from imdrive.layout import (
 )
 
 
-def default_mras_gains(flux_ref_Wb: float, bandwidth_rad_s: float) -> tuple[float, float]:
-    """MRAS gains from a bandwidth.
+def default_mras_gains(
+    flux_ref_Wb: float, T2_s: float, bandwidth_rad_s: float
+) -> tuple[float, float]:
+    """MRAS gains from a bandwidth, by pole-zero cancellation.
 
-    Near the operating point the error signal is ``e ~ |lam|^2 (theta - theta_hat)``, the angle
-    between the two flux estimates, which integrates the speed error. The speed loop of the
-    estimator is then ``w_hat = (K1 + K2/s) |lam|^2 (w - w_hat)/s``; choosing
+    Linearised about a steady state with small slip, the error signal responds to a speed
+    error through the adjustable model's rotor time constant::
 
-        K1 = 2 a / |lam|^2,    K2 = a^2 / |lam|^2
+        e ~ |lam|^2 T2 / (1 + s T2) * (w_r - w_r_hat)
 
-    places both closed-loop poles at ``s = -a`` (critically damped), ``a = bandwidth_rad_s``.
+    With the PI ``K1 + K2/s`` and ``K2/K1 = 1/T2`` the PI zero cancels that pole and the loop
+    becomes ``K1 |lam|^2 / s``: the estimate follows the true speed with a first-order lag of
+    bandwidth ``a = K1 |lam|^2``. Hence::
+
+        K1 = a / |lam|^2,    K2 = K1 / T2
+
+    Parameters
+    ----------
+    flux_ref_Wb : float
+        Rotor-flux magnitude, Wb.
+    T2_s : float
+        The estimator's rotor time constant L2/R2_hat, s.
+    bandwidth_rad_s : float
+        Desired bandwidth ``a``, rad/s.
 
     Returns
     -------
@@ -77,8 +91,8 @@ def default_mras_gains(flux_ref_Wb: float, bandwidth_rad_s: float) -> tuple[floa
     K2 : float
         Integral gain, (rad/s^2)/Wb^2.
     """
-    lam2 = flux_ref_Wb**2
-    return 2.0 * bandwidth_rad_s / lam2, bandwidth_rad_s**2 / lam2
+    K1 = bandwidth_rad_s / flux_ref_Wb**2
+    return K1, K1 / T2_s
 
 
 @njit(cache=True)
@@ -124,14 +138,21 @@ def mras_step(par, c, i_a, i_b, Ts):
     lam_v_a = g * c[C_LAM_V_A] + k_in * d_a
     lam_v_b = g * c[C_LAM_V_B] + k_in * d_b
 
-    # adjustable (current) model, eq. (2), exact over Ts for constant w_hat and i_mean
-    z = complex(-R2 / L2, c[C_W_HAT])
-    ez = complex(
-        math.exp(z.real * Ts) * math.cos(z.imag * Ts), math.exp(z.real * Ts) * math.sin(z.imag * Ts)
-    )
+    # adjustable (current) model, eq. (2): exact over Ts for constant w_hat and a current
+    # varying linearly between its two samples (first-order hold)
+    zT = complex(-R2 / L2, c[C_W_HAT]) * Ts
+    ez = math.exp(zT.real) * complex(math.cos(zT.imag), math.sin(zT.imag))
+    if abs(zT) > 1e-4:
+        phi1 = (ez - 1.0) / zT
+        phi2 = (ez - 1.0 - zT) / (zT * zT)
+    else:  # series, avoids cancellation
+        phi1 = 1.0 + zT / 2.0 + zT * zT / 6.0
+        phi2 = 0.5 + zT / 6.0 + zT * zT / 24.0
     lam_old = complex(c[C_LAM_I_A], c[C_LAM_I_B])
-    u = (M * R2 / L2) * complex(i_mean_a, i_mean_b)
-    lam_new = ez * lam_old + (ez - 1.0) / z * u
+    b = M * R2 / L2 * Ts
+    i0 = complex(c[C_I_PREV_A], c[C_I_PREV_B])
+    i1 = complex(i_a, i_b)
+    lam_new = ez * lam_old + b * (phi1 * i0 + phi2 * (i1 - i0))
     dlam = lam_new - lam_old
     lam_f_a = g * c[C_LAM_F_A] + k_in * dlam.real
     lam_f_b = g * c[C_LAM_F_B] + k_in * dlam.imag

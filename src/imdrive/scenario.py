@@ -193,8 +193,8 @@ class EstimatorSettings:
 class MrasSettings:
     """Schauder's MRAS (``[mras]``). K1, K2 default from ``bandwidth_Hz`` (see mras module)."""
 
-    wc_rad_s: float = 2.0
-    bandwidth_Hz: float = 10.0
+    wc_rad_s: float = 5.0
+    bandwidth_Hz: float = 40.0
     K1: float | None = None
     K2: float | None = None
 

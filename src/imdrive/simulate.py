@@ -105,7 +105,7 @@ def build_arrays(sc: Scenario) -> DriveArrays:
     k_t = 1.5 * m.pole_pairs * Mh / L2h * psi0
     kp_i, ki_i = default_current_gains(sigma_L1, R_sigma, 2 * math.pi * ctl.current_bandwidth_Hz)
     kp_w, ki_w = default_speed_gains(m.J_kgm2, k_t, 2 * math.pi * ctl.speed_bandwidth_Hz)
-    K1, K2 = default_mras_gains(psi0, 2 * math.pi * sc.mras.bandwidth_Hz)
+    K1, K2 = default_mras_gains(psi0, L2h / R2h, 2 * math.pi * sc.mras.bandwidth_Hz)
     gains = {
         "current_kp": ctl.current_kp if ctl.current_kp is not None else kp_i,
         "current_ki": ctl.current_ki if ctl.current_ki is not None else ki_i,
