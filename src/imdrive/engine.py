@@ -36,6 +36,10 @@ from imdrive.layout import (
     C_I_Q,
     C_ID_REF,
     C_IQ_REF,
+    C_LAM_F_A,
+    C_LAM_F_B,
+    C_LAM_V_A,
+    C_LAM_V_B,
     C_R2_HAT,
     C_THETA_E,
     C_V_PREV_A,
@@ -51,6 +55,10 @@ from imdrive.layout import (
     L_I_Q,
     L_ID_REF,
     L_IQ_REF,
+    L_LAM_F_A,
+    L_LAM_F_B,
+    L_LAM_V_A,
+    L_LAM_V_B,
     L_PSI_R_A,
     L_PSI_R_B,
     L_R1,
@@ -262,6 +270,10 @@ def run_drive(par, prof_t, prof_v, prof_n, table, x, c, n_steps, log, log_every)
                 row[L_TH1] = x[X_TH1]
                 row[L_TH2] = x[X_TH2]
                 row[L_DEMOD] = c[C_DEMOD]
+                row[L_LAM_V_A] = c[C_LAM_V_A]
+                row[L_LAM_V_B] = c[C_LAM_V_B]
+                row[L_LAM_F_A] = c[C_LAM_F_A]
+                row[L_LAM_F_B] = c[C_LAM_F_B]
         if k == n_steps:
             break
 

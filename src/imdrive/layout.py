@@ -177,7 +177,11 @@ L_THETA_E = 22  # controller field angle, rad
 L_TH1 = 23
 L_TH2 = 24
 L_DEMOD = 25
-N_LOG = 26
+L_LAM_V_A = 26  # MRAS reference-model flux (filtered), Wb
+L_LAM_V_B = 27
+L_LAM_F_A = 28  # MRAS adjustable-model flux (filtered), Wb
+L_LAM_F_B = 29
+N_LOG = 30
 
 # status codes returned by the engine
 S_OK = 0

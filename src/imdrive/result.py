@@ -54,6 +54,10 @@ _DIRECT = {
     "theta1_C": (Lo.L_TH1, 1.0),
     "theta2_C": (Lo.L_TH2, 1.0),
     "e_d0_demod_Wb": (Lo.L_DEMOD, 1.0),
+    "lam_v_alpha_Wb": (Lo.L_LAM_V_A, 1.0),
+    "lam_v_beta_Wb": (Lo.L_LAM_V_B, 1.0),
+    "lam_i_alpha_Wb": (Lo.L_LAM_F_A, 1.0),
+    "lam_i_beta_Wb": (Lo.L_LAM_F_B, 1.0),
 }
 OPEN_LOOP_COLUMNS = (
     "time_s speed_rpm w_m_rad_s torque_Nm load_torque_Nm i_a_A i_b_A i_c_A i_alpha_A i_beta_A "
@@ -63,7 +67,7 @@ VECTOR_COLUMNS = (
     OPEN_LOOP_COLUMNS
     + (
         "speed_ref_rpm speed_est_rpm id_ref_A iq_ref_A i_d_A i_q_A R2_est_ohm e_d0_Wb e_q0_Wb "
-        "theta_e_rad"
+        "theta_e_rad lam_v_alpha_Wb lam_v_beta_Wb lam_i_alpha_Wb lam_i_beta_Wb"
     ).split()
 )
 
