@@ -78,6 +78,29 @@ def _cmd_run(args) -> int:
     return EXIT_OK
 
 
+def _cmd_fuzzy_table(args) -> int:
+    from imdrive.fuzzy import format_table, fuzzy_table, table_diff
+
+    if args.diff:
+        paper = fuzzy_table("paper")
+        rules = fuzzy_table("rules")
+        diff = table_diff(rules, paper)
+        if args.format == "csv":
+            print("E,DE,rules,paper")
+            for e, de, a, b in diff:
+                print(f"{e},{de},{a},{b}")
+        else:
+            print(f"{len(diff)} of 169 cells differ (rule-compiled vs printed Table III):")
+            print(f"  {'E':>3} {'DE':>3} {'rules':>6} {'paper':>6}")
+            for e, de, a, b in diff:
+                print(f"  {e:>3} {de:>3} {a:>6} {b:>6}")
+        return EXIT_OK
+    sys.stdout.write(format_table(fuzzy_table(args.source), args.format))
+    if args.format == "text":
+        sys.stdout.write("\n")
+    return EXIT_OK
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="imdrive", description="Simulate sensorless induction-motor drives.")
     p.add_argument("--version", action="version", version=_version())
@@ -101,6 +124,21 @@ def build_parser() -> argparse.ArgumentParser:
     sh = sub.add_parser("show", help="print a preset's TOML, to copy and edit")
     sh.add_argument("preset")
     sh.set_defaults(func=_cmd_show)
+
+    ft = sub.add_parser("fuzzy-table", help="print the compensator's 13x13 lookup table")
+    ft.add_argument(
+        "--source",
+        choices=("paper", "rules"),
+        default="paper",
+        help="the printed Table III, or the table compiled from the fitted rules",
+    )
+    ft.add_argument("--format", choices=("text", "csv"), default="text")
+    ft.add_argument(
+        "--diff",
+        action="store_true",
+        help="list the cells where the rule-compiled table differs from the printed one",
+    )
+    ft.set_defaults(func=_cmd_fuzzy_table)
     return p
 
 

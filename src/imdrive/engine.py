@@ -3,7 +3,7 @@
 Each control period ``[t_k, t_k + Ts)``:
 
 1. sample the plant (current with sensor offset, speed) at ``t_k``;
-2. run the estimator (MRAS) and, at its own period, the R2 compensator;
+2. run the estimator (MRAS) and the R2 compensator (which acts at its own period);
 3. run the controller (open-loop voltage or field-oriented control) -> voltage reference;
 4. the inverter turns it into voltage segments, held over the period (zero-order hold);
 5. integrate the plant over the period with ``P_NSUB`` classical RK4 sub-steps per segment.
@@ -24,6 +24,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
+from imdrive.compensator import compensator_step
 from imdrive.control import foc_step, open_loop_voltage
 from imdrive.inverter import MAX_SEGMENTS, inverter_segments
 from imdrive.layout import (
@@ -76,6 +77,7 @@ from imdrive.layout import (
     L_W_M,
     L_W_REF,
     NX,
+    P_COMP_ON,
     P_DRIVE_MODE,
     P_I_LIMIT_DIV,
     P_I_OFFSET_A,
@@ -183,6 +185,7 @@ def run_drive(par, prof_t, prof_v, prof_n, table, x, c, n_steps, log, log_every)
     n_p = par[P_NP]
     mode = int(par[P_DRIVE_MODE])
     sensorless = par[P_SPEED_FB] != 0.0
+    comp_on = par[P_COMP_ON] != 0.0
     i_lim = par[P_I_LIMIT_DIV]
     w_lim = par[P_W_LIMIT_DIV]
     n_rows = log.shape[0]
@@ -217,6 +220,8 @@ def run_drive(par, prof_t, prof_v, prof_n, table, x, c, n_steps, log, log_every)
         theta_k = c[C_THETA_E]  # the controller's d-axis angle at this sample
         if mode == DRIVE_FOC:
             mras_step(par, c, i_meas_a, i_meas_b, Ts)
+            if comp_on:
+                compensator_step(par, c, table, t, k)
             w_ref = profile_at(prof_t, prof_v, prof_n, PR_SPEED_REF, t)
             psi_ref = profile_at(prof_t, prof_v, prof_n, PR_FLUX_REF, t)
             w_fb = c[C_W_HAT] / n_p if sensorless else w_m

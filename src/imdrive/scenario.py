@@ -20,6 +20,9 @@ PRESET`` prints complete examples)::
     [estimator]    the controller's machine model: R1_ohm, R2_ohm (initial R2_hat), Ll1_H,
                    Ll2_H, M_H (each defaults to the plant's value)
     [mras]         wc_rad_s, bandwidth_Hz, K1, K2
+    [compensator]  enabled, t_on_s, period_s, gain_E_per_Wb, gain_DE_per_Wb, G_CR_ohm,
+                   R2_min_ohm, R2_max_ohm, table = "paper" | "rules",
+                   input = "e_d0" | "demodulated", average
     [sensor]       i_offset_alpha_A, i_offset_beta_A
     [simulation]   t_end_s, Ts_s, substeps, log_every, divergence_current_A, divergence_speed_rpm
     [output]       figures, csv
@@ -208,6 +211,47 @@ class MrasSettings:
 
 
 @dataclass(frozen=True)
+class CompensatorSettings:
+    """The fuzzy rotor-resistance compensator (``[compensator]``, paper §4).
+
+    ``gain_E_per_Wb`` and ``gain_DE_per_Wb`` scale e_d0 and its change per period before the
+    quantiser (thresholds 0.25 ... 5): 1e6 reproduces the paper's micro-weber thresholds.
+    ``G_CR_ohm`` is the change of R2_hat per output level and period. The clamps default to
+    0.5 and 2 times the initial estimate.
+    """
+
+    enabled: bool = False
+    t_on_s: float = 0.0
+    period_s: float = 0.01
+    gain_E_per_Wb: float = 1e6
+    gain_DE_per_Wb: float = 1e6
+    G_CR_ohm: float = 0.001
+    R2_min_ohm: float | None = None
+    R2_max_ohm: float | None = None
+    table: str = "paper"
+    input: str = "e_d0"
+    average: bool = True
+
+    def __post_init__(self):
+        _nonneg(self.t_on_s, "compensator.t_on_s")
+        _pos(self.period_s, "compensator.period_s")
+        _pos(self.gain_E_per_Wb, "compensator.gain_E_per_Wb")
+        _pos(self.gain_DE_per_Wb, "compensator.gain_DE_per_Wb")
+        _nonneg(self.G_CR_ohm, "compensator.G_CR_ohm")
+        for n in ("R2_min_ohm", "R2_max_ohm"):
+            if getattr(self, n) is not None:
+                _pos(getattr(self, n), f"compensator.{n}")
+        if self.R2_min_ohm is not None and self.R2_max_ohm is not None:
+            _check(
+                self.R2_min_ohm < self.R2_max_ohm,
+                "compensator.R2_min_ohm",
+                "must be < compensator.R2_max_ohm",
+            )
+        _choice(self.table, ("paper", "rules"), "compensator.table")
+        _choice(self.input, ("e_d0", "demodulated"), "compensator.input")
+
+
+@dataclass(frozen=True)
 class SensorSettings:
     """Current-sensor imperfections (``[sensor]``)."""
 
@@ -259,6 +303,7 @@ SECTIONS: dict[str, type] = {
     "control": ControlSettings,
     "estimator": EstimatorSettings,
     "mras": MrasSettings,
+    "compensator": CompensatorSettings,
     "sensor": SensorSettings,
     "simulation": SimulationSettings,
     "output": OutputSettings,
@@ -281,6 +326,7 @@ class Scenario:
     control: ControlSettings = field(default_factory=ControlSettings)
     estimator: EstimatorSettings = field(default_factory=EstimatorSettings)
     mras: MrasSettings = field(default_factory=MrasSettings)
+    compensator: CompensatorSettings = field(default_factory=CompensatorSettings)
     sensor: SensorSettings = field(default_factory=SensorSettings)
     simulation: SimulationSettings = field(default_factory=SimulationSettings)
     output: OutputSettings = field(default_factory=OutputSettings)

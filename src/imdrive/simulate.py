@@ -11,6 +11,7 @@ import numpy as np
 from imdrive import layout as Lo
 from imdrive.control import default_current_gains, default_speed_gains
 from imdrive.engine import DRIVE_FOC, DRIVE_OPEN_LOOP, run_drive
+from imdrive.fuzzy import fuzzy_table
 from imdrive.inverter import INVERTER_MODELS
 from imdrive.machine import initial_state
 from imdrive.mras import default_mras_gains
@@ -128,6 +129,21 @@ def build_arrays(sc: Scenario) -> DriveArrays:
     par[Lo.P_I_OFFSET_B] = sc.sensor.i_offset_beta_A
     par[Lo.P_LOG_EVERY] = sc.simulation.log_every
 
+    comp = sc.compensator
+    Ts = sc.simulation.Ts_s
+    n_comp = max(int(round(comp.period_s / Ts)), 1)
+    par[Lo.P_COMP_ON] = 1.0 if comp.enabled else 0.0
+    par[Lo.P_COMP_T_ON] = comp.t_on_s
+    par[Lo.P_COMP_N] = n_comp
+    par[Lo.P_COMP_GE] = comp.gain_E_per_Wb
+    par[Lo.P_COMP_GDE] = comp.gain_DE_per_Wb
+    par[Lo.P_COMP_GCR] = comp.G_CR_ohm
+    par[Lo.P_R2_HAT_MIN] = comp.R2_min_ohm if comp.R2_min_ohm is not None else 0.5 * R2h
+    par[Lo.P_R2_HAT_MAX] = comp.R2_max_ohm if comp.R2_max_ohm is not None else 2.0 * R2h
+    par[Lo.P_COMP_INPUT] = 1.0 if comp.input == "demodulated" else 0.0
+    par[Lo.P_COMP_AVG] = 1.0 if comp.average else 0.0
+    table = fuzzy_table(comp.table).astype(np.float64)
+
     v_amp, freq = _vf_profiles(sc)
     profiles = [Profile.constant(0.0)] * Lo.N_PROF
     profiles[Lo.PR_SPEED_REF] = ctl.speed_ref_rpm.scaled(RPM)
@@ -157,6 +173,9 @@ def build_arrays(sc: Scenario) -> DriveArrays:
             "sigma": m.sigma,
             "T2_s": m.T2_s,
             "v_max_V": sc.inverter.v_max_V,
+            "compensator_period_steps": n_comp,
+            "R2_hat_min_ohm": par[Lo.P_R2_HAT_MIN],
+            "R2_hat_max_ohm": par[Lo.P_R2_HAT_MAX],
         }
     )
     return DriveArrays(
@@ -164,7 +183,7 @@ def build_arrays(sc: Scenario) -> DriveArrays:
         prof_t=prof_t,
         prof_v=prof_v,
         prof_n=prof_n,
-        table=np.zeros((13, 13)),
+        table=table,
         x0=x0,
         c0=c0,
         n_steps=sc.simulation.n_steps,
