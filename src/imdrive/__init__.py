@@ -13,8 +13,23 @@ Conventions (used everywhere in the package)
 * ``w_m`` is mechanical speed (rad/s), ``w_r = n_p * w_m`` electrical rotor speed (rad/s).
 """
 
+from imdrive._cache import kernel_cache
 from imdrive.errors import ConfigError, SimulationDiverged
-from imdrive.machine import MachineParams, machine_preset, machine_presets
+
+# every compiled kernel is defined here, under the package's own cache folder (see _cache)
+with kernel_cache():
+    from imdrive import (  # noqa: F401
+        compensator,
+        control,
+        engine,
+        fuzzy,
+        inverter,
+        machine,
+        mras,
+        profiles,
+    )
+
+from imdrive.machine import MachineParams, machine_preset, machine_presets  # noqa: E402
 
 __version__ = "0.1.0"
 

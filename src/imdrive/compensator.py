@@ -13,12 +13,26 @@ updates
     R2_hat <- clip(R2_hat + G_CR * CR, R2_min, R2_max)
 
 The MRAS and the slip calculation read ``R2_hat`` from the controller state, so both use the
-new value from the next sample on. By default E is the mean of e_d0 over the compensator
-period rather than a single sample (``P_COMP_AVG``): a boxcar anti-aliasing filter that keeps
-the inverter-frequency ripple of e_d0 out of the quantiser.
+new value from the next sample on.
+
+Persistent-excitation variant (this project's, not the paper's): a sinusoid of amplitude
+``P_INJ_AMP`` and frequency ``P_INJ_FREQ`` is added to the flux-current reference id*
+(:func:`imdrive.control.foc_step`), and the compensator's input becomes the synchronous
+detection ``2 e_d0 sin(phase)`` of e_d0 with the injected sinusoid. Averaged over whole
+injection periods (the compensator period) it is the in-phase part of the e_d0 oscillation,
+which the rotor-time-constant mismatch creates: with the flux responding as
+``1/(1 + s T2)`` in the plant and ``1/(1 + s T2_hat)`` in the adjustable model, the in-phase
+part of their difference has the sign of ``T2_hat - T2``, i.e. it is negative when
+``R2_hat > R2`` — the same sign convention as the paper's e_d0, so the same table applies.
+A constant (e.g. discretisation) bias of e_d0 averages out.
+
+By default E is the mean of the input over the compensator period rather than a single sample
+(``P_COMP_AVG``): a boxcar anti-aliasing filter that keeps ripple out of the quantiser.
 """
 
 from __future__ import annotations
+
+import math
 
 from numba import njit
 
@@ -30,6 +44,7 @@ from imdrive.layout import (
     C_DEMOD,
     C_E_D0,
     C_E_D0_PREV,
+    C_INJ_PHASE,
     C_R2_HAT,
     P_COMP_AVG,
     P_COMP_GCR,
@@ -38,9 +53,25 @@ from imdrive.layout import (
     P_COMP_INPUT,
     P_COMP_N,
     P_COMP_T_ON,
+    P_INJ_LPF,
     P_R2_HAT_MAX,
     P_R2_HAT_MIN,
 )
+
+
+@njit(cache=True)
+def demodulate(par, c, Ts):
+    """Synchronous detection of e_d0 with the injected sinusoid (updates ``C_DEMOD``).
+
+    Uses the injection phase of this sample (before the controller advances it). With
+    ``P_INJ_LPF > 0`` the product is also low-pass filtered (rad/s), for display.
+    """
+    prod = 2.0 * c[C_E_D0] * math.sin(c[C_INJ_PHASE])
+    w_lp = par[P_INJ_LPF]
+    if w_lp > 0.0:
+        c[C_DEMOD] += (1.0 - math.exp(-w_lp * Ts)) * (prod - c[C_DEMOD])
+    else:
+        c[C_DEMOD] = prod
 
 
 @njit(cache=True)

@@ -2,12 +2,18 @@
 
 Indirect field orientation (the paper's Fig. 4): the controller's synchronous frame has the angle
 
-    theta_e = \\int (n_p w_fb + w_sl) dt,     w_sl = (R2_hat / L2_hat) iq* / id*
+    theta_e = \\int (n_p w_fb + w_sl) dt,     w_sl = (M_hat / T2_hat) iq* / psi_hat,
+    T2_hat d(psi_hat)/dt + psi_hat = M_hat id*,  T2_hat = L2_hat / R2_hat
 
 where ``w_fb`` is the speed feedback (measured, or the MRAS estimate) and ``R2_hat`` the
 *estimated* rotor resistance, so a wrong R2_hat shows up exactly where it does in a real drive.
+In steady state ``psi_hat = M_hat id*`` and the slip is the paper's ``(R2_hat/L2_hat) iq*/id*``;
+the flux model keeps the orientation right while the flux changes (magnetising, or the injected
+sinusoid of the persistent-excitation compensator).
 The rotor-flux reference is expressed as the flux-current reference ``id* = psi* / M_hat`` (plus
-an optional injected sinusoid); the speed PI gives ``iq*``; synchronous-frame current PIs with
+an optional injected sinusoid); the speed PI gives a torque command, expressed as the q current
+at the reference flux and divided by the flux model, ``iq* = u psi*/psi_hat``, so the torque
+does not follow flux changes; synchronous-frame current PIs with
 cross-coupling and back-emf feed-forward give the voltage, limited to the inverter's range.
 
 Gain formulas (the defaults; each can be overridden in the scenario):
@@ -41,6 +47,7 @@ from imdrive.layout import (
     C_INT_Q,
     C_INT_W,
     C_IQ_REF,
+    C_PSI_HAT,
     C_R2_HAT,
     C_THETA_E,
     C_THETA_OL,
@@ -130,12 +137,21 @@ def foc_step(par, c, i_a, i_b, w_fb_m, w_ref_m, psi_ref, Ts):
         c[C_INJ_PHASE] = wrap_angle(c[C_INJ_PHASE] + 2.0 * math.pi * par[P_INJ_FREQ] * Ts)
     id_ref = min(id_ref, i_max)
 
-    # speed PI -> torque-current reference within the current limit
+    # the controller's rotor-flux model (exact for id* held over the period)
+    T2_hat = L2 / c[C_R2_HAT]
+    g = math.exp(-Ts / T2_hat)
+    psi_hat = c[C_PSI_HAT]
+    # floor: keeps slip and torque current finite while the machine is still unmagnetised
+    psi_div = max(psi_hat, 0.05 * M * abs(id_ref), 1e-6)
+
+    # speed PI -> torque command, expressed as the q current at the reference flux; divided by
+    # the modelled flux so the torque does not follow flux changes (injection, magnetising)
     iq_max = math.sqrt(max(i_max * i_max - id_ref * id_ref, 0.0))
     err_w = w_ref_m - w_fb_m
-    iq_unsat = par[P_KP_W] * err_w + c[C_INT_W]
-    iq_ref = min(max(iq_unsat, -iq_max), iq_max)
-    c[C_INT_W] += par[P_KI_W] * Ts * err_w + (iq_ref - iq_unsat)
+    u_unsat = par[P_KP_W] * err_w + c[C_INT_W]
+    flux_gain = psi_ref / psi_div
+    iq_ref = min(max(u_unsat * flux_gain, -iq_max), iq_max)
+    c[C_INT_W] += par[P_KI_W] * Ts * err_w + (iq_ref / flux_gain - u_unsat)
 
     # synchronous frame: slip from the estimated rotor time constant
     th = c[C_THETA_E]
@@ -143,9 +159,8 @@ def foc_step(par, c, i_a, i_b, w_fb_m, w_ref_m, psi_ref, Ts):
     sn = math.sin(th)
     i_d = cs * i_a + sn * i_b
     i_q = -sn * i_a + cs * i_b
-    w_sl = 0.0
-    if id_ref > 1e-9:
-        w_sl = c[C_R2_HAT] / L2 * iq_ref / id_ref
+    w_sl = M * iq_ref / (T2_hat * psi_div)
+    c[C_PSI_HAT] = g * psi_hat + (1.0 - g) * M * id_ref
     w_e = n_p * w_fb_m + w_sl
 
     # current PIs with decoupling; the d axis has priority in the voltage limit (keeps flux)
@@ -157,7 +172,7 @@ def foc_step(par, c, i_a, i_b, w_fb_m, w_ref_m, psi_ref, Ts):
     ff_q = 0.0
     if par[P_DECOUPLE] != 0.0:
         ff_d = -w_e * sigma_L1 * iq_ref
-        ff_q = w_e * L1 * id_ref
+        ff_q = w_e * (sigma_L1 * id_ref + M / L2 * psi_hat)
     v_d_unsat = kp * e_d + c[C_INT_D] + ff_d
     v_q_unsat = kp * e_q + c[C_INT_Q] + ff_q
     v_max = par[P_VDC] / math.sqrt(3.0)

@@ -24,7 +24,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from imdrive.compensator import compensator_step
+from imdrive.compensator import compensator_step, demodulate
 from imdrive.control import foc_step, open_loop_voltage
 from imdrive.inverter import MAX_SEGMENTS, inverter_segments
 from imdrive.layout import (
@@ -82,6 +82,7 @@ from imdrive.layout import (
     P_I_LIMIT_DIV,
     P_I_OFFSET_A,
     P_I_OFFSET_B,
+    P_INJ_AMP,
     P_LL1,
     P_LL2,
     P_M,
@@ -186,6 +187,7 @@ def run_drive(par, prof_t, prof_v, prof_n, table, x, c, n_steps, log, log_every)
     mode = int(par[P_DRIVE_MODE])
     sensorless = par[P_SPEED_FB] != 0.0
     comp_on = par[P_COMP_ON] != 0.0
+    injecting = par[P_INJ_AMP] != 0.0
     i_lim = par[P_I_LIMIT_DIV]
     w_lim = par[P_W_LIMIT_DIV]
     n_rows = log.shape[0]
@@ -220,6 +222,8 @@ def run_drive(par, prof_t, prof_v, prof_n, table, x, c, n_steps, log, log_every)
         theta_k = c[C_THETA_E]  # the controller's d-axis angle at this sample
         if mode == DRIVE_FOC:
             mras_step(par, c, i_meas_a, i_meas_b, Ts)
+            if injecting:
+                demodulate(par, c, Ts)
             if comp_on:
                 compensator_step(par, c, table, t, k)
             w_ref = profile_at(prof_t, prof_v, prof_n, PR_SPEED_REF, t)

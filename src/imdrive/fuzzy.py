@@ -13,7 +13,8 @@ This module holds
   (see :func:`infer` for the difference): ``"rules"`` — eq. (12) read literally, the default —
   and ``"universe"`` — the textbook Mamdani max-aggregation over the 13-level universe;
 * a search for the unprinted rule base that best reproduces Table III
-  (:func:`fit_rules_to_table`, result cached as :data:`FITTED_RULES`);
+  (:func:`fit_rules_to_table`, results cached as :data:`FITTED_RULES` and
+  :data:`FITTED_RULES_MONOTONE`);
 * helpers to compare and print tables, and the numba-compiled :func:`quantize` / :func:`lookup`.
 
 Levels are integers −6 … 6 and are stored at array index ``level + 6``; fuzzy sets are indexed
@@ -39,6 +40,7 @@ __all__ = [
     "METHODS",
     "DEFAULT_FIT_STARTS",
     "FITTED_RULES",
+    "FITTED_RULES_MONOTONE",
     "FitResult",
     "quantize",
     "quantize_array",
@@ -136,11 +138,11 @@ for _a in (THRESHOLDS, LEVELS, SET_PEAKS, MEMBERSHIP, PAPER_TABLE_III):
 def quantize(x: float) -> int:
     """Quantise a scaled input to its level −6 … 6 (Tables I/II).
 
-    Intervals are closed on the side nearer zero's far end exactly as the paper prints them:
-    level 0 is ``−0.25 < x ≤ 0.25``, level k > 0 is ``t[k−1] < x ≤ t[k]`` and level −k is
-    ``−t[k] < x ≤ −t[k−1]`` with ``t = THRESHOLDS``; level 6 is ``x > 5`` and level −6 is
-    ``x ≤ −5``. Because every interval is open on the left and closed on the right, the map is
-    *not* odd at the thresholds: ``quantize(0.25) = 0`` but ``quantize(-0.25) = -1``.
+    Every interval is open below and closed above, as the paper prints them: level 0 is
+    ``−0.25 < x ≤ 0.25``; with ``t = THRESHOLDS`` (0-based), level k = 1 … 5 is
+    ``t[k−1] < x ≤ t[k]`` and level −k is ``−t[k] < x ≤ −t[k−1]``; level 6 is ``x > 5`` and
+    level −6 is ``x ≤ −5``. So the map is *not* odd at the thresholds:
+    ``quantize(0.25) = 0`` but ``quantize(-0.25) = -1``.
 
     Parameters
     ----------
@@ -257,11 +259,13 @@ def _check_rules(rules) -> np.ndarray:
         raise ConfigError("fuzzy.rules", "must be a 7x7 integer array of set indices")
     if r.min() < 0 or r.max() > 6:
         raise ConfigError("fuzzy.rules", "set indices must lie in 0..6")
-    return np.ascontiguousarray(r, dtype=np.int64)
+    # always a fresh writable C array: numba compiles read-only arrays (our constants) as a
+    # separate type, and one specialisation per kernel keeps the compile time down
+    return np.array(r, dtype=np.int64, order="C")
 
 
 def _check_membership(membership) -> np.ndarray:
-    m = np.ascontiguousarray(membership, dtype=np.float64)
+    m = np.array(membership, dtype=np.float64, order="C")  # fresh and writable, as above
     if m.shape != (13, 7):
         raise ConfigError("fuzzy.membership", "must be a 13x7 array (levels x sets)")
     return m
@@ -351,7 +355,9 @@ def round_level(x) -> np.ndarray:
     Values are first rounded to 9 decimals so that a COG that is a half-integer in exact
     arithmetic (e.g. 2.5 computed as 2.4999999999999996) rounds the same way on every platform.
     Half away from zero keeps a table compiled from antisymmetric rules antisymmetric, which
-    round-half-to-even would not guarantee.
+    round-half-to-even would not guarantee, and it is what Table III shows: with
+    :data:`FITTED_RULES_MONOTONE` 30 cells have an exact .5 COG (row E = −5: −5.5, −4.5, …,
+    −0.5), and 29 of them are printed rounded away from zero (9 would match half-to-even).
 
     Parameters
     ----------
@@ -464,18 +470,20 @@ def _better(d, best):
 
 
 @njit(cache=True)
-def _delta(rules, mask, vals, target, membership, peaks, method, reg, viol0, out):
+def _delta(rules, mask, vals, target, membership, peaks, method, reg, viol0, out, newvals):
     """Cost change of the current (modified) ``rules`` vs the state ``vals`` / ``viol0``.
 
     Only the cells in ``mask`` are recomputed. ``out`` receives the change of the cost vector
     (monotonicity violations if ``reg == 2``, differing cells, Σ|diff|, violations if
-    ``reg == 1``, Σ residual²).
+    ``reg == 1``, Σ residual²); the recomputed cell values go to ``newvals``.
     """
-    out[:] = 0.0
+    for k in range(5):
+        out[k] = 0.0
     for i in range(13):
         for j in range(13):
             if mask[i, j]:
                 v = _cell(i, j, rules, membership, peaks, method)
+                newvals[i, j] = v
                 n0, n1, n2 = _cell_cost(v, target[i, j])
                 o0, o1, o2 = _cell_cost(vals[i, j], target[i, j])
                 out[1] += n0 - o0
@@ -486,100 +494,107 @@ def _delta(rules, mask, vals, target, membership, peaks, method, reg, viol0, out
 
 
 @njit(cache=True)
-def _descend(rules, target, membership, peaks, method, reg):
-    """Local search in place on ``rules``: single-rule moves, then pair moves of neighbours.
+def _try_move(rules, a, b, c, e, fire, mask, vals, viol, target, membership, peaks, method, reg):
+    """Give rules (a, b) and (c, e) their best values; True if that lowered the cost.
 
-    A rule (a, b) only changes cells where set a fires on E and set b fires on DE, so a move is
-    scored on those cells alone. Moves are tried in a fixed order; each rule (pair) takes its
-    best value if that strictly lowers the cost vector. Deterministic, and it terminates
-    because every accepted move lowers the cost.
+    ``(c, e) == (a, b)`` is a single-rule move. For a pair, only values where both rules change
+    are tried (single moves cover the rest). A rule (a, b) only changes the cells where set a
+    fires on E and set b fires on DE, so only those cells (``mask``) are rescored.
     """
-    vals = _compile(rules, membership, peaks, method)
-    viol = _violations(rules)
-    fire = membership > 0.0
-    mask = np.zeros((13, 13), dtype=np.bool_)
+    single = a == c and b == e
+    for i in range(13):
+        for j in range(13):
+            mask[i, j] = (fire[i, a] and fire[j, b]) or (fire[i, c] and fire[j, e])
+    o1 = rules[a, b]
+    o2 = rules[c, e]
+    bv1 = o1
+    bv2 = o2
     d = np.zeros(5)
     best = np.zeros(5)
-    improved = True
-    while improved:
-        improved = False
-        # single moves
-        for a in range(7):
-            for b in range(7):
-                for i in range(13):
-                    for j in range(13):
-                        mask[i, j] = fire[i, a] and fire[j, b]
-                old = rules[a, b]
-                best_v = old
-                best[:] = 0.0
-                for v in range(7):
-                    if v == old:
-                        continue
-                    rules[a, b] = v
-                    _delta(rules, mask, vals, target, membership, peaks, method, reg, viol, d)
-                    if _better(d, best):
-                        best[:] = d
-                        best_v = v
-                rules[a, b] = best_v
-                if best_v != old:
-                    improved = True
-                    viol = _violations(rules)
-                    for i in range(13):
-                        for j in range(13):
-                            if mask[i, j]:
-                                vals[i, j] = _cell(i, j, rules, membership, peaks, method)
-        if improved:
+    newvals = np.empty((13, 13))
+    bestvals = np.empty((13, 13))  # cell values of the best move so far (no rescoring needed)
+    for v1 in range(7):
+        if v1 == o1:
             continue
-        # pair moves: two rules whose sets are adjacent share cells, so a change that helps
-        # only when both move together is invisible to single moves
-        for a in range(7):
-            for b in range(7):
-                for c in range(a, min(a + 2, 7)):
-                    for e in range(max(b - 1, 0), min(b + 2, 7)):
-                        if c == a and e <= b:
-                            continue
-                        for i in range(13):
-                            for j in range(13):
-                                mask[i, j] = (fire[i, a] and fire[j, b]) or (
-                                    fire[i, c] and fire[j, e]
-                                )
-                        o1 = rules[a, b]
-                        o2 = rules[c, e]
-                        bv1 = o1
-                        bv2 = o2
-                        best[:] = 0.0
-                        for v1 in range(7):
-                            for v2 in range(7):
-                                if v1 == o1 or v2 == o2:
-                                    continue  # single moves already covered
-                                rules[a, b] = v1
-                                rules[c, e] = v2
-                                _delta(
-                                    rules,
-                                    mask,
-                                    vals,
-                                    target,
-                                    membership,
-                                    peaks,
-                                    method,
-                                    reg,
-                                    viol,
-                                    d,
-                                )
-                                if _better(d, best):
-                                    best[:] = d
-                                    bv1 = v1
-                                    bv2 = v2
-                        rules[a, b] = bv1
-                        rules[c, e] = bv2
-                        if bv1 != o1:
-                            improved = True
-                            viol = _violations(rules)
-                            for i in range(13):
-                                for j in range(13):
-                                    if mask[i, j]:
-                                        vals[i, j] = _cell(i, j, rules, membership, peaks, method)
-    return rules
+        for v2 in range(7):
+            if single:
+                if v2 > 0:
+                    break
+            elif v2 == o2:
+                continue
+            rules[a, b] = v1
+            if not single:
+                rules[c, e] = v2
+            _delta(rules, mask, vals, target, membership, peaks, method, reg, viol, d, newvals)
+            if _better(d, best):
+                for k in range(5):
+                    best[k] = d[k]
+                for i in range(13):  # explicit loops: slice assignment is slow to compile
+                    for j in range(13):
+                        bestvals[i, j] = newvals[i, j]
+                bv1 = v1
+                bv2 = rules[c, e]
+    rules[a, b] = bv1
+    rules[c, e] = bv2
+    if bv1 == o1:
+        return False
+    for i in range(13):
+        for j in range(13):
+            if mask[i, j]:
+                vals[i, j] = bestvals[i, j]
+    return True
+
+
+def _move_list() -> np.ndarray:
+    # rows (a, b, c, e): the 49 single-rule moves (c, e) = (a, b), then every pair of rules
+    # whose sets are adjacent in E and in DE (they share cells, so a change that helps only when
+    # both move together is invisible to single moves)
+    singles = [(a, b, a, b) for a in range(7) for b in range(7)]
+    pairs = [
+        (a, b, c, e)
+        for a in range(7)
+        for b in range(7)
+        for c in range(a, min(a + 2, 7))
+        for e in range(max(b - 1, 0), min(b + 2, 7))
+        if (c, e) > (a, b)
+    ]
+    return np.array(singles + pairs, dtype=np.int64)
+
+
+_MOVES = _move_list()
+_N_SINGLE = 49
+
+
+@njit(cache=True)
+def _descend(rules, target, membership, peaks, method, reg, moves):
+    """Local search in place on ``rules``: single-rule moves, then pair moves (``moves``).
+
+    Single moves are swept until none helps, then pair moves; any success returns to single
+    moves. Moves are tried in a fixed order and taken on strict improvement of the cost vector
+    (see :func:`_delta`): deterministic, and it terminates because every move lowers the cost.
+    """
+    vals = _compile(rules, membership, peaks, method)
+    fire = np.zeros((13, 7), dtype=np.bool_)  # set c fires at level index i
+    for i in range(13):
+        for c in range(7):
+            fire[i, c] = membership[i, c] > 0.0
+    mask = np.zeros((13, 13), dtype=np.bool_)
+    lo, hi = 0, _N_SINGLE
+    while True:
+        improved = False
+        for k in range(lo, hi):
+            a, b, c, e = moves[k, 0], moves[k, 1], moves[k, 2], moves[k, 3]
+            viol = _violations(rules)
+            ok = _try_move(
+                rules, a, b, c, e, fire, mask, vals, viol, target, membership, peaks, method, reg
+            )
+            improved = improved or ok
+        if improved:
+            lo, hi = 0, _N_SINGLE
+        elif lo == 0:
+            lo, hi = _N_SINGLE, moves.shape[0]
+        else:
+            return rules
 
 
 def _half_rules() -> np.ndarray:
@@ -594,7 +609,7 @@ _REGULARITY = {"none": 0, "tiebreak": 1, "monotone": 2}
 DEFAULT_FIT_STARTS = 4
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # eq on array fields would be ambiguous
 class FitResult:
     """Outcome of :func:`fit_rules_to_table`.
 
@@ -640,14 +655,27 @@ def fit_rules_to_table(
     3. then ``n_kicks`` times: randomly reassign 2-4 rules of the best base (seeded), descend,
        and keep the result if it is better.
 
-    The objective is lexicographic: first the number of differing cells, then Σ |difference|,
-    then (tie-break only) the squared residual of the unrounded table. The result is fully
-    determined by the arguments.
+    This runs twice: first restricted to monotone rule bases (output set non-decreasing in E
+    and DE), where local search converges well, then — unless
+    ``regularity="monotone"`` — from that optimum without the restriction.
 
-    With the defaults the result is :data:`FITTED_RULES`: 18 cells differ from the printed
-    Table III, Σ |difference| = 18 (every miss is by one level). For ``method="universe"`` the
-    best base found misses 39 cells (Σ |difference| = 40) — evidence that the paper used the
-    literal eq. (12).
+    The objective is lexicographic: the number of differing cells, then Σ |difference|, then
+    (``regularity="tiebreak"``) the monotonicity violation V of the rules, then the squared
+    residual of the unrounded table. The result is fully determined by the arguments; with
+    the defaults it takes about 2 s.
+
+    Results for the printed Table III (method "rules"; the same for seeds 0-9):
+
+    * defaults: :data:`FITTED_RULES`, 11 differing cells, Σ |difference| = 11, V = 8;
+    * ``regularity="monotone"``: :data:`FITTED_RULES_MONOTONE`, 12 cells, Σ = 12, V = 0. This
+      base is also antisymmetric and its table exactly antisymmetric; 6 of its 12 misses are
+      in the printed row E = −4, which PAPER.md already flags as breaking the pattern. It is the
+      more plausible reconstruction of the authors' rules: the unconstrained optimum buys one
+      cell with eight non-monotone rules.
+    * ``method="universe"``: 37 cells, Σ = 39 with the defaults (36 / 38 in a long search;
+      44 / 44 if monotone). The Mamdani reading cannot reproduce Table III — it cannot even
+      reach ±6, the COG of NB over U being −5.35 — evidence that the paper used the literal
+      eq. (12).
 
     Parameters
     ----------
@@ -700,7 +728,7 @@ def fit_rules_to_table(
         # iterated local search: descend from every start, then kick the best and re-descend
         best, best_key = None, None
         for c in starts_:
-            r = _descend(c.copy(), tgt, m, SET_PEAKS, code, reg_)
+            r = _descend(c.copy(), tgt, m, SET_PEAKS, code, reg_, _MOVES)
             k = key(r, reg_)
             if best_key is None or k < best_key:
                 best, best_key = r, k
@@ -709,14 +737,14 @@ def fit_rules_to_table(
             n = int(rng.integers(2, 5))
             idx = rng.choice(49, size=n, replace=False)
             r.flat[idx] = rng.integers(0, 7, size=n)
-            r = _descend(r, tgt, m, SET_PEAKS, code, reg_)
+            r = _descend(r, tgt, m, SET_PEAKS, code, reg_, _MOVES)
             k = key(r, reg_)
             if k < best_key:
                 best, best_key = r, k
         return best, best_key
 
-    # stage 1: monotone bases only; in that smooth landscape local search reliably finds the
-    # optimum, which is a good start for the unconstrained search of stage 2
+    # stage 1: monotone bases only; local search converges well in that smoother landscape,
+    # and its optimum is a good start for the unconstrained search of stage 2
     best, best_key = ils(cands, _REGULARITY["monotone"], n_kicks)
     if reg != _REGULARITY["monotone"]:
         best, best_key = ils([best], reg, n_kicks)
@@ -724,23 +752,42 @@ def fit_rules_to_table(
     return FitResult(best, table, best_key[1], best_key[2])
 
 
-#: Rule base fitted to Table III by ``fit_rules_to_table()`` (defaults, method "rules"), pasted
-#: here as data so importing the module costs nothing. ``FITTED_RULES[e_set, de_set]`` is the
-#: output set index; rows E = NB … PB, columns DE = NB … PB. Compiled with method "rules" it
-#: differs from the printed Table III in 18 cells, each by one level (see
-#: :func:`fit_rules_to_table`).
+#: Rule base fitted to Table III by ``fit_rules_to_table()`` (all defaults: method "rules",
+#: regularity "tiebreak"), pasted here as data so importing the module costs nothing.
+#: ``FITTED_RULES[e_set, de_set]`` is the output set index; rows E = NB … PB, columns
+#: DE = NB … PB. Compiled with method "rules" it differs from the printed Table III in 11 cells,
+#: each by one level: (E, DE) = (−6, 1), (−6, 4), (−4, −6), (−4, −5), (−4, −2), (−4, −1),
+#: (−4, 2), (−1, −4), (1, 2), (1, 3), (1, 4).
 FITTED_RULES = np.array(
     [
-        [0, 0, 0, 1, 2, 2, 3],
-        [0, 0, 0, 1, 2, 2, 3],
-        [1, 1, 2, 2, 3, 3, 4],
-        [1, 1, 2, 3, 3, 4, 5],
-        [3, 3, 3, 4, 4, 5, 5],
-        [3, 3, 4, 4, 5, 5, 6],
-        [3, 4, 4, 5, 5, 6, 6],
+        [0, 0, 1, 1, 3, 1, 4],  # NB
+        [0, 1, 1, 2, 1, 3, 3],  # NM
+        [1, 1, 2, 2, 4, 3, 3],  # NS
+        [1, 2, 3, 3, 3, 4, 5],  # ZE
+        [3, 3, 3, 4, 4, 5, 5],  # PS
+        [3, 3, 4, 4, 5, 5, 6],  # PM
+        [3, 4, 4, 5, 5, 6, 6],  # PB
     ],
     dtype=np.int64,
 )
+
+#: Best monotone rule base, ``fit_rules_to_table(regularity="monotone")``: 12 differing cells,
+#: each by one level; monotone, antisymmetric (``r[6-a, 6-b] = 6 - r[a, b]``), and its compiled
+#: table is exactly antisymmetric. See :func:`fit_rules_to_table` for why it may be the better
+#: reconstruction.
+FITTED_RULES_MONOTONE = np.array(
+    [
+        [0, 0, 1, 1, 2, 2, 3],  # NB
+        [0, 1, 1, 2, 2, 3, 3],  # NM
+        [1, 1, 2, 2, 3, 3, 3],  # NS
+        [1, 2, 3, 3, 3, 4, 5],  # ZE
+        [3, 3, 3, 4, 4, 5, 5],  # PS
+        [3, 3, 4, 4, 5, 5, 6],  # PM
+        [3, 4, 4, 5, 5, 6, 6],  # PB
+    ],
+    dtype=np.int64,
+)
+FITTED_RULES_MONOTONE.flags.writeable = False
 FITTED_RULES.flags.writeable = False
 
 

@@ -80,7 +80,7 @@ P_R2_HAT_MAX = 51  # clamp, ohm
 # flux-current injection (persistent excitation)
 P_INJ_AMP = 52  # amplitude of the sinusoid added to id*, A
 P_INJ_FREQ = 53  # its frequency, Hz
-P_INJ_LPF = 54  # cut-off of the demodulator's low-pass filter, rad/s
+P_INJ_LPF = 54  # optional low-pass on the demodulated product, rad/s (0: none)
 P_COMP_INPUT = 55  # 0: e_d0 (paper), 1: demodulated e_d0 (injection)
 P_LOG_EVERY = 56  # logging decimation (control periods per logged row)
 P_COMP_AVG = 57  # 1.0: the compensator input is the mean over its period, 0.0: a sample
@@ -149,6 +149,7 @@ C_DEMOD = 27  # demodulated, low-pass-filtered e_d0, Wb
 C_CR = 28  # last compensator output level
 C_COMP_STARTED = 29  # 1.0 once the compensator has taken its first sample
 C_COMP_ACC = 30  # running sum of the compensator input over the current period, Wb
+C_PSI_HAT = 31  # the IFOC's rotor-flux model, Wb
 NC = 32
 
 # --------------------------------------------------------------------------------------------

@@ -23,6 +23,7 @@ PRESET`` prints complete examples)::
     [compensator]  enabled, t_on_s, period_s, gain_E_per_Wb, gain_DE_per_Wb, G_CR_ohm,
                    R2_min_ohm, R2_max_ohm, table = "paper" | "rules",
                    input = "e_d0" | "demodulated", average
+    [injection]    amplitude_A, frequency_Hz, lowpass_rad_s (sinusoid added to id*)
     [sensor]       i_offset_alpha_A, i_offset_beta_A
     [simulation]   t_end_s, Ts_s, substeps, log_every, divergence_current_A, divergence_speed_rpm
     [output]       figures, csv
@@ -43,6 +44,7 @@ from pathlib import Path
 
 from imdrive.errors import ConfigError
 from imdrive.inverter import InverterParams
+from imdrive.layout import N_LOG
 from imdrive.machine import MachineParams, machine_preset
 from imdrive.profiles import Profile, parse_profile
 
@@ -65,6 +67,8 @@ def _choice(value: str, choices: tuple[str, ...], path: str) -> None:
 
 
 C = Profile.constant
+LOG_ROW_BYTES = N_LOG * 8
+MAX_LOG_BYTES = 2 * 2**30
 
 
 @dataclass(frozen=True)
@@ -217,12 +221,13 @@ class CompensatorSettings:
     ``gain_E_per_Wb`` and ``gain_DE_per_Wb`` scale e_d0 and its change per period before the
     quantiser (thresholds 0.25 ... 5): 1e6 reproduces the paper's micro-weber thresholds.
     ``G_CR_ohm`` is the change of R2_hat per output level and period. The clamps default to
-    0.5 and 2 times the initial estimate.
+    0.5 and 2 times the initial estimate. ``period_s`` defaults to 10 ms, or to one injection
+    period with ``input = "demodulated"``.
     """
 
     enabled: bool = False
     t_on_s: float = 0.0
-    period_s: float = 0.01
+    period_s: float | None = None
     gain_E_per_Wb: float = 1e6
     gain_DE_per_Wb: float = 1e6
     G_CR_ohm: float = 0.001
@@ -234,7 +239,8 @@ class CompensatorSettings:
 
     def __post_init__(self):
         _nonneg(self.t_on_s, "compensator.t_on_s")
-        _pos(self.period_s, "compensator.period_s")
+        if self.period_s is not None:
+            _pos(self.period_s, "compensator.period_s")
         _pos(self.gain_E_per_Wb, "compensator.gain_E_per_Wb")
         _pos(self.gain_DE_per_Wb, "compensator.gain_DE_per_Wb")
         _nonneg(self.G_CR_ohm, "compensator.G_CR_ohm")
@@ -249,6 +255,25 @@ class CompensatorSettings:
             )
         _choice(self.table, ("paper", "rules"), "compensator.table")
         _choice(self.input, ("e_d0", "demodulated"), "compensator.input")
+
+
+@dataclass(frozen=True)
+class InjectionSettings:
+    """Persistent excitation (``[injection]``): a sinusoid added to the flux-current reference.
+
+    ``amplitude_A`` = 0 switches it off. The compensator's ``input = "demodulated"`` feeds on
+    e_d0 detected synchronously with this sinusoid; its period should be a whole number of
+    injection periods (the default compensator period for that input is one).
+    """
+
+    amplitude_A: float = 0.0
+    frequency_Hz: float = 1.0
+    lowpass_rad_s: float = 0.0
+
+    def __post_init__(self):
+        _nonneg(self.amplitude_A, "injection.amplitude_A")
+        _pos(self.frequency_Hz, "injection.frequency_Hz")
+        _nonneg(self.lowpass_rad_s, "injection.lowpass_rad_s")
 
 
 @dataclass(frozen=True)
@@ -277,6 +302,13 @@ class SimulationSettings:
         _check(self.substeps >= 1, "simulation.substeps", f"must be >= 1 (got {self.substeps})")
         _check(self.log_every >= 1, "simulation.log_every", f"must be >= 1 (got {self.log_every})")
         _check(self.t_end_s / self.Ts_s <= 2e9, "simulation.Ts_s", "gives more than 2e9 periods")
+        log_bytes = (self.n_steps // self.log_every + 1) * LOG_ROW_BYTES
+        _check(
+            log_bytes <= MAX_LOG_BYTES,
+            "simulation.log_every",
+            f"the log would take {log_bytes / 2**30:.1f} GiB (limit "
+            f"{MAX_LOG_BYTES / 2**30:.0f} GiB): raise simulation.log_every",
+        )
         if self.divergence_current_A is not None:
             _pos(self.divergence_current_A, "simulation.divergence_current_A")
         _pos(self.divergence_speed_rpm, "simulation.divergence_speed_rpm")
@@ -304,6 +336,7 @@ SECTIONS: dict[str, type] = {
     "estimator": EstimatorSettings,
     "mras": MrasSettings,
     "compensator": CompensatorSettings,
+    "injection": InjectionSettings,
     "sensor": SensorSettings,
     "simulation": SimulationSettings,
     "output": OutputSettings,
@@ -327,6 +360,7 @@ class Scenario:
     estimator: EstimatorSettings = field(default_factory=EstimatorSettings)
     mras: MrasSettings = field(default_factory=MrasSettings)
     compensator: CompensatorSettings = field(default_factory=CompensatorSettings)
+    injection: InjectionSettings = field(default_factory=InjectionSettings)
     sensor: SensorSettings = field(default_factory=SensorSettings)
     simulation: SimulationSettings = field(default_factory=SimulationSettings)
     output: OutputSettings = field(default_factory=OutputSettings)
@@ -485,6 +519,8 @@ def apply_override(data: dict, spec: str) -> None:
     key, raw = spec.split("=", 1)
     key = key.strip()
     parts = key.split(".")
+    if not key:
+        raise ConfigError("--set", f"{spec!r}: the key before '=' is empty")
     if not all(parts) or not _schema_allows(parts):
         raise ConfigError(key, "no such setting (see 'imdrive show PRESET' for the keys)")
     try:
@@ -523,7 +559,10 @@ def scenario_text(preset_or_path: str) -> str:
         return preset_text(preset_or_path)
     p = Path(preset_or_path)
     if p.is_file():
-        return p.read_text()
+        try:
+            return p.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as exc:
+            raise ConfigError("scenario", f"cannot read {p}: {exc}") from None
     raise ConfigError(
         "scenario", f"{preset_or_path!r} is neither a preset (see 'imdrive presets') nor a file"
     )

@@ -131,7 +131,17 @@ def build_arrays(sc: Scenario) -> DriveArrays:
 
     comp = sc.compensator
     Ts = sc.simulation.Ts_s
-    n_comp = max(int(round(comp.period_s / Ts)), 1)
+    inj = sc.injection
+    if comp.period_s is not None:
+        comp_period = comp.period_s
+    elif comp.input == "demodulated":
+        comp_period = 1.0 / inj.frequency_Hz
+    else:
+        comp_period = 0.01
+    n_comp = max(int(round(comp_period / Ts)), 1)
+    par[Lo.P_INJ_AMP] = inj.amplitude_A
+    par[Lo.P_INJ_FREQ] = inj.frequency_Hz
+    par[Lo.P_INJ_LPF] = inj.lowpass_rad_s
     par[Lo.P_COMP_ON] = 1.0 if comp.enabled else 0.0
     par[Lo.P_COMP_T_ON] = comp.t_on_s
     par[Lo.P_COMP_N] = n_comp
