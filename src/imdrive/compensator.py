@@ -53,17 +53,34 @@ from imdrive.layout import (
     P_COMP_INPUT,
     P_COMP_N,
     P_COMP_T_ON,
+    P_INJ_AMP,
+    P_INJ_FREQ,
     P_INJ_LPF,
+    P_INJ_T_ON,
     P_R2_HAT_MAX,
     P_R2_HAT_MIN,
 )
 
 
 @njit(cache=True)
+def injection_current(par, c, t, Ts):
+    """The injected flux-current component for this period, A (advances its phase in ``c``).
+
+    ``P_INJ_AMP sin(phase)`` from ``P_INJ_T_ON`` on, zero before. The phase used here is the
+    one :func:`demodulate` detects with at the same sample.
+    """
+    if t < par[P_INJ_T_ON]:
+        return 0.0
+    ph = c[C_INJ_PHASE]
+    c[C_INJ_PHASE] = (ph + 2.0 * math.pi * par[P_INJ_FREQ] * Ts) % (2.0 * math.pi)
+    return par[P_INJ_AMP] * math.sin(ph)
+
+
+@njit(cache=True)
 def demodulate(par, c, Ts):
     """Synchronous detection of e_d0 with the injected sinusoid (updates ``C_DEMOD``).
 
-    Uses the injection phase of this sample (before the controller advances it). With
+    Uses the injection phase of this sample (call before :func:`injection_current`). With
     ``P_INJ_LPF > 0`` the product is also low-pass filtered (rad/s), for display.
     """
     prod = 2.0 * c[C_E_D0] * math.sin(c[C_INJ_PHASE])

@@ -42,7 +42,6 @@ from imdrive.layout import (
     C_I_D,
     C_I_Q,
     C_ID_REF,
-    C_INJ_PHASE,
     C_INT_D,
     C_INT_Q,
     C_INT_W,
@@ -54,8 +53,6 @@ from imdrive.layout import (
     C_W_E,
     P_DECOUPLE,
     P_I_MAX,
-    P_INJ_AMP,
-    P_INJ_FREQ,
     P_KI_I,
     P_KI_W,
     P_KP_I,
@@ -99,7 +96,7 @@ def open_loop_voltage(c, v_amp, f_Hz, Ts):
 
 
 @njit(cache=True)
-def foc_step(par, c, i_a, i_b, w_fb_m, w_ref_m, psi_ref, Ts):
+def foc_step(par, c, i_a, i_b, w_fb_m, w_ref_m, psi_ref, i_inj, Ts):
     """One period of indirect field-oriented speed control (updates ``c``).
 
     Parameters
@@ -115,6 +112,8 @@ def foc_step(par, c, i_a, i_b, w_fb_m, w_ref_m, psi_ref, Ts):
         Speed reference, mechanical rad/s.
     psi_ref : float
         Rotor-flux reference, Wb.
+    i_inj : float
+        Component added to the flux-current reference id* (the injected sinusoid), A.
     Ts : float
         Control period, s.
 
@@ -130,12 +129,8 @@ def foc_step(par, c, i_a, i_b, w_fb_m, w_ref_m, psi_ref, Ts):
     n_p = par[P_NP]
     i_max = par[P_I_MAX]
 
-    # flux-current reference, with the optional injected sinusoid (persistent excitation)
-    id_ref = psi_ref / M
-    if par[P_INJ_AMP] != 0.0:
-        id_ref += par[P_INJ_AMP] * math.sin(c[C_INJ_PHASE])
-        c[C_INJ_PHASE] = wrap_angle(c[C_INJ_PHASE] + 2.0 * math.pi * par[P_INJ_FREQ] * Ts)
-    id_ref = min(id_ref, i_max)
+    # flux-current reference, plus the injected component (persistent excitation)
+    id_ref = min(psi_ref / M + i_inj, i_max)
 
     # the controller's rotor-flux model (exact for id* held over the period)
     T2_hat = L2 / c[C_R2_HAT]

@@ -24,7 +24,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from imdrive.compensator import compensator_step, demodulate
+from imdrive.compensator import compensator_step, demodulate, injection_current
 from imdrive.control import foc_step, open_loop_voltage
 from imdrive.inverter import MAX_SEGMENTS, inverter_segments
 from imdrive.layout import (
@@ -229,7 +229,8 @@ def run_drive(par, prof_t, prof_v, prof_n, table, x, c, n_steps, log, log_every)
             w_ref = profile_at(prof_t, prof_v, prof_n, PR_SPEED_REF, t)
             psi_ref = profile_at(prof_t, prof_v, prof_n, PR_FLUX_REF, t)
             w_fb = c[C_W_HAT] / n_p if sensorless else w_m
-            v_ref_a, v_ref_b = foc_step(par, c, i_meas_a, i_meas_b, w_fb, w_ref, psi_ref, Ts)
+            i_inj = injection_current(par, c, t, Ts) if injecting else 0.0
+            v_ref_a, v_ref_b = foc_step(par, c, i_meas_a, i_meas_b, w_fb, w_ref, psi_ref, i_inj, Ts)
         else:
             v_amp = profile_at(prof_t, prof_v, prof_n, PR_V_AMP, t)
             f_Hz = profile_at(prof_t, prof_v, prof_n, PR_FREQ, t)

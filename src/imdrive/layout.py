@@ -84,6 +84,7 @@ P_INJ_LPF = 54  # optional low-pass on the demodulated product, rad/s (0: none)
 P_COMP_INPUT = 55  # 0: e_d0 (paper), 1: demodulated e_d0 (injection)
 P_LOG_EVERY = 56  # logging decimation (control periods per logged row)
 P_COMP_AVG = 57  # 1.0: the compensator input is the mean over its period, 0.0: a sample
+P_INJ_T_ON = 58  # time the injection starts, s
 N_PAR = 64
 
 # --------------------------------------------------------------------------------------------

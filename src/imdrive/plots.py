@@ -78,6 +78,35 @@ def estimator_figure(res) -> Figure:
     return fig
 
 
+def compensation_figure(res) -> Figure:
+    """The paper's Figs. 5/6 layout: e_d0, the R2 estimate, and the motor speed over time."""
+    s = res.signals
+    t = s["time_s"]
+    comp = res.scenario.compensator
+    fig, axes = _fig(3, f"{res.scenario.name}: rotor-resistance compensation")
+    if comp.input == "demodulated":
+        axes[0].plot(t, s["e_d0_Wb"], lw=0.6, alpha=0.6, label="e_d0")
+        axes[0].plot(t, s["e_d0_demod_Wb"], lw=0.6, label="2 e_d0 sin(injection)")
+    else:
+        axes[0].plot(t, s["e_d0_Wb"], label="e_d0")
+    axes[0].set_ylabel("flux error (Wb)")
+    axes[0].legend(loc="best")
+    axes[1].plot(t, s["R2_ohm"], label="R2 (plant)")
+    axes[1].plot(t, s["R2_est_ohm"], "--", label="R2 estimate")
+    axes[1].set_ylabel("rotor resistance (ohm)")
+    axes[1].legend(loc="best")
+    axes[2].plot(t, s["speed_rpm"], label="actual")
+    axes[2].plot(t, s["speed_ref_rpm"], "--", label="reference")
+    axes[2].plot(t, s["speed_est_rpm"], ":", label="estimated (MRAS)")
+    ref = s["speed_ref_rpm"][-1]
+    axes[2].set_ylim(ref - 30 - 0.05 * abs(ref), ref + 30 + 0.05 * abs(ref))
+    axes[2].set_ylabel("speed (rpm)")
+    axes[2].legend(loc="best")
+    for ax in axes:
+        ax.axvline(comp.t_on_s, color="0.5", lw=0.8, ls="-.")
+    return fig
+
+
 def save_figures(res, out_dir) -> list[Path]:
     """Write the run's PNG figures into ``out_dir``; returns their paths."""
     out = Path(out_dir)
@@ -88,6 +117,8 @@ def save_figures(res, out_dir) -> list[Path]:
     }
     if "e_d0_Wb" in res.signals:
         figs["estimator.png"] = estimator_figure(res)
+        if res.scenario.compensator.enabled:
+            figs["compensation.png"] = compensation_figure(res)
     paths = []
     for name, fig in figs.items():
         fig.savefig(out / name, dpi=110)

@@ -205,6 +205,45 @@ class SimulationResult:
             "kinetic_energy_change_J": 0.5 * J * (x[Lo.X_W_M] ** 2 - x0[Lo.X_W_M] ** 2),
         }
 
+    def compensation_metrics(self, tol: float = 0.02, window_s: float = 0.5) -> dict | None:
+        """How the R2 compensator did (None when it is off).
+
+        ``time_to_tol_s``: time from the compensator's enable instant after which
+        ``|R2_hat/R2 - 1| <= tol`` holds to the end of the run (None if it never settles
+        there). Speed errors (actual minus reference, rpm) are means over ``window_s`` just
+        before the enable instant and at the end of the run; the ripple is the peak-to-peak
+        actual speed over the final window.
+        """
+        comp = self.scenario.compensator
+        if not comp.enabled or self.scenario.drive.mode != "vector" or len(self.time_s) < 2:
+            return None
+        s = self.signals
+        t = s["time_s"]
+        t_on = comp.t_on_s
+        ratio_err = np.abs(s["R2_est_ohm"] / s["R2_ohm"] - 1.0)
+        outside = np.nonzero((ratio_err > tol) | (t < t_on))[0]
+        if len(outside) == 0:
+            t_tol = 0.0
+        elif outside[-1] + 1 < len(t):
+            t_tol = float(t[outside[-1] + 1] - t_on)
+        else:
+            t_tol = None
+        before = (t >= t_on - window_s) & (t < t_on)
+        after = t >= t[-1] - window_s
+        err = s["speed_rpm"] - s["speed_ref_rpm"]
+        return {
+            "R2_ohm": float(s["R2_ohm"][-1]),
+            "R2_est_initial_ohm": float(s["R2_est_ohm"][0]),
+            "R2_est_final_ohm": float(s["R2_est_ohm"][-1]),
+            "R2_est_final_error_pct": float(100.0 * (s["R2_est_ohm"][-1] / s["R2_ohm"][-1] - 1)),
+            "tolerance_pct": 100.0 * tol,
+            "time_to_tolerance_s": t_tol,
+            "speed_error_before_rpm": float(np.mean(err[before])) if before.any() else None,
+            "speed_error_after_rpm": float(np.mean(err[after])),
+            "speed_ripple_after_rpm": float(np.ptp(s["speed_rpm"][after])),
+            "e_d0_mean_after_Wb": float(np.mean(s["e_d0_Wb"][after])),
+        }
+
     # -- summary and export ------------------------------------------------------------------
     def final_values(self) -> dict[str, float]:
         return {k: float(v[-1]) for k, v in self.signals.items() if len(v)}
@@ -226,6 +265,7 @@ class SimulationResult:
             "real_time_factor": (self.end_time_s / self.wall_time_s) if self.wall_time_s else None,
             "final": self.final_values(),
             "energy_J": {k: float(v) for k, v in self.energy_balance().items()},
+            "compensation": self.compensation_metrics(),
         }
 
     def to_csv(self, path) -> None:

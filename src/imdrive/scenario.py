@@ -23,7 +23,7 @@ PRESET`` prints complete examples)::
     [compensator]  enabled, t_on_s, period_s, gain_E_per_Wb, gain_DE_per_Wb, G_CR_ohm,
                    R2_min_ohm, R2_max_ohm, table = "paper" | "rules",
                    input = "e_d0" | "demodulated", average
-    [injection]    amplitude_A, frequency_Hz, lowpass_rad_s (sinusoid added to id*)
+    [injection]    amplitude_A, frequency_Hz, t_on_s, lowpass_rad_s (sinusoid added to id*)
     [sensor]       i_offset_alpha_A, i_offset_beta_A
     [simulation]   t_end_s, Ts_s, substeps, log_every, divergence_current_A, divergence_speed_rpm
     [output]       figures, csv
@@ -267,11 +267,13 @@ class InjectionSettings:
     """
 
     amplitude_A: float = 0.0
-    frequency_Hz: float = 1.0
+    frequency_Hz: float = 2.0
+    t_on_s: float = 0.0
     lowpass_rad_s: float = 0.0
 
     def __post_init__(self):
         _nonneg(self.amplitude_A, "injection.amplitude_A")
+        _nonneg(self.t_on_s, "injection.t_on_s")
         _pos(self.frequency_Hz, "injection.frequency_Hz")
         _nonneg(self.lowpass_rad_s, "injection.lowpass_rad_s")
 

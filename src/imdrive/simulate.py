@@ -142,6 +142,7 @@ def build_arrays(sc: Scenario) -> DriveArrays:
     par[Lo.P_INJ_AMP] = inj.amplitude_A
     par[Lo.P_INJ_FREQ] = inj.frequency_Hz
     par[Lo.P_INJ_LPF] = inj.lowpass_rad_s
+    par[Lo.P_INJ_T_ON] = inj.t_on_s
     par[Lo.P_COMP_ON] = 1.0 if comp.enabled else 0.0
     par[Lo.P_COMP_T_ON] = comp.t_on_s
     par[Lo.P_COMP_N] = n_comp
