@@ -343,6 +343,8 @@ def figure_thermal(res) -> Figure:
     ax.legend(fontsize=8)
     ax.set_title("Tracking a 30 % rise of R2 over 20 s, 1000 rpm, rated load")
     ax2.plot(s["time_s"], s["speed_rpm"] - s["speed_ref_rpm"], label="actual - reference")
+    ax2.set_xlim(3.0, s["time_s"][-1])
+    ax2.set_ylim(-5.0, 5.0)
     ax2.set_ylabel("speed error (rpm)")
     ax2.set_xlabel("time (s)")
     ax2.legend(fontsize=8)
