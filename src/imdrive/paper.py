@@ -420,14 +420,15 @@ def run_all(out_dir, progress: Callable[[str], None] | None = None) -> dict:
     res = thermal_tracking()
     figure_thermal(res).savefig(out / "thermal_tracking.png", dpi=100)
     w = res.window(res.time_s[-1] - 2.0)
+    ramp = res.window(8.0, 26.0)
     results["thermal_tracking"] = {
         "R2_final_ohm": float(res["R2_ohm"][-1]),
         "R2_est_final_ohm": float(res["R2_est_ohm"][-1]),
         "max_R2_error_pct_during_ramp": float(
-            100
-            * np.max(
-                np.abs(res.window(8.0, 26.0)["R2_est_ohm"] / res.window(8.0, 26.0)["R2_ohm"] - 1)
-            )
+            100 * np.max(np.abs(ramp["R2_est_ohm"] / ramp["R2_ohm"] - 1))
+        ),
+        "max_speed_error_during_ramp_rpm": float(
+            np.max(np.abs(ramp["speed_rpm"] - ramp["speed_ref_rpm"]))
         ),
         "speed_error_final_rpm": float(np.mean(w["speed_rpm"] - w["speed_ref_rpm"])),
     }
