@@ -53,7 +53,6 @@ from imdrive.layout import (
     P_COMP_INPUT,
     P_COMP_N,
     P_COMP_T_ON,
-    P_INJ_AMP,
     P_INJ_FREQ,
     P_INJ_LPF,
     P_INJ_T_ON,
@@ -63,27 +62,27 @@ from imdrive.layout import (
 
 
 @njit(cache=True)
-def injection_current(par, c, t, Ts):
-    """The injected flux-current component for this period, A (advances its phase in ``c``).
+def injection_sine(par, c, t, Ts):
+    """``sin(phase)`` of the injected sinusoid at this sample, 0 before ``P_INJ_T_ON``.
 
-    ``P_INJ_AMP sin(phase)`` from ``P_INJ_T_ON`` on, zero before. The phase used here is the
-    one :func:`demodulate` detects with at the same sample.
+    Advances the phase held in ``c`` by one period. The injected flux current is
+    ``P_INJ_AMP`` times this value, and :func:`demodulate` detects e_d0 with the same value.
     """
     if t < par[P_INJ_T_ON]:
         return 0.0
     ph = c[C_INJ_PHASE]
     c[C_INJ_PHASE] = (ph + 2.0 * math.pi * par[P_INJ_FREQ] * Ts) % (2.0 * math.pi)
-    return par[P_INJ_AMP] * math.sin(ph)
+    return math.sin(ph)
 
 
 @njit(cache=True)
-def demodulate(par, c, Ts):
+def demodulate(par, c, sine, Ts):
     """Synchronous detection of e_d0 with the injected sinusoid (updates ``C_DEMOD``).
 
-    Uses the injection phase of this sample (call before :func:`injection_current`). With
-    ``P_INJ_LPF > 0`` the product is also low-pass filtered (rad/s), for display.
+    ``sine`` is :func:`injection_sine` of this sample. With ``P_INJ_LPF > 0`` the product
+    ``2 e_d0 sine`` is also low-pass filtered (rad/s), for display.
     """
-    prod = 2.0 * c[C_E_D0] * math.sin(c[C_INJ_PHASE])
+    prod = 2.0 * c[C_E_D0] * sine
     w_lp = par[P_INJ_LPF]
     if w_lp > 0.0:
         c[C_DEMOD] += (1.0 - math.exp(-w_lp * Ts)) * (prod - c[C_DEMOD])

@@ -24,7 +24,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from imdrive.compensator import compensator_step, demodulate, injection_current
+from imdrive.compensator import compensator_step, demodulate, injection_sine
 from imdrive.control import foc_step, open_loop_voltage
 from imdrive.inverter import MAX_SEGMENTS, inverter_segments
 from imdrive.layout import (
@@ -222,14 +222,16 @@ def run_drive(par, prof_t, prof_v, prof_n, table, x, c, n_steps, log, log_every)
         theta_k = c[C_THETA_E]  # the controller's d-axis angle at this sample
         if mode == DRIVE_FOC:
             mras_step(par, c, i_meas_a, i_meas_b, Ts)
+            i_inj = 0.0
             if injecting:
-                demodulate(par, c, Ts)
+                sine = injection_sine(par, c, t, Ts)
+                demodulate(par, c, sine, Ts)
+                i_inj = par[P_INJ_AMP] * sine
             if comp_on:
                 compensator_step(par, c, table, t, k)
             w_ref = profile_at(prof_t, prof_v, prof_n, PR_SPEED_REF, t)
             psi_ref = profile_at(prof_t, prof_v, prof_n, PR_FLUX_REF, t)
             w_fb = c[C_W_HAT] / n_p if sensorless else w_m
-            i_inj = injection_current(par, c, t, Ts) if injecting else 0.0
             v_ref_a, v_ref_b = foc_step(par, c, i_meas_a, i_meas_b, w_fb, w_ref, psi_ref, i_inj, Ts)
         else:
             v_amp = profile_at(prof_t, prof_v, prof_n, PR_V_AMP, t)
