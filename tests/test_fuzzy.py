@@ -490,3 +490,36 @@ def test_table_iii_rounds_half_away_from_zero():
     np.testing.assert_array_equal(
         fz.compile_table(fz.FITTED_RULES_MONOTONE)[1], fz.PAPER_TABLE_III[1]
     )
+
+
+# ---------------------------------------------------------------------------------------------
+# imdrive fuzzy-table
+
+
+def test_cli_fuzzy_table_paper_csv(capsys):
+    from imdrive.cli import main
+
+    assert main(["fuzzy-table", "--source", "paper", "--format", "csv"]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert lines[0] == "E\\DE," + ",".join(str(k) for k in range(-6, 7))
+    body = np.array([[int(v) for v in ln.split(",")[1:]] for ln in lines[1:]])
+    assert np.array_equal(body, fz.PAPER_TABLE_III)
+
+
+def test_cli_fuzzy_table_diff_lists_the_differing_cells(capsys):
+    from imdrive.cli import main
+
+    assert main(["fuzzy-table", "--diff", "--format", "csv"]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert lines[0] == "E,DE,rules,paper"
+    cells = [tuple(int(v) for v in ln.split(",")) for ln in lines[1:]]
+    assert cells == fz.table_diff(fz.fuzzy_table("rules"), fz.PAPER_TABLE_III)
+    assert len(cells) == fz.table_score(fz.fuzzy_table("rules"))[0] == 11
+
+
+def test_cli_fuzzy_table_bad_source_exits_2(capsys):
+    from imdrive.cli import main
+
+    with pytest.raises(SystemExit) as exc:
+        main(["fuzzy-table", "--source", "bogus"])
+    assert exc.value.code == 2
