@@ -15,6 +15,7 @@ import pytest
 
 from imdrive import analysis
 from imdrive.cli import main
+from imdrive.errors import SimulationDiverged
 from imdrive.machine import machine_preset
 from imdrive.scenario import Scenario
 from imdrive.simulate import simulate
@@ -182,6 +183,9 @@ def test_divergence_is_reported_with_time_and_signal():
     assert res.summary()["diverged_signal"] == "i_s_A"
     assert len(res.time_s) >= 1 and res.time_s[-1] <= res.end_time_s
     assert np.all(np.isfinite(res["i_alpha_A"]))
+    with pytest.raises(SimulationDiverged, match="diverged at t =") as exc:
+        res.raise_if_diverged()
+    assert exc.value.result is res and exc.value.time_s == res.end_time_s
 
 
 def test_cli_divergence_exit_code_and_partial_results(tmp_path, capsys):

@@ -170,6 +170,16 @@ class SimulationResult:
             return None
         return f"diverged at t = {self.end_time_s:.6g} s: {STATUS_TEXT[self.status]}"
 
+    def raise_if_diverged(self) -> SimulationResult:
+        """Raise :class:`~imdrive.errors.SimulationDiverged` (carrying this result) if the run
+        diverged; return the result otherwise, so scripts can write
+        ``res = simulate(sc).raise_if_diverged()``."""
+        if self.diverged:
+            from imdrive.errors import SimulationDiverged
+
+            raise SimulationDiverged(self.end_time_s, STATUS_TEXT[self.status], self)
+        return self
+
     def to_pandas(self):
         """The signals as a pandas DataFrame (one column per signal, unit in the name)."""
         import pandas as pd
