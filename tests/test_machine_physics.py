@@ -649,3 +649,28 @@ def test_clarke_convention():
     pc = (-0.5 * va - math.sqrt(0.75) * vb) * ic
     p_ab = 1.5 * (va * s["i_alpha_A"] + vb * s["i_beta_A"])
     np.testing.assert_allclose(pa + pb + pc, p_ab, atol=1e-9 * np.max(np.abs(p_ab)))
+
+
+def test_vf_ramp_scales_voltage_with_frequency():
+    """With vf_ramp_s = T, amplitude and frequency rise together from 0 to their set values."""
+    T = 0.5
+    sc = Scenario.read("free-acceleration", [f"open_loop.vf_ramp_s={T}", "simulation.t_end_s=1.0"])
+    res = simulate(sc)
+    t = res.time_s
+    v = np.hypot(res["v_alpha_V"], res["v_beta_V"])
+    v_peak = np.sqrt(2.0 / 3.0) * 220.0
+    ramp = (t > 0.01) & (t < T - 0.01)
+    # the amplitude profile is sampled at the start of each period (the angle at its middle)
+    expected = v_peak * t[ramp] / T
+    assert np.allclose(v[ramp], expected, rtol=1e-9)
+    assert np.allclose(v[t >= T], v_peak, rtol=1e-12)
+    # the frequency: the voltage angle advances at 2*pi*f(t)
+    ang = np.unwrap(np.arctan2(res["v_beta_V"], res["v_alpha_V"]))
+    f_est = np.gradient(ang, t) / (2 * np.pi)
+    late = t > T + 0.05
+    assert np.allclose(f_est[late], 60.0, rtol=1e-6)
+    mid = np.argmin(np.abs(t - T / 2))
+    assert f_est[mid] == pytest.approx(60.0 * t[mid] / T, rel=2e-3)
+    # a soft start draws far less current than direct-on-line
+    dol = simulate(Scenario.read("free-acceleration", ["simulation.t_end_s=1.0"]))
+    assert np.max(np.abs(res["i_a_A"])) < 0.6 * np.max(np.abs(dol["i_a_A"]))
