@@ -19,6 +19,7 @@ from imdrive.errors import ConfigError, SimulationDiverged
 # every compiled kernel is defined here, under the package's own cache folder (see _cache)
 with kernel_cache():
     from imdrive import (  # noqa: F401
+        batch,
         compensator,
         control,
         engine,

@@ -13,6 +13,7 @@ import time
 from pathlib import Path
 
 from imdrive.errors import ConfigError
+from imdrive.sweep import add_sweep_parser
 
 EXIT_OK = 0
 EXIT_DIVERGED = 1
@@ -170,6 +171,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="list the cells where the rule-compiled table differs from the printed one",
     )
     ft.set_defaults(func=_cmd_fuzzy_table)
+    add_sweep_parser(sub)
     return p
 
 

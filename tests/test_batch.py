@@ -1,0 +1,223 @@
+"""The batch engine: N drives in one compiled call give what N single simulate() calls give.
+
+The metrics are checked against an independent numpy implementation of their definitions
+(imdrive.batch's module docstring) applied to simulate()'s full-rate signals.
+"""
+
+from __future__ import annotations
+
+import math
+import tracemalloc
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from imdrive import layout as Lo
+from imdrive.batch import COLUMNS, METRICS, simulate_batch
+from imdrive.errors import ConfigError
+from imdrive.scenario import Scenario
+from imdrive.simulate import simulate
+
+R2 = 0.816
+
+
+def _ramp(speed: float, at: float = 0.1, over: float = 0.2) -> str:
+    return f"{{ initial = 0, changes = [{{ at = {at}, to = {speed}, over = {over} }}] }}"
+
+
+def _scenarios():
+    """Different R2 errors, speeds, loads, lengths, profiles, compensators; one diverging."""
+    common = ["simulation.log_every=1", "simulation.t_end_s=0.6"]
+    specs = [
+        # R2_hat/R2, speed ref, load, extra overrides
+        (1.0, _ramp(1000), "3.0", []),
+        (1.3, _ramp(500), "{ initial = 0, changes = [{ at = 0.3, to = 12 }] }", []),
+        (0.7, "800", "6.0", ["control.speed_feedback=measured"]),
+        (
+            1.2,
+            _ramp(300),
+            "12",
+            ["compensator.enabled=true", "compensator.t_on_s=0.2", "compensator.G_CR_ohm=0.01"],
+        ),
+        (0.9, _ramp(1200), "0", ["simulation.t_end_s=0.45", 'compensator.table="rules"']),
+        (1.0, _ramp(600), "0", ["control.current_kp=-5", "inverter.Vdc_V=1e5"]),  # diverges
+    ]
+    out = []
+    for ratio, speed, load, extra in specs:
+        ov = [
+            *common,
+            f"estimator.R2_ohm={R2 * ratio}",
+            f"control.speed_ref_rpm={speed}",
+            f"load.torque_Nm={load}",
+            *extra,
+        ]
+        out.append(Scenario.read("sensorless", ov))
+    return out
+
+
+def reference_metrics(res, window_s: float = 0.5) -> dict:
+    """The documented metrics, computed with numpy from a full-rate SimulationResult."""
+    s = res.signals
+    sc = res.scenario
+    Ts = sc.simulation.Ts_s
+    n_steps = sc.simulation.n_steps
+    k = np.rint(s["time_s"] / Ts).astype(int)
+    assert np.array_equal(k, np.arange(len(k))), "needs log_every = 1"
+    ok = not res.diverged
+    out = {
+        "status": res.status,
+        "diverged": res.diverged,
+        "diverged_at_s": res.k_end * Ts if res.diverged else math.nan,
+        "simulated_s": res.k_end * Ts,
+    }
+    win = k >= max(n_steps - int(round(window_s / Ts)), 0)
+    speed = s["speed_rpm"]
+    rel = np.abs(s["R2_est_ohm"] - s["R2_ohm"]) / s["R2_ohm"]
+    bad = np.flatnonzero(~(rel <= 0.02))
+    if not ok:
+        conv = math.nan
+    elif bad.size == 0:
+        conv = 0.0
+    elif bad[-1] == len(k) - 1:
+        conv = math.nan
+    else:
+        conv = s["time_s"][bad[-1] + 1]
+    nan = math.nan
+    out.update(
+        {
+            "speed_error_rpm": np.mean(speed[win] - s["speed_ref_rpm"][win]) if ok else nan,
+            "speed_est_error_rpm": np.mean(s["speed_est_rpm"][win] - speed[win]) if ok else nan,
+            "speed_ripple_rpm": np.ptp(speed[win]) if ok else nan,
+            "torque_mean_Nm": np.mean(s["torque_Nm"][win]) if ok else nan,
+            "R2_hat_final_ohm": s["R2_est_ohm"][-1],
+            "R2_final_ohm": s["R2_ohm"][-1],
+            "R2_error_pct": 100 * (s["R2_est_ohm"][-1] - s["R2_ohm"][-1]) / s["R2_ohm"][-1],
+            "convergence_time_s": conv,
+            "peak_current_A": np.max(np.sqrt(s["i_alpha_A"] ** 2 + s["i_beta_A"] ** 2)),
+            "final_speed_rpm": speed[-1],
+            "final_speed_ref_rpm": s["speed_ref_rpm"][-1],
+            "final_speed_est_rpm": s["speed_est_rpm"][-1],
+        }
+    )
+    return out
+
+
+@pytest.fixture(scope="module")
+def scenarios():
+    return _scenarios()
+
+
+@pytest.fixture(scope="module")
+def singles(scenarios):
+    return [simulate(sc) for sc in scenarios]
+
+
+@pytest.fixture(scope="module")
+def batch(scenarios):
+    return simulate_batch(scenarios, logs=True)
+
+
+def test_the_set_is_what_it_claims(singles):
+    assert [r.diverged for r in singles] == [False] * 5 + [True]
+    assert len({r.scenario.simulation.n_steps for r in singles}) == 2
+    assert len({r.scenario.compensator.table for r in singles}) == 2
+
+
+def test_batch_logs_are_bit_identical_to_single_runs(singles, batch):
+    assert list(batch.metrics.columns) == list(COLUMNS)
+    assert len(batch.results) == len(singles)
+    for one, many in zip(singles, batch.results, strict=True):
+        assert many.status == one.status
+        assert many.k_end == one.k_end
+        assert list(many.signals) == list(one.signals)
+        for name, v in one.signals.items():
+            assert np.array_equal(many.signals[name], v), name
+        assert np.array_equal(many.x_final, one.x_final)
+        assert np.array_equal(many.c_final, one.c_final)
+
+
+def test_batch_metrics_match_the_definitions_on_single_runs(singles, batch):
+    df = batch.metrics
+    for i, one in enumerate(singles):
+        ref = reference_metrics(one)
+        row = df.iloc[i]
+        assert row["drive"] == i
+        for name in ("status", "diverged"):
+            assert row[name] == ref[name], (i, name)
+        for name in ("diverged_at_s", "simulated_s", *METRICS):
+            a, b = float(row[name]), float(ref[name])
+            if math.isnan(b):
+                assert math.isnan(a), (i, name, a)
+            else:
+                scale = max(abs(b), 1.0)
+                assert abs(a - b) <= 1e-12 * scale, (i, name, a, b)
+
+
+def test_metric_values_make_sense(batch):
+    df = batch.metrics
+    assert df.loc[0, "convergence_time_s"] == 0.0  # exact R2_hat throughout
+    assert math.isnan(df.loc[1, "convergence_time_s"])  # 30 % off, never corrected
+    assert df.loc[1, "R2_error_pct"] == pytest.approx(30.0)
+    div = df.loc[5]
+    assert div["diverged"] and div["status"] != Lo.S_OK
+    assert 0 < div["diverged_at_s"] < 0.6
+    assert math.isnan(div["speed_error_rpm"]) and math.isfinite(div["final_speed_rpm"])
+    assert np.all(np.isfinite(df.loc[:4, list(METRICS[:4])].to_numpy()))
+    assert batch.control_periods == sum(int(round(t / 1e-4)) for t in df["simulated_s"])
+
+
+def test_decimated_logs_equal_simulate_at_that_rate(scenarios):
+    from dataclasses import replace
+
+    scs = [replace(sc, simulation=replace(sc.simulation, log_every=7)) for sc in scenarios]
+    res = simulate_batch(scs, logs=True)
+    for sc, many in zip(scs, res.results, strict=True):
+        one = simulate(sc)
+        for name, v in one.signals.items():
+            assert np.array_equal(many.signals[name], v), name
+    # an explicit log_every overrides the scenarios'
+    res3 = simulate_batch(scenarios[:2], logs=True, log_every=3)
+    sc3 = replace(scenarios[1], simulation=replace(scenarios[1].simulation, log_every=3))
+    one = simulate(sc3)
+    for name, v in one.signals.items():
+        assert np.array_equal(res3.results[1].signals[name], v), name
+    assert res3.results[0].time_s[1] == pytest.approx(3e-4)
+
+
+def test_serial_kernel_small_blocks_and_generators_give_the_same_metrics(scenarios, batch):
+    a = simulate_batch(iter(scenarios), parallel=False, block_size=2)
+    assert a.results is None
+    pd.testing.assert_frame_equal(a.metrics, batch.metrics)
+
+
+def test_empty_batch_and_bad_arguments(scenarios):
+    assert len(simulate_batch([]).metrics) == 0
+    with pytest.raises(ConfigError, match="log_every"):
+        simulate_batch(scenarios[:1], logs=True, log_every=0)
+    with pytest.raises(ConfigError, match="window_s"):
+        simulate_batch(scenarios[:1], window_s=-1.0)
+
+
+def test_memory_per_drive_is_linear_and_under_1kB():
+    """Without logs the batch keeps ~120 B per drive: measure the growth from N to 2N."""
+    base = Scenario.read("sensorless", ["simulation.t_end_s=0.002"])
+
+    def gen(n):
+        from dataclasses import replace
+
+        for i in range(n):
+            yield replace(base, estimator=replace(base.estimator, R2_ohm=R2 * (0.8 + i * 1e-4)))
+
+    simulate_batch(gen(4), block_size=100)
+    peaks = {}
+    for n in (400, 800):
+        tracemalloc.start()
+        res = simulate_batch(gen(n), block_size=100)
+        _, peak = tracemalloc.get_traced_memory()
+        tracemalloc.stop()
+        peaks[n] = peak
+        assert len(res.metrics) == n
+        del res
+    per_drive = (peaks[800] - peaks[400]) / 400
+    assert per_drive < 1024, per_drive
