@@ -71,7 +71,8 @@ def injection_sine(par, c, t, Ts):
     if t < par[P_INJ_T_ON]:
         return 0.0
     ph = c[C_INJ_PHASE]
-    c[C_INJ_PHASE] = (ph + 2.0 * math.pi * par[P_INJ_FREQ] * Ts) % (2.0 * math.pi)
+    nxt = ph + 2.0 * math.pi * par[P_INJ_FREQ] * Ts
+    c[C_INJ_PHASE] = nxt - 2.0 * math.pi if nxt >= 2.0 * math.pi else nxt
     return math.sin(ph)
 
 
