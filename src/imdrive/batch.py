@@ -434,7 +434,7 @@ def simulate_batch(
 
     from imdrive.errors import ConfigError
     from imdrive.result import SimulationResult
-    from imdrive.simulate import build_arrays
+    from imdrive.simulate import build_arrays, logged_rows
 
     if log_every is not None and (isinstance(log_every, bool) or int(log_every) < 1):
         raise ConfigError("log_every", f"must be >= 1 (got {log_every})")
@@ -477,10 +477,7 @@ def simulate_batch(
                 k_blk[i] = ke[g]
                 ts_blk[i] = a.par[Lo.P_TS]
                 if logs:
-                    lg = log[g]
-                    if st[g] != Lo.S_OK:
-                        lg = lg[: ke[g] // le + 1]
-                        lg = lg[~np.isnan(lg[:, Lo.L_TIME])]
+                    lg = logged_rows(log[g], st[g], ke[g], le)
                     res_blk[i] = SimulationResult.from_log(
                         sc, lg, a.x0, x[g], c[g], a.par, int(st[g]), int(ke[g]), 0.0, a.derived
                     )

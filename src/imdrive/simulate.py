@@ -203,6 +203,14 @@ def build_arrays(sc: Scenario) -> DriveArrays:
     )
 
 
+def logged_rows(log: np.ndarray, status: int, k_end: int, log_every: int) -> np.ndarray:
+    """The rows of a NaN-prefilled kernel log that were written (all of them unless diverged)."""
+    if status == Lo.S_OK:
+        return log
+    log = log[: k_end // log_every + 1]
+    return log[~np.isnan(log[:, Lo.L_TIME])]
+
+
 def simulate(scenario: Scenario, arrays: DriveArrays | None = None) -> SimulationResult:
     """Run one drive and return its :class:`~imdrive.result.SimulationResult`.
 
@@ -223,9 +231,7 @@ def simulate(scenario: Scenario, arrays: DriveArrays | None = None) -> Simulatio
         a.par, a.prof_t, a.prof_v, a.prof_n, a.table, x, c, a.n_steps, log, a.log_every
     )
     wall = time.perf_counter() - t0
-    if status != Lo.S_OK:
-        log = log[: k_end // a.log_every + 1]
-        log = log[~np.isnan(log[:, Lo.L_TIME])]
+    log = logged_rows(log, status, k_end, a.log_every)
     res = SimulationResult.from_log(
         scenario, log, a.x0, x, c, a.par, int(status), int(k_end), wall, a.derived
     )
