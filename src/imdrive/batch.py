@@ -209,6 +209,48 @@ def one_drive(
     return status, k_end
 
 
+@njit(cache=True, nogil=True)
+def _worker(
+    par,
+    prof_t,
+    prof_v,
+    prof_n,
+    tables,
+    table_idx,
+    x,
+    c,
+    n_steps,
+    n_win,
+    log,
+    log_every,
+    metrics,
+    status,
+    k_end,
+    first,
+    stride,
+    scratch,
+):
+    """Drives ``first, first + stride, ...`` one after the other, sharing ``scratch``."""
+    for n in range(first, par.shape[0], stride):
+        s, ke = one_drive(
+            par[n],
+            prof_t[n],
+            prof_v[n],
+            prof_n[n],
+            tables[table_idx[n]],
+            x[n],
+            c[n],
+            n_steps,
+            n_win[n],
+            log[n],
+            log_every,
+            metrics[n],
+            scratch,
+        )
+        status[n] = s
+        k_end[n] = ke
+
+
 @njit(cache=True, parallel=True)
 def batch_kernel(
     par,
@@ -237,27 +279,28 @@ def batch_kernel(
     The drives are dealt to ``n_slots`` parallel workers (``n, n + n_slots, ...``), each with
     one scratch log for all its drives.
     """
-    N = par.shape[0]
     for slot in prange(n_slots):
         scratch = np.empty((n_steps + 1, Lo.N_LOG))
-        for n in range(slot, N, n_slots):
-            s, ke = one_drive(
-                par[n],
-                prof_t[n],
-                prof_v[n],
-                prof_n[n],
-                tables[table_idx[n]],
-                x[n],
-                c[n],
-                n_steps,
-                n_win[n],
-                log[n],
-                log_every,
-                metrics[n],
-                scratch,
-            )
-            status[n] = s
-            k_end[n] = ke
+        _worker(
+            par,
+            prof_t,
+            prof_v,
+            prof_n,
+            tables,
+            table_idx,
+            x,
+            c,
+            n_steps,
+            n_win,
+            log,
+            log_every,
+            metrics,
+            status,
+            k_end,
+            slot,
+            n_slots,
+            scratch,
+        )
 
 
 @njit(cache=True, nogil=True)
@@ -280,24 +323,26 @@ def batch_kernel_serial(
 ):
     """:func:`batch_kernel` on the calling thread only, releasing the GIL (for dask workers)."""
     scratch = np.empty((n_steps + 1, Lo.N_LOG))
-    for n in range(par.shape[0]):
-        s, ke = one_drive(
-            par[n],
-            prof_t[n],
-            prof_v[n],
-            prof_n[n],
-            tables[table_idx[n]],
-            x[n],
-            c[n],
-            n_steps,
-            n_win[n],
-            log[n],
-            log_every,
-            metrics[n],
-            scratch,
-        )
-        status[n] = s
-        k_end[n] = ke
+    _worker(
+        par,
+        prof_t,
+        prof_v,
+        prof_n,
+        tables,
+        table_idx,
+        x,
+        c,
+        n_steps,
+        n_win,
+        log,
+        log_every,
+        metrics,
+        status,
+        k_end,
+        0,
+        1,
+        scratch,
+    )
 
 
 # --------------------------------------------------------------------------------------------
