@@ -10,24 +10,21 @@ Design
 One compiled kernel (:func:`batch_kernel`, numba ``parallel=True``; :func:`batch_kernel_serial`
 is the same loop on one thread, without the GIL, for dask workers) deals the drives to one
 parallel worker per thread (``prange``; worker ``w`` takes drives ``w, w + W, ...``). Each worker
-allocates one scratch log of ``n_steps + 1`` rows and reuses it for all its drives, so memory
-scales with the number of threads and the length of one drive, not with N. For each drive it
+allocates one scratch log of ``CHUNK + 1`` rows (240 kB) and reuses it for all its drives, so
+memory scales with the number of threads, not with N nor with the length of a drive. For each
+drive it
 
-1. runs :func:`imdrive.engine.run_drive` **once, unchanged, over the whole run** at full rate
-   (``log_every = 1``) into the scratch log. The drive's arithmetic is therefore exactly that of
-   a single ``simulate()`` call: results are bit-identical by construction. (Splitting the run
-   into chunks of a few hundred periods would bound the scratch to a chunk, but ``run_drive``
-   restarts its time ``t = k Ts`` and its compensator counter ``k`` at 0 on every call and runs
-   the controller once more at the final sample without integrating, so chunked calls are *not*
-   identical to one call; that would need an engine change, see below);
-2. reduces the scratch log to the drive's row of the ``float64[N, N_METRICS]`` metrics array
-   (:func:`summarize`, one streaming pass), and, on request, copies every ``log_every``-th row
-   into the drive's slot of the output log (the rows a ``simulate()`` at that ``log_every``
-   would log: logging does not feed back into the drive).
+1. runs :func:`imdrive.engine.run_drive`, unchanged, ``CHUNK`` periods per call at full rate
+   (``log_every = 1``) into the scratch log; with ``k0`` (the periods already done) and
+   ``final`` (take the closing sample only at the end) consecutive calls reproduce one long
+   call exactly, so the results are bit-identical to a single ``simulate()``;
+2. folds each chunk's rows into running sums (:func:`accumulate`) that :func:`summarize` turns
+   into the drive's row of the ``float64[N, N_METRICS]`` metrics array, and, on request, copies
+   every ``log_every``-th row into the drive's slot of the output log (the rows a ``simulate()``
+   at that ``log_every`` would log: logging does not feed back into the drive).
 
-Reusing the scratch matters for long drives: a fresh 34 MB scratch per 14 s drive is a fresh
-``mmap`` whose page faults cost a third of the run time. Logging at full rate and the summary
-pass cost about 5-10 % of the kernel time (the dynamics dominate).
+Logging at full rate into the small scratch and the streaming reduction cost about 5-10 % of
+the kernel time (the dynamics dominate).
 
 The Python side feeds the kernel blocks of ``block_size`` drives (default 512): per block it
 builds and stacks the flat arrays (:func:`imdrive.simulate.build_arrays`), grouped by number of
@@ -36,14 +33,9 @@ different numbers of breakpoints are padded (the kernel reads ``prof_n`` of them
 are shared (a small stack of the distinct tables plus an index per drive). Without logs, what is
 kept per drive is its metrics row and status: 12 float64 + 3 int64 = 120 bytes (plus pandas'
 per-row cost of the final table, about the same again), so memory is linear in N at well under
-1 kB per drive; the per-block arrays and the per-thread scratch logs are bounded (the scratch is
-``(n_steps + 1) * N_LOG * 8`` bytes, 2.4 MB for a 1 s drive at 100 us). With ``logs=True`` every
-drive's decimated log is kept, ``(n_steps // log_every + 1) * 240`` bytes per drive.
-
-An engine change that would bound the scratch by a chunk instead of the run length (not needed
-for correctness or for the figures measured in ``benchmarks/``): ``run_drive(..., k0, final)``
-with the time and compensator index ``k0 + k`` and, when ``final`` is 0, a return after the
-integration of period ``n_steps - 1`` without the extra sample at ``k = n_steps``.
+1 kB per drive; the per-block arrays and the per-thread scratch logs are a fixed cost. With
+``logs=True`` every drive's decimated log is kept, ``(n_steps // log_every + 1) * 240`` bytes
+per drive.
 
 Metrics (columns of :attr:`BatchResult.metrics`)
 ------------------------------------------------
@@ -93,6 +85,8 @@ RPM = 2.0 * math.pi / 60.0
 _INV_RPM = 1.0 / RPM  # the factor result.py applies to rad/s columns
 CONVERGENCE_BAND = 0.02
 
+CHUNK = 1000  # control periods per engine call: bounds each thread's scratch log (240 kB)
+
 # metric columns, in the order of the kernel's metrics array
 M_SPEED_ERR = 0
 M_SPEED_EST_ERR = 1
@@ -129,50 +123,70 @@ COLUMNS = ("drive", "status", "diverged", "diverged_at_s", "simulated_s", *METRI
 # kernels
 
 
-@njit(cache=True)
-def summarize(log, n_valid, k_win0, ok, out):
-    """Reduce full-rate log rows ``0 .. n_valid-1`` to one metrics row ``out`` (N_METRICS).
+# running sums of the metrics while a drive's rows stream past, chunk by chunk
+A_PEAK = 0
+A_LAST_BAD = 1  # last sample outside the R2 convergence band (-1: none)
+A_COUNT = 2  # samples in the steady-state window
+A_SPEED_ERR = 3
+A_SPEED_EST_ERR = 4
+A_TORQUE = 5
+A_MIN = 6
+A_MAX = 7
+N_ACC = 8
 
-    ``k_win0`` is the first sample of the steady-state window; ``ok`` is False for a diverged
-    drive (window metrics and convergence time are then NaN).
-    """
-    nan = np.nan
-    peak = 0.0
-    last_bad = -1
-    cnt = 0
-    s_err = 0.0
-    s_est = 0.0
-    s_te = 0.0
-    w_min = np.inf
-    w_max = -np.inf
-    for r in range(n_valid):
+
+@njit(cache=True)
+def accumulator():
+    acc = np.zeros(N_ACC)
+    acc[A_LAST_BAD] = -1.0
+    acc[A_MIN] = np.inf
+    acc[A_MAX] = -np.inf
+    return acc
+
+
+@njit(cache=True)
+def accumulate(log, n_rows, k_first, k_win0, acc):
+    """Fold full-rate log rows ``0 .. n_rows-1`` (samples ``k_first ...``) into ``acc``."""
+    for r in range(n_rows):
         row = log[r]
+        k = k_first + r
         i_mag = math.sqrt(row[Lo.L_I_A] ** 2 + row[Lo.L_I_B] ** 2)
-        if i_mag > peak:
-            peak = i_mag
+        if i_mag > acc[A_PEAK]:
+            acc[A_PEAK] = i_mag
         r2 = row[Lo.L_R2]
         if not (abs(row[Lo.L_R2_HAT] - r2) / r2 <= CONVERGENCE_BAND):
-            last_bad = r
-        if r >= k_win0:
+            acc[A_LAST_BAD] = k
+        if k >= k_win0:
             sp = row[Lo.L_W_M] * _INV_RPM
-            s_err += sp - row[Lo.L_W_REF] * _INV_RPM
-            s_est += row[Lo.L_W_HAT] * _INV_RPM - sp
-            s_te += row[Lo.L_TE]
-            w_min = min(w_min, sp)
-            w_max = max(w_max, sp)
-            cnt += 1
-    last = log[n_valid - 1]
+            acc[A_SPEED_ERR] += sp - row[Lo.L_W_REF] * _INV_RPM
+            acc[A_SPEED_EST_ERR] += row[Lo.L_W_HAT] * _INV_RPM - sp
+            acc[A_TORQUE] += row[Lo.L_TE]
+            acc[A_MIN] = min(acc[A_MIN], sp)
+            acc[A_MAX] = max(acc[A_MAX], sp)
+            acc[A_COUNT] += 1.0
+
+
+@njit(cache=True)
+def summarize(acc, last, n_valid, ok, Ts, out):
+    """The metrics row ``out`` (N_METRICS) from the accumulated sums and the last sample.
+
+    ``n_valid`` is the number of samples seen; ``ok`` is False for a diverged drive (window
+    metrics and convergence time are then NaN).
+    """
+    nan = np.nan
+    cnt = acc[A_COUNT]
     if ok and cnt > 0:
-        out[M_SPEED_ERR] = s_err / cnt
-        out[M_SPEED_EST_ERR] = s_est / cnt
-        out[M_RIPPLE] = w_max - w_min
-        out[M_TORQUE] = s_te / cnt
+        out[M_SPEED_ERR] = acc[A_SPEED_ERR] / cnt
+        out[M_SPEED_EST_ERR] = acc[A_SPEED_EST_ERR] / cnt
+        out[M_RIPPLE] = acc[A_MAX] - acc[A_MIN]
+        out[M_TORQUE] = acc[A_TORQUE] / cnt
+        last_bad = int(acc[A_LAST_BAD])
         if last_bad == -1:
             out[M_CONV] = 0.0
         elif last_bad == n_valid - 1:
             out[M_CONV] = nan
         else:
-            out[M_CONV] = log[last_bad + 1, Lo.L_TIME]
+            out[M_CONV] = (last_bad + 1) * Ts  # the sample time, as the engine computes it
     else:
         out[M_SPEED_ERR] = nan
         out[M_SPEED_EST_ERR] = nan
@@ -182,7 +196,7 @@ def summarize(log, n_valid, k_win0, ok, out):
     out[M_R2_HAT] = last[Lo.L_R2_HAT]
     out[M_R2] = last[Lo.L_R2]
     out[M_R2_ERR] = 100.0 * (last[Lo.L_R2_HAT] - last[Lo.L_R2]) / last[Lo.L_R2]
-    out[M_PEAK_I] = peak
+    out[M_PEAK_I] = acc[A_PEAK]
     out[M_SPEED] = last[Lo.L_W_M] * _INV_RPM
     out[M_SPEED_REF] = last[Lo.L_W_REF] * _INV_RPM
     out[M_SPEED_EST] = last[Lo.L_W_HAT] * _INV_RPM
@@ -192,21 +206,40 @@ def summarize(log, n_valid, k_win0, ok, out):
 def one_drive(
     par, prof_t, prof_v, prof_n, table, x, c, n_steps, n_win, log_out, log_every, metrics, scratch
 ):
-    """Run one drive at full rate into ``scratch`` (n_steps + 1 rows), summarize it, copy the
-    decimated rows into ``log_out``.
+    """Run one drive at full rate, ``scratch.shape[0] - 1`` periods per engine call, folding
+    each chunk into the metrics and copying its decimated rows into ``log_out``.
 
-    Returns ``(status, k_end)`` as :func:`imdrive.engine.run_drive`.
+    Consecutive :func:`imdrive.engine.run_drive` calls with ``k0`` and ``final`` reproduce one
+    long call exactly, so the drive is bit-identical to ``simulate()``. Returns
+    ``(status, k_end)`` as :func:`imdrive.engine.run_drive` does for the whole run.
     """
-    status, k_end = run_drive(par, prof_t, prof_v, prof_n, table, x, c, n_steps, scratch, 1)
-    n_valid = n_steps + 1 if status == Lo.S_OK else k_end
-    summarize(scratch, n_valid, max(n_steps - n_win, 0), status == Lo.S_OK, metrics)
-    for r in range(log_out.shape[0]):
-        k = r * log_every
-        if k >= n_valid:
-            break
-        for j in range(Lo.N_LOG):
-            log_out[r, j] = scratch[k, j]
-    return status, k_end
+    chunk = scratch.shape[0] - 1
+    acc = accumulator()
+    last = np.empty(Lo.N_LOG)
+    k_win0 = max(n_steps - n_win, 0)
+    k0 = 0
+    while True:
+        steps = min(chunk, n_steps - k0)
+        final = k0 + steps == n_steps
+        status, ke = run_drive(
+            par, prof_t, prof_v, prof_n, table, x, c, steps, scratch, 1, k0, final
+        )
+        ok = status == Lo.S_OK
+        rows = ke + 1 if (ok and final) else ke
+        accumulate(scratch, rows, k0, k_win0, acc)
+        for r in range(rows):
+            k = k0 + r
+            if k % log_every == 0 and k // log_every < log_out.shape[0]:
+                log_out[k // log_every, :] = scratch[r, :]
+        last[:] = scratch[rows - 1, :]
+        if not ok:
+            k_end = k0 + ke
+            summarize(acc, last, k_end, False, par[Lo.P_TS], metrics)
+            return status, k_end
+        k0 += steps
+        if final:
+            summarize(acc, last, n_steps + 1, True, par[Lo.P_TS], metrics)
+            return status, n_steps
 
 
 @njit(cache=True, nogil=True)
@@ -280,7 +313,7 @@ def batch_kernel(
     one scratch log for all its drives.
     """
     for slot in prange(n_slots):
-        scratch = np.empty((n_steps + 1, Lo.N_LOG))
+        scratch = np.empty((CHUNK + 1, Lo.N_LOG))
         _worker(
             par,
             prof_t,
@@ -322,7 +355,7 @@ def batch_kernel_serial(
     k_end,
 ):
     """:func:`batch_kernel` on the calling thread only, releasing the GIL (for dask workers)."""
-    scratch = np.empty((n_steps + 1, Lo.N_LOG))
+    scratch = np.empty((CHUNK + 1, Lo.N_LOG))
     _worker(
         par,
         prof_t,

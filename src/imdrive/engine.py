@@ -149,7 +149,7 @@ def rk4_segment(x, v_a, v_b, R1b, R2b, TL0, par, dt, nsub, k1, k2, k3, k4, xt):
 
 
 @njit(cache=True)
-def run_drive(par, prof_t, prof_v, prof_n, table, x, c, n_steps, log, log_every):
+def run_drive(par, prof_t, prof_v, prof_n, table, x, c, n_steps, log, log_every, k0=0, final=True):
     """Simulate one drive for ``n_steps`` control periods (``x`` and ``c`` updated in place).
 
     Parameters
@@ -170,13 +170,19 @@ def run_drive(par, prof_t, prof_v, prof_n, table, x, c, n_steps, log, log_every)
         t = 0 and (when ``n_steps`` is a multiple of ``log_every``) t = n_steps*Ts.
         Pass an array with zero rows for no logging.
     log_every : int
+    k0 : int
+        Index of the first period: the run continues one that stopped after ``k0`` periods
+        (time ``(k0 + k) Ts``), so consecutive calls reproduce one long call exactly.
+    final : bool
+        Whether to take (and log) the closing sample at ``k = n_steps``. A call that another
+        will continue passes False: it returns right after integrating its last period.
 
     Returns
     -------
     status : int
         ``S_OK`` or the divergence code ``S_NAN``, ``S_CURRENT``, ``S_SPEED``.
     k_end : int
-        Number of periods completed (the period where divergence was found, if any).
+        Number of periods completed in this call (the period where divergence was found).
     """
     Ts = par[P_TS]
     nsub = max(int(par[P_NSUB]), 1)
@@ -201,8 +207,8 @@ def run_drive(par, prof_t, prof_v, prof_n, table, x, c, n_steps, log, log_every)
     seg_va = np.empty(MAX_SEGMENTS)
     seg_vb = np.empty(MAX_SEGMENTS)
 
-    for k in range(n_steps + 1):
-        t = k * Ts
+    for k in range(n_steps + 1 if final else n_steps):
+        t = (k0 + k) * Ts
         if par[P_MECH_MODE] != 0.0:
             x[X_W_M] = profile_at(prof_t, prof_v, prof_n, PR_SPEED_IMPOSED, t)
         R1b = par[P_R1] * profile_at(prof_t, prof_v, prof_n, PR_R1_SCALE, t)
@@ -228,7 +234,7 @@ def run_drive(par, prof_t, prof_v, prof_n, table, x, c, n_steps, log, log_every)
                 demodulate(par, c, sine, Ts)
                 i_inj = par[P_INJ_AMP] * sine
             if comp_on:
-                compensator_step(par, c, table, t, k)
+                compensator_step(par, c, table, t, k0 + k)
             w_ref = profile_at(prof_t, prof_v, prof_n, PR_SPEED_REF, t)
             psi_ref = profile_at(prof_t, prof_v, prof_n, PR_FLUX_REF, t)
             w_fb = c[C_W_HAT] / n_p if sensorless else w_m
