@@ -24,11 +24,11 @@ import numba
 _PKG = Path(__file__).resolve().parent
 
 
-def source_hash() -> str:
-    """Short hash of every ``.py`` file of the package (names and contents)."""
+def source_hash(root: Path = _PKG) -> str:
+    """Short hash of every ``.py`` file under ``root`` (names and contents) and numba's version."""
     h = hashlib.sha256()
-    for p in sorted(_PKG.rglob("*.py")):
-        h.update(str(p.relative_to(_PKG)).encode())
+    for p in sorted(root.rglob("*.py")):
+        h.update(str(p.relative_to(root)).encode())
         h.update(p.read_bytes())
     h.update(numba.__version__.encode())
     return h.hexdigest()[:16]
