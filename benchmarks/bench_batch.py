@@ -72,8 +72,9 @@ def drives(n: int, t_end: float = 1.0):
 
 
 def bench_presets(repeat: int) -> dict:
-    from imdrive.scenario import Scenario, preset_names
-    from imdrive.simulate import simulate
+    from imdrive.config.presets import preset_names
+    from imdrive.config.scenario import Scenario
+    from imdrive.run.simulate import simulate
 
     out = {}
     for name in preset_names():
@@ -94,7 +95,7 @@ def bench_presets(repeat: int) -> dict:
 def bench_scaling(sizes: list[int]) -> dict:
     import numba
 
-    from imdrive.batch import simulate_batch
+    from imdrive.run.batch import simulate_batch
 
     sw = drives(4)
     simulate_batch(sw.scenario(i) for i in range(4))  # compile or load
@@ -137,7 +138,7 @@ _MEMORY_CHILD = textwrap.dedent(
     import json, resource, sys, tracemalloc
     sys.path.insert(0, {here!r})
     from bench_batch import drives
-    from imdrive.batch import simulate_batch
+    from imdrive.run.batch import simulate_batch
     n = {n}
     warm = drives(8, {t_end})
     simulate_batch(warm.scenario(i) for i in range(8))
@@ -178,9 +179,9 @@ def bench_memory(sizes, t_end: float = 0.01) -> dict:
 
 
 def bench_peers(repeat: int) -> dict:
-    from imdrive.batch import simulate_batch
-    from imdrive.scenario import Scenario
-    from imdrive.simulate import simulate
+    from imdrive.config.scenario import Scenario
+    from imdrive.run.batch import simulate_batch
+    from imdrive.run.simulate import simulate
 
     if not PEERS_PYTHON.exists():
         print(f"(no peers venv at {PEERS_PYTHON}: peers skipped, see README.md)")

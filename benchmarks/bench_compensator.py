@@ -22,8 +22,8 @@ import argparse
 import json
 import statistics
 
-from imdrive.scenario import Scenario
-from imdrive.simulate import simulate
+from imdrive.config.scenario import Scenario
+from imdrive.run.simulate import simulate
 
 VARIANTS = {
     "off": [],

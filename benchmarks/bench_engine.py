@@ -40,8 +40,8 @@ PEERS_PYTHON = HERE / ".venv-peers" / "bin" / "python"
 
 
 def bench_kernel(repeat: int, preset: str = "free-acceleration") -> dict:
-    from imdrive.scenario import Scenario
-    from imdrive.simulate import simulate
+    from imdrive.config.scenario import Scenario
+    from imdrive.run.simulate import simulate
 
     sc = Scenario.read(preset)
     t_sim = sc.simulation.t_end_s

@@ -16,8 +16,8 @@ from imdrive.analysis import (
     foc_operating_point,
     plot_speed_error_vs_R2,
 )
+from imdrive.config.machine import machine_preset
 from imdrive.errors import ConfigError
-from imdrive.machine import machine_preset
 
 
 @pytest.fixture(scope="module")

@@ -13,11 +13,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from imdrive import layout as Lo
-from imdrive.batch import COLUMNS, METRICS, simulate_batch
+from imdrive.config.scenario import Scenario
 from imdrive.errors import ConfigError
-from imdrive.scenario import Scenario
-from imdrive.simulate import simulate
+from imdrive.kernels import layout as Lo
+from imdrive.run.batch import COLUMNS, METRICS, simulate_batch
+from imdrive.run.simulate import simulate
 
 R2 = 0.816
 

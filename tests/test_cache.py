@@ -7,7 +7,7 @@ from pathlib import Path
 
 import imdrive
 from imdrive import _cache
-from imdrive.engine import run_drive
+from imdrive.kernels.engine import run_drive
 
 
 def test_any_source_change_gives_a_new_cache_folder(tmp_path):

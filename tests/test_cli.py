@@ -18,7 +18,8 @@ import pytest
 
 import imdrive
 from imdrive.cli import main
-from imdrive.scenario import Scenario, preset_names, preset_text
+from imdrive.config.presets import preset_names, preset_text
+from imdrive.config.scenario import Scenario
 
 REQUIRED_COLUMNS = (
     "time_s speed_rpm w_m_rad_s torque_Nm load_torque_Nm i_a_A i_b_A i_c_A i_alpha_A i_beta_A "

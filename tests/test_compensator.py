@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from imdrive import layout as Lo
-from imdrive.compensator import compensator_step, compensator_update
+from imdrive.config.scenario import Scenario
 from imdrive.fuzzy import fuzzy_table
-from imdrive.scenario import Scenario
-from imdrive.simulate import build_arrays, simulate
+from imdrive.kernels import layout as Lo
+from imdrive.kernels.compensator import compensator_step, compensator_update
+from imdrive.run.simulate import build_arrays, simulate
 
 
 def _kernel_arrays(table="paper", period=10, R2_hat=0.9, lo=0.5, hi=1.5, gain=1e6, g_cr=0.001):

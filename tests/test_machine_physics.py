@@ -34,10 +34,12 @@ from scipy.optimize import brentq
 
 from imdrive import ConfigError
 from imdrive.analysis import breakdown, equivalent_circuit
-from imdrive.inverter import limit_magnitude
-from imdrive.profiles import Profile, parse_profile, profile_at, profiles_to_arrays, pwl_eval
-from imdrive.scenario import Scenario
-from imdrive.simulate import simulate
+from imdrive.config.profiles import Profile, parse_profile
+from imdrive.config.scenario import Scenario
+from imdrive.kernels.inverter import limit_magnitude
+from imdrive.kernels.profiles import profile_at, pwl_eval
+from imdrive.run._profiles import profiles_to_arrays
+from imdrive.run.simulate import simulate
 
 V_LL = 220.0  # line-to-line rms, V (free-acceleration preset)
 F_HZ = 60.0

@@ -12,11 +12,12 @@ import json
 import numpy as np
 import pytest
 
-from imdrive import analysis, paper
+from imdrive import analysis
 from imdrive.cli import main
-from imdrive.machine import machine_preset
-from imdrive.scenario import Scenario
-from imdrive.simulate import simulate
+from imdrive.config.machine import machine_preset
+from imdrive.config.scenario import Scenario
+from imdrive.run.simulate import simulate
+from imdrive.studies import paper
 
 MACHINE = machine_preset("paper-table-iv")
 R2 = MACHINE.R2_ohm

@@ -12,8 +12,9 @@ from pathlib import Path
 import pytest
 from data.make_preset_baseline import fingerprint
 
-from imdrive.scenario import Scenario, preset_names
-from imdrive.simulate import simulate
+from imdrive.config.presets import preset_names
+from imdrive.config.scenario import Scenario
+from imdrive.run.simulate import simulate
 
 BASELINE = json.loads((Path(__file__).parent / "data" / "preset_baseline.json").read_text())
 

@@ -14,9 +14,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from imdrive.config.scenario import Scenario
 from imdrive.errors import ConfigError
-from imdrive.scenario import Scenario
-from imdrive.simulate import simulate
+from imdrive.run.simulate import simulate
 from imdrive.sweep import _apply, load_sweep, parse_sweep, run_sweep, sweep_names
 
 R2 = 0.816

@@ -15,10 +15,10 @@ import pytest
 
 from imdrive import analysis
 from imdrive.cli import main
+from imdrive.config.machine import machine_preset
+from imdrive.config.scenario import Scenario
 from imdrive.errors import SimulationDiverged
-from imdrive.machine import machine_preset
-from imdrive.scenario import Scenario
-from imdrive.simulate import simulate
+from imdrive.run.simulate import simulate
 
 MACHINE = machine_preset("paper-table-iv")
 RATED_LOAD = 12.0  # N m, about the rated torque of the 3 hp machine

@@ -13,32 +13,43 @@ Conventions (used everywhere in the package)
 * ``w_m`` is mechanical speed (rad/s), ``w_r = n_p * w_m`` electrical rotor speed (rad/s).
 """
 
-from imdrive._cache import kernel_cache
+from imdrive.config.machine import MachineParams, machine_preset, machine_presets
 from imdrive.errors import ConfigError, SimulationDiverged
 
-# every compiled kernel is defined here, under the package's own cache folder (see _cache)
-with kernel_cache():
-    from imdrive import (  # noqa: F401
-        batch,
-        compensator,
-        control,
-        engine,
-        fuzzy,
-        inverter,
-        machine,
-        mras,
-        profiles,
-    )
+__version__ = "0.2.0.dev0"
 
-from imdrive.machine import MachineParams, machine_preset, machine_presets  # noqa: E402
+# the layers (docs/architecture.md): config -> kernels -> design -> fuzzy/analysis -> run ->
+# sweep/studies/plots -> cli. The most used names are importable from here; the run layer
+# (and with it numba) loads on first use, so ``import imdrive`` stays light.
+_LAZY = {
+    "Scenario": "imdrive.config.scenario",
+    "Profile": "imdrive.config.profiles",
+    "simulate": "imdrive.run.simulate",
+    "simulate_batch": "imdrive.run.batch",
+    "SimulationResult": "imdrive.run.result",
+    "BatchResult": "imdrive.run.batch",
+}
 
-__version__ = "0.1.0"
+
+def __getattr__(name):
+    if name in _LAZY:
+        import importlib
+
+        return getattr(importlib.import_module(_LAZY[name]), name)
+    raise AttributeError(f"module 'imdrive' has no attribute {name!r}")
+
 
 __all__ = [
+    "BatchResult",
     "ConfigError",
-    "SimulationDiverged",
     "MachineParams",
+    "Profile",
+    "Scenario",
+    "SimulationDiverged",
+    "SimulationResult",
+    "__version__",
     "machine_preset",
     "machine_presets",
-    "__version__",
+    "simulate",
+    "simulate_batch",
 ]

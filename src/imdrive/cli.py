@@ -28,8 +28,9 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _cmd_presets(args) -> int:
-    from imdrive.machine import machine_presets
-    from imdrive.scenario import Scenario, preset_names
+    from imdrive.config.machine import machine_presets
+    from imdrive.config.presets import preset_names
+    from imdrive.config.scenario import Scenario
 
     print("scenario presets:")
     for name in preset_names():
@@ -42,15 +43,15 @@ def _cmd_presets(args) -> int:
 
 
 def _cmd_show(args) -> int:
-    from imdrive.scenario import preset_text
+    from imdrive.config.presets import preset_text
 
     sys.stdout.write(preset_text(args.preset))
     return EXIT_OK
 
 
 def _cmd_run(args) -> int:
-    from imdrive.scenario import Scenario
-    from imdrive.simulate import simulate
+    from imdrive.config.scenario import Scenario
+    from imdrive.run.simulate import simulate
 
     scenario = Scenario.read(args.scenario, args.set or [])
     out = Path(args.out) if args.out else Path("out") / scenario.name
@@ -104,7 +105,7 @@ def _cmd_fuzzy_table(args) -> int:
 
 
 def _cmd_paper(args) -> int:
-    from imdrive.paper import run_all
+    from imdrive.studies.paper import run_all
 
     out = Path(args.out)
     if out.exists() and not out.is_dir():

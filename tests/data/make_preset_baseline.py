@@ -40,8 +40,9 @@ def fingerprint(res, columns) -> dict:
 
 
 def main() -> None:
-    from imdrive.scenario import Scenario, preset_names
-    from imdrive.simulate import simulate
+    from imdrive.config.presets import preset_names
+    from imdrive.config.scenario import Scenario
+    from imdrive.run.simulate import simulate
 
     data = {}
     for name in preset_names():

@@ -100,9 +100,11 @@ from pathlib import Path
 
 import numpy as np
 
+from imdrive.config.overrides import _schema_allows
+from imdrive.config.presets import scenario_text
+from imdrive.config.profiles import Profile
+from imdrive.config.scenario import SECTIONS, Scenario, _convert
 from imdrive.errors import ConfigError
-from imdrive.profiles import Profile
-from imdrive.scenario import SECTIONS, Scenario, _convert, _schema_allows, scenario_text
 
 CONVENIENCE = ("R2_ratio", "speed_rpm", "load_Nm")
 CONVENIENCE_TARGET = {
@@ -328,14 +330,14 @@ def _build(sweep: Sweep, point: dict) -> Scenario:
 
 def sweep_names() -> list[str]:
     """Names of the built-in sweeps."""
-    root = resources.files("imdrive").joinpath("sweeps")
+    root = resources.files("imdrive.sweep").joinpath("presets")
     return sorted(p.name[:-5] for p in root.iterdir() if p.name.endswith(".toml"))
 
 
 def sweep_text(ref: str) -> tuple[str, Path | None]:
     """Text of a built-in sweep by name, or of the file at that path (and its folder)."""
     if ref in sweep_names():
-        return resources.files("imdrive").joinpath(f"sweeps/{ref}.toml").read_text(), None
+        return resources.files("imdrive.sweep").joinpath(f"presets/{ref}.toml").read_text(), None
     p = Path(ref)
     if p.is_file():
         try:
@@ -486,7 +488,7 @@ def _axis_values(name: str, spec, random: bool, samples: int, rng) -> Axis:
 
 
 def _heatmaps(items, axes: tuple[Axis, ...], random: bool) -> tuple[Heatmap, ...]:
-    from imdrive.batch import COLUMNS
+    from imdrive.run.batch import COLUMNS
 
     names = [a.name for a in axes]
     metric_cols = [c for c in COLUMNS if c != "drive"]
@@ -651,7 +653,7 @@ def run_chunk(sweep: Sweep, j: int, chunk_size: int | None = None, parallel: boo
     """Run chunk ``j`` of ``sweep``: its table (run, axis values, metrics), sorted by run."""
     import pandas as pd
 
-    from imdrive.batch import simulate_batch
+    from imdrive.run.batch import simulate_batch
 
     runs = sweep.chunk_runs(j, chunk_size)
     inputs = sweep.inputs(runs)

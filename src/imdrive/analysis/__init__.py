@@ -70,8 +70,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
+from imdrive.config.machine import MachineParams
 from imdrive.errors import ConfigError
-from imdrive.machine import MachineParams
 
 __all__ = [
     "SteadyState",

@@ -1,0 +1,156 @@
+"""Induction machine: parameters (T-equivalent circuit) and the continuous plant model.
+
+State variables (stationary alpha-beta frame, amplitude-invariant Clarke, see :mod:`imdrive`):
+stator and rotor flux linkages ``psi_s_ab``, ``psi_r_ab`` (Wb), mechanical speed ``w_m`` (rad/s),
+mechanical angle, two winding temperatures and four energy accumulators. With flux linkages as
+states the electrical equations are::
+
+    d psi_s/dt = v_s - R1 i_s
+    d psi_r/dt = -R2 i_r + j w_r psi_r                     (rotor short-circuited)
+    [psi_s; psi_r] = [[L1, M], [M, L2]] [i_s; i_r],  L1 = Ll1 + M,  L2 = Ll2 + M
+    T_e = 1.5 n_p (psi_s x i_s)
+    J dw_m/dt = T_e - T_L(t, w_m) - B w_m
+
+Winding temperatures follow a first-order thermal model per winding::
+
+    tau dtheta/dt = R_th P_cu - (theta - theta_amb),   R = R_ref (1 + alpha (theta - theta_ref))
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import asdict, dataclass, fields, replace
+from importlib import resources
+
+import numpy as np
+
+from imdrive.errors import ConfigError
+
+
+@dataclass(frozen=True)
+class MachineParams:
+    """T-equivalent-circuit parameters of a three-phase induction machine (per phase, SI).
+
+    Parameters
+    ----------
+    R1_ohm, R2_ohm : float
+        Stator and (stator-referred) rotor resistance at the reference temperature, ohm.
+    Ll1_H, Ll2_H : float
+        Stator and rotor leakage inductance, H.
+    M_H : float
+        Magnetising (mutual) inductance, H.
+    pole_pairs : int
+        Number of pole pairs n_p.
+    J_kgm2 : float
+        Moment of inertia of rotor and load, kg m^2.
+    B_Nms : float
+        Viscous friction coefficient, N m s/rad.
+    rated_power_W, rated_voltage_V, rated_frequency_Hz : float
+        Nameplate (shaft power, line-to-line rms voltage, frequency).
+    """
+
+    R1_ohm: float
+    R2_ohm: float
+    Ll1_H: float
+    Ll2_H: float
+    M_H: float
+    pole_pairs: int = 2
+    J_kgm2: float = 0.069
+    B_Nms: float = 0.0
+    rated_power_W: float = 2238.0
+    rated_voltage_V: float = 220.0
+    rated_frequency_Hz: float = 60.0
+    description: str = ""
+
+    def __post_init__(self):
+        for name in ("R1_ohm", "R2_ohm", "Ll1_H", "Ll2_H", "M_H", "J_kgm2"):
+            _positive(f"machine.{name}", getattr(self, name))
+        for name in ("rated_power_W", "rated_voltage_V", "rated_frequency_Hz"):
+            _positive(f"machine.{name}", getattr(self, name))
+        if isinstance(self.pole_pairs, bool) or not isinstance(self.pole_pairs, int | np.integer):
+            raise ConfigError("machine.pole_pairs", "must be an integer")
+        if self.pole_pairs < 1:
+            raise ConfigError("machine.pole_pairs", "must be >= 1")
+        if not math.isfinite(self.B_Nms) or self.B_Nms < 0:
+            raise ConfigError("machine.B_Nms", "must be >= 0")
+
+    # derived quantities -------------------------------------------------------------------
+    @property
+    def L1_H(self) -> float:
+        """Stator self-inductance L1 = Ll1 + M, H."""
+        return self.Ll1_H + self.M_H
+
+    @property
+    def L2_H(self) -> float:
+        """Rotor self-inductance L2 = Ll2 + M, H."""
+        return self.Ll2_H + self.M_H
+
+    @property
+    def sigma(self) -> float:
+        """Leakage factor sigma = 1 - M^2 / (L1 L2)."""
+        return 1.0 - self.M_H**2 / (self.L1_H * self.L2_H)
+
+    @property
+    def T2_s(self) -> float:
+        """Rotor time constant T2 = L2 / R2, s."""
+        return self.L2_H / self.R2_ohm
+
+    @property
+    def rated_flux_Wb(self) -> float:
+        """Rotor flux of the machine at rated voltage and frequency, no load, Wb.
+
+        ``(M/L1) * V_phase_peak / w_e`` with ``V_phase_peak = sqrt(2/3) V_ll``.
+        """
+        v_peak = math.sqrt(2.0 / 3.0) * self.rated_voltage_V
+        return self.M_H / self.L1_H * v_peak / (2 * math.pi * self.rated_frequency_Hz)
+
+    @property
+    def rated_current_A(self) -> float:
+        """Nominal peak phase current, A: rated power over sqrt(3) V_ll, as a peak value.
+
+        Used only to scale limits (controller current limit, divergence bound).
+        """
+        return math.sqrt(2.0) * self.rated_power_W / (math.sqrt(3.0) * self.rated_voltage_V)
+
+    def with_(self, **changes) -> MachineParams:
+        """Return a copy with some fields changed (validated again)."""
+        return replace(self, **changes)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def _positive(field: str, value) -> None:
+    if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer):
+        raise ConfigError(field, f"must be a number, got {type(value).__name__}")
+    if not math.isfinite(value) or value <= 0:
+        raise ConfigError(field, f"must be > 0 (got {value})")
+
+
+def _load_presets() -> dict[str, dict]:
+    text = resources.files("imdrive.config").joinpath("data/machines.toml").read_text()
+    return tomllib.loads(text)
+
+
+def machine_presets() -> dict[str, str]:
+    """Names and descriptions of the published machine parameter sets."""
+    return {k: v.get("description", "") for k, v in _load_presets().items()}
+
+
+def machine_preset(name: str = "paper-table-iv", **overrides) -> MachineParams:
+    """A published machine parameter set, optionally with fields overridden.
+
+    ``paper-table-iv`` (the paper's Table IV, J = 0.069 kg m^2) and ``krause-3hp`` (the textbook
+    machine it comes from, J = 0.089 kg m^2).
+    """
+    presets = _load_presets()
+    if name not in presets:
+        raise ConfigError("machine.preset", f"unknown preset {name!r}; known: {sorted(presets)}")
+    data = {k: v for k, v in presets[name].items() if k != "source"}
+    known = {f.name for f in fields(MachineParams)}
+    for k in overrides:
+        if k not in known:
+            raise ConfigError(f"machine.{k}", "unknown field")
+    data.update(overrides)
+    return MachineParams(**data)

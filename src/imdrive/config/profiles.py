@@ -1,0 +1,153 @@
+"""Time profiles: speed references, load torques, resistance changes, ...
+
+Every profile is a piecewise-linear function of time given by breakpoints ``(t_i, v_i)`` with
+non-decreasing times. Two breakpoints at the same time make a step (the function is continuous
+from the right: at the step time it already has the new value). Before the first breakpoint the
+function holds the first value, after the last one the last value.
+
+In a scenario file a profile is written either as a number (constant), as explicit points::
+
+    speed_ref_rpm = { points = [[0, 0], [0.2, 1000], [1.0, 1000], [1.0, 500]] }
+
+or as an initial value followed by changes, each a step (no ``over``) or a ramp lasting ``over``
+seconds::
+
+    load_Nm = { initial = 0, changes = [{ at = 0.5, to = 12 }, { at = 2, to = 6, over = 1 }] }
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from imdrive.errors import ConfigError
+
+
+@dataclass(frozen=True)
+class Profile:
+    """A piecewise-linear function of time, ``points = ((t0, v0), (t1, v1), ...)``."""
+
+    points: tuple[tuple[float, float], ...]
+
+    @staticmethod
+    def constant(value: float) -> Profile:
+        return Profile(((0.0, float(value)),))
+
+    def scaled(self, k: float) -> Profile:
+        """The same profile with every value multiplied by ``k`` (unit conversion)."""
+        return Profile(tuple((t, v * k) for t, v in self.points))
+
+    def __call__(self, t):
+        """Evaluate at time(s) ``t`` (Python side, for plots and tests)."""
+        tt, vv = self.arrays()
+        t = np.asarray(t, dtype=float)
+        out = np.empty(t.shape)
+        flat = out.reshape(-1)
+        for k, tk in enumerate(t.reshape(-1)):
+            flat[k] = _pwl_value(tt, vv, float(tk))
+        return out if out.ndim else float(out)
+
+    def arrays(self) -> tuple[np.ndarray, np.ndarray]:
+        t = np.array([p[0] for p in self.points], dtype=float)
+        v = np.array([p[1] for p in self.points], dtype=float)
+        return t, v
+
+    def to_toml_value(self):
+        if len(self.points) == 1:
+            return self.points[0][1]
+        return {"points": [list(p) for p in self.points]}
+
+    @property
+    def final(self) -> float:
+        return self.points[-1][1]
+
+
+def _number(field: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise ConfigError(field, f"must be a number, got {type(value).__name__}")
+    if not math.isfinite(value):
+        raise ConfigError(field, "must be finite")
+    return float(value)
+
+
+def parse_profile(field: str, value) -> Profile:
+    """Build a :class:`Profile` from its scenario-file form (see module docstring).
+
+    Raises
+    ------
+    ConfigError
+        Naming ``field`` and the broken rule.
+    """
+    if isinstance(value, Profile):
+        return value
+    if not isinstance(value, dict):
+        return Profile.constant(_number(field, value))
+    keys = set(value)
+    if "points" in keys:
+        if keys - {"points"}:
+            raise ConfigError(f"{field}.{sorted(keys - {'points'})[0]}", "unknown key")
+        pts = value["points"]
+        if not isinstance(pts, list) or not pts:
+            raise ConfigError(f"{field}.points", "must be a non-empty list of [t, value] pairs")
+        out = []
+        for k, p in enumerate(pts):
+            if not isinstance(p, list | tuple) or len(p) != 2:
+                raise ConfigError(f"{field}.points[{k}]", "must be a [t, value] pair")
+            out.append(
+                (_number(f"{field}.points[{k}]", p[0]), _number(f"{field}.points[{k}]", p[1]))
+            )
+        for k in range(1, len(out)):
+            if out[k][0] < out[k - 1][0]:
+                raise ConfigError(f"{field}.points[{k}]", "times must be non-decreasing")
+        return Profile(tuple(out))
+    unknown = keys - {"initial", "changes"}
+    if unknown:
+        raise ConfigError(f"{field}.{sorted(unknown)[0]}", "unknown key")
+    if "initial" not in keys:
+        raise ConfigError(f"{field}.initial", "is required with 'changes'")
+    v = _number(f"{field}.initial", value["initial"])
+    pts = [(0.0, v)]
+    changes = value.get("changes", [])
+    if not isinstance(changes, list):
+        raise ConfigError(f"{field}.changes", "must be a list of {at, to[, over]} tables")
+    t_last = 0.0
+    for k, ch in enumerate(changes):
+        f = f"{field}.changes[{k}]"
+        if not isinstance(ch, dict):
+            raise ConfigError(f, "must be a table {at, to[, over]}")
+        bad = set(ch) - {"at", "to", "over"}
+        if bad:
+            raise ConfigError(f"{f}.{sorted(bad)[0]}", "unknown key")
+        if "at" not in ch or "to" not in ch:
+            raise ConfigError(f, "needs 'at' and 'to'")
+        at = _number(f"{f}.at", ch["at"])
+        to = _number(f"{f}.to", ch["to"])
+        over = _number(f"{f}.over", ch.get("over", 0.0))
+        if at < 0:
+            raise ConfigError(f"{f}.at", "must be >= 0")
+        if over < 0:
+            raise ConfigError(f"{f}.over", "must be >= 0")
+        if at < t_last:
+            raise ConfigError(f"{f}.at", "changes must be in time order and must not overlap")
+        pts.append((at, v))
+        pts.append((at + over, to))
+        v = to
+        t_last = at + over
+    return Profile(tuple(pts))
+
+
+def _pwl_value(t_pts, v_pts, t: float) -> float:
+    """Value at ``t`` of a piecewise-linear profile: the same arithmetic as the kernels'
+    :func:`imdrive.kernels.profiles.pwl_eval` (right-continuous at steps, constant outside)."""
+    n = len(t_pts)
+    if t < t_pts[0]:
+        return float(v_pts[0])
+    i = 0
+    while i + 1 < n and t_pts[i + 1] <= t:
+        i += 1
+    if i + 1 >= n:
+        return float(v_pts[n - 1])
+    dt = t_pts[i + 1] - t_pts[i]
+    return float(v_pts[i] + (v_pts[i + 1] - v_pts[i]) * (t - t_pts[i]) / dt)

@@ -1,0 +1,17 @@
+"""Compiled blocks: small numba functions of (parameters, state, inputs), and the loops that
+compose them. Nothing here sees a Python object.
+
+Every module of this package is compiled under the package's hashed cache folder
+(:mod:`imdrive._cache`) *by construction*: importing any ``imdrive.kernels.*`` module runs this
+file first, and it imports every module found below it inside :func:`kernel_cache`. A new kernel
+module needs no registration; ``tests/test_layers.py`` checks that none escapes.
+"""
+
+import importlib
+import pkgutil
+
+from imdrive._cache import kernel_cache
+
+with kernel_cache():
+    for _info in pkgutil.walk_packages(__path__, __name__ + "."):
+        importlib.import_module(_info.name)

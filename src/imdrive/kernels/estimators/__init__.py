@@ -1,0 +1,1 @@
+"""Speed and flux estimators: Schauder's MRAS today; the reactive-power MRAS, AFO and EKF next."""
