@@ -15,7 +15,7 @@ import pytest
 
 from imdrive.config.scenario import Scenario
 from imdrive.errors import ConfigError
-from imdrive.kernels import layout as Lo
+from imdrive.kernels.engine import S_OK
 from imdrive.run.batch import COLUMNS, METRICS, simulate_batch
 from imdrive.run.simulate import simulate
 
@@ -160,7 +160,7 @@ def test_metric_values_make_sense(batch):
     assert math.isnan(df.loc[1, "convergence_time_s"])  # 30 % off, never corrected
     assert df.loc[1, "R2_error_pct"] == pytest.approx(30.0)
     div = df.loc[5]
-    assert div["diverged"] and div["status"] != Lo.S_OK
+    assert div["diverged"] and div["status"] != S_OK
     assert 0 < div["diverged_at_s"] < 0.6
     assert math.isnan(div["speed_error_rpm"]) and math.isfinite(div["final_speed_rpm"])
     assert np.all(np.isfinite(df.loc[:4, list(METRICS[:4])].to_numpy()))

@@ -7,36 +7,59 @@ import pytest
 
 from imdrive.config.scenario import Scenario
 from imdrive.fuzzy import fuzzy_table
-from imdrive.kernels import layout as Lo
-from imdrive.kernels.compensator import compensator_step, compensator_update
+from imdrive.kernels.compensator import (
+    COMPENSATOR_PARAMS,
+    COMPENSATOR_STATE,
+    compensator_step,
+    compensator_update,
+)
+from imdrive.kernels.model import MODEL_STATE
+from imdrive.kernels.records import new_record
 from imdrive.run.simulate import build_arrays, simulate
 
 
-def _kernel_arrays(table="paper", period=10, R2_hat=0.9, lo=0.5, hi=1.5, gain=1e6, g_cr=0.001):
-    par = np.zeros(Lo.N_PAR)
-    par[Lo.P_COMP_N] = period
-    par[Lo.P_COMP_GE] = gain
-    par[Lo.P_COMP_GDE] = gain
-    par[Lo.P_COMP_GCR] = g_cr
-    par[Lo.P_R2_HAT_MIN] = lo
-    par[Lo.P_R2_HAT_MAX] = hi
-    par[Lo.P_COMP_AVG] = 1.0
-    c = np.zeros(Lo.NC)
-    c[Lo.C_R2_HAT] = R2_hat
-    return par, c, fuzzy_table(table).astype(float)
+class _Comp:
+    """The compensator block's records (parameters, state, the controller's model) for one
+    drive, and the table: a bench to drive it sample by sample."""
+
+    def __init__(self, table="paper", period=10, R2_hat=0.9, lo=0.5, hi=1.5, gain=1e6, g_cr=0.001):
+        self.p = new_record(
+            COMPENSATOR_PARAMS,
+            enabled=True,
+            n=period,
+            G_E=gain,
+            G_DE=gain,
+            G_CR=g_cr,
+            R2_min=lo,
+            R2_max=hi,
+            average=True,
+        )[0]
+        self.s = np.zeros(1, dtype=COMPENSATOR_STATE)[0]
+        self.m = new_record(MODEL_STATE, R2_hat=R2_hat)[0]
+        self.table = fuzzy_table(table).astype(float)
+
+    @property
+    def R2_hat(self) -> float:
+        return float(self.m["R2_hat"])
+
+    def step(self, e_d0, t, k):
+        compensator_step(self.p, self.s, self.m, self.table, e_d0, t, k)
+
+    def update(self, E):
+        compensator_update(self.p, self.s, self.m, self.table, E)
 
 
 @pytest.mark.parametrize("source", ["paper", "rules"])
 @pytest.mark.parametrize("e_d0, direction", [(-3e-6, -1), (3e-6, +1), (-20e-6, -1), (20e-6, +1)])
 def test_constant_e_d0_moves_R2_hat_as_the_paper_rule_says(source, e_d0, direction):
     """e_d0 < 0 means R2_hat > R2 (paper §3): decrease R2_hat; e_d0 > 0: increase it."""
-    par, c, table = _kernel_arrays(source)
-    r0 = c[Lo.C_R2_HAT]
+    comp = _Comp(source)
+    table = comp.table
+    r0 = comp.R2_hat
     history = []
     for k in range(1, 201):
-        c[Lo.C_E_D0] = e_d0
-        compensator_step(par, c, table, k * 1e-4, k)
-        history.append(c[Lo.C_R2_HAT])
+        comp.step(e_d0, k * 1e-4, k)
+        history.append(comp.R2_hat)
     steps = np.diff([r0, *history])
     assert np.all(np.sign(steps[steps != 0]) == direction)
     assert np.count_nonzero(steps) == 20  # one decision per 10 control periods
@@ -47,35 +70,34 @@ def test_constant_e_d0_moves_R2_hat_as_the_paper_rule_says(source, e_d0, directi
 
 
 def test_zero_e_d0_leaves_R2_hat_alone():
-    par, c, table = _kernel_arrays()
+    comp = _Comp()
     for k in range(1, 101):
-        c[Lo.C_E_D0] = 1e-7  # inside the dead zone |E| <= 0.25e-6
-        compensator_step(par, c, table, k * 1e-4, k)
-    assert c[Lo.C_R2_HAT] == 0.9
+        comp.step(1e-7, k * 1e-4, k)  # inside the dead zone |E| <= 0.25e-6
+    assert comp.R2_hat == 0.9
 
 
 @pytest.mark.parametrize("e_d0, bound", [(-1e-3, 0.5), (1e-3, 1.5)])
 def test_clamps_hold(e_d0, bound):
-    par, c, table = _kernel_arrays(g_cr=0.01)
+    comp = _Comp(g_cr=0.01)
     for k in range(1, 5001):
-        c[Lo.C_E_D0] = e_d0
-        compensator_step(par, c, table, k * 1e-4, k)
-        assert 0.5 <= c[Lo.C_R2_HAT] <= 1.5
-    assert c[Lo.C_R2_HAT] == bound
+        comp.step(e_d0, k * 1e-4, k)
+        assert 0.5 <= comp.R2_hat <= 1.5
+    assert comp.R2_hat == bound
 
 
 def test_change_of_error_enters_through_DE():
     """A growing negative error decreases R2_hat faster than a shrinking one (Table III)."""
-    par, c, table = _kernel_arrays()
-    compensator_update(par, c, table, -2e-6)  # first sample: DE = 0
-    before = c[Lo.C_R2_HAT]
+    comp = _Comp()
+    table = comp.table
+    comp.update(-2e-6)  # first sample: DE = 0
+    before = comp.R2_hat
     # E = -5.5 -> level -6; DE = -3.5 -> level -4; table[-6, -4] = -5
-    compensator_update(par, c, table, -5.5e-6)
-    assert c[Lo.C_R2_HAT] - before == pytest.approx(table[0, 2] * 0.001)
-    before = c[Lo.C_R2_HAT]
+    comp.update(-5.5e-6)
+    assert comp.R2_hat - before == pytest.approx(table[0, 2] * 0.001)
+    before = comp.R2_hat
     # E = -2 -> level -3 (-3 < x <= -2); DE = +3.5 -> level 4; table[-3, 4] = 0
-    compensator_update(par, c, table, -2e-6)
-    assert c[Lo.C_R2_HAT] - before == pytest.approx(table[3, 10] * 0.001)
+    comp.update(-2e-6)
+    assert comp.R2_hat - before == pytest.approx(table[3, 10] * 0.001)
     assert table[0, 2] < table[3, 10]
 
 
@@ -137,6 +159,6 @@ def test_compensator_settings_reach_the_kernel():
         ["compensator.enabled=true", "compensator.period_s=0.02", "compensator.table=rules"],
     )
     a = build_arrays(sc)
-    assert a.par[Lo.P_COMP_N] == 200
-    assert a.par[Lo.P_R2_HAT_MIN] == pytest.approx(0.5 * 0.9792)
-    assert np.array_equal(a.table, fuzzy_table("rules").astype(float))
+    assert a.params.comp["n"][0] == 200
+    assert a.params.comp["R2_min"][0] == pytest.approx(0.5 * 0.9792)
+    assert np.array_equal(a.params.tables[0], fuzzy_table("rules").astype(float))

@@ -1,6 +1,7 @@
-"""Deprecated (0.1 layout): the names now live in
-:mod:`imdrive.kernels.layout`."""
+"""Deprecated (0.1 layout). The flat arrays and their index constants are gone: every block now
+declares named records (see docs/architecture.md). The status codes and profile slots moved to
+:mod:`imdrive.kernels.engine` and :mod:`imdrive.kernels.profiles`."""
 
 from imdrive._deprecated import reexport
 
-reexport(__name__, "imdrive.kernels.layout")
+reexport(__name__, "imdrive.kernels.engine", "imdrive.kernels.profiles")

@@ -1,22 +1,22 @@
 """The fuzzy-logic rotor-resistance compensator in the drive (paper §4, Fig. 1).
 
-Every compensator period (``P_COMP_N`` control periods) after the enable time it forms
+Every compensator period (``p.n`` control periods) after the enable time it forms
 
     E  = e_d0                      (the MRAS flux error in the rotor-flux frame, Wb)
     DE = E - E_previous            (change per compensator period, Wb)
 
-scales them (``P_COMP_GE``, ``P_COMP_GDE``, 1/Wb: the paper's thresholds are in units of
+scales them (``p.G_E``, ``p.G_DE``, 1/Wb: the paper's thresholds are in units of
 1e-6, so a gain of 1e6 reproduces them), looks up the output level CR (-6 ... 6) in the 13 x 13
 table (the paper's printed Table III or one compiled from rules, :mod:`imdrive.fuzzy`) and
 updates
 
     R2_hat <- clip(R2_hat + G_CR * CR, R2_min, R2_max)
 
-The MRAS and the slip calculation read ``R2_hat`` from the controller state, so both use the
+The MRAS and the slip calculation read ``R2_hat`` from the controller model (MODEL_STATE), so both use the
 new value from the next sample on.
 
 Persistent-excitation variant (this project's, not the paper's): a sinusoid of amplitude
-``P_INJ_AMP`` and frequency ``P_INJ_FREQ`` is added to the flux-current reference id*
+``p.inj_amp`` and frequency ``p.inj_freq`` is added to the flux-current reference id*
 (:func:`imdrive.control.foc_step`), and the compensator's input becomes the synchronous
 detection ``2 e_d0 sin(phase)`` of e_d0 with the injected sinusoid. Averaged over whole
 injection periods (the compensator period) it is the in-phase part of the e_d0 oscillation,
@@ -27,7 +27,7 @@ part of their difference has the sign of ``T2_hat - T2``, i.e. it is negative wh
 A constant (e.g. discretisation) bias of e_d0 averages out.
 
 By default E is the mean of the input over the compensator period rather than a single sample
-(``P_COMP_AVG``): a boxcar anti-aliasing filter that keeps ripple out of the quantiser.
+(``p.average``): a boxcar anti-aliasing filter that keeps ripple out of the quantiser.
 """
 
 from __future__ import annotations
@@ -37,98 +37,118 @@ import math
 from numba import njit
 
 from imdrive.kernels.fuzzy import lookup
-from imdrive.kernels.layout import (
-    C_COMP_ACC,
-    C_COMP_STARTED,
-    C_CR,
-    C_DEMOD,
-    C_E_D0,
-    C_E_D0_PREV,
-    C_INJ_PHASE,
-    C_R2_HAT,
-    P_COMP_AVG,
-    P_COMP_GCR,
-    P_COMP_GDE,
-    P_COMP_GE,
-    P_COMP_INPUT,
-    P_COMP_N,
-    P_COMP_T_ON,
-    P_INJ_FREQ,
-    P_INJ_LPF,
-    P_INJ_T_ON,
-    P_R2_HAT_MAX,
-    P_R2_HAT_MIN,
+from imdrive.kernels.records import b1, f8, record_dtype
+
+#: Parameters of the fuzzy R2 compensator and of the injected sinusoid.
+COMPENSATOR_PARAMS = record_dtype(
+    [
+        ("enabled", b1),  # compensator present
+        ("t_on", f8),  # time it is enabled, s
+        ("n", f8),  # compensator period in control periods
+        ("G_E", f8),  # scaling gain of E = e_d0, 1/Wb
+        ("G_DE", f8),  # scaling gain of DE = change of E per compensator period, 1/Wb
+        ("G_CR", f8),  # resistance change per output level, ohm
+        ("R2_min", f8),  # clamp, ohm
+        ("R2_max", f8),  # clamp, ohm
+        ("demodulated", b1),  # input: e_d0 (paper) or demodulated e_d0 (injection)
+        ("average", b1),  # input is the mean over the compensator period, else a sample
+        ("inj_amp", f8),  # amplitude of the sinusoid added to id*, A (0: off)
+        ("inj_freq", f8),  # its frequency, Hz
+        ("inj_lpf", f8),  # optional low-pass on the demodulated product, rad/s (0: none)
+        ("inj_t_on", f8),  # time the injection starts, s
+    ]
 )
+
+#: State of the compensator.
+COMPENSATOR_STATE = record_dtype(
+    [
+        ("E_prev", f8),  # input at the last compensator sample, Wb
+        ("cr", f8),  # last output level
+        ("started", b1),  # the first sample has been taken
+        ("acc", f8),  # running sum of the input over the current period, Wb
+        ("inj_phase", f8),  # phase of the injected sinusoid, rad
+        ("demod", f8),  # demodulated (optionally low-pass-filtered) e_d0, Wb
+    ]
+)
+
+#: Log fields of this block.
+LOG_FIELDS = ("e_d0_demod",)  # Wb
 
 
 @njit(cache=True)
-def injection_sine(par, c, t, Ts):
-    """``sin(phase)`` of the injected sinusoid at this sample, 0 before ``P_INJ_T_ON``.
+def injection_sine(p, s, t, Ts):
+    """``sin(phase)`` of the injected sinusoid at this sample, 0 before ``p.inj_t_on``.
 
-    Advances the phase held in ``c`` by one period. The injected flux current is
-    ``P_INJ_AMP`` times this value, and :func:`demodulate` detects e_d0 with the same value.
+    Advances the phase held in ``s`` by one period. The injected flux current is
+    ``p.inj_amp`` times this value, and :func:`demodulate` detects e_d0 with the same value.
     """
-    if t < par[P_INJ_T_ON]:
+    if t < p.inj_t_on:
         return 0.0
-    ph = c[C_INJ_PHASE]
-    nxt = ph + 2.0 * math.pi * par[P_INJ_FREQ] * Ts
-    c[C_INJ_PHASE] = nxt - 2.0 * math.pi if nxt >= 2.0 * math.pi else nxt
+    ph = s.inj_phase
+    nxt = ph + 2.0 * math.pi * p.inj_freq * Ts
+    s.inj_phase = nxt - 2.0 * math.pi if nxt >= 2.0 * math.pi else nxt
     return math.sin(ph)
 
 
 @njit(cache=True)
-def demodulate(par, c, sine, Ts):
-    """Synchronous detection of e_d0 with the injected sinusoid (updates ``C_DEMOD``).
+def demodulate(p, s, e_d0, sine, Ts):
+    """Synchronous detection of e_d0 with the injected sinusoid (updates ``s.demod``).
 
-    ``sine`` is :func:`injection_sine` of this sample. With ``P_INJ_LPF > 0`` the product
+    ``sine`` is :func:`injection_sine` of this sample. With ``p.inj_lpf > 0`` the product
     ``2 e_d0 sine`` is also low-pass filtered (rad/s), for display.
     """
-    prod = 2.0 * c[C_E_D0] * sine
-    w_lp = par[P_INJ_LPF]
+    prod = 2.0 * e_d0 * sine
+    w_lp = p.inj_lpf
     if w_lp > 0.0:
-        c[C_DEMOD] += (1.0 - math.exp(-w_lp * Ts)) * (prod - c[C_DEMOD])
+        s.demod += (1.0 - math.exp(-w_lp * Ts)) * (prod - s.demod)
     else:
-        c[C_DEMOD] = prod
+        s.demod = prod
 
 
 @njit(cache=True)
-def compensator_input(par, c):
+def compensator_input(p, s, e_d0):
     """The signal the compensator feeds on: e_d0 (paper) or its demodulated version, Wb."""
-    if par[P_COMP_INPUT] != 0.0:
-        return c[C_DEMOD]
-    return c[C_E_D0]
+    if p.demodulated:
+        return s.demod
+    return e_d0
 
 
 @njit(cache=True)
-def compensator_update(par, c, table, E):
-    """One compensator decision from the input ``E`` (Wb); updates ``C_R2_HAT`` in ``c``.
+def compensator_update(p, s, m, table, E):
+    """One compensator decision from the input ``E`` (Wb); updates ``m.R2_hat`` (MODEL_STATE).
 
     Returns the output level CR.
     """
-    if c[C_COMP_STARTED] == 0.0:
-        c[C_COMP_STARTED] = 1.0
-        c[C_E_D0_PREV] = E  # no change is known at the first sample
-    DE = E - c[C_E_D0_PREV]
-    c[C_E_D0_PREV] = E
-    cr = lookup(table, par[P_COMP_GE] * E, par[P_COMP_GDE] * DE)
-    r2 = c[C_R2_HAT] + par[P_COMP_GCR] * cr
-    c[C_R2_HAT] = min(max(r2, par[P_R2_HAT_MIN]), par[P_R2_HAT_MAX])
-    c[C_CR] = cr
+    if not s.started:
+        s.started = True
+        s.E_prev = E  # no change is known at the first sample
+    DE = E - s.E_prev
+    s.E_prev = E
+    cr = lookup(table, p.G_E * E, p.G_DE * DE)
+    r2 = m.R2_hat + p.G_CR * cr
+    m.R2_hat = min(max(r2, p.R2_min), p.R2_max)
+    s.cr = cr
     return cr
 
 
 @njit(cache=True)
-def compensator_step(par, c, table, t, k):
-    """Called every control period ``k`` at time ``t`` after the MRAS update."""
-    if t < par[P_COMP_T_ON]:
+def compensator_step(p, s, m, table, e_d0, t, k):
+    """Called every control period ``k`` at time ``t`` after the MRAS update (``e_d0``, Wb)."""
+    if t < p.t_on:
         return
-    n = max(int(par[P_COMP_N]), 1)
-    c[C_COMP_ACC] += compensator_input(par, c)
+    n = max(int(p.n), 1)
+    s.acc += compensator_input(p, s, e_d0)
     if k % n != 0:
         return
-    if par[P_COMP_AVG] != 0.0 and c[C_COMP_STARTED] != 0.0:
-        E = c[C_COMP_ACC] / n
+    if p.average and s.started:
+        E = s.acc / n
     else:
-        E = compensator_input(par, c)
-    c[C_COMP_ACC] = 0.0
-    compensator_update(par, c, table, E)
+        E = compensator_input(p, s, e_d0)
+    s.acc = 0.0
+    compensator_update(p, s, m, table, E)
+
+
+@njit(cache=True)
+def log_compensator(row, s):
+    """Write this block's :data:`LOG_FIELDS` into the log record ``row``."""
+    row.e_d0_demod = s.demod

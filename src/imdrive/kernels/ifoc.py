@@ -38,31 +38,39 @@ import math
 from numba import njit
 
 from imdrive.kernels.inverter import limit_magnitude
-from imdrive.kernels.layout import (
-    C_I_D,
-    C_I_Q,
-    C_ID_REF,
-    C_INT_D,
-    C_INT_Q,
-    C_INT_W,
-    C_IQ_REF,
-    C_PSI_HAT,
-    C_R2_HAT,
-    C_THETA_E,
-    C_THETA_OL,
-    C_W_E,
-    P_DECOUPLE,
-    P_I_MAX,
-    P_KI_I,
-    P_KI_W,
-    P_KP_I,
-    P_KP_W,
-    P_LL1_HAT,
-    P_LL2_HAT,
-    P_M_HAT,
-    P_NP,
-    P_VDC,
+from imdrive.kernels.model import model_inductances
+from imdrive.kernels.records import b1, c16, f8, record_dtype
+
+#: Parameters of the speed and current controllers (gains from :mod:`imdrive.design.gains`).
+CONTROL_PARAMS = record_dtype(
+    [
+        ("n_p", f8),  # pole pairs (the controller knows them)
+        ("kp_w", f8),  # speed PI proportional gain, A/(rad/s)
+        ("ki_w", f8),  # speed PI integral gain, A/rad
+        ("kp_i", f8),  # current PI proportional gain, V/A
+        ("ki_i", f8),  # current PI integral gain, V/(A s)
+        ("i_max", f8),  # stator current magnitude limit, A
+        ("v_max", f8),  # voltage magnitude limit (the inverter's linear range), V
+        ("decouple", b1),  # cross-coupling and back-emf feed-forward on
+    ]
 )
+
+#: State of the controller (and of the open-loop voltage drive).
+CONTROL_STATE = record_dtype(
+    [
+        ("theta_e", f8),  # field angle of the controller's synchronous frame, rad
+        ("w_e", f8),  # synchronous speed used by the controller, rad/s
+        ("int_w", f8),  # speed PI integral state, A
+        ("int_dq", c16),  # current PI integral states (d + j q), V
+        ("i_ref_dq", c16),  # current reference id* + j iq*, A
+        ("i_s_dq", c16),  # measured current in the controller's frame, A
+        ("psi_hat", f8),  # the controller's rotor-flux model, Wb
+        ("theta_ol", f8),  # angle of the open-loop voltage, rad
+    ]
+)
+
+#: Log fields of this block.
+LOG_FIELDS = ("speed_ref", "id_ref", "iq_ref", "i_d", "i_q", "theta_e")
 
 
 @njit(cache=True)
@@ -72,27 +80,29 @@ def wrap_angle(th):
 
 
 @njit(cache=True)
-def open_loop_voltage(c, v_amp, f_Hz, Ts):
+def open_loop_voltage(s, v_amp, f_Hz, Ts):
     """Balanced sinusoidal voltage for the next period (updates the angle in ``c``).
 
     The sinusoid is sampled at the middle of the period, so the held voltage has the
     continuous sinusoid's phase (its amplitude is reduced by sinc(w Ts/2), 6e-5 at 60 Hz, 10 kHz).
     """
     w = 2.0 * math.pi * f_Hz
-    th = c[C_THETA_OL] + 0.5 * w * Ts
-    c[C_THETA_OL] = wrap_angle(c[C_THETA_OL] + w * Ts)
+    th = s.theta_ol + 0.5 * w * Ts
+    s.theta_ol = wrap_angle(s.theta_ol + w * Ts)
     return v_amp * math.cos(th), v_amp * math.sin(th)
 
 
 @njit(cache=True)
-def foc_step(par, c, i_a, i_b, w_fb_m, w_ref_m, psi_ref, i_inj, Ts):
+def foc_step(p, m, s, i_a, i_b, w_fb_m, w_ref_m, psi_ref, i_inj, Ts):
     """One period of indirect field-oriented speed control (updates ``c``).
 
     Parameters
     ----------
-    par : float64[N_PAR]
-    c : float64[NC]
-        Controller state; ``C_R2_HAT`` is the rotor-resistance estimate the slip uses.
+    p : CONTROL_PARAMS record
+    m : MODEL_STATE record
+        The controller's machine model; ``R2_hat`` is the estimate the slip uses.
+    s : CONTROL_STATE record
+        Updated in place.
     i_a, i_b : float
         Measured stator current, stationary frame, A.
     w_fb_m : float
@@ -111,20 +121,17 @@ def foc_step(par, c, i_a, i_b, w_fb_m, w_ref_m, psi_ref, i_inj, Ts):
     v_a, v_b : float
         Voltage reference for the next period, stationary frame, V.
     """
-    M = par[P_M_HAT]
-    L1 = par[P_LL1_HAT] + M
-    L2 = par[P_LL2_HAT] + M
-    sigma_L1 = L1 - M * M / L2
-    n_p = par[P_NP]
-    i_max = par[P_I_MAX]
+    M, L1, L2, sigma_L1 = model_inductances(m)
+    n_p = p.n_p
+    i_max = p.i_max
 
     # flux-current reference, plus the injected component (persistent excitation)
     id_ref = min(psi_ref / M + i_inj, i_max)
 
     # the controller's rotor-flux model (exact for id* held over the period)
-    T2_hat = L2 / c[C_R2_HAT]
+    T2_hat = L2 / m.R2_hat
     g = math.exp(-Ts / T2_hat)
-    psi_hat = c[C_PSI_HAT]
+    psi_hat = s.psi_hat
     # floor: keeps slip and torque current finite while the machine is still unmagnetised
     psi_div = max(psi_hat, 0.05 * M * abs(id_ref), 1e-6)
 
@@ -132,39 +139,41 @@ def foc_step(par, c, i_a, i_b, w_fb_m, w_ref_m, psi_ref, i_inj, Ts):
     # the modelled flux so the torque does not follow flux changes (injection, magnetising)
     iq_max = math.sqrt(max(i_max * i_max - id_ref * id_ref, 0.0))
     err_w = w_ref_m - w_fb_m
-    u_unsat = par[P_KP_W] * err_w + c[C_INT_W]
+    u_unsat = p.kp_w * err_w + s.int_w
     flux_gain = psi_ref / psi_div
     iq_ref = min(max(u_unsat * flux_gain, -iq_max), iq_max)
-    c[C_INT_W] += par[P_KI_W] * Ts * err_w + (iq_ref / flux_gain - u_unsat)
+    s.int_w += p.ki_w * Ts * err_w + (iq_ref / flux_gain - u_unsat)
 
     # synchronous frame: slip from the estimated rotor time constant
-    th = c[C_THETA_E]
+    th = s.theta_e
     cs = math.cos(th)
     sn = math.sin(th)
     i_d = cs * i_a + sn * i_b
     i_q = -sn * i_a + cs * i_b
     w_sl = M * iq_ref / (T2_hat * psi_div)
-    c[C_PSI_HAT] = g * psi_hat + (1.0 - g) * M * id_ref
+    s.psi_hat = g * psi_hat + (1.0 - g) * M * id_ref
     w_e = n_p * w_fb_m + w_sl
 
     # current PIs with decoupling; the d axis has priority in the voltage limit (keeps flux)
-    kp = par[P_KP_I]
-    ki = par[P_KI_I]
+    kp = p.kp_i
+    ki = p.ki_i
     e_d = id_ref - i_d
     e_q = iq_ref - i_q
     ff_d = 0.0
     ff_q = 0.0
-    if par[P_DECOUPLE] != 0.0:
+    if p.decouple:
         ff_d = -w_e * sigma_L1 * iq_ref
         ff_q = w_e * (sigma_L1 * id_ref + M / L2 * psi_hat)
-    v_d_unsat = kp * e_d + c[C_INT_D] + ff_d
-    v_q_unsat = kp * e_q + c[C_INT_Q] + ff_q
-    v_max = par[P_VDC] / math.sqrt(3.0)
+    v_d_unsat = kp * e_d + s.int_dq.real + ff_d
+    v_q_unsat = kp * e_q + s.int_dq.imag + ff_q
+    v_max = p.v_max
     v_d = min(max(v_d_unsat, -v_max), v_max)
     v_q_max = math.sqrt(max(v_max * v_max - v_d * v_d, 0.0))
     v_q = min(max(v_q_unsat, -v_q_max), v_q_max)
-    c[C_INT_D] += ki * Ts * e_d + (v_d - v_d_unsat)
-    c[C_INT_Q] += ki * Ts * e_q + (v_q - v_q_unsat)
+    s.int_dq = complex(
+        s.int_dq.real + (ki * Ts * e_d + (v_d - v_d_unsat)),
+        s.int_dq.imag + (ki * Ts * e_q + (v_q - v_q_unsat)),
+    )
 
     # back to the stationary frame at the middle of the period, where the held voltage acts
     th_mid = th + 0.5 * w_e * Ts
@@ -174,10 +183,23 @@ def foc_step(par, c, i_a, i_b, w_fb_m, w_ref_m, psi_ref, i_inj, Ts):
     v_b = sm * v_d + cm * v_q
     v_a, v_b = limit_magnitude(v_a, v_b, v_max)
 
-    c[C_THETA_E] = wrap_angle(th + w_e * Ts)
-    c[C_W_E] = w_e
-    c[C_ID_REF] = id_ref
-    c[C_IQ_REF] = iq_ref
-    c[C_I_D] = i_d
-    c[C_I_Q] = i_q
+    s.theta_e = wrap_angle(th + w_e * Ts)
+    s.w_e = w_e
+    s.i_ref_dq = complex(id_ref, iq_ref)
+    s.i_s_dq = complex(i_d, i_q)
     return v_a, v_b
+
+
+@njit(cache=True)
+def log_control(row, s, w_ref_m, theta_k):
+    """Write this block's :data:`LOG_FIELDS` into the log record ``row``.
+
+    ``w_ref_m`` is the speed reference (mechanical rad/s) and ``theta_k`` the field angle at
+    this sample (before :func:`foc_step` advanced it).
+    """
+    row.speed_ref = w_ref_m
+    row.id_ref = s.i_ref_dq.real
+    row.iq_ref = s.i_ref_dq.imag
+    row.i_d = s.i_s_dq.real
+    row.i_q = s.i_s_dq.imag
+    row.theta_e = theta_k

@@ -14,11 +14,22 @@ import math
 
 from numba import njit
 
-from imdrive.kernels.layout import P_INV_MODEL, P_VDC
+from imdrive.kernels.records import f8, i8, record_dtype
 
 INV_AVERAGE = 0
 MAX_SEGMENTS = 8
 INVERTER_CODES = {"average": INV_AVERAGE}
+
+#: Parameters of the inverter.
+INVERTER_PARAMS = record_dtype(
+    [
+        ("Vdc", f8),  # DC-link voltage, V
+        ("model", i8),  # INV_AVERAGE (switching models next)
+    ]
+)
+
+#: Log fields this block's caller writes: the period-average voltage applied, V.
+LOG_FIELDS = ("v_alpha", "v_beta")
 
 
 @njit(cache=True)
@@ -32,12 +43,12 @@ def limit_magnitude(v_a, v_b, v_max):
 
 
 @njit(cache=True)
-def inverter_segments(par, v_ref_a, v_ref_b, i_a, i_b, Ts, seg_dt, seg_va, seg_vb):
+def inverter_segments(p, v_ref_a, v_ref_b, i_a, i_b, Ts, seg_dt, seg_va, seg_vb):
     """Voltage segments the machine sees over one control period.
 
     Parameters
     ----------
-    par : float64[N_PAR]
+    p : INVERTER_PARAMS record
     v_ref_a, v_ref_b : float
         Voltage reference from the controller, stationary frame, V.
     i_a, i_b : float
@@ -52,9 +63,8 @@ def inverter_segments(par, v_ref_a, v_ref_b, i_a, i_b, Ts, seg_dt, seg_va, seg_v
     int
         Number of segments written.
     """
-    v_max = par[P_VDC] / math.sqrt(3.0)
-    # only the average model exists so far; P_INV_MODEL selects future models
-    _ = par[P_INV_MODEL]
+    v_max = p.Vdc / math.sqrt(3.0)
+    # only the average model exists so far; p.model selects future models
     va, vb = limit_magnitude(v_ref_a, v_ref_b, v_max)
     seg_dt[0] = Ts
     seg_va[0] = va

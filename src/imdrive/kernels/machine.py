@@ -1,4 +1,4 @@
-"""Induction machine: parameters (T-equivalent circuit) and the continuous plant model.
+"""Induction machine: the continuous plant model (compiled).
 
 State variables (stationary alpha-beta frame, amplitude-invariant Clarke, see :mod:`imdrive`):
 stator and rotor flux linkages ``psi_s_ab``, ``psi_r_ab`` (Wb), mechanical speed ``w_m`` (rad/s),
@@ -14,48 +14,85 @@ states the electrical equations are::
 Winding temperatures follow a first-order thermal model per winding::
 
     tau dtheta/dt = R_th P_cu - (theta - theta_amb),   R = R_ref (1 + alpha (theta - theta_ref))
+
+The flux linkages are the electrical states: the equations are then linear in the state for a
+given speed, resistances enter only as coefficients (so R1, R2 may jump without discontinuity
+of the state), and the magnetic energy is a function of state.
+
+Each control period the engine integrates the plant over the inverter's voltage segments with
+classical RK4 (:func:`integrate_segment`). RK4 rather than an exact discretisation: the plant is
+nonlinear (speed multiplies flux, the thermal model makes R depend on state); the fastest
+electrical mode has ``|lambda| ~ 400 1/s`` so ``|lambda| h ~ 0.04`` at the default 100 us, where
+RK4's local error is ~1e-9 relative; tests/test_machine_physics.py measures it against scipy's
+solve_ivp.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
-from imdrive.kernels.layout import (
-    P_ALPHA1,
-    P_ALPHA2,
-    P_B,
-    P_J,
-    P_LL1,
-    P_LL2,
-    P_LOAD_FAN,
-    P_LOAD_VISC,
-    P_M,
-    P_MECH_MODE,
-    P_NP,
-    P_RTH1,
-    P_RTH2,
-    P_TAU1,
-    P_TAU2,
-    P_THERMAL,
-    P_THETA_AMB,
-    P_THETA_REF,
-    X_E_CU,
-    X_E_EM,
-    X_E_IN,
-    X_E_LOAD,
-    X_PSI_R_A,
-    X_PSI_R_B,
-    X_PSI_S_A,
-    X_PSI_S_B,
-    X_TH1,
-    X_TH2,
-    X_THETA_M,
-    X_W_M,
+from imdrive.kernels.records import b1, c16, f8, record_dtype
+
+#: Parameters of the true machine and its load (SI; temperatures in degC).
+PLANT_PARAMS = record_dtype(
+    [
+        ("R1", f8),  # stator resistance at the reference temperature, ohm
+        ("R2", f8),  # rotor resistance (stator-referred) at the reference temperature, ohm
+        ("Ll1", f8),  # stator leakage inductance, H
+        ("Ll2", f8),  # rotor leakage inductance, H
+        ("M", f8),  # magnetising inductance, H
+        ("n_p", f8),  # pole pairs
+        ("J", f8),  # inertia, kg m^2
+        ("B", f8),  # viscous friction of the machine, N m s/rad
+        ("k_visc", f8),  # load torque coefficient on w_m, N m s/rad
+        ("k_fan", f8),  # load torque coefficient on w_m |w_m|, N m s^2/rad^2
+        ("alpha1", f8),  # temperature coefficient of R1, 1/K
+        ("alpha2", f8),  # temperature coefficient of R2, 1/K
+        ("theta_ref", f8),  # reference temperature of R1, R2, degC
+        ("theta_amb", f8),  # ambient temperature, degC
+        ("Rth1", f8),  # stator thermal resistance, K/W
+        ("tau1", f8),  # stator thermal time constant, s
+        ("Rth2", f8),  # rotor thermal resistance, K/W
+        ("tau2", f8),  # rotor thermal time constant, s
+        ("thermal", b1),  # thermal model on
+        ("speed_imposed", b1),  # w_m follows a profile instead of J dw/dt = Te - TL
+    ]
 )
 
-# ------------------------------------------------------------------------------------------
-# compiled kernels
+#: Continuous plant state; ``PLANT_STATE`` has the memory layout of 12 float64.
+PLANT_STATE = record_dtype(
+    [
+        ("psi_s_ab", c16),  # stator flux linkage, Wb
+        ("psi_r_ab", c16),  # rotor flux linkage (stator-referred), Wb
+        ("w_m", f8),  # mechanical speed, rad/s
+        ("theta_m", f8),  # mechanical angle, rad
+        ("theta1", f8),  # stator winding temperature, degC
+        ("theta2", f8),  # rotor winding temperature, degC
+        ("E_in", f8),  # electrical input energy, J
+        ("E_cu", f8),  # copper losses, J
+        ("E_em", f8),  # air-gap (electromechanical) work, integral of Te w_m, J
+        ("E_load", f8),  # work done on the load and friction, J
+    ]
+)
+
+#: Log fields this block writes (SI units; the result's units table names the columns).
+LOG_FIELDS = (
+    "speed",  # w_m, rad/s
+    "torque",  # T_e, N m
+    "load_torque",  # T_L, N m
+    "i_alpha",  # plant stator current, A
+    "i_beta",
+    "psi_r_alpha",  # plant rotor flux, Wb
+    "psi_r_beta",
+    "R1",  # actual resistances, ohm
+    "R2",
+    "flux",  # |psi_r|, Wb
+    "theta1",  # winding temperatures, degC
+    "theta2",
+)
 
 
 @njit(cache=True)
@@ -73,19 +110,30 @@ def currents_from_fluxes(psi_s_a, psi_s_b, psi_r_a, psi_r_b, L1, L2, M):
 
 
 @njit(cache=True)
-def winding_resistances(x, par, R1_base, R2_base):
+def stator_current(p, x):
+    """Stator current ``(i_s_alpha, i_s_beta)`` of plant state ``x``, A."""
+    L1 = p.Ll1 + p.M
+    L2 = p.Ll2 + p.M
+    i_s_a, i_s_b, _, _ = currents_from_fluxes(
+        x.psi_s_ab.real, x.psi_s_ab.imag, x.psi_r_ab.real, x.psi_r_ab.imag, L1, L2, p.M
+    )
+    return i_s_a, i_s_b
+
+
+@njit(cache=True)
+def winding_resistances(p, x, R1_base, R2_base):
     """Actual R1, R2 (ohm): the profile-scaled base values times the thermal factor."""
-    if par[P_THERMAL] != 0.0:
-        R1 = R1_base * (1.0 + par[P_ALPHA1] * (x[X_TH1] - par[P_THETA_REF]))
-        R2 = R2_base * (1.0 + par[P_ALPHA2] * (x[X_TH2] - par[P_THETA_REF]))
+    if p.thermal:
+        R1 = R1_base * (1.0 + p.alpha1 * (x.theta1 - p.theta_ref))
+        R2 = R2_base * (1.0 + p.alpha2 * (x.theta2 - p.theta_ref))
         return R1, R2
     return R1_base, R2_base
 
 
 @njit(cache=True)
-def load_torque(par, TL0, w_m):
+def load_torque(p, TL0, w_m):
     """Load torque T_L = T0(t) + b w_m + k_fan w_m |w_m|, N m (positive opposes forward motion)."""
-    return TL0 + par[P_LOAD_VISC] * w_m + par[P_LOAD_FAN] * w_m * abs(w_m)
+    return TL0 + p.k_visc * w_m + p.k_fan * w_m * abs(w_m)
 
 
 @njit(cache=True)
@@ -95,79 +143,167 @@ def electromagnetic_torque(psi_s_a, psi_s_b, i_s_a, i_s_b, n_p):
 
 
 @njit(cache=True)
-def machine_derivative(x, v_a, v_b, R1_base, R2_base, TL0, par, dx):
-    """Time derivative of the plant state (writes ``dx``).
+def machine_derivative(p, x, v_a, v_b, R1_base, R2_base, TL0, dx):
+    """Time derivative of the plant state (writes the record ``dx``).
 
     Parameters
     ----------
-    x : float64[NX]
-        Plant state (layout ``X_*``).
+    p : PLANT_PARAMS record
+    x : PLANT_STATE record
     v_a, v_b : float
         Stator voltage space vector applied by the inverter, V.
     R1_base, R2_base : float
         Resistances at the reference temperature, already scaled by their time profiles, ohm.
     TL0 : float
         Time-dependent part of the load torque, N m.
-    par : float64[N_PAR]
-    dx : float64[NX]
+    dx : PLANT_STATE record
         Output.
     """
-    L1 = par[P_LL1] + par[P_M]
-    L2 = par[P_LL2] + par[P_M]
-    M = par[P_M]
-    n_p = par[P_NP]
-    psi_s_a = x[X_PSI_S_A]
-    psi_s_b = x[X_PSI_S_B]
-    psi_r_a = x[X_PSI_R_A]
-    psi_r_b = x[X_PSI_R_B]
-    w_m = x[X_W_M]
-    R1, R2 = winding_resistances(x, par, R1_base, R2_base)
+    L1 = p.Ll1 + p.M
+    L2 = p.Ll2 + p.M
+    M = p.M
+    n_p = p.n_p
+    psi_s_a = x.psi_s_ab.real
+    psi_s_b = x.psi_s_ab.imag
+    psi_r_a = x.psi_r_ab.real
+    psi_r_b = x.psi_r_ab.imag
+    w_m = x.w_m
+    R1, R2 = winding_resistances(p, x, R1_base, R2_base)
     i_s_a, i_s_b, i_r_a, i_r_b = currents_from_fluxes(psi_s_a, psi_s_b, psi_r_a, psi_r_b, L1, L2, M)
     w_r = n_p * w_m
-    dx[X_PSI_S_A] = v_a - R1 * i_s_a
-    dx[X_PSI_S_B] = v_b - R1 * i_s_b
-    dx[X_PSI_R_A] = -R2 * i_r_a - w_r * psi_r_b
-    dx[X_PSI_R_B] = -R2 * i_r_b + w_r * psi_r_a
+    dx.psi_s_ab = complex(v_a - R1 * i_s_a, v_b - R1 * i_s_b)
+    dx.psi_r_ab = complex(-R2 * i_r_a - w_r * psi_r_b, -R2 * i_r_b + w_r * psi_r_a)
     T_e = electromagnetic_torque(psi_s_a, psi_s_b, i_s_a, i_s_b, n_p)
-    T_L = load_torque(par, TL0, w_m)
-    if par[P_MECH_MODE] == 0.0:
-        dx[X_W_M] = (T_e - T_L - par[P_B] * w_m) / par[P_J]
-    else:  # speed imposed: the engine writes x[X_W_M] from its profile every period
-        dx[X_W_M] = 0.0
-    dx[X_THETA_M] = w_m
+    T_L = load_torque(p, TL0, w_m)
+    if not p.speed_imposed:
+        dx.w_m = (T_e - T_L - p.B * w_m) / p.J
+    else:  # speed imposed: the engine writes x.w_m from its profile every period
+        dx.w_m = 0.0
+    dx.theta_m = w_m
     p_cu1 = 1.5 * R1 * (i_s_a * i_s_a + i_s_b * i_s_b)
     p_cu2 = 1.5 * R2 * (i_r_a * i_r_a + i_r_b * i_r_b)
-    if par[P_THERMAL] != 0.0:
-        dx[X_TH1] = (par[P_RTH1] * p_cu1 - (x[X_TH1] - par[P_THETA_AMB])) / par[P_TAU1]
-        dx[X_TH2] = (par[P_RTH2] * p_cu2 - (x[X_TH2] - par[P_THETA_AMB])) / par[P_TAU2]
+    if p.thermal:
+        dx.theta1 = (p.Rth1 * p_cu1 - (x.theta1 - p.theta_amb)) / p.tau1
+        dx.theta2 = (p.Rth2 * p_cu2 - (x.theta2 - p.theta_amb)) / p.tau2
     else:
-        dx[X_TH1] = 0.0
-        dx[X_TH2] = 0.0
-    dx[X_E_IN] = 1.5 * (v_a * i_s_a + v_b * i_s_b)
-    dx[X_E_CU] = p_cu1 + p_cu2
-    dx[X_E_EM] = T_e * w_m
-    dx[X_E_LOAD] = (T_L + par[P_B] * w_m) * w_m
+        dx.theta1 = 0.0
+        dx.theta2 = 0.0
+    dx.E_in = 1.5 * (v_a * i_s_a + v_b * i_s_b)
+    dx.E_cu = p_cu1 + p_cu2
+    dx.E_em = T_e * w_m
+    dx.E_load = (T_L + p.B * w_m) * w_m
 
 
 @njit(cache=True)
-def magnetic_energy(x, par):
+def _cx_axpy(x, a, k):
+    """``x + a k`` for complex ``x``, ``k`` and real ``a``, part by part (no complex product)."""
+    return complex(x.real + a * k.real, x.imag + a * k.imag)
+
+
+@njit(cache=True)
+def _stage(out, x, a, k):
+    """``out = x + a k``, field by field (an RK4 stage)."""
+    out.psi_s_ab = _cx_axpy(x.psi_s_ab, a, k.psi_s_ab)
+    out.psi_r_ab = _cx_axpy(x.psi_r_ab, a, k.psi_r_ab)
+    out.w_m = x.w_m + a * k.w_m
+    out.theta_m = x.theta_m + a * k.theta_m
+    out.theta1 = x.theta1 + a * k.theta1
+    out.theta2 = x.theta2 + a * k.theta2
+    out.E_in = x.E_in + a * k.E_in
+    out.E_cu = x.E_cu + a * k.E_cu
+    out.E_em = x.E_em + a * k.E_em
+    out.E_load = x.E_load + a * k.E_load
+
+
+@njit(cache=True)
+def _rk4_sum(x0, x1, x2, x3, h6):
+    """The RK4 combination ``h/6 (k1 + 2 k2 + 2 k3 + k4)`` of one real component."""
+    return h6 * (x0 + 2.0 * x1 + 2.0 * x2 + x3)
+
+
+@njit(cache=True)
+def _rk4_update(x, h6, k1, k2, k3, k4):
+    """``x += h/6 (k1 + 2 k2 + 2 k3 + k4)``, field by field."""
+    a, b = x.psi_s_ab, (k1.psi_s_ab, k2.psi_s_ab, k3.psi_s_ab, k4.psi_s_ab)
+    x.psi_s_ab = complex(
+        a.real + _rk4_sum(b[0].real, b[1].real, b[2].real, b[3].real, h6),
+        a.imag + _rk4_sum(b[0].imag, b[1].imag, b[2].imag, b[3].imag, h6),
+    )
+    a, b = x.psi_r_ab, (k1.psi_r_ab, k2.psi_r_ab, k3.psi_r_ab, k4.psi_r_ab)
+    x.psi_r_ab = complex(
+        a.real + _rk4_sum(b[0].real, b[1].real, b[2].real, b[3].real, h6),
+        a.imag + _rk4_sum(b[0].imag, b[1].imag, b[2].imag, b[3].imag, h6),
+    )
+    x.w_m += _rk4_sum(k1.w_m, k2.w_m, k3.w_m, k4.w_m, h6)
+    x.theta_m += _rk4_sum(k1.theta_m, k2.theta_m, k3.theta_m, k4.theta_m, h6)
+    x.theta1 += _rk4_sum(k1.theta1, k2.theta1, k3.theta1, k4.theta1, h6)
+    x.theta2 += _rk4_sum(k1.theta2, k2.theta2, k3.theta2, k4.theta2, h6)
+    x.E_in += _rk4_sum(k1.E_in, k2.E_in, k3.E_in, k4.E_in, h6)
+    x.E_cu += _rk4_sum(k1.E_cu, k2.E_cu, k3.E_cu, k4.E_cu, h6)
+    x.E_em += _rk4_sum(k1.E_em, k2.E_em, k3.E_em, k4.E_em, h6)
+    x.E_load += _rk4_sum(k1.E_load, k2.E_load, k3.E_load, k4.E_load, h6)
+
+
+@njit(cache=True)
+def integrate_segment(p, x, v_a, v_b, R1b, R2b, TL0, dt, nsub, work):
+    """Integrate the plant over ``dt`` with ``nsub`` RK4 steps at constant voltage (in place).
+
+    ``work`` is a PLANT_STATE array of 5 records of scratch (k1 ... k4 and the stage state).
+    """
+    h = dt / nsub
+    k1 = work[0]
+    k2 = work[1]
+    k3 = work[2]
+    k4 = work[3]
+    xt = work[4]
+    for _ in range(nsub):
+        machine_derivative(p, x, v_a, v_b, R1b, R2b, TL0, k1)
+        _stage(xt, x, 0.5 * h, k1)
+        machine_derivative(p, xt, v_a, v_b, R1b, R2b, TL0, k2)
+        _stage(xt, x, 0.5 * h, k2)
+        machine_derivative(p, xt, v_a, v_b, R1b, R2b, TL0, k3)
+        _stage(xt, x, h, k3)
+        machine_derivative(p, xt, v_a, v_b, R1b, R2b, TL0, k4)
+        _rk4_update(x, h / 6.0, k1, k2, k3, k4)
+
+
+@njit(cache=True)
+def magnetic_energy(p, x):
     """Energy stored in the magnetic field, 1.5 * 0.5 * (psi_s.i_s + psi_r.i_r), J."""
-    L1 = par[P_LL1] + par[P_M]
-    L2 = par[P_LL2] + par[P_M]
+    L1 = p.Ll1 + p.M
+    L2 = p.Ll2 + p.M
+    psi_s_a = x.psi_s_ab.real
+    psi_s_b = x.psi_s_ab.imag
+    psi_r_a = x.psi_r_ab.real
+    psi_r_b = x.psi_r_ab.imag
     i_s_a, i_s_b, i_r_a, i_r_b = currents_from_fluxes(
-        x[X_PSI_S_A], x[X_PSI_S_B], x[X_PSI_R_A], x[X_PSI_R_B], L1, L2, par[P_M]
+        psi_s_a, psi_s_b, psi_r_a, psi_r_b, L1, L2, p.M
     )
-    return 0.75 * (
-        x[X_PSI_S_A] * i_s_a + x[X_PSI_S_B] * i_s_b + x[X_PSI_R_A] * i_r_a + x[X_PSI_R_B] * i_r_b
-    )
+    return 0.75 * (psi_s_a * i_s_a + psi_s_b * i_s_b + psi_r_a * i_r_a + psi_r_b * i_r_b)
 
 
-def initial_state(theta_init_C: float = 20.0, w_m0: float = 0.0) -> np.ndarray:
-    """Plant state at rest, demagnetised, windings at ``theta_init_C``."""
-    from imdrive.kernels.layout import NX
+@njit(cache=True)
+def log_plant(row, p, x, i_s_a, i_s_b, TL0, R1b, R2b):
+    """Write this block's :data:`LOG_FIELDS` of the sample into the log record ``row``."""
+    R1, R2 = winding_resistances(p, x, R1b, R2b)
+    row.speed = x.w_m
+    row.torque = electromagnetic_torque(x.psi_s_ab.real, x.psi_s_ab.imag, i_s_a, i_s_b, p.n_p)
+    row.load_torque = load_torque(p, TL0, x.w_m)
+    row.i_alpha = i_s_a
+    row.i_beta = i_s_b
+    row.psi_r_alpha = x.psi_r_ab.real
+    row.psi_r_beta = x.psi_r_ab.imag
+    row.R1 = R1
+    row.R2 = R2
+    row.flux = math.sqrt(x.psi_r_ab.real**2 + x.psi_r_ab.imag**2)
+    row.theta1 = x.theta1
+    row.theta2 = x.theta2
 
-    x = np.zeros(NX)
-    x[X_W_M] = w_m0
-    x[X_TH1] = theta_init_C
-    x[X_TH2] = theta_init_C
+
+def initial_plant_state(theta_init_C: float = 20.0, w_m0: float = 0.0) -> np.ndarray:
+    """Plant state at rest (or at ``w_m0``), demagnetised, windings at ``theta_init_C``."""
+    x = np.zeros(1, dtype=PLANT_STATE)
+    x["w_m"] = w_m0
+    x["theta1"] = theta_init_C
+    x["theta2"] = theta_init_C
     return x

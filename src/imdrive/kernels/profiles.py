@@ -2,6 +2,17 @@
 
 from numba import njit
 
+# profile slots (rows of the drive's profile arrays): piecewise-linear functions of time
+PR_SPEED_REF = 0  # speed reference, mechanical rad/s
+PR_LOAD = 1  # time-dependent part of the load torque, N m
+PR_R1_SCALE = 2  # plant R1 multiplier (1 = reference value)
+PR_R2_SCALE = 3  # plant R2 multiplier
+PR_V_AMP = 4  # open-loop voltage: space-vector amplitude (= phase peak), V
+PR_FREQ = 5  # open-loop voltage: frequency, Hz
+PR_SPEED_IMPOSED = 6  # imposed mechanical speed, rad/s (plant speed_imposed)
+PR_FLUX_REF = 7  # rotor-flux reference, Wb
+N_PROF = 8
+
 
 @njit(cache=True)
 def pwl_eval(t_pts, v_pts, n, t):

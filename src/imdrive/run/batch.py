@@ -60,7 +60,7 @@ seconds, both ends included; the whole run if ``window_s >= t_end``).
                          all samples
 ``final_speed_rpm``, ``final_speed_ref_rpm``, ``final_speed_est_rpm``   at the last sample
 
-plus ``status`` (0 ok, else the :mod:`imdrive.layout` divergence code), ``diverged``,
+plus ``status`` (0 ok, else the divergence code of :mod:`imdrive.kernels.engine`), ``diverged``,
 ``diverged_at_s`` (the time the divergence was found, ``k_end Ts``; NaN if not diverged) and
 ``simulated_s`` (``k_end Ts``). For a diverged drive the samples are those logged before the
 divergence: the window metrics and ``convergence_time_s`` are NaN (no steady state was reached),
@@ -76,8 +76,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from imdrive.kernels import layout as Lo
-from imdrive.kernels.batch import METRICS, N_METRICS, batch_kernel, batch_kernel_serial, num_threads
+from imdrive.kernels.batch import (
+    BATCH_METRICS,
+    METRICS,
+    BatchOut,
+    batch_kernel,
+    batch_kernel_serial,
+    num_threads,
+)
+from imdrive.kernels.engine import LOG, S_OK, DriveParams, DriveState
+from imdrive.kernels.profiles import N_PROF
 
 COLUMNS = ("drive", "status", "diverged", "diverged_at_s", "simulated_s", *METRICS)
 
@@ -117,65 +125,67 @@ class BatchResult:
         return self.control_periods / self.wall_time_s if self.wall_time_s > 0 else math.inf
 
 
+def stack_drives(arrays) -> tuple[DriveParams, DriveState]:
+    """Stack one-drive :class:`DriveArrays` into the (N,)-row records of one kernel call.
+
+    Profiles with different numbers of breakpoints are padded (the kernel reads ``prof_n``
+    of them); fuzzy tables are shared (the distinct tables plus an index per drive).
+    """
+    G = len(arrays)
+    K = max(a.params.prof_t.shape[2] for a in arrays)
+    prof_t = np.zeros((G, N_PROF, K))
+    prof_v = np.zeros((G, N_PROF, K))
+    table_idx = np.empty(G, dtype=np.int64)
+    tables: list[np.ndarray] = []
+    seen: dict[bytes, int] = {}
+    for g, a in enumerate(arrays):
+        k = a.params.prof_t.shape[2]
+        prof_t[g, :, :k] = a.params.prof_t[0]
+        prof_v[g, :, :k] = a.params.prof_v[0]
+        table = a.params.tables[a.params.table_idx[0]]
+        key = table.tobytes()
+        if key not in seen:
+            seen[key] = len(tables)
+            tables.append(table)
+        table_idx[g] = seen[key]
+    records = {
+        name: np.concatenate([getattr(a.params, name) for a in arrays])
+        for name in ("sim", "plant", "inverter", "sensor", "control", "mras", "comp", "prof_n")
+    }
+    params = DriveParams(
+        **records,
+        prof_t=prof_t,
+        prof_v=prof_v,
+        tables=np.ascontiguousarray(np.stack(tables)),
+        table_idx=table_idx,
+    )
+    state = DriveState(
+        *(np.concatenate([a.state0[j] for a in arrays]) for j in range(len(DriveState._fields)))
+    )
+    return params, state
+
+
 def _stack(items, log_every: int, n_rows: int, window_s: float, parallel: bool):
     """Run one group of (index, scenario, DriveArrays) sharing n_steps; return per-drive data."""
     G = len(items)
     arrays = [a for _, _, a in items]
     n_steps = arrays[0].n_steps
-    K = max(a.prof_t.shape[1] for a in arrays)
-    par = np.empty((G, Lo.N_PAR))
-    prof_t = np.zeros((G, Lo.N_PROF, K))
-    prof_v = np.zeros((G, Lo.N_PROF, K))
-    prof_n = np.empty((G, Lo.N_PROF), dtype=np.int64)
-    x = np.empty((G, Lo.NX))
-    c = np.empty((G, Lo.NC))
-    n_win = np.empty(G, dtype=np.int64)
-    table_idx = np.empty(G, dtype=np.int64)
-    tables: list[np.ndarray] = []
-    seen: dict[bytes, int] = {}
-    for g, a in enumerate(arrays):
-        par[g] = a.par
-        k = a.prof_t.shape[1]
-        prof_t[g, :, :k] = a.prof_t
-        prof_v[g, :, :k] = a.prof_v
-        prof_n[g] = a.prof_n
-        x[g] = a.x0
-        c[g] = a.c0
-        n_win[g] = int(round(window_s / a.par[Lo.P_TS]))
-        key = a.table.tobytes()
-        if key not in seen:
-            seen[key] = len(tables)
-            tables.append(np.ascontiguousarray(a.table, dtype=np.float64))
-        table_idx[g] = seen[key]
-    tab = np.stack(tables)
-    log = np.full((G, n_rows, Lo.N_LOG), np.nan)
-    metrics = np.empty((G, N_METRICS))
-    status = np.empty(G, dtype=np.int64)
-    k_end = np.empty(G, dtype=np.int64)
-    args = (
-        par,
-        prof_t,
-        prof_v,
-        prof_n,
-        tab,
-        table_idx,
-        x,
-        c,
-        n_steps,
-        n_win,
-        log,
-        log_every,
-        metrics,
-        status,
-        k_end,
+    params, state = stack_drives(arrays)
+    n_win = np.array([int(round(window_s / a.Ts)) for a in arrays], dtype=np.int64)
+    log = np.full((G, n_rows), np.nan, dtype=LOG)
+    out = BatchOut(
+        metrics=np.empty(G, dtype=BATCH_METRICS),
+        status=np.empty(G, dtype=np.int64),
+        k_end=np.empty(G, dtype=np.int64),
+        n_win=n_win,
     )
     t0 = time.perf_counter()
     if parallel:
-        batch_kernel(*args, max(min(G, num_threads()), 1))
+        batch_kernel(params, state, n_steps, log, log_every, out, max(min(G, num_threads()), 1))
     else:
-        batch_kernel_serial(*args)
+        batch_kernel_serial(params, state, n_steps, log, log_every, out)
     wall = time.perf_counter() - t0
-    return par, x, c, log, metrics, status, k_end, wall
+    return params, state, log, out, wall
 
 
 def simulate_batch(
@@ -236,7 +246,7 @@ def simulate_batch(
         if not block:
             break
         B = len(block)
-        m_blk = np.empty((B, N_METRICS))
+        m_blk = np.empty(B, dtype=BATCH_METRICS)
         s_blk = np.empty(B, dtype=np.int64)
         k_blk = np.empty(B, dtype=np.int64)
         ts_blk = np.empty(B)
@@ -248,17 +258,26 @@ def simulate_batch(
             groups.setdefault((a.n_steps, int(le)), []).append((i, sc, a))
         for (n_steps, le), items in groups.items():
             n_rows = n_steps // le + 1 if logs else 0
-            par, x, c, log, met, st, ke, wall = _stack(items, le, n_rows, window_s, parallel)
+            params, state, log, out, wall = _stack(items, le, n_rows, window_s, parallel)
             kernel_wall += wall
             for g, (i, sc, a) in enumerate(items):
-                m_blk[i] = met[g]
-                s_blk[i] = st[g]
-                k_blk[i] = ke[g]
-                ts_blk[i] = a.par[Lo.P_TS]
+                m_blk[i] = out.metrics[g]
+                s_blk[i] = out.status[g]
+                k_blk[i] = out.k_end[g]
+                ts_blk[i] = a.Ts
                 if logs:
-                    lg = logged_rows(log[g], st[g], ke[g], le)
+                    lg = logged_rows(log[g], out.status[g], out.k_end[g], le)
+                    final = DriveState(*(f[g : g + 1].copy() for f in state))
                     res_blk[i] = SimulationResult.from_log(
-                        sc, lg, a.x0, x[g], c[g], a.par, int(st[g]), int(ke[g]), 0.0, a.derived
+                        sc,
+                        lg,
+                        a.state0,
+                        final,
+                        a.params,
+                        int(out.status[g]),
+                        int(out.k_end[g]),
+                        0.0,
+                        a.derived,
                     )
         chunks_m.append(m_blk)
         chunks_s.append(s_blk)
@@ -274,11 +293,11 @@ def simulate_batch(
         Ts = np.concatenate(chunks_ts)
         del chunks_m, chunks_s, chunks_k, chunks_ts
     else:
-        met = np.empty((0, N_METRICS))
+        met = np.empty(0, dtype=BATCH_METRICS)
         status = np.empty(0, dtype=np.int64)
         k_end = np.empty(0, dtype=np.int64)
         Ts = np.empty(0)
-    diverged = status != Lo.S_OK
+    diverged = status != S_OK
     simulated = k_end * Ts
     cols = {
         "drive": np.arange(offset, dtype=np.int64),
@@ -287,8 +306,8 @@ def simulate_batch(
         "diverged_at_s": np.where(diverged, simulated, np.nan),
         "simulated_s": simulated,
     }
-    for j, name in enumerate(METRICS):
-        cols[name] = np.ascontiguousarray(met[:, j])
+    for name in METRICS:
+        cols[name] = np.ascontiguousarray(met[name])
     del met
     df = pd.DataFrame(cols, copy=False)
     return BatchResult(

@@ -1,4 +1,10 @@
-"""From a :class:`~imdrive.config.scenario.Scenario` to the flat arrays the kernels run on."""
+"""From a :class:`~imdrive.config.scenario.Scenario` to the records the kernels run on.
+
+Each block's record is filled by field name (:func:`imdrive.kernels.records.new_record`, which
+refuses an unknown name) from the configuration and the gain design; the result is one
+:class:`~imdrive.kernels.engine.DriveParams` and the initial
+:class:`~imdrive.kernels.engine.DriveState`, every array of shape ``(1,)``.
+"""
 
 from __future__ import annotations
 
@@ -12,10 +18,24 @@ from imdrive.config.scenario import Scenario
 from imdrive.design.gains import default_current_gains, default_mras_gains, default_speed_gains
 from imdrive.errors import ConfigError
 from imdrive.fuzzy import fuzzy_table
-from imdrive.kernels import layout as Lo
-from imdrive.kernels.engine import DRIVE_FOC, DRIVE_OPEN_LOOP
-from imdrive.kernels.inverter import INVERTER_CODES
-from imdrive.kernels.machine import initial_state
+from imdrive.kernels import profiles as kp
+from imdrive.kernels.compensator import COMPENSATOR_PARAMS, COMPENSATOR_STATE
+from imdrive.kernels.engine import (
+    DRIVE_FOC,
+    DRIVE_OPEN_LOOP,
+    LOG,
+    SAMPLE_STATE,
+    SIM_PARAMS,
+    DriveParams,
+    DriveState,
+)
+from imdrive.kernels.estimators.mras import MRAS_PARAMS, MRAS_STATE
+from imdrive.kernels.ifoc import CONTROL_PARAMS, CONTROL_STATE
+from imdrive.kernels.inverter import INVERTER_CODES, INVERTER_PARAMS
+from imdrive.kernels.machine import PLANT_PARAMS, initial_plant_state
+from imdrive.kernels.model import MODEL_STATE
+from imdrive.kernels.records import new_record
+from imdrive.kernels.sensors import SENSOR_PARAMS
 from imdrive.run._profiles import profiles_to_arrays
 
 RPM = 2.0 * math.pi / 60.0  # rad/s per rpm
@@ -25,7 +45,7 @@ MAX_LOG_BYTES = 2 * 2**30  # a log larger than this is refused before anything r
 def check_log_size(sc: Scenario) -> None:
     """Refuse a scenario whose log would not fit in :data:`MAX_LOG_BYTES`."""
     sim = sc.simulation
-    log_bytes = (sim.n_steps // sim.log_every + 1) * Lo.N_LOG * 8
+    log_bytes = (sim.n_steps // sim.log_every + 1) * LOG.itemsize
     if log_bytes > MAX_LOG_BYTES:
         raise ConfigError(
             "simulation.log_every",
@@ -36,18 +56,33 @@ def check_log_size(sc: Scenario) -> None:
 
 @dataclass
 class DriveArrays:
-    """Everything the compiled loop needs for one drive."""
+    """Everything the compiled loop needs for one drive.
 
-    par: np.ndarray
-    prof_t: np.ndarray
-    prof_v: np.ndarray
-    prof_n: np.ndarray
-    table: np.ndarray
-    x0: np.ndarray
-    c0: np.ndarray
+    Attributes
+    ----------
+    params : DriveParams
+        Constant inputs, every array of shape ``(1,)`` (profiles and table with a leading 1).
+    state0 : DriveState
+        Initial state; :func:`copy_state` before running, the kernels update it in place.
+    n_steps, log_every : int
+    derived : dict
+        Derived quantities reported in ``summary.json`` (gains, limits, ...).
+    """
+
+    params: DriveParams
+    state0: DriveState
     n_steps: int
     log_every: int
     derived: dict
+
+    @property
+    def Ts(self) -> float:
+        return float(self.params.sim["Ts"][0])
+
+
+def copy_state(state: DriveState) -> DriveState:
+    """A deep copy of a drive state (the kernels write into the arrays)."""
+    return DriveState(*(a.copy() for a in state))
 
 
 def _vf_profiles(sc: Scenario) -> tuple[Profile, Profile]:
@@ -61,42 +96,53 @@ def _vf_profiles(sc: Scenario) -> tuple[Profile, Profile]:
 
 
 def build_arrays(sc: Scenario) -> DriveArrays:
-    """Fill the flat parameter, profile and state arrays of :mod:`imdrive.layout`."""
+    """Fill every block's parameter and state records from the scenario."""
     check_log_size(sc)
     m = sc.machine
     est = sc.estimator
     ctl = sc.control
     th = sc.plant.thermal
-    par = np.zeros(Lo.N_PAR)
-    par[Lo.P_R1] = m.R1_ohm
-    par[Lo.P_R2] = m.R2_ohm
-    par[Lo.P_LL1] = m.Ll1_H
-    par[Lo.P_LL2] = m.Ll2_H
-    par[Lo.P_M] = m.M_H
-    par[Lo.P_NP] = m.pole_pairs
-    par[Lo.P_J] = m.J_kgm2
-    par[Lo.P_B] = m.B_Nms
-    par[Lo.P_LOAD_VISC] = sc.load.viscous_Nms
-    par[Lo.P_LOAD_FAN] = sc.load.fan_Nms2
-    par[Lo.P_ALPHA1] = th.alpha1_per_K
-    par[Lo.P_ALPHA2] = th.alpha2_per_K
-    par[Lo.P_THETA_REF] = th.theta_ref_C
-    par[Lo.P_THETA_AMB] = th.theta_amb_C
-    par[Lo.P_RTH1] = th.Rth1_K_per_W
-    par[Lo.P_TAU1] = th.tau1_s
-    par[Lo.P_RTH2] = th.Rth2_K_per_W
-    par[Lo.P_TAU2] = th.tau2_s
-    par[Lo.P_THERMAL] = 1.0 if th.enabled else 0.0
-    par[Lo.P_MECH_MODE] = 1.0 if sc.plant.speed_mode == "imposed" else 0.0
-    par[Lo.P_VDC] = sc.inverter.Vdc_V
-    par[Lo.P_INV_MODEL] = INVERTER_CODES[sc.inverter.model]
-    par[Lo.P_TS] = sc.simulation.Ts_s
-    par[Lo.P_NSUB] = sc.simulation.substeps
+    Ts = sc.simulation.Ts_s
     i_div = sc.simulation.divergence_current_A or 100.0 * m.rated_current_A
-    par[Lo.P_I_LIMIT_DIV] = i_div
-    par[Lo.P_W_LIMIT_DIV] = sc.simulation.divergence_speed_rpm * RPM
-    par[Lo.P_DRIVE_MODE] = DRIVE_FOC if sc.drive.mode == "vector" else DRIVE_OPEN_LOOP
-    par[Lo.P_SPEED_FB] = 1.0 if ctl.speed_feedback == "mras" else 0.0
+
+    plant = new_record(
+        PLANT_PARAMS,
+        R1=m.R1_ohm,
+        R2=m.R2_ohm,
+        Ll1=m.Ll1_H,
+        Ll2=m.Ll2_H,
+        M=m.M_H,
+        n_p=m.pole_pairs,
+        J=m.J_kgm2,
+        B=m.B_Nms,
+        k_visc=sc.load.viscous_Nms,
+        k_fan=sc.load.fan_Nms2,
+        alpha1=th.alpha1_per_K,
+        alpha2=th.alpha2_per_K,
+        theta_ref=th.theta_ref_C,
+        theta_amb=th.theta_amb_C,
+        Rth1=th.Rth1_K_per_W,
+        tau1=th.tau1_s,
+        Rth2=th.Rth2_K_per_W,
+        tau2=th.tau2_s,
+        thermal=th.enabled,
+        speed_imposed=sc.plant.speed_mode == "imposed",
+    )
+    sim = new_record(
+        SIM_PARAMS,
+        Ts=Ts,
+        nsub=sc.simulation.substeps,
+        i_lim=i_div,
+        w_lim=sc.simulation.divergence_speed_rpm * RPM,
+        mode=DRIVE_FOC if sc.drive.mode == "vector" else DRIVE_OPEN_LOOP,
+        sensorless=ctl.speed_feedback == "mras",
+    )
+    inverter = new_record(
+        INVERTER_PARAMS, Vdc=sc.inverter.Vdc_V, model=INVERTER_CODES[sc.inverter.model]
+    )
+    sensor = new_record(
+        SENSOR_PARAMS, i_offset_ab=complex(sc.sensor.i_offset_alpha_A, sc.sensor.i_offset_beta_A)
+    )
 
     # the controller's own machine model
     R1h = est.R1_ohm if est.R1_ohm is not None else m.R1_ohm
@@ -104,11 +150,7 @@ def build_arrays(sc: Scenario) -> DriveArrays:
     Ll1h = est.Ll1_H if est.Ll1_H is not None else m.Ll1_H
     Ll2h = est.Ll2_H if est.Ll2_H is not None else m.Ll2_H
     Mh = est.M_H if est.M_H is not None else m.M_H
-    par[Lo.P_R1_HAT] = R1h
-    par[Lo.P_R2_HAT0] = R2h
-    par[Lo.P_LL1_HAT] = Ll1h
-    par[Lo.P_LL2_HAT] = Ll2h
-    par[Lo.P_M_HAT] = Mh
+    model = new_record(MODEL_STATE, R1_hat=R1h, R2_hat=R2h, Ll1_hat=Ll1h, Ll2_hat=Ll2h, M_hat=Mh)
 
     # gains from bandwidths, each overridable
     L1h, L2h = Ll1h + Mh, Ll2h + Mh
@@ -129,21 +171,20 @@ def build_arrays(sc: Scenario) -> DriveArrays:
         "mras_K2": sc.mras.K2 if sc.mras.K2 is not None else K2,
     }
     i_max = ctl.current_limit_A or 2.0 * m.rated_current_A
-    par[Lo.P_KP_I] = gains["current_kp"]
-    par[Lo.P_KI_I] = gains["current_ki"]
-    par[Lo.P_KP_W] = gains["speed_kp"]
-    par[Lo.P_KI_W] = gains["speed_ki"]
-    par[Lo.P_I_MAX] = i_max
-    par[Lo.P_DECOUPLE] = 1.0 if ctl.decoupling else 0.0
-    par[Lo.P_WC] = sc.mras.wc_rad_s
-    par[Lo.P_K1] = gains["mras_K1"]
-    par[Lo.P_K2] = gains["mras_K2"]
-    par[Lo.P_I_OFFSET_A] = sc.sensor.i_offset_alpha_A
-    par[Lo.P_I_OFFSET_B] = sc.sensor.i_offset_beta_A
-    par[Lo.P_LOG_EVERY] = sc.simulation.log_every
+    control = new_record(
+        CONTROL_PARAMS,
+        n_p=m.pole_pairs,
+        kp_w=gains["speed_kp"],
+        ki_w=gains["speed_ki"],
+        kp_i=gains["current_kp"],
+        ki_i=gains["current_ki"],
+        i_max=i_max,
+        v_max=sc.inverter.Vdc_V / math.sqrt(3.0),
+        decouple=ctl.decoupling,
+    )
+    mras = new_record(MRAS_PARAMS, wc=sc.mras.wc_rad_s, K1=gains["mras_K1"], K2=gains["mras_K2"])
 
     comp = sc.compensator
-    Ts = sc.simulation.Ts_s
     inj = sc.injection
     if comp.period_s is not None:
         comp_period = comp.period_s
@@ -152,39 +193,62 @@ def build_arrays(sc: Scenario) -> DriveArrays:
     else:
         comp_period = 0.01
     n_comp = max(int(round(comp_period / Ts)), 1)
-    par[Lo.P_INJ_AMP] = inj.amplitude_A
-    par[Lo.P_INJ_FREQ] = inj.frequency_Hz
-    par[Lo.P_INJ_LPF] = inj.lowpass_rad_s
-    par[Lo.P_INJ_T_ON] = inj.t_on_s
-    par[Lo.P_COMP_ON] = 1.0 if comp.enabled else 0.0
-    par[Lo.P_COMP_T_ON] = comp.t_on_s
-    par[Lo.P_COMP_N] = n_comp
-    par[Lo.P_COMP_GE] = comp.gain_E_per_Wb
-    par[Lo.P_COMP_GDE] = comp.gain_DE_per_Wb
-    par[Lo.P_COMP_GCR] = comp.G_CR_ohm
-    par[Lo.P_R2_HAT_MIN] = comp.R2_min_ohm if comp.R2_min_ohm is not None else 0.5 * R2h
-    par[Lo.P_R2_HAT_MAX] = comp.R2_max_ohm if comp.R2_max_ohm is not None else 2.0 * R2h
-    par[Lo.P_COMP_INPUT] = 1.0 if comp.input == "demodulated" else 0.0
-    par[Lo.P_COMP_AVG] = 1.0 if comp.average else 0.0
+    R2_min = comp.R2_min_ohm if comp.R2_min_ohm is not None else 0.5 * R2h
+    R2_max = comp.R2_max_ohm if comp.R2_max_ohm is not None else 2.0 * R2h
+    compensator = new_record(
+        COMPENSATOR_PARAMS,
+        enabled=comp.enabled,
+        t_on=comp.t_on_s,
+        n=n_comp,
+        G_E=comp.gain_E_per_Wb,
+        G_DE=comp.gain_DE_per_Wb,
+        G_CR=comp.G_CR_ohm,
+        R2_min=R2_min,
+        R2_max=R2_max,
+        demodulated=comp.input == "demodulated",
+        average=comp.average,
+        inj_amp=inj.amplitude_A,
+        inj_freq=inj.frequency_Hz,
+        inj_lpf=inj.lowpass_rad_s,
+        inj_t_on=inj.t_on_s,
+    )
     table = fuzzy_table(comp.table).astype(np.float64)
 
     v_amp, freq = _vf_profiles(sc)
-    profiles = [Profile.constant(0.0)] * Lo.N_PROF
-    profiles[Lo.PR_SPEED_REF] = ctl.speed_ref_rpm.scaled(RPM)
-    profiles[Lo.PR_LOAD] = sc.load.torque_Nm
-    profiles[Lo.PR_R1_SCALE] = sc.plant.R1_scale
-    profiles[Lo.PR_R2_SCALE] = sc.plant.R2_scale
-    profiles[Lo.PR_V_AMP] = v_amp
-    profiles[Lo.PR_FREQ] = freq
-    profiles[Lo.PR_SPEED_IMPOSED] = sc.plant.imposed_speed_rpm.scaled(RPM)
-    profiles[Lo.PR_FLUX_REF] = flux_ref
+    profiles = [Profile.constant(0.0)] * kp.N_PROF
+    profiles[kp.PR_SPEED_REF] = ctl.speed_ref_rpm.scaled(RPM)
+    profiles[kp.PR_LOAD] = sc.load.torque_Nm
+    profiles[kp.PR_R1_SCALE] = sc.plant.R1_scale
+    profiles[kp.PR_R2_SCALE] = sc.plant.R2_scale
+    profiles[kp.PR_V_AMP] = v_amp
+    profiles[kp.PR_FREQ] = freq
+    profiles[kp.PR_SPEED_IMPOSED] = sc.plant.imposed_speed_rpm.scaled(RPM)
+    profiles[kp.PR_FLUX_REF] = flux_ref
     prof_t, prof_v, prof_n = profiles_to_arrays(profiles)
 
-    x0 = initial_state(th.theta_init_C)
-    if sc.plant.speed_mode == "imposed":
-        x0[Lo.X_W_M] = profiles[Lo.PR_SPEED_IMPOSED](0.0)
-    c0 = np.zeros(Lo.NC)
-    c0[Lo.C_R2_HAT] = R2h
+    w_m0 = profiles[kp.PR_SPEED_IMPOSED](0.0) if sc.plant.speed_mode == "imposed" else 0.0
+    params = DriveParams(
+        sim=sim,
+        plant=plant,
+        inverter=inverter,
+        sensor=sensor,
+        control=control,
+        mras=mras,
+        comp=compensator,
+        prof_t=prof_t[None],
+        prof_v=prof_v[None],
+        prof_n=prof_n[None],
+        tables=np.ascontiguousarray(table[None]),
+        table_idx=np.zeros(1, dtype=np.int64),
+    )
+    state0 = DriveState(
+        plant=initial_plant_state(th.theta_init_C, w_m0),
+        sample=np.zeros(1, dtype=SAMPLE_STATE),
+        model=model,
+        control=np.zeros(1, dtype=CONTROL_STATE),
+        mras=np.zeros(1, dtype=MRAS_STATE),
+        comp=np.zeros(1, dtype=COMPENSATOR_STATE),
+    )
 
     derived = dict(gains)
     derived.update(
@@ -198,18 +262,13 @@ def build_arrays(sc: Scenario) -> DriveArrays:
             "T2_s": m.T2_s,
             "v_max_V": sc.inverter.v_max_V,
             "compensator_period_steps": n_comp,
-            "R2_hat_min_ohm": par[Lo.P_R2_HAT_MIN],
-            "R2_hat_max_ohm": par[Lo.P_R2_HAT_MAX],
+            "R2_hat_min_ohm": R2_min,
+            "R2_hat_max_ohm": R2_max,
         }
     )
     return DriveArrays(
-        par=par,
-        prof_t=prof_t,
-        prof_v=prof_v,
-        prof_n=prof_n,
-        table=table,
-        x0=x0,
-        c0=c0,
+        params=params,
+        state0=state0,
         n_steps=sc.simulation.n_steps,
         log_every=sc.simulation.log_every,
         derived=derived,

@@ -12,53 +12,59 @@ from pathlib import Path
 
 import numpy as np
 
-from imdrive.kernels import layout as Lo
+from imdrive.kernels.engine import S_CURRENT, S_NAN, S_OK, S_SPEED, DriveParams, DriveState
+from imdrive.kernels.machine import magnetic_energy
+from imdrive.kernels.records import record_bytes
 
 RPM = 2.0 * math.pi / 60.0
 SQ3_2 = math.sqrt(3.0) / 2.0
 
 STATUS_TEXT = {
-    Lo.S_OK: "ok",
-    Lo.S_NAN: "a state became NaN or infinite",
-    Lo.S_CURRENT: "stator current magnitude |i_s| exceeded simulation.divergence_current_A",
-    Lo.S_SPEED: "speed |w_m| exceeded simulation.divergence_speed_rpm",
+    S_OK: "ok",
+    S_NAN: "a state became NaN or infinite",
+    S_CURRENT: "stator current magnitude |i_s| exceeded simulation.divergence_current_A",
+    S_SPEED: "speed |w_m| exceeded simulation.divergence_speed_rpm",
 }
-STATUS_SIGNAL = {Lo.S_NAN: "state", Lo.S_CURRENT: "i_s_A", Lo.S_SPEED: "speed_rpm"}
+STATUS_SIGNAL = {S_NAN: "state", S_CURRENT: "i_s_A", S_SPEED: "speed_rpm"}
 
-# column name -> (log index, scale): exported value = log[:, index] * scale
-_DIRECT = {
-    "time_s": (Lo.L_TIME, 1.0),
-    "speed_rpm": (Lo.L_W_M, 1.0 / RPM),
-    "w_m_rad_s": (Lo.L_W_M, 1.0),
-    "torque_Nm": (Lo.L_TE, 1.0),
-    "load_torque_Nm": (Lo.L_TL, 1.0),
-    "i_alpha_A": (Lo.L_I_A, 1.0),
-    "i_beta_A": (Lo.L_I_B, 1.0),
-    "psi_r_alpha_Wb": (Lo.L_PSI_R_A, 1.0),
-    "psi_r_beta_Wb": (Lo.L_PSI_R_B, 1.0),
-    "v_alpha_V": (Lo.L_V_A, 1.0),
-    "v_beta_V": (Lo.L_V_B, 1.0),
-    "R1_ohm": (Lo.L_R1, 1.0),
-    "R2_ohm": (Lo.L_R2, 1.0),
-    "speed_ref_rpm": (Lo.L_W_REF, 1.0 / RPM),
-    "speed_est_rpm": (Lo.L_W_HAT, 1.0 / RPM),
-    "id_ref_A": (Lo.L_ID_REF, 1.0),
-    "iq_ref_A": (Lo.L_IQ_REF, 1.0),
-    "i_d_A": (Lo.L_I_D, 1.0),
-    "i_q_A": (Lo.L_I_Q, 1.0),
-    "R2_est_ohm": (Lo.L_R2_HAT, 1.0),
-    "e_d0_Wb": (Lo.L_E_D0, 1.0),
-    "e_q0_Wb": (Lo.L_E_Q0, 1.0),
-    "flux_Wb": (Lo.L_FLUX, 1.0),
-    "theta_e_rad": (Lo.L_THETA_E, 1.0),
-    "theta1_C": (Lo.L_TH1, 1.0),
-    "theta2_C": (Lo.L_TH2, 1.0),
-    "e_d0_demod_Wb": (Lo.L_DEMOD, 1.0),
-    "lam_v_alpha_Wb": (Lo.L_LAM_V_A, 1.0),
-    "lam_v_beta_Wb": (Lo.L_LAM_V_B, 1.0),
-    "lam_i_alpha_Wb": (Lo.L_LAM_F_A, 1.0),
-    "lam_i_beta_Wb": (Lo.L_LAM_F_B, 1.0),
+#: The units table: log field (SI, see each block's LOG_FIELDS) -> (unit, scale). The exported
+#: column is ``f"{field}_{unit}"`` holding ``log[field] * scale``.
+LOG_UNITS = {
+    "time": ("s", 1.0),
+    "speed": ("rpm", 1.0 / RPM),
+    "torque": ("Nm", 1.0),
+    "load_torque": ("Nm", 1.0),
+    "i_alpha": ("A", 1.0),
+    "i_beta": ("A", 1.0),
+    "psi_r_alpha": ("Wb", 1.0),
+    "psi_r_beta": ("Wb", 1.0),
+    "R1": ("ohm", 1.0),
+    "R2": ("ohm", 1.0),
+    "flux": ("Wb", 1.0),
+    "theta1": ("C", 1.0),
+    "theta2": ("C", 1.0),
+    "v_alpha": ("V", 1.0),
+    "v_beta": ("V", 1.0),
+    "speed_ref": ("rpm", 1.0 / RPM),
+    "id_ref": ("A", 1.0),
+    "iq_ref": ("A", 1.0),
+    "i_d": ("A", 1.0),
+    "i_q": ("A", 1.0),
+    "theta_e": ("rad", 1.0),
+    "speed_est": ("rpm", 1.0 / RPM),
+    "e_d0": ("Wb", 1.0),
+    "e_q0": ("Wb", 1.0),
+    "lam_v_alpha": ("Wb", 1.0),
+    "lam_v_beta": ("Wb", 1.0),
+    "lam_i_alpha": ("Wb", 1.0),
+    "lam_i_beta": ("Wb", 1.0),
+    "R2_est": ("ohm", 1.0),
+    "e_d0_demod": ("Wb", 1.0),
 }
+# column -> (log field, scale) for every column taken straight from the log
+_DIRECT = {f"{f}_{u}": (f, k) for f, (u, k) in LOG_UNITS.items()}
+_DIRECT["w_m_rad_s"] = ("speed", 1.0)  # the speed in SI as well
+
 OPEN_LOOP_COLUMNS = (
     "time_s speed_rpm w_m_rad_s torque_Nm load_torque_Nm i_a_A i_b_A i_c_A i_alpha_A i_beta_A "
     "psi_r_alpha_Wb psi_r_beta_Wb v_alpha_V v_beta_V R1_ohm R2_ohm flux_Wb theta1_C theta2_C"
@@ -73,14 +79,14 @@ VECTOR_COLUMNS = (
 
 
 def columns_from_log(log: np.ndarray, vector: bool) -> dict[str, np.ndarray]:
-    """Named, unit-carrying columns from a raw kernel log (rows x N_LOG)."""
+    """Named, unit-carrying columns from a kernel log (a LOG record array)."""
     out = {}
     names = VECTOR_COLUMNS if vector else OPEN_LOOP_COLUMNS
     for name in names:
         if name in _DIRECT:
-            idx, scale = _DIRECT[name]
-            out[name] = log[:, idx] * scale
-    ia, ib = log[:, Lo.L_I_A], log[:, Lo.L_I_B]
+            field, scale = _DIRECT[name]
+            out[name] = log[field] * scale
+    ia, ib = log["i_alpha"], log["i_beta"]
     out["i_a_A"] = ia.copy()
     out["i_b_A"] = -0.5 * ia + SQ3_2 * ib
     out["i_c_A"] = -0.5 * ia - SQ3_2 * ib
@@ -118,31 +124,51 @@ class SimulationResult:
 
     scenario: object
     signals: dict[str, np.ndarray]
-    x_initial: np.ndarray
-    x_final: np.ndarray
-    c_final: np.ndarray
-    par: np.ndarray
-    status: int = Lo.S_OK
+    state_initial: DriveState
+    state_final: DriveState
+    params: DriveParams
+    status: int = S_OK
     k_end: int = 0
     wall_time_s: float = 0.0
     derived: dict = field(default_factory=dict)
     startup_s: float = 0.0  # kernel load (from the on-disk cache) or compilation
 
     @classmethod
-    def from_log(cls, scenario, log, x0, x, c, par, status, k_end, wall, derived):
+    def from_log(cls, scenario, log, state0, state, params, status, k_end, wall, derived):
         vector = scenario.drive.mode == "vector"
         return cls(
             scenario=scenario,
             signals=columns_from_log(log, vector),
-            x_initial=x0,
-            x_final=x,
-            c_final=c,
-            par=par,
+            state_initial=state0,
+            state_final=state,
+            params=params,
             status=status,
             k_end=k_end,
             wall_time_s=wall,
             derived=derived,
         )
+
+    # -- the kernels' records (named state) ----------------------------------------------
+    @property
+    def x_initial(self) -> np.ndarray:
+        """The plant's initial state, a ``PLANT_STATE`` record (``x_initial["w_m"]``)."""
+        return self.state_initial.plant[0]
+
+    @property
+    def x_final(self) -> np.ndarray:
+        """The plant's final state, a ``PLANT_STATE`` record."""
+        return self.state_final.plant[0]
+
+    @property
+    def c_final(self) -> np.ndarray:
+        """Every controller-side final state (sample, model, control, MRAS, compensator),
+        as one array of their raw bytes: equal arrays mean bit-identical states."""
+        return np.concatenate([record_bytes(a) for a in self.state_final[1:]])
+
+    @property
+    def par(self) -> DriveParams:
+        """The kernels' parameter records (:class:`~imdrive.kernels.engine.DriveParams`)."""
+        return self.params
 
     # -- access ----------------------------------------------------------------------------
     def __getitem__(self, name: str) -> np.ndarray:
@@ -158,7 +184,7 @@ class SimulationResult:
 
     @property
     def diverged(self) -> bool:
-        return self.status != Lo.S_OK
+        return self.status != S_OK
 
     @property
     def end_time_s(self) -> float:
@@ -199,20 +225,19 @@ class SimulationResult:
     # -- energy ------------------------------------------------------------------------------
     def energy_balance(self) -> dict[str, float]:
         """Energies over the run, J (from the integrated accumulators of the plant)."""
-        from imdrive.kernels.machine import magnetic_energy
-
         x = self.x_final
         x0 = self.x_initial
         J = self.scenario.machine.J_kgm2
-        w_mag_end = magnetic_energy(x, self.par)
-        w_mag_start = magnetic_energy(x0, self.par)
+        p = self.params.plant[0]
+        w_mag_end = magnetic_energy(p, x)
+        w_mag_start = magnetic_energy(p, x0)
         return {
-            "input_J": x[Lo.X_E_IN],
-            "copper_loss_J": x[Lo.X_E_CU],
-            "airgap_work_J": x[Lo.X_E_EM],
-            "load_and_friction_work_J": x[Lo.X_E_LOAD],
+            "input_J": float(x["E_in"]),
+            "copper_loss_J": float(x["E_cu"]),
+            "airgap_work_J": float(x["E_em"]),
+            "load_and_friction_work_J": float(x["E_load"]),
             "magnetic_energy_change_J": w_mag_end - w_mag_start,
-            "kinetic_energy_change_J": 0.5 * J * (x[Lo.X_W_M] ** 2 - x0[Lo.X_W_M] ** 2),
+            "kinetic_energy_change_J": 0.5 * J * (x["w_m"] ** 2 - x0["w_m"] ** 2),
         }
 
     def compensation_metrics(self, tol: float = 0.02, window_s: float = 0.5) -> dict | None:

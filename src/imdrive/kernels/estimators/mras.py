@@ -32,57 +32,68 @@ import math
 
 from numba import njit
 
-from imdrive.kernels.layout import (
-    C_E_D0,
-    C_E_Q0,
-    C_I_PREV_A,
-    C_I_PREV_B,
-    C_INT_E,
-    C_LAM_F_A,
-    C_LAM_F_B,
-    C_LAM_I_A,
-    C_LAM_I_B,
-    C_LAM_V_A,
-    C_LAM_V_B,
-    C_R2_HAT,
-    C_THETA_E,
-    C_V_PREV_A,
-    C_V_PREV_B,
-    C_W_HAT,
-    P_K1,
-    P_K2,
-    P_LL1_HAT,
-    P_LL2_HAT,
-    P_M_HAT,
-    P_R1_HAT,
-    P_WC,
+from imdrive.kernels.model import model_inductances
+from imdrive.kernels.records import c16, f8, record_dtype
+
+#: Parameters of the MRAS (gains from :func:`imdrive.design.gains.default_mras_gains`).
+MRAS_PARAMS = record_dtype(
+    [
+        ("wc", f8),  # cut-off of the low-pass replacing the integrators, rad/s (0: pure)
+        ("K1", f8),  # proportional adaptation gain, (rad/s)/Wb^2
+        ("K2", f8),  # integral adaptation gain, (rad/s^2)/Wb^2
+    ]
+)
+
+#: State of the MRAS.
+MRAS_STATE = record_dtype(
+    [
+        ("lam_v_ab", c16),  # reference (voltage) model rotor flux, filtered, Wb
+        ("lam_i_ab", c16),  # adjustable (current) model rotor flux, unfiltered, Wb
+        ("lam_f_ab", c16),  # adjustable model passed through the same filter, Wb
+        ("int_e", f8),  # integral of the error signal, Wb^2 s
+        ("w_r_hat", f8),  # speed estimate, electrical rad/s
+        ("e_dq0", c16),  # flux error (reference - adjustable) in the controller's frame, Wb
+    ]
+)
+
+#: Log fields of this block.
+LOG_FIELDS = (
+    "speed_est",  # mechanical rad/s
+    "e_d0",  # Wb
+    "e_q0",
+    "lam_v_alpha",  # reference model, Wb
+    "lam_v_beta",
+    "lam_i_alpha",  # adjustable model, filtered, Wb
+    "lam_i_beta",
 )
 
 
 @njit(cache=True)
-def mras_step(par, c, i_a, i_b, Ts):
-    """Advance the MRAS by one control period to the new current sample (updates ``c``).
+def mras_step(p, m, s, v_prev_a, v_prev_b, i_prev_a, i_prev_b, i_a, i_b, theta_e, Ts):
+    """Advance the MRAS by one control period to the new current sample (updates ``s``).
 
     Parameters
     ----------
-    par : float64[N_PAR]
-        Uses the controller's machine model ``P_*_HAT``, ``P_WC``, ``P_K1``, ``P_K2``.
-    c : float64[NC]
-        Controller state. Reads the last voltage ``C_V_PREV_*`` and current ``C_I_PREV_*``, the
-        estimate ``C_R2_HAT`` and the field angle ``C_THETA_E``; writes the model fluxes, the
-        speed estimate ``C_W_HAT`` (electrical rad/s) and ``C_E_D0``, ``C_E_Q0``.
+    p : MRAS_PARAMS record
+    m : MODEL_STATE record
+        The controller's machine model (``R1_hat``, ``R2_hat``, inductances).
+    s : MRAS_STATE record
+        Updated in place: model fluxes, speed estimate ``w_r_hat`` (electrical rad/s), ``e_dq0``.
+    v_prev_a, v_prev_b : float
+        Voltage applied over the period that just ended, V.
+    i_prev_a, i_prev_b : float
+        Measured stator current at the previous sample, A.
     i_a, i_b : float
         Measured stator current at this sample, A.
+    theta_e : float
+        The controller's field angle at this sample (frame of ``e_dq0``), rad.
     Ts : float
         Control period, s.
     """
-    M = par[P_M_HAT]
-    L1 = par[P_LL1_HAT] + M
-    L2 = par[P_LL2_HAT] + M
-    sigma_L1 = L1 - M * M / L2
-    R1 = par[P_R1_HAT]
-    R2 = c[C_R2_HAT]
-    wc = par[P_WC]
+    M, L1, L2, sigma_L1 = model_inductances(m)
+    R1 = m.R1_hat
+    R2 = m.R2_hat
+    wc = p.wc
 
     # the common filter 1/(s + wc) applied to a derivative held over the period
     if wc > 0.0:
@@ -92,19 +103,19 @@ def mras_step(par, c, i_a, i_b, Ts):
         g = 1.0
         k_in = 1.0
 
-    i_mean_a = 0.5 * (i_a + c[C_I_PREV_A])
-    i_mean_b = 0.5 * (i_b + c[C_I_PREV_B])
+    i_mean_a = 0.5 * (i_a + i_prev_a)
+    i_mean_b = 0.5 * (i_b + i_prev_b)
 
     # reference (voltage) model, eq. (1)
     kv = L2 / M
-    d_a = kv * (Ts * (c[C_V_PREV_A] - R1 * i_mean_a) - sigma_L1 * (i_a - c[C_I_PREV_A]))
-    d_b = kv * (Ts * (c[C_V_PREV_B] - R1 * i_mean_b) - sigma_L1 * (i_b - c[C_I_PREV_B]))
-    lam_v_a = g * c[C_LAM_V_A] + k_in * d_a
-    lam_v_b = g * c[C_LAM_V_B] + k_in * d_b
+    d_a = kv * (Ts * (v_prev_a - R1 * i_mean_a) - sigma_L1 * (i_a - i_prev_a))
+    d_b = kv * (Ts * (v_prev_b - R1 * i_mean_b) - sigma_L1 * (i_b - i_prev_b))
+    lam_v_a = g * s.lam_v_ab.real + k_in * d_a
+    lam_v_b = g * s.lam_v_ab.imag + k_in * d_b
 
     # adjustable (current) model, eq. (2): exact over Ts for constant w_hat and a current
     # varying linearly between its two samples (first-order hold)
-    zT = complex(-R2 / L2, c[C_W_HAT]) * Ts
+    zT = complex(-R2 / L2, s.w_r_hat) * Ts
     ez = math.exp(zT.real) * complex(math.cos(zT.imag), math.sin(zT.imag))
     if abs(zT) > 1e-4:
         phi1 = (ez - 1.0) / zT
@@ -112,32 +123,39 @@ def mras_step(par, c, i_a, i_b, Ts):
     else:  # series, avoids cancellation
         phi1 = 1.0 + zT / 2.0 + zT * zT / 6.0
         phi2 = 0.5 + zT / 6.0 + zT * zT / 24.0
-    lam_old = complex(c[C_LAM_I_A], c[C_LAM_I_B])
+    lam_old = s.lam_i_ab
     b = M * R2 / L2 * Ts
-    i0 = complex(c[C_I_PREV_A], c[C_I_PREV_B])
+    i0 = complex(i_prev_a, i_prev_b)
     i1 = complex(i_a, i_b)
     lam_new = ez * lam_old + b * (phi1 * i0 + phi2 * (i1 - i0))
     dlam = lam_new - lam_old
-    lam_f_a = g * c[C_LAM_F_A] + k_in * dlam.real
-    lam_f_b = g * c[C_LAM_F_B] + k_in * dlam.imag
+    lam_f_a = g * s.lam_f_ab.real + k_in * dlam.real
+    lam_f_b = g * s.lam_f_ab.imag + k_in * dlam.imag
 
     # adaptation, eqs. (4), (8), (9)
     e = lam_v_b * lam_f_a - lam_v_a * lam_f_b
-    c[C_INT_E] += Ts * e
-    c[C_W_HAT] = par[P_K1] * e + par[P_K2] * c[C_INT_E]
+    s.int_e += Ts * e
+    s.w_r_hat = p.K1 * e + p.K2 * s.int_e
 
     # flux error (reference minus adjustable) in the controller's synchronous frame
-    th = c[C_THETA_E]
-    cs = math.cos(th)
-    sn = math.sin(th)
+    cs = math.cos(theta_e)
+    sn = math.sin(theta_e)
     err_a = lam_v_a - lam_f_a
     err_b = lam_v_b - lam_f_b
-    c[C_E_D0] = cs * err_a + sn * err_b
-    c[C_E_Q0] = -sn * err_a + cs * err_b
+    s.e_dq0 = complex(cs * err_a + sn * err_b, -sn * err_a + cs * err_b)
 
-    c[C_LAM_V_A] = lam_v_a
-    c[C_LAM_V_B] = lam_v_b
-    c[C_LAM_I_A] = lam_new.real
-    c[C_LAM_I_B] = lam_new.imag
-    c[C_LAM_F_A] = lam_f_a
-    c[C_LAM_F_B] = lam_f_b
+    s.lam_v_ab = complex(lam_v_a, lam_v_b)
+    s.lam_i_ab = lam_new
+    s.lam_f_ab = complex(lam_f_a, lam_f_b)
+
+
+@njit(cache=True)
+def log_mras(row, s, n_p):
+    """Write this block's :data:`LOG_FIELDS` into the log record ``row``."""
+    row.speed_est = s.w_r_hat / n_p
+    row.e_d0 = s.e_dq0.real
+    row.e_q0 = s.e_dq0.imag
+    row.lam_v_alpha = s.lam_v_ab.real
+    row.lam_v_beta = s.lam_v_ab.imag
+    row.lam_i_alpha = s.lam_f_ab.real
+    row.lam_i_beta = s.lam_f_ab.imag

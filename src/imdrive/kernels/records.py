@@ -1,0 +1,45 @@
+"""Helpers for the kernels' named records (numpy structured dtypes).
+
+Every block declares its parameters and state as a numpy record dtype (complex fields for space
+vectors). A drive holds each record as an array of shape ``(N,)``: ``N = 1`` for one drive, one
+row per drive in a batch. Numba compiles field access to a load at a fixed offset (as fast as
+the flat arrays of 0.1), caches functions that take records (``cache=True``), and a record taken
+from an array (``state[i]``) is a view, so a block updates its state in place.
+
+One pitfall, found the hard way: inside a kernel, a record taken from an array the kernel
+allocated itself does not keep that array alive, and numba frees an array after its last use.
+Keep using the array (``acc_arr[0].peak``, or pass ``acc_arr``) for as long as its records are
+used; records of arrays passed in as arguments are safe.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+f8 = np.float64
+c16 = np.complex128
+i8 = np.int64
+b1 = np.bool_
+
+
+def record_dtype(fields) -> np.dtype:
+    """A packed record dtype from ``(name, type)`` pairs."""
+    return np.dtype(list(fields))
+
+
+def new_record(dtype: np.dtype, /, **values) -> np.ndarray:
+    """A ``(1,)`` record array of ``dtype``, zeros but for the given fields (set by name).
+
+    An unknown field name is a programming error: it raises ``KeyError`` naming it.
+    """
+    rec = np.zeros(1, dtype=dtype)
+    for name, val in values.items():
+        if name not in dtype.names:
+            raise KeyError(f"{name!r} is not a field of {dtype.names}")
+        rec[name] = val
+    return rec
+
+
+def record_bytes(rec: np.ndarray) -> np.ndarray:
+    """The record array's raw bytes (uint8): equal bytes mean bit-identical records."""
+    return np.ascontiguousarray(rec).view(np.uint8)
