@@ -12,8 +12,8 @@ updates
 
     R2_hat <- clip(R2_hat + G_CR * CR, R2_min, R2_max)
 
-The MRAS and the slip calculation read ``R2_hat`` from the controller model (MODEL_STATE), so both use the
-new value from the next sample on.
+The MRAS and the slip calculation read ``R2_hat`` from the controller's model (MODEL_STATE),
+so both use the new value from the next sample on.
 
 Persistent-excitation variant (this project's, not the paper's): a sinusoid of amplitude
 ``p.inj_amp`` and frequency ``p.inj_freq`` is added to the flux-current reference id*
