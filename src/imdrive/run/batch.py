@@ -27,44 +27,20 @@ Logging at full rate into the small scratch and the streaming reduction cost abo
 the kernel time (the dynamics dominate).
 
 The Python side feeds the kernel blocks of ``block_size`` drives (default 512): per block it
-builds and stacks the flat arrays (:func:`imdrive.simulate.build_arrays`), grouped by number of
+builds and stacks the drives' records (:func:`imdrive.run.build.build_arrays`,
+:func:`stack_drives`), grouped by number of
 periods (one ``n_steps`` per kernel call) and, with logs, by ``log_every``; profiles with
 different numbers of breakpoints are padded (the kernel reads ``prof_n`` of them); fuzzy tables
 are shared (a small stack of the distinct tables plus an index per drive). Without logs, what is
-kept per drive is its metrics row and status: 12 float64 + 3 int64 = 120 bytes (plus pandas'
+kept per drive is its metrics record and status: 12 float64 + 2 int64 = 112 bytes (plus pandas'
 per-row cost of the final table, about the same again), so memory is linear in N at well under
 1 kB per drive; the per-block arrays and the per-thread scratch logs are a fixed cost. With
-``logs=True`` every drive's decimated log is kept, ``(n_steps // log_every + 1) * 240`` bytes
-per drive.
+``logs=True`` every drive's decimated log is kept, ``(n_steps // log_every + 1) * LOG.itemsize`` bytes
+per drive (240 today).
 
-Metrics (columns of :attr:`BatchResult.metrics`)
-------------------------------------------------
-All are computed from the full-rate samples ``k = 0 ... K`` (``K = n_steps`` for a complete run,
-``t_k = k Ts``), i.e. the rows a ``simulate()`` with ``log_every = 1`` logs. Speeds are
-mechanical, in rpm; ``speed`` is the plant's, ``speed_ref`` the reference (0 in open loop),
-``speed_est`` the MRAS estimate (0 in open loop, the measured-speed drives also run the MRAS).
-The *window* is the samples ``k >= n_steps - round(window_s / Ts)`` (the last ``window_s``
-seconds, both ends included; the whole run if ``window_s >= t_end``).
-
-``speed_error_rpm``      mean of ``speed - speed_ref`` over the window
-``speed_est_error_rpm``  mean of ``speed_est - speed`` over the window
-``speed_ripple_rpm``     ``max(speed) - min(speed)`` over the window
-``torque_mean_Nm``       mean electromagnetic torque over the window
-``R2_hat_final_ohm``     the rotor-resistance estimate at the last sample
-``R2_final_ohm``         the plant's rotor resistance at the last sample (scale and temperature)
-``R2_error_pct``         ``100 (R2_hat - R2) / R2`` at the last sample
-``convergence_time_s``   the first sample time after which ``|R2_hat - R2| / R2 <= 2 %`` at
-                         every sample to the end (``R2`` the plant's at each sample): 0 if it
-                         holds throughout, NaN if it does not hold at the last sample
-``peak_current_A``       ``max sqrt(i_alpha^2 + i_beta^2)`` of the plant's stator current over
-                         all samples
-``final_speed_rpm``, ``final_speed_ref_rpm``, ``final_speed_est_rpm``   at the last sample
-
-plus ``status`` (0 ok, else the divergence code of :mod:`imdrive.kernels.engine`), ``diverged``,
-``diverged_at_s`` (the time the divergence was found, ``k_end Ts``; NaN if not diverged) and
-``simulated_s`` (``k_end Ts``). For a diverged drive the samples are those logged before the
-divergence: the window metrics and ``convergence_time_s`` are NaN (no steady state was reached),
-the final values and ``peak_current_A`` are those of the last sample before the divergence.
+Metrics (columns of :attr:`BatchResult.metrics`): defined in :mod:`imdrive.run.metrics`; the
+batch kernel computes them while the rows stream, and a test checks it against
+:func:`imdrive.run.metrics.drive_metrics` on the same drives.
 """
 
 from __future__ import annotations

@@ -1,0 +1,130 @@
+"""Every metric of a run, defined once.
+
+Three families, each used by the CLI, the batch, the sweeps and the paper's study alike:
+
+* :func:`drive_metrics` — one row per drive, the columns of the batch and sweep tables. The
+  batch kernel (:mod:`imdrive.kernels.batch`) computes the same quantities while the samples
+  stream past; ``tests/test_batch.py`` checks the two agree to 1e-12.
+* :func:`compensation_metrics` — how the R2 compensator did (``summary.json``, the paper's
+  compensation table).
+* :func:`steady_means` — means of the main signals over the last part of a run (the paper's
+  e_d0 experiments).
+
+Definitions of :func:`drive_metrics`
+------------------------------------
+All are computed from the full-rate samples ``k = 0 ... K`` (``K = n_steps`` for a complete run,
+``t_k = k Ts``), i.e. the rows a ``simulate()`` with ``log_every = 1`` logs. Speeds are
+mechanical, in rpm; ``speed`` is the plant's, ``speed_ref`` the reference (0 in open loop),
+``speed_est`` the MRAS estimate (0 in open loop, the measured-speed drives also run the MRAS).
+The *window* is the samples ``k >= n_steps - round(window_s / Ts)`` (the last ``window_s``
+seconds, both ends included; the whole run if ``window_s >= t_end``).
+
+``speed_error_rpm``      mean of ``speed - speed_ref`` over the window
+``speed_est_error_rpm``  mean of ``speed_est - speed`` over the window
+``speed_ripple_rpm``     ``max(speed) - min(speed)`` over the window
+``torque_mean_Nm``       mean electromagnetic torque over the window
+``R2_hat_final_ohm``     the rotor-resistance estimate at the last sample
+``R2_final_ohm``         the plant's rotor resistance at the last sample (scale and temperature)
+``R2_error_pct``         ``100 (R2_hat - R2) / R2`` at the last sample
+``convergence_time_s``   the first sample time after which ``|R2_hat - R2| / R2 <= 2 %`` at
+                         every sample to the end (``R2`` the plant's at each sample): 0 if it
+                         holds throughout, NaN if it does not hold at the last sample
+``peak_current_A``       ``max sqrt(i_alpha^2 + i_beta^2)`` of the plant's stator current over
+                         all samples
+``final_speed_rpm``, ``final_speed_ref_rpm``, ``final_speed_est_rpm``   at the last sample
+
+plus ``status`` (0 ok, else the divergence code of :mod:`imdrive.kernels.engine`), ``diverged``,
+``diverged_at_s`` (the time the divergence was found, ``k_end Ts``; NaN if not diverged) and
+``simulated_s`` (``k_end Ts``). For a diverged drive the samples are those logged before the
+divergence: the window metrics and ``convergence_time_s`` are NaN (no steady state was reached),
+the final values and ``peak_current_A`` are those of the last sample before the divergence.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from imdrive.kernels.batch import CONVERGENCE_BAND, METRICS
+
+DEFAULT_WINDOW_S = 0.5
+
+__all__ = [
+    "CONVERGENCE_BAND",
+    "DEFAULT_WINDOW_S",
+    "METRICS",
+    "compensation_metrics",
+    "drive_metrics",
+    "steady_means",
+]
+
+
+def drive_metrics(res, window_s: float = DEFAULT_WINDOW_S) -> dict:
+    """The batch table's row of one run (definitions in the module docstring).
+
+    Exact (equal to the batch to rounding) for a run logged at every period
+    (``simulation.log_every = 1``); with decimated logs the same formulas apply to the logged
+    samples, so window means, peaks and the convergence time are those of the decimated signal.
+
+    Parameters
+    ----------
+    res : SimulationResult
+    window_s : float
+        Length of the steady-state window, s.
+
+    Returns
+    -------
+    dict
+        ``status``, ``diverged``, ``diverged_at_s``, ``simulated_s`` and every name of
+        :data:`METRICS`.
+    """
+    s = res.signals
+    sc = res.scenario
+    Ts = sc.simulation.Ts_s
+    n_steps = sc.simulation.n_steps
+    k = np.rint(s["time_s"] / Ts).astype(np.int64)
+    ok = not res.diverged
+    nan = math.nan
+    out = {
+        "status": res.status,
+        "diverged": res.diverged,
+        "diverged_at_s": res.k_end * Ts if res.diverged else nan,
+        "simulated_s": res.k_end * Ts,
+    }
+    zeros = np.zeros(len(k))
+    speed = s["speed_rpm"]
+    speed_ref = s.get("speed_ref_rpm", zeros)
+    speed_est = s.get("speed_est_rpm", zeros)
+    R2_hat = s.get("R2_est_ohm", s["R2_ohm"])
+    win = k >= max(n_steps - int(round(window_s / Ts)), 0)
+    rel = np.abs(R2_hat - s["R2_ohm"]) / s["R2_ohm"]
+    bad = np.flatnonzero(~(rel <= CONVERGENCE_BAND))
+    if not ok:
+        conv = nan
+    elif bad.size == 0:
+        conv = 0.0
+    elif bad[-1] == len(k) - 1:
+        conv = nan
+    else:
+        conv = float(s["time_s"][bad[-1] + 1])
+    steady = ok and win.any()
+    out.update(
+        {
+            "speed_error_rpm": np.mean(speed[win] - speed_ref[win]) if steady else nan,
+            "speed_est_error_rpm": np.mean(speed_est[win] - speed[win]) if steady else nan,
+            "speed_ripple_rpm": np.ptp(speed[win]) if steady else nan,
+            "torque_mean_Nm": np.mean(s["torque_Nm"][win]) if steady else nan,
+            "R2_hat_final_ohm": R2_hat[-1],
+            "R2_final_ohm": s["R2_ohm"][-1],
+            "R2_error_pct": 100 * (R2_hat[-1] - s["R2_ohm"][-1]) / s["R2_ohm"][-1],
+            "convergence_time_s": conv,
+            "peak_current_A": np.max(np.sqrt(s["i_alpha_A"] ** 2 + s["i_beta_A"] ** 2)),
+            "final_speed_rpm": speed[-1],
+            "final_speed_ref_rpm": speed_ref[-1],
+            "final_speed_est_rpm": speed_est[-1],
+        }
+    )
+    return out
+
+
