@@ -258,3 +258,22 @@ def test_plot(m):
     assert len(curves) == 3
     y = curves[-1].get_ydata()
     assert y[0] < 0 < y[-1]
+
+
+@pytest.mark.parametrize("ratio", [0.8, 1.2])
+def test_zero_flux_error_is_an_equilibrium_of_eq10(m, ratio):
+    # PAPER.md eq. (10) in the rotor-flux frame with e_d0 = e_q0 = 0 and lam_hat = (M id, 0):
+    # the q row, lam_hat_d0 (w_r - w_r_hat) + (M/L2) iq (R2 - R2_hat), must vanish at the
+    # sensorless steady state (see imdrive.analysis.foc), i.e. the speed error cancels the
+    # R2-error input and no flux error is needed
+    op = foc_operating_point(m, 1000.0, 12.0, R2_ratio=ratio)
+    n_p = m.pole_pairs
+    w_r = n_p * op.w_m
+    w_r_hat = n_p * op.speed_est_rpm * math.pi / 30.0
+    lam_hat_d0 = m.M_H * op.id_A
+    R2_hat = ratio * m.R2_ohm
+    q_row = lam_hat_d0 * (w_r - w_r_hat) + m.M_H / m.L2_H * op.iq_A * (m.R2_ohm - R2_hat)
+    scale = lam_hat_d0 * abs(w_r - w_r_hat)
+    assert scale > 0.1  # a real speed error, so the check is not trivially 0 = 0
+    assert abs(q_row) < 1e-9 * scale
+    assert op.psi_r_Wb == pytest.approx(lam_hat_d0, rel=1e-12)  # no flux error either

@@ -1,0 +1,593 @@
+"""The layer rules of the package, checked on its import graph (see docs/architecture.md).
+
+Every ``src/imdrive/**/*.py`` is parsed with :mod:`ast`; every ``import`` and ``from ... import``
+anywhere in a file (module level, inside functions, under ``if TYPE_CHECKING``) and every
+``importlib.import_module("imdrive...")`` with a literal name is an edge of the graph. The
+rules are written against layers, not file lists, so modules added later are checked too.
+
+Ranks
+-----
+A module belongs to the layer of its first name under ``imdrive`` (``imdrive.run.build`` ->
+``run``) and may import modules of its own rank or lower, never higher:
+
+==== ============================================ ===============================================
+rank layer                                        why it sits there
+==== ============================================ ===============================================
+0    ``errors``, ``_cache``, ``_io``,             leaf utilities every layer may use; they import
+     ``_progress``, ``_deprecated``               nothing of imdrive above rank 0
+1    ``config``                                   what a run *is* (machine, inverter, profiles,
+                                                  scenario, presets): pure Python, never numba,
+                                                  so reading a scenario costs no compilation
+2    ``kernels``                                  compiled blocks on flat arrays; they may import
+                                                  only rank 0 and ``kernels`` (they never see a
+                                                  Python object, so never ``config`` either)
+3    ``design``                                   gain formulas turning bandwidths into numbers
+                                                  the kernels receive
+4    ``fuzzy``, ``analysis``                      offline theory: Table III from rules (with the
+                                                  compiled loops of ``kernels.fuzzy``) and the
+                                                  steady state (numba-free, over
+                                                  ``config.machine``)
+5    ``run``                                      assembles a drive: config + design + fuzzy ->
+                                                  arrays -> kernels -> result
+6    ``sweep``, ``studies``, ``plots``            users of ``run``: many runs, the paper's
+                                                  studies, figures
+7    ``cli``, ``__main__``                        the command line, on top of everything
+==== ============================================ ===============================================
+
+``config`` and ``kernels`` never import each other (the run layer translates one into the
+other), and ``config`` and ``analysis`` never load numba, not even through what they import.
+
+Exempt: ``imdrive/__init__.py`` and the top-level deprecation shims (files directly in
+``src/imdrive/`` that call :func:`imdrive._deprecated.reexport`) are aliases of other modules,
+so their own imports are not checked; package code must not import a shim. Importing the root
+``imdrive`` (for ``__version__``) counts as importing the highest layer the root itself imports.
+
+Depth
+-----
+The longest chain of imports between imdrive modules is measured twice: in modules, and in
+levels, i.e. in the ranks it passes through (consecutive modules of one rank count once). The
+levels must stay within :data:`MAX_LEVELS`; the module count may not grow beyond
+:data:`MAX_MODULE_CHAIN`, the value measured when this test was written (lower it as chains
+are shortened).
+
+Known violations
+----------------
+Violations that exist in code whose owner has not fixed them yet are listed in
+:data:`KNOWN_VIOLATIONS`, each with the reason; they are tolerated, anything new fails, and an
+entry that no longer occurs fails too, so the list can only shrink.
+"""
+
+from __future__ import annotations
+
+import ast
+import importlib
+import os
+import pkgutil
+import shutil
+import subprocess
+import sys
+import textwrap
+from dataclasses import dataclass
+from functools import cache
+from pathlib import Path
+
+import pytest
+
+SRC = Path(__file__).resolve().parents[1] / "src"
+PKG = SRC / "imdrive"
+
+RANK = {
+    "errors": 0,
+    "_cache": 0,
+    "_io": 0,
+    "_progress": 0,
+    "_deprecated": 0,
+    "config": 1,
+    "kernels": 2,
+    "design": 3,
+    "fuzzy": 4,
+    "analysis": 4,
+    "run": 5,
+    "sweep": 6,
+    "studies": 6,
+    "plots": 6,
+    "cli": 7,
+    "__main__": 7,
+}
+BASE = {layer for layer, rank in RANK.items() if rank == 0}
+
+#: layers restricted beyond their rank: they may import only these layers
+ONLY = {"kernels": BASE | {"kernels"}}
+
+#: layers that must not load numba, directly or through anything they import
+NUMBA_FREE = ("config", "analysis")
+
+#: where ``import numba`` may appear: the kernels and the cache folder they compile into
+NUMBA_ALLOWED = ("kernels", "_cache")
+
+#: order inside a package: a module may import only siblings listed before it
+INTRA = {
+    "fuzzy": ("tables", "inference", "fit"),
+    "analysis": ("circuit", "foc", "figures"),
+}
+
+MAX_LEVELS = 6
+MAX_MODULE_CHAIN = 11
+
+#: (rule, importer, imported) -> why it is tolerated for now. Rules: "rank", "only", "shim",
+#: "numba", "intra", "cycle" (imported = the module the cut edge points to).
+KNOWN_VIOLATIONS = {
+    ("rank", "imdrive.run.result", "imdrive.plots"): (
+        "SimulationResult.save draws the figures (run/result.py, function-level import); the "
+        "figure call belongs above run, or plots below it"
+    ),
+    ("numba", "imdrive.run.result", "numba"): (
+        "package_versions() reads numba.__version__ (run/result.py, function-level import); "
+        "importlib.metadata.version('numba') would avoid importing numba"
+    ),
+    ("cycle", "imdrive.config.scenario", "imdrive.config.overrides"): (
+        "Scenario.from_toml imports config.overrides inside the method, and config.overrides "
+        "imports config.scenario (SECTIONS) at module level"
+    ),
+}
+
+
+# --------------------------------------------------------------------------------------------
+# the import graph
+
+
+@dataclass(frozen=True)
+class Edge:
+    importer: str
+    target: str  # an imdrive module, or the top-level name of an outside package
+    path: Path
+    line: int
+    toplevel: bool  # executed at import time (not inside a function)
+
+    @property
+    def where(self) -> str:
+        return f"{self.path.relative_to(SRC.parent)}:{self.line}"
+
+
+def _module_name(path: Path) -> tuple[str, bool]:
+    parts = list(path.relative_to(SRC).with_suffix("").parts)
+    is_pkg = parts[-1] == "__init__"
+    return ".".join(parts[:-1] if is_pkg else parts), is_pkg
+
+
+class _Collector(ast.NodeVisitor):
+    def __init__(self, name: str, is_pkg: bool, path: Path, modules):
+        self.name, self.path, self.modules = name, path, modules
+        self.package = name if is_pkg else name.rpartition(".")[0]
+        self.depth = 0
+        self.edges: list[Edge] = []
+
+    def _add(self, target: str, node) -> None:
+        if not target.startswith("imdrive"):
+            target = target.split(".")[0]
+        elif target not in self.modules:  # e.g. a name misspelt; keep the closest module
+            while target not in self.modules and "." in target:
+                target = target.rpartition(".")[0]
+        edge = Edge(self.name, target, self.path, node.lineno, self.depth == 0)
+        if edge not in self.edges:  # `from m import a, b` is one edge
+            self.edges.append(edge)
+
+    def _scoped(self, node):
+        self.depth += 1
+        self.generic_visit(node)
+        self.depth -= 1
+
+    visit_FunctionDef = visit_AsyncFunctionDef = visit_Lambda = _scoped
+
+    def visit_Import(self, node):
+        for alias in node.names:
+            self._add(alias.name, node)
+
+    def visit_ImportFrom(self, node):
+        base = node.module or ""
+        if node.level:
+            parts = self.package.split(".")
+            parts = parts[: len(parts) - node.level + 1]
+            base = ".".join(parts + ([node.module] if node.module else []))
+        for alias in node.names:
+            sub = f"{base}.{alias.name}"
+            self._add(sub if sub in self.modules else base, node)
+
+    def visit_Call(self, node):
+        f = node.func
+        name = f.attr if isinstance(f, ast.Attribute) else getattr(f, "id", "")
+        if (
+            name == "import_module"
+            and node.args
+            and isinstance(node.args[0], ast.Constant)
+            and isinstance(node.args[0].value, str)
+        ):
+            self._add(node.args[0].value, node)
+        self.generic_visit(node)
+
+
+def _is_shim(path: Path, tree: ast.Module) -> bool:
+    if path.parent != PKG or path.name in ("__init__.py", "_deprecated.py"):
+        return False
+    return any(
+        isinstance(n, ast.Call)
+        and (getattr(n.func, "id", None) or getattr(n.func, "attr", None)) == "reexport"
+        for n in ast.walk(tree)
+    )
+
+
+@dataclass(frozen=True)
+class Graph:
+    modules: dict[str, Path]
+    shims: frozenset[str]
+    edges: tuple[Edge, ...]
+
+    def out(self, name: str) -> list[Edge]:
+        return [e for e in self.edges if e.importer == name]
+
+    def internal(self, name: str) -> set[str]:
+        return {e.target for e in self.out(name) if e.target in self.modules}
+
+
+@cache
+def graph() -> Graph:
+    paths = sorted(PKG.rglob("*.py"))
+    modules = {}
+    for p in paths:
+        name, _ = _module_name(p)
+        modules[name] = p
+    shims, edges = set(), []
+    for name, p in modules.items():
+        tree = ast.parse(p.read_text(encoding="utf-8"), filename=str(p))
+        if _is_shim(p, tree):
+            shims.add(name)
+        col = _Collector(name, p.name == "__init__.py", p, modules)
+        col.visit(tree)
+        edges += col.edges
+    return Graph(modules, frozenset(shims), tuple(edges))
+
+
+def layer(module: str) -> str | None:
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else None  # None: the root package
+
+
+def exempt(module: str) -> bool:
+    return module == "imdrive" or module in graph().shims
+
+
+@cache
+def rank(module: str) -> int:
+    if module == "imdrive":  # the root counts as the highest layer it imports itself
+        return max((rank(t) for t in graph().internal("imdrive")), default=0)
+    return RANK[layer(module)]
+
+
+def _report(found, rule_name: str) -> str:
+    lines = [f"{len(found)} violation(s) of the rule '{rule_name}':"]
+    lines += [f"  {e.where}: {e.importer} imports {e.target}  ({why})" for e, why in found]
+    return "\n".join(lines)
+
+
+def _new(found):
+    return [(e, why) for e, why in found if (why.split(":")[0], e.importer, e.target) not in KNOWN]
+
+
+KNOWN = set(KNOWN_VIOLATIONS)
+
+
+# --------------------------------------------------------------------------------------------
+# rules
+
+
+def rank_violations():
+    g = graph()
+    found = []
+    for e in g.edges:
+        if exempt(e.importer) or e.target not in g.modules:
+            continue
+        if e.target in g.shims:
+            found.append((e, "shim: package code imports a deprecation shim"))
+            continue
+        src, dst = layer(e.importer), layer(e.target)
+        if src in ONLY and dst not in ONLY[src]:
+            found.append((e, f"only: {src} may import only {sorted(ONLY[src])}"))
+        elif rank(e.target) > rank(e.importer):
+            up = f"rank: {src} (rank {rank(e.importer)}) imports rank {rank(e.target)}"
+            found.append((e, up))
+    return found
+
+
+def test_every_module_has_a_layer():
+    missing = sorted({layer(m) for m in graph().modules if layer(m) and layer(m) not in RANK})
+    missing = [m for m in missing if f"imdrive.{m}" not in graph().shims]
+    assert not missing, f"give these a rank in RANK of tests/test_layers.py: {missing}"
+
+
+def test_shims_are_detected():
+    # the old 0.1 paths (imdrive.scenario, imdrive.simulate, ...) are shims; a silent
+    # change of _deprecated.reexport must not turn the shim rule off
+    assert {"imdrive.scenario", "imdrive.simulate", "imdrive.engine"} <= graph().shims
+    assert "imdrive.cli" not in graph().shims
+
+
+def test_no_layer_imports_upward():
+    found = _new(rank_violations())
+    assert not found, _report(found, "imports go to the same or a lower layer only")
+
+
+def test_numba_only_in_kernels_and_cache():
+    found = [
+        (e, "numba: numba imported outside kernels/ and _cache.py")
+        for e in graph().edges
+        if e.target == "numba" and not exempt(e.importer) and layer(e.importer) not in NUMBA_ALLOWED
+    ]
+    found = _new(found)
+    assert not found, _report(found, "numba is imported only under kernels/ and by _cache.py")
+
+
+def _closure(start: str) -> set[str]:
+    # every imdrive module loaded when `start` is imported: its imports and, as Python does,
+    # the __init__ of every package on the way
+    g, seen, todo = graph(), set(), [start]
+    while todo:
+        m = todo.pop()
+        if m in seen:
+            continue
+        seen.add(m)
+        parts = m.split(".")
+        todo += [".".join(parts[:i]) for i in range(1, len(parts))]
+        todo += list(g.internal(m))
+    return seen
+
+
+@pytest.mark.parametrize("name", NUMBA_FREE)
+def test_numba_free_layers_statically(name):
+    g = graph()
+    for module in [m for m in g.modules if layer(m) == name]:
+        loaded = _closure(module)
+        bad = sorted(
+            f"{e.where}: {e.importer} imports {e.target}"
+            for m in loaded
+            for e in g.out(m)
+            if e.target == "numba" or layer(e.target) == "kernels"
+        )
+        assert not bad, f"importing {module} would load numba through:\n  " + "\n  ".join(bad)
+
+
+def test_numba_free_layers_at_run_time():
+    mods = [m for m in graph().modules if layer(m) in NUMBA_FREE and m not in graph().shims]
+    code = textwrap.dedent(f"""
+        import importlib, sys
+        for m in {mods!r}:
+            importlib.import_module(m)
+        bad = sorted(k for k in sys.modules if k == "numba" or k.startswith("imdrive.kernels"))
+        print(" ".join(bad))
+    """)
+    env = {**os.environ, "PYTHONPATH": str(SRC)}
+    res = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+    assert res.stdout.strip() == "", f"importing {NUMBA_FREE} loaded: {res.stdout}"
+
+
+def test_order_inside_packages():
+    g = graph()
+    found = []
+    for pkg, order in INTRA.items():
+        names = [f"imdrive.{pkg}.{m}" for m in order]
+        for i, importer in enumerate(names):
+            for e in g.out(importer):
+                if e.target in names[i:]:
+                    found.append((e, f"intra: imdrive.{pkg} is ordered {' <- '.join(order)}"))
+        extra = {m for m in g.modules if m.startswith(f"imdrive.{pkg}.")} - set(names)
+        assert not extra, f"add {sorted(extra)} to INTRA['{pkg}'] in tests/test_layers.py"
+    found = _new(found)
+    assert not found, _report(found, "a package's modules import only earlier siblings")
+
+
+# --------------------------------------------------------------------------------------------
+# cycles and depth
+
+
+def _cut_edges() -> set[tuple[str, str]]:
+    return {(a, b) for rule, a, b in KNOWN if rule == "cycle"}
+
+
+def _cycles(cut=frozenset()) -> list[list[str]]:
+    # strongly connected components with more than one module (or a self-import), Tarjan
+    g = graph()
+    succ = {m: sorted(g.internal(m) - {b for a, b in cut if a == m}) for m in g.modules}
+    index, low, stack, on, out = {}, {}, [], set(), []
+    counter = [0]
+
+    def visit(v):
+        index[v] = low[v] = counter[0]
+        counter[0] += 1
+        stack.append(v)
+        on.add(v)
+        for w in succ[v]:
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1 or v in succ[v]:
+                out.append(sorted(comp))
+
+    for v in sorted(g.modules):
+        if v not in index:
+            visit(v)
+    return out
+
+
+def test_no_import_cycles():
+    cycles = _cycles(frozenset(_cut_edges()))
+    detail = []
+    for comp in cycles:
+        detail.append(f" cycle through {', '.join(comp)}:")
+        for m in comp:
+            inside = [e for e in graph().out(m) if e.target in comp]
+            detail += [f"  {e.where}: {m} imports {e.target}" for e in inside]
+    assert not cycles, "import cycles between imdrive modules:\n" + "\n".join(detail)
+
+
+def test_known_cycles_are_real():
+    # each cut edge must be part of a cycle today, or it should leave KNOWN_VIOLATIONS
+    every = [set(c) for c in _cycles()]
+    stale = [(a, b) for a, b in _cut_edges() if not any({a, b} <= c for c in every)]
+    assert not stale, f"no longer cycles, remove from KNOWN_VIOLATIONS: {stale}"
+
+
+def longest_chains() -> tuple[list[str], list[str]]:
+    """The longest import chain in modules, and the one passing through the most ranks."""
+    g = graph()
+    cut = _cut_edges()
+    nodes = [m for m in g.modules if not exempt(m)]
+    succ = {}
+    for m in nodes:
+        succ[m] = [t for t in sorted(g.internal(m)) if not exempt(t) and (m, t) not in cut]
+
+    @cache
+    def by_modules(m):
+        best = (m,)
+        for t in succ[m]:
+            c = (m, *by_modules(t))
+            if len(c) > len(best):
+                best = c
+        return best
+
+    @cache
+    def by_levels(m):
+        best, best_n = (m,), 1
+        for t in succ[m]:
+            c, n = by_levels(t)
+            n += rank(m) != rank(t)
+            if n > best_n:
+                best, best_n = (m, *c), n
+        return best, best_n
+
+    modules = max((by_modules(m) for m in nodes), key=len)
+    levels = max((by_levels(m) for m in nodes), key=lambda cn: cn[1])[0]
+    return list(modules), list(levels)
+
+
+def _levels(chain: list[str]) -> int:
+    return 1 + sum(rank(a) != rank(b) for a, b in zip(chain, chain[1:], strict=False))
+
+
+def test_import_chains_are_shallow():
+    if _cycles(frozenset(_cut_edges())):
+        pytest.fail(
+            "the depth is undefined while there are import cycles: see test_no_import_cycles"
+        )
+    modules, levels = longest_chains()
+    msg = (
+        f"longest chain in modules ({len(modules)}, at most {MAX_MODULE_CHAIN}):\n  "
+        + " -> ".join(modules)
+        + f"\nlongest chain in levels ({_levels(levels)}, at most {MAX_LEVELS}):\n  "
+        + " -> ".join(f"{m} [{rank(m)}]" for m in levels)
+    )
+    print(msg)
+    assert _levels(levels) <= MAX_LEVELS, msg
+    assert len(modules) <= MAX_MODULE_CHAIN, msg
+
+
+def test_known_violations_still_occur():
+    # an entry whose import is gone must leave the list, so the list only shrinks
+    g = graph()
+    occurring = {(why.split(":")[0], e.importer, e.target) for e, why in rank_violations()}
+    occurring |= {("numba", e.importer, "numba") for e in g.edges if e.target == "numba"}
+    occurring |= {("cycle", a, b) for a, b in _cut_edges() if b in g.internal(a)}
+    stale = sorted(KNOWN - occurring)
+    assert not stale, f"fixed, remove from KNOWN_VIOLATIONS in tests/test_layers.py: {stale}"
+
+
+# --------------------------------------------------------------------------------------------
+# every kernel compiles into the hashed cache folder
+
+
+def _dispatchers():
+    import numba.core.dispatcher
+
+    import imdrive.kernels
+
+    found = []
+    for info in pkgutil.walk_packages(imdrive.kernels.__path__, "imdrive.kernels."):
+        mod = importlib.import_module(info.name)
+        for name, obj in vars(mod).items():
+            if (
+                isinstance(obj, numba.core.dispatcher.Dispatcher)
+                and obj.py_func.__module__ == mod.__name__
+            ):
+                found.append((f"{mod.__name__}.{name}", obj))
+    return found
+
+
+def test_every_cached_kernel_is_in_the_hashed_cache_folder():
+    from numba.core.caching import NullCache
+
+    from imdrive import _cache
+
+    folder = _cache.cache_dir()
+    kernels = _dispatchers()
+    cached = [(n, d) for n, d in kernels if not isinstance(d._cache, NullCache)]
+    assert "imdrive.kernels.engine.run_drive" in dict(cached)  # the walk is not vacuous
+    outside = [
+        f"{n}: {d._cache._cache_path}"
+        for n, d in cached
+        if not Path(d._cache._cache_path).resolve().is_relative_to(folder.resolve())
+    ]
+    assert not outside, f"compiled outside {folder}:\n  " + "\n  ".join(outside)
+
+
+NEW_KERNEL = """
+from numba import njit
+
+
+@njit(cache=True)
+def doubled(x):
+    return 2.0 * x
+"""
+
+
+def test_a_new_kernel_module_lands_in_the_hashed_folder_without_registration(tmp_path):
+    # a copy of the package with two modules nobody registered: one directly under kernels/,
+    # one in a sub-package; imported directly, each must compile into the hashed folder
+    copy = tmp_path / "src" / "imdrive"
+    shutil.copytree(PKG, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    (copy / "kernels" / "zz_new_block.py").write_text(NEW_KERNEL)
+    (copy / "kernels" / "estimators" / "zz_new_estimator.py").write_text(NEW_KERNEL)
+    cache_root = tmp_path / "cache"
+    code = textwrap.dedent("""
+        from pathlib import Path
+        import imdrive.kernels.zz_new_block as a
+        import imdrive.kernels.estimators.zz_new_estimator as b
+        from imdrive import _cache
+
+        folder = _cache.cache_dir()
+        for m in (a, b):
+            assert Path(m.__file__).is_relative_to(Path.cwd()), m.__file__
+            assert m.doubled(1.5) == 3.0
+            where = Path(m.doubled._cache._cache_path)
+            assert where.is_relative_to(folder), f"{m.__name__} compiled into {where}"
+        print(folder)
+        print(sorted(p.name for p in folder.rglob("*.nbi")))
+    """)
+    env = {**os.environ, "PYTHONPATH": str(tmp_path / "src"), "IMDRIVE_CACHE_DIR": str(cache_root)}
+    env.pop("NUMBA_CACHE_DIR", None)
+    res = subprocess.run(
+        [sys.executable, "-c", code], cwd=tmp_path, env=env, capture_output=True, text=True
+    )
+    assert res.returncode == 0, res.stderr
+    folder_line, index_line = res.stdout.strip().splitlines()
+    folder = Path(folder_line)
+    assert folder.parent == cache_root and folder.name.startswith("kernels-")
+    assert index_line.count("doubled") == 2  # one index file per new module, in that folder
