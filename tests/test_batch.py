@@ -17,6 +17,7 @@ from imdrive.config.scenario import Scenario
 from imdrive.errors import ConfigError
 from imdrive.kernels.engine import S_OK
 from imdrive.run.batch import COLUMNS, METRICS, simulate_batch
+from imdrive.run.metrics import drive_metrics
 from imdrive.run.simulate import simulate
 
 R2 = 0.816
@@ -58,49 +59,9 @@ def _scenarios():
 
 def reference_metrics(res, window_s: float = 0.5) -> dict:
     """The documented metrics, computed with numpy from a full-rate SimulationResult."""
-    s = res.signals
-    sc = res.scenario
-    Ts = sc.simulation.Ts_s
-    n_steps = sc.simulation.n_steps
-    k = np.rint(s["time_s"] / Ts).astype(int)
+    k = np.rint(res.signals["time_s"] / res.scenario.simulation.Ts_s).astype(int)
     assert np.array_equal(k, np.arange(len(k))), "needs log_every = 1"
-    ok = not res.diverged
-    out = {
-        "status": res.status,
-        "diverged": res.diverged,
-        "diverged_at_s": res.k_end * Ts if res.diverged else math.nan,
-        "simulated_s": res.k_end * Ts,
-    }
-    win = k >= max(n_steps - int(round(window_s / Ts)), 0)
-    speed = s["speed_rpm"]
-    rel = np.abs(s["R2_est_ohm"] - s["R2_ohm"]) / s["R2_ohm"]
-    bad = np.flatnonzero(~(rel <= 0.02))
-    if not ok:
-        conv = math.nan
-    elif bad.size == 0:
-        conv = 0.0
-    elif bad[-1] == len(k) - 1:
-        conv = math.nan
-    else:
-        conv = s["time_s"][bad[-1] + 1]
-    nan = math.nan
-    out.update(
-        {
-            "speed_error_rpm": np.mean(speed[win] - s["speed_ref_rpm"][win]) if ok else nan,
-            "speed_est_error_rpm": np.mean(s["speed_est_rpm"][win] - speed[win]) if ok else nan,
-            "speed_ripple_rpm": np.ptp(speed[win]) if ok else nan,
-            "torque_mean_Nm": np.mean(s["torque_Nm"][win]) if ok else nan,
-            "R2_hat_final_ohm": s["R2_est_ohm"][-1],
-            "R2_final_ohm": s["R2_ohm"][-1],
-            "R2_error_pct": 100 * (s["R2_est_ohm"][-1] - s["R2_ohm"][-1]) / s["R2_ohm"][-1],
-            "convergence_time_s": conv,
-            "peak_current_A": np.max(np.sqrt(s["i_alpha_A"] ** 2 + s["i_beta_A"] ** 2)),
-            "final_speed_rpm": speed[-1],
-            "final_speed_ref_rpm": s["speed_ref_rpm"][-1],
-            "final_speed_est_rpm": s["speed_est_rpm"][-1],
-        }
-    )
-    return out
+    return drive_metrics(res, window_s)
 
 
 @pytest.fixture(scope="module")

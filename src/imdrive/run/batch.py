@@ -35,7 +35,8 @@ are shared (a small stack of the distinct tables plus an index per drive). Witho
 kept per drive is its metrics record and status: 12 float64 + 2 int64 = 112 bytes (plus pandas'
 per-row cost of the final table, about the same again), so memory is linear in N at well under
 1 kB per drive; the per-block arrays and the per-thread scratch logs are a fixed cost. With
-``logs=True`` every drive's decimated log is kept, ``(n_steps // log_every + 1) * LOG.itemsize`` bytes
+``logs=True`` every drive's decimated log is kept,
+``(n_steps // log_every + 1) * LOG.itemsize`` bytes
 per drive (240 today).
 
 Metrics (columns of :attr:`BatchResult.metrics`): defined in :mod:`imdrive.run.metrics`; the

@@ -128,3 +128,56 @@ def drive_metrics(res, window_s: float = DEFAULT_WINDOW_S) -> dict:
     return out
 
 
+def compensation_metrics(
+    res, tol: float = CONVERGENCE_BAND, window_s: float = DEFAULT_WINDOW_S
+) -> dict | None:
+    """How the R2 compensator did (None when it is off).
+
+    ``time_to_tolerance_s``: time from the compensator's enable instant after which
+    ``|R2_hat/R2 - 1| <= tol`` holds to the end of the run (None if it never settles
+    there). Speed errors (actual minus reference, rpm) are means over ``window_s`` just
+    before the enable instant and at the end of the run; the ripple is the peak-to-peak
+    actual speed over the final window.
+    """
+    comp = res.scenario.compensator
+    if not comp.enabled or res.scenario.drive.mode != "vector" or len(res.time_s) < 2:
+        return None
+    s = res.signals
+    t = s["time_s"]
+    t_on = comp.t_on_s
+    ratio_err = np.abs(s["R2_est_ohm"] / s["R2_ohm"] - 1.0)
+    outside = np.nonzero((ratio_err > tol) | (t < t_on))[0]
+    if len(outside) == 0:
+        t_tol = 0.0
+    elif outside[-1] + 1 < len(t):
+        t_tol = float(t[outside[-1] + 1] - t_on)
+    else:
+        t_tol = None
+    before = (t >= t_on - window_s) & (t < t_on)
+    after = t >= t[-1] - window_s
+    err = s["speed_rpm"] - s["speed_ref_rpm"]
+    return {
+        "R2_ohm": float(s["R2_ohm"][-1]),
+        "R2_est_initial_ohm": float(s["R2_est_ohm"][0]),
+        "R2_est_final_ohm": float(s["R2_est_ohm"][-1]),
+        "R2_est_final_error_pct": float(100.0 * (s["R2_est_ohm"][-1] / s["R2_ohm"][-1] - 1)),
+        "tolerance_pct": 100.0 * tol,
+        "time_to_tolerance_s": t_tol,
+        "speed_error_before_rpm": float(np.mean(err[before])) if before.any() else None,
+        "speed_error_after_rpm": float(np.mean(err[after])),
+        "speed_ripple_after_rpm": float(np.ptp(s["speed_rpm"][after])),
+        "e_d0_mean_after_Wb": float(np.mean(s["e_d0_Wb"][after])),
+    }
+
+
+def steady_means(res, window_s: float = DEFAULT_WINDOW_S) -> dict:
+    """Means over the last ``window_s`` of a vector-controlled run (the paper's experiments)."""
+    w = res.window(res.time_s[-1] - window_s)
+    return {
+        "e_d0_Wb": float(np.mean(w["e_d0_Wb"])),
+        "e_q0_Wb": float(np.mean(w["e_q0_Wb"])),
+        "speed_error_rpm": float(np.mean(w["speed_rpm"] - w["speed_ref_rpm"])),
+        "speed_est_error_rpm": float(np.mean(w["speed_est_rpm"] - w["speed_rpm"])),
+        "flux_Wb": float(np.mean(w["flux_Wb"])),
+        "torque_Nm": float(np.mean(w["torque_Nm"])),
+    }

@@ -15,6 +15,12 @@ import numpy as np
 from imdrive.kernels.engine import S_CURRENT, S_NAN, S_OK, S_SPEED, DriveParams, DriveState
 from imdrive.kernels.machine import magnetic_energy
 from imdrive.kernels.records import record_bytes
+from imdrive.run.metrics import (
+    CONVERGENCE_BAND,
+    DEFAULT_WINDOW_S,
+    compensation_metrics,
+    drive_metrics,
+)
 
 RPM = 2.0 * math.pi / 60.0
 SQ3_2 = math.sqrt(3.0) / 2.0
@@ -94,8 +100,7 @@ def columns_from_log(log: np.ndarray, vector: bool) -> dict[str, np.ndarray]:
 
 
 def package_versions() -> dict[str, str]:
-    import numba
-    import scipy
+    from importlib.metadata import version
 
     import imdrive
 
@@ -103,8 +108,8 @@ def package_versions() -> dict[str, str]:
         "imdrive": imdrive.__version__,
         "python": platform.python_version(),
         "numpy": np.__version__,
-        "scipy": scipy.__version__,
-        "numba": numba.__version__,
+        "scipy": version("scipy"),
+        "numba": version("numba"),
     }
 
 
@@ -240,44 +245,16 @@ class SimulationResult:
             "kinetic_energy_change_J": 0.5 * J * (x["w_m"] ** 2 - x0["w_m"] ** 2),
         }
 
-    def compensation_metrics(self, tol: float = 0.02, window_s: float = 0.5) -> dict | None:
-        """How the R2 compensator did (None when it is off).
+    def compensation_metrics(
+        self, tol: float = CONVERGENCE_BAND, window_s: float = DEFAULT_WINDOW_S
+    ) -> dict | None:
+        """How the R2 compensator did (None when it is off); see
+        :func:`imdrive.run.metrics.compensation_metrics`."""
+        return compensation_metrics(self, tol, window_s)
 
-        ``time_to_tol_s``: time from the compensator's enable instant after which
-        ``|R2_hat/R2 - 1| <= tol`` holds to the end of the run (None if it never settles
-        there). Speed errors (actual minus reference, rpm) are means over ``window_s`` just
-        before the enable instant and at the end of the run; the ripple is the peak-to-peak
-        actual speed over the final window.
-        """
-        comp = self.scenario.compensator
-        if not comp.enabled or self.scenario.drive.mode != "vector" or len(self.time_s) < 2:
-            return None
-        s = self.signals
-        t = s["time_s"]
-        t_on = comp.t_on_s
-        ratio_err = np.abs(s["R2_est_ohm"] / s["R2_ohm"] - 1.0)
-        outside = np.nonzero((ratio_err > tol) | (t < t_on))[0]
-        if len(outside) == 0:
-            t_tol = 0.0
-        elif outside[-1] + 1 < len(t):
-            t_tol = float(t[outside[-1] + 1] - t_on)
-        else:
-            t_tol = None
-        before = (t >= t_on - window_s) & (t < t_on)
-        after = t >= t[-1] - window_s
-        err = s["speed_rpm"] - s["speed_ref_rpm"]
-        return {
-            "R2_ohm": float(s["R2_ohm"][-1]),
-            "R2_est_initial_ohm": float(s["R2_est_ohm"][0]),
-            "R2_est_final_ohm": float(s["R2_est_ohm"][-1]),
-            "R2_est_final_error_pct": float(100.0 * (s["R2_est_ohm"][-1] / s["R2_ohm"][-1] - 1)),
-            "tolerance_pct": 100.0 * tol,
-            "time_to_tolerance_s": t_tol,
-            "speed_error_before_rpm": float(np.mean(err[before])) if before.any() else None,
-            "speed_error_after_rpm": float(np.mean(err[after])),
-            "speed_ripple_after_rpm": float(np.ptp(s["speed_rpm"][after])),
-            "e_d0_mean_after_Wb": float(np.mean(s["e_d0_Wb"][after])),
-        }
+    def metrics(self, window_s: float = DEFAULT_WINDOW_S) -> dict:
+        """This run's row of the batch table; see :func:`imdrive.run.metrics.drive_metrics`."""
+        return drive_metrics(self, window_s)
 
     # -- summary and export ------------------------------------------------------------------
     def final_values(self) -> dict[str, float]:
@@ -325,7 +302,7 @@ class SimulationResult:
             if csv:
                 self.to_csv(tmp / "timeseries.csv")
             if figures:
-                from imdrive.plots import save_figures
+                from imdrive.run.plots import save_figures
 
                 save_figures(self, tmp)
             (tmp / "summary.json").write_text(json.dumps(self.summary(), indent=2) + "\n")

@@ -30,6 +30,7 @@ from matplotlib.figure import Figure
 from imdrive import analysis
 from imdrive.config.machine import machine_preset
 from imdrive.config.scenario import Scenario
+from imdrive.run.metrics import steady_means
 from imdrive.run.simulate import simulate
 
 MACHINE = machine_preset("paper-table-iv")
@@ -77,19 +78,6 @@ def sensorless_run(
     return simulate(Scenario.read("sensorless", ov))
 
 
-def steady_means(res, window_s: float = 0.5) -> dict:
-    """Means over the last ``window_s`` of a run."""
-    w = res.window(res.time_s[-1] - window_s)
-    return {
-        "e_d0_Wb": float(np.mean(w["e_d0_Wb"])),
-        "e_q0_Wb": float(np.mean(w["e_q0_Wb"])),
-        "speed_error_rpm": float(np.mean(w["speed_rpm"] - w["speed_ref_rpm"])),
-        "speed_est_error_rpm": float(np.mean(w["speed_est_rpm"] - w["speed_rpm"])),
-        "flux_Wb": float(np.mean(w["flux_Wb"])),
-        "torque_Nm": float(np.mean(w["torque_Nm"])),
-    }
-
-
 # ---------------------------------------------------------------------------------------------
 # experiments
 
@@ -113,7 +101,7 @@ def compensation_table(out: Path | None = None, progress=None) -> pd.DataFrame:
             }
         )
         if out is not None:
-            from imdrive.plots import compensation_figure
+            from imdrive.run.plots import compensation_figure
 
             compensation_figure(res).savefig(out / f"{name}.png", dpi=100)
     return pd.DataFrame(rows)
