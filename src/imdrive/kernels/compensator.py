@@ -12,8 +12,8 @@ updates
 
     R2_hat <- clip(R2_hat + G_CR * CR, R2_min, R2_max)
 
-The MRAS and the slip calculation read ``R2_hat`` from the controller's model (MODEL_STATE),
-so both use the new value from the next sample on.
+The slip calculation (which runs after the compensator in the same period) and the MRAS (from
+the next sample on) read ``R2_hat`` from the controller's model (MODEL_STATE).
 
 Persistent-excitation variant (this project's, not the paper's): a sinusoid of amplitude
 ``p.inj_amp`` and frequency ``p.inj_freq`` is added to the flux-current reference id*
