@@ -1,0 +1,570 @@
+"""The sweep specification: reading, validating and expanding a sweep file.
+
+A sweep file (format in :mod:`imdrive.sweep`) names a base scenario, overrides for every run and
+axes; :func:`parse_sweep` turns it into a :class:`Sweep`, which knows the value of every axis of
+every run (:meth:`Sweep.run_values`) and builds each run's scenario (:meth:`Sweep.scenario`).
+Every run's scenario is built and validated when the sweep is read, so bad input raises
+:class:`~imdrive.errors.ConfigError` naming the field before anything runs.
+
+Notes
+-----
+Pure Python on top of :mod:`imdrive.config`: reading a sweep imports neither numba nor the
+kernels.
+"""
+
+from __future__ import annotations
+
+import copy
+import hashlib
+import json
+import math
+import tomllib
+import typing
+from dataclasses import dataclass, field, is_dataclass, replace
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from imdrive.config.overrides import _schema_allows
+from imdrive.config.presets import scenario_text
+from imdrive.config.profiles import Profile
+from imdrive.config.scenario import SECTIONS, Scenario, _convert
+from imdrive.errors import ConfigError
+
+CONVENIENCE = ("R2_ratio", "speed_rpm", "load_Nm")
+CONVENIENCE_TARGET = {
+    "R2_ratio": "estimator.R2_ohm",
+    "speed_rpm": "control.speed_ref_rpm",
+    "load_Nm": "load.torque_Nm",
+}
+TOP_KEYS = (
+    "name",
+    "description",
+    "base",
+    "window_s",
+    "chunk_size",
+    "samples",
+    "seed",
+    "set",
+    "axes",
+    "heatmap",
+)
+AGGREGATES = ("mean", "min", "max", "absmax")
+DEFAULT_CHUNK = 32
+
+
+# ------------------------------------------------------------------------------------------
+# the sweep
+
+
+@dataclass(frozen=True)
+class Axis:
+    """One axis: its name, kind and values.
+
+    ``kind`` is ``"path"`` (a scenario key), one of :data:`CONVENIENCE`, or ``"sets"``. For a
+    grid sweep ``values`` are the axis points; for a random sweep the drawn value of every run.
+    For a set axis ``values`` are the set names and ``sets`` maps a name to its overrides.
+    """
+
+    name: str
+    kind: str
+    values: tuple
+    sets: dict = field(default_factory=dict)
+    path: tuple[str, ...] = ()
+    choice: bool = False  # random sweep: drawn from listed values or sets
+
+    @property
+    def numeric(self) -> bool:
+        return self.kind != "sets" and all(
+            isinstance(v, int | float) and not isinstance(v, bool) for v in self.values
+        )
+
+    def points(self) -> list:
+        """Distinct values in order of first appearance."""
+        return list(dict.fromkeys(self.values))
+
+
+@dataclass(frozen=True)
+class Heatmap:
+    x: str
+    y: str
+    value: str = "speed_error_rpm"
+    rows: str | None = None
+    cols: str | None = None
+    agg: str = "mean"
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """A resolved sweep: base scenario, axes, number of runs. Picklable (sent to dask)."""
+
+    name: str
+    description: str
+    base: Scenario
+    base_data: dict  # TOML-shaped base (after [set]), to rebuild on a machine.preset change
+    axes: tuple[Axis, ...]
+    random: bool
+    n_runs: int
+    seed: int
+    window_s: float
+    chunk_size: int
+    heatmaps: tuple[Heatmap, ...]
+    source: str = ""
+
+    # -- runs ------------------------------------------------------------------------------
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return tuple(len(a.values) for a in self.axes)
+
+    def run_values(self, i: int) -> tuple:
+        """The value of every axis (set name for a set axis) of run ``i``."""
+        if not 0 <= i < self.n_runs:
+            raise IndexError(i)
+        if self.random:
+            return tuple(a.values[i] for a in self.axes)
+        idx = np.unravel_index(i, self.shape)
+        return tuple(a.values[int(j)] for a, j in zip(self.axes, idx, strict=True))
+
+    def scenario(self, i: int) -> Scenario:
+        """The scenario of run ``i``."""
+        return self.scenario_for(self.run_values(i))
+
+    def scenario_for(self, values: tuple) -> Scenario:
+        return _build(self, dict(zip((a.name for a in self.axes), values, strict=True)))
+
+    def n_chunks(self, chunk_size: int | None = None) -> int:
+        cs = chunk_size or self.chunk_size
+        return (self.n_runs + cs - 1) // cs
+
+    def chunk_runs(self, j: int, chunk_size: int | None = None) -> range:
+        cs = chunk_size or self.chunk_size
+        return range(j * cs, min((j + 1) * cs, self.n_runs))
+
+    def fingerprint(self) -> str:
+        """Hash of everything that determines the runs (not the chunking or the figures)."""
+        spec = {
+            "base": self.base.to_dict(),
+            "axes": [
+                {"name": a.name, "kind": a.kind, "values": list(a.values), "sets": a.sets}
+                for a in self.axes
+            ],
+            "random": self.random,
+            "n_runs": self.n_runs,
+            "window_s": self.window_s,
+        }
+        text = json.dumps(spec, sort_keys=True, default=repr)
+        return hashlib.sha256(text.encode()).hexdigest()[:20]
+
+    def inputs(self, runs: range):
+        """Table of run index and axis values for ``runs``."""
+        import pandas as pd
+
+        cols: dict = {"run": np.arange(runs.start, runs.stop, dtype=np.int64)}
+        vals = [self.run_values(i) for i in runs]
+        for k, a in enumerate(self.axes):
+            col = [v[k] for v in vals]
+            cols[a.name] = np.array(col, dtype=float) if a.numeric else col
+        return pd.DataFrame(cols)
+
+
+# ------------------------------------------------------------------------------------------
+# building a run's scenario
+
+
+_HINTS: dict[type, dict] = {}
+
+
+def _hints(cls) -> dict:
+    if cls not in _HINTS:
+        _HINTS[cls] = typing.get_type_hints(cls)
+    return _HINTS[cls]
+
+
+def _set_field(obj, parts: tuple[str, ...], value, path: str):
+    """``obj`` (a frozen dataclass) with the field at ``parts`` set to ``value`` (validated)."""
+    name = parts[0]
+    if len(parts) == 1:
+        return replace(obj, **{name: _convert(_hints(type(obj))[name], value, path)})
+    return replace(obj, **{name: _set_field(getattr(obj, name), parts[1:], value, path)})
+
+
+def _apply(sc: Scenario, parts: tuple[str, ...], value) -> Scenario:
+    """Scenario ``sc`` with the key ``parts`` set, as ``Scenario.read`` with that override."""
+    path = ".".join(parts)
+    if len(parts) == 1:  # name, description
+        if not isinstance(value, str):
+            raise ConfigError(path, "must be a string")
+        return replace(sc, **{parts[0]: value})
+    if parts[0] == "machine":
+        v = _convert(_hints(type(sc.machine))[parts[1]], value, path)
+        return replace(sc, machine=replace(sc.machine, **{parts[1]: v}))
+    return _set_field(sc, parts, value, path)
+
+
+def _with_final(profile: Profile, value: float) -> Profile:
+    """``profile`` with the value of its last breakpoint set to ``value``."""
+    pts = list(profile.points)
+    pts[-1] = (pts[-1][0], float(value))
+    return Profile(tuple(pts))
+
+
+def _number(value, path: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        raise ConfigError(path, f"must be a finite number, got {value!r}")
+    return float(value)
+
+
+def _build(sweep: Sweep, point: dict) -> Scenario:
+    """The scenario of one point (axis name -> value) of ``sweep``."""
+    overrides: list[tuple[tuple[str, ...], object]] = []
+    for a in sweep.axes:
+        if a.kind == "sets":
+            overrides.extend(a.sets[point[a.name]])
+    for a in sweep.axes:
+        if a.kind == "path":
+            overrides.append((a.path, point[a.name]))
+    preset = [v for p, v in overrides if p == ("machine", "preset")]
+    sc = sweep.base
+    if preset:
+        data = copy.deepcopy(sweep.base_data)
+        data.setdefault("machine", {})["preset"] = preset[-1]
+        sc = Scenario.from_dict(data)
+    for parts, value in overrides:
+        if parts != ("machine", "preset"):
+            sc = _apply(sc, parts, value)
+    for a in sweep.axes:
+        if a.kind == "R2_ratio":
+            r = _number(point[a.name], f"axes.{a.name}")
+            sc = _apply(sc, ("estimator", "R2_ohm"), r * sc.machine.R2_ohm)
+        elif a.kind == "speed_rpm":
+            v = _number(point[a.name], f"axes.{a.name}")
+            sc = replace(
+                sc,
+                control=replace(sc.control, speed_ref_rpm=_with_final(sc.control.speed_ref_rpm, v)),
+            )
+        elif a.kind == "load_Nm":
+            v = _number(point[a.name], f"axes.{a.name}")
+            sc = replace(sc, load=replace(sc.load, torque_Nm=_with_final(sc.load.torque_Nm, v)))
+    return sc
+
+
+# ------------------------------------------------------------------------------------------
+# reading a sweep file
+
+
+def sweep_names() -> list[str]:
+    """Names of the built-in sweeps."""
+    root = resources.files("imdrive.sweep").joinpath("presets")
+    return sorted(p.name[:-5] for p in root.iterdir() if p.name.endswith(".toml"))
+
+
+def sweep_text(ref: str) -> tuple[str, Path | None]:
+    """Text of a built-in sweep by name, or of the file at that path (and its folder)."""
+    if ref in sweep_names():
+        return resources.files("imdrive.sweep").joinpath(f"presets/{ref}.toml").read_text(), None
+    p = Path(ref)
+    if p.is_file():
+        try:
+            return p.read_text(encoding="utf-8"), p.resolve().parent
+        except (OSError, UnicodeDecodeError) as exc:
+            raise ConfigError("sweep", f"cannot read {p}: {exc}") from None
+    raise ConfigError(
+        "sweep", f"{ref!r} is neither a built-in sweep ({', '.join(sweep_names())}) nor a file"
+    )
+
+
+def _split(key: str) -> list[str]:
+    return [p.strip() for p in key.split(".")]
+
+
+def _flatten(table: dict, where: str, prefix: tuple[str, ...] = ()) -> list:
+    """``[(parts, value)]`` of scenario overrides written as a (possibly nested) TOML table.
+
+    Dotted keys (``compensator.enabled = true``) arrive nested; quoted ones
+    (``"compensator.enabled" = true``) arrive as one key: both are accepted. A nested table is
+    descended into while it names a table of the schema (a section such as ``compensator`` or
+    ``plant.thermal``), so a profile table (``{initial, changes}``) is a value.
+    """
+    out = []
+    for key, value in table.items():
+        parts = (*prefix, *_split(key))
+        if not all(parts):
+            raise ConfigError(f"{where}.{key}", "empty part in a key path")
+        if isinstance(value, dict) and _is_section_path(parts):
+            out.extend(_flatten(value, where, parts))
+            continue
+        if not _schema_allows(list(parts)):
+            raise ConfigError(
+                f"{where}.{'.'.join(parts)}",
+                "no such setting (see 'imdrive show PRESET' for the keys)",
+            )
+        out.append((parts, value))
+    return out
+
+
+def _is_section_path(parts) -> bool:
+    """Whether ``parts`` names a table of the schema (a section or a nested settings table)."""
+    if len(parts) == 1:
+        return parts[0] in SECTIONS or parts[0] == "machine"
+    cls = SECTIONS.get(parts[0])
+    for p in parts[1:]:
+        if cls is None or p not in _hints(cls):
+            return False
+        cls = _hints(cls)[p]
+    return isinstance(cls, type) and is_dataclass(cls) and cls is not Profile
+
+
+def _set_data(data: dict, parts, value) -> None:
+    node = data
+    for p in parts[:-1]:
+        nxt = node.setdefault(p, {})
+        if not isinstance(nxt, dict):
+            raise ConfigError(".".join(parts), f"{p} is not a table")
+        node = nxt
+    node[parts[-1]] = value
+
+
+def _int(value, path: str, lo: int = 1) -> int:
+    ok = isinstance(value, int) and not isinstance(value, bool)
+    if not ok or value < lo:
+        raise ConfigError(path, f"must be an integer >= {lo}, got {value!r}")
+    return int(value)
+
+
+def _axis_values(name: str, spec, random: bool, samples: int, rng) -> Axis:
+    """Parse ``axes.NAME``; draws the samples of a random sweep."""
+    where = f"axes.{name}"
+    parts = tuple(_split(name))
+    if name in CONVENIENCE:
+        kind = name
+    elif isinstance(spec, dict) and spec and all(isinstance(v, dict) for v in spec.values()):
+        kind = "sets"
+    else:
+        if not all(parts) or not _schema_allows(list(parts)):
+            raise ConfigError(where, "no such setting (see 'imdrive show PRESET' for the keys)")
+        kind = "path"
+    if kind == "sets":
+        sets = {}
+        for label, table in spec.items():
+            sets[label] = tuple(_flatten(table, f"{where}.{label}"))
+        labels = tuple(sets)
+        if random:
+            labels = tuple(labels[int(k)] for k in rng.integers(0, len(labels), samples))
+        return Axis(name, "sets", labels, sets, choice=random)
+    if isinstance(spec, dict) and "values" in spec:
+        extra = set(spec) - {"values"}
+        if extra:
+            raise ConfigError(f"{where}.{sorted(extra)[0]}", "unknown key (with 'values')")
+        spec = spec["values"]
+    if isinstance(spec, list):
+        if not spec:
+            raise ConfigError(where, "is empty: give at least one value")
+        kinds = {
+            type(v) if not isinstance(v, int | float) or isinstance(v, bool) else float
+            for v in spec
+        }
+        if len(kinds) > 1:
+            raise ConfigError(where, "values must all be numbers, all strings or all booleans")
+        values = tuple(spec)
+        if kind in CONVENIENCE:
+            for k, v in enumerate(values):
+                _number(v, f"{where}[{k}]")
+        if random:
+            values = tuple(values[int(k)] for k in rng.integers(0, len(values), samples))
+        return Axis(name, kind, values, path=parts if kind == "path" else (), choice=random)
+    if not isinstance(spec, dict):
+        if isinstance(spec, int | float) and not isinstance(spec, bool):
+            raise ConfigError(where, "a single value is not an axis: write [value] or use [set]")
+        raise ConfigError(where, "must be a list of values, {min, max, num|step} or override sets")
+    if not spec:
+        raise ConfigError(where, "is empty: give values, or {min, max, num} / {min, max, step}")
+    allowed = {"min", "max"} if random else {"min", "max", "num", "step"}
+    extra = set(spec) - allowed
+    if extra:
+        rule = "unknown key" if not random else "unknown key (a random sweep draws from min, max)"
+        raise ConfigError(f"{where}.{sorted(extra)[0]}", rule)
+    for k in ("min", "max"):
+        if k not in spec:
+            raise ConfigError(f"{where}.{k}", "is required")
+    lo = _number(spec["min"], f"{where}.min")
+    hi = _number(spec["max"], f"{where}.max")
+    if lo > hi:
+        raise ConfigError(f"{where}.min", f"must be <= max (min = {lo:g} > max = {hi:g})")
+    if random:
+        values = tuple(float(v) for v in rng.uniform(lo, hi, samples))
+        return Axis(name, kind, values, path=parts if kind == "path" else ())
+    if ("num" in spec) == ("step" in spec):
+        raise ConfigError(where, "give exactly one of num or step with min and max")
+    if "num" in spec:
+        num = _int(spec["num"], f"{where}.num", lo=1)
+        if num == 1 and lo != hi:
+            raise ConfigError(f"{where}.num", "must be >= 2 when min < max")
+        pts = [lo] if num == 1 else [float(v) for v in np.linspace(lo, hi, num)]
+    else:
+        step = _number(spec["step"], f"{where}.step")
+        if step <= 0:
+            raise ConfigError(f"{where}.step", f"must be > 0 (got {step:g})")
+        n = int(math.floor((hi - lo) / step * (1 + 1e-12) + 1e-9)) + 1
+        if n > 1_000_000:
+            raise ConfigError(f"{where}.step", f"gives {n} points (more than 1e6)")
+        pts = [lo + k * step for k in range(n)]
+    return Axis(name, kind, tuple(pts), path=parts if kind == "path" else ())
+
+
+def _heatmaps(items, axes: tuple[Axis, ...], random: bool) -> tuple[Heatmap, ...]:
+    from imdrive.run.batch import COLUMNS
+
+    names = [a.name for a in axes]
+    metric_cols = [c for c in COLUMNS if c != "drive"]
+    if items is None:
+        numeric = [a.name for a in axes if a.numeric]
+        if len(numeric) < 2:
+            return ()
+        other = [a.name for a in axes if a.name not in numeric[:2]]
+        cat = [a for a in other if not random or _categorical(axes, a)]
+        return (Heatmap(numeric[0], numeric[1], "speed_error_rpm", cat[0] if cat else None),)
+    if not isinstance(items, list):
+        raise ConfigError("heatmap", "must be an array of tables: [[heatmap]]")
+    out = []
+    for k, h in enumerate(items):
+        where = f"heatmap[{k}]"
+        if not isinstance(h, dict):
+            raise ConfigError(where, "must be a table")
+        extra = set(h) - {"x", "y", "value", "rows", "cols", "agg"}
+        if extra:
+            raise ConfigError(f"{where}.{sorted(extra)[0]}", "unknown key")
+        for key in ("x", "y"):
+            if h.get(key) not in names:
+                raise ConfigError(f"{where}.{key}", f"must name an axis ({', '.join(names)})")
+        for key in ("rows", "cols"):
+            if key in h:
+                if h[key] not in names:
+                    raise ConfigError(f"{where}.{key}", f"must name an axis ({', '.join(names)})")
+                if random and not _categorical(axes, h[key]):
+                    raise ConfigError(
+                        f"{where}.{key}", "in a random sweep, only an axis of listed values or sets"
+                    )
+        value = h.get("value", "speed_error_rpm")
+        if value not in metric_cols:
+            raise ConfigError(f"{where}.value", f"must be a metric ({', '.join(metric_cols)})")
+        agg = h.get("agg", "mean")
+        if agg not in AGGREGATES:
+            raise ConfigError(f"{where}.agg", f"must be one of {', '.join(AGGREGATES)}")
+        out.append(Heatmap(h["x"], h["y"], value, h.get("rows"), h.get("cols"), agg))
+    return tuple(out)
+
+
+def _categorical(axes, name) -> bool:
+    """Whether a random sweep's axis takes few values (drawn from a list or sets)."""
+    return next(a for a in axes if a.name == name).choice
+
+
+def parse_sweep(text: str, folder: Path | None = None, default_name: str = "sweep") -> Sweep:
+    """Read and validate a sweep from its TOML text (``folder``: where relative paths start)."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError("sweep", f"invalid TOML: {exc}") from None
+    for key in data:
+        if key not in TOP_KEYS:
+            raise ConfigError(key, f"unknown key (a sweep file has {', '.join(TOP_KEYS)})")
+    name = data.get("name", default_name)
+    desc = data.get("description", "")
+    for key, v in (("name", name), ("description", desc)):
+        if not isinstance(v, str):
+            raise ConfigError(key, "must be a string")
+    if "base" not in data:
+        raise ConfigError("base", "is required: a scenario preset name or a scenario file")
+    base_ref = data["base"]
+    if not isinstance(base_ref, str):
+        raise ConfigError("base", "must be a string")
+    if folder is not None and not Path(base_ref).is_absolute() and (folder / base_ref).is_file():
+        base_ref = str(folder / base_ref)
+    try:
+        base_data = tomllib.loads(scenario_text(base_ref))
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError("base", f"invalid TOML in {base_ref}: {exc}") from None
+    sets = data.get("set", {})
+    if not isinstance(sets, dict):
+        raise ConfigError("set", "must be a table of scenario keys")
+    for parts, value in _flatten(sets, "set"):
+        _set_data(base_data, parts, value)
+    base = Scenario.from_dict(base_data)
+
+    window_s = _number(data.get("window_s", 0.5), "window_s")
+    if window_s < 0:
+        raise ConfigError("window_s", f"must be >= 0 (got {window_s:g})")
+    chunk_size = _int(data.get("chunk_size", DEFAULT_CHUNK), "chunk_size")
+    random = "samples" in data
+    samples = _int(data["samples"], "samples") if random else 0
+    seed = _int(data.get("seed", 0), "seed", lo=0)
+    if "seed" in data and not random:
+        raise ConfigError("seed", "only for a random sweep (with samples = N)")
+    rng = np.random.default_rng(seed)
+
+    axes_spec = data.get("axes")
+    if not isinstance(axes_spec, dict) or not axes_spec:
+        raise ConfigError("axes", "is required and needs at least one axis")
+    axes = tuple(_axis_values(n, s, random, samples, rng) for n, s in axes_spec.items())
+    targets: dict[str, str] = {}
+    for a in axes:
+        keys = (
+            [".".join(a.path)]
+            if a.kind == "path"
+            else [CONVENIENCE_TARGET[a.kind]]
+            if a.kind in CONVENIENCE
+            else []
+        )
+        for key in keys:
+            if key in targets:
+                raise ConfigError(f"axes.{a.name}", f"sets {key}, as axis {targets[key]} does")
+            targets[key] = a.name
+    n_runs = samples if random else math.prod(len(a.values) for a in axes)
+    heatmaps = _heatmaps(data.get("heatmap"), axes, random)
+    sweep = Sweep(
+        name=name,
+        description=desc,
+        base=base,
+        base_data=base_data,
+        axes=axes,
+        random=random,
+        n_runs=n_runs,
+        seed=seed,
+        window_s=window_s,
+        chunk_size=chunk_size,
+        heatmaps=heatmaps,
+        source=text,
+    )
+    _validate(sweep)
+    return sweep
+
+
+def _validate(sweep: Sweep) -> None:
+    """Build every axis value alone on the base, then every run: errors name the axis."""
+    for a in sweep.axes:
+        for v in a.points():
+            try:
+                _build_one_axis(sweep, a, v)
+            except ConfigError as exc:
+                raise ConfigError(f"axes.{a.name}", f"value {v!r} is rejected: {exc}") from None
+    for i in range(sweep.n_runs):
+        try:
+            sweep.scenario(i)
+        except ConfigError as exc:
+            pt = ", ".join(
+                f"{a.name} = {v!r}" for a, v in zip(sweep.axes, sweep.run_values(i), strict=True)
+            )
+            raise ConfigError(f"axes (run {i}: {pt})", str(exc)) from None
+
+
+def _build_one_axis(sweep: Sweep, axis: Axis, value) -> Scenario:
+    single = replace(sweep, axes=(replace(axis, values=(value,)),), random=False, n_runs=1)
+    return single.scenario(0)
+
+
+def load_sweep(ref: str) -> Sweep:
+    """A built-in sweep by name, or a sweep file by path."""
+    text, folder = sweep_text(ref)
+    default = ref if folder is None else Path(ref).stem
+    return parse_sweep(text, folder, default)
