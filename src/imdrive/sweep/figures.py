@@ -26,25 +26,13 @@ def heatmap_figure(sweep: Sweep, df, h: Heatmap):
     """One heatmap (or a grid of them: ``rows`` x ``cols`` panels) of a metric over two axes."""
     from matplotlib.figure import Figure
 
-    def levels(name):
-        a = next(a for a in sweep.axes if a.name == name)
-        return a.points()
-
-    rows = levels(h.rows) if h.rows else [None]
-    cols = levels(h.cols) if h.cols else [None]
+    rows = _levels(sweep, h.rows) if h.rows else [None]
+    cols = _levels(sweep, h.cols) if h.cols else [None]
     fig = Figure(figsize=(3.6 * len(cols) + 1.2, 3.0 * len(rows) + 0.8), layout="constrained")
     axs = fig.subplots(len(rows), len(cols), squeeze=False)
-    vals = df[h.value].to_numpy(dtype=float)
-    finite = vals[np.isfinite(vals)]
     signed = h.value in SIGNED_METRICS
-    if finite.size:
-        vmax = float(np.max(np.abs(finite))) if signed else float(finite.max())
-        vmin = -vmax if signed else float(finite.min())
-    else:
-        vmin, vmax = -1.0, 1.0
-    if vmin == vmax:
-        vmin, vmax = vmin - 1.0, vmax + 1.0
-    cmap = "RdBu_r" if signed else "viridis"
+    vmin, vmax = _colour_range(df[h.value], signed)
+    style = {"cmap": "RdBu_r" if signed else "viridis", "vmin": vmin, "vmax": vmax}
     mappable = None
     for r, rv in enumerate(rows):
         for c, cv in enumerate(cols):
@@ -54,41 +42,14 @@ def heatmap_figure(sweep: Sweep, df, h: Heatmap):
                 sel = sel[sel[h.rows] == rv]
             if h.cols:
                 sel = sel[sel[h.cols] == cv]
+            ax.set_facecolor("0.85")
+            draw = _scatter_panel if sweep.random else _image_panel
+            mappable = draw(ax, sweep, sel, h, style)
+            ax.set_xlabel(h.x)
+            ax.set_ylabel(h.y)
             title = ", ".join(
                 f"{n} = {_fmt(v)}" for n, v in ((h.rows, rv), (h.cols, cv)) if n is not None
             )
-            ax.set_facecolor("0.85")
-            if sweep.random:
-                mappable = ax.scatter(
-                    sel[h.x], sel[h.y], c=sel[h.value], cmap=cmap, vmin=vmin, vmax=vmax, s=18
-                )
-                ax.set_xlabel(h.x)
-                ax.set_ylabel(h.y)
-            else:
-                xs, ys = levels(h.x), levels(h.y)
-                g = sel.groupby([h.y, h.x], sort=False)[h.value].agg(
-                    lambda s, how=h.agg: _aggregate(s, how)
-                )
-                Z = np.full((len(ys), len(xs)), np.nan)
-                for (yv, xv), v in g.items():
-                    Z[ys.index(yv), xs.index(xv)] = v
-                mappable = ax.imshow(
-                    np.ma.masked_invalid(Z),
-                    origin="lower",
-                    aspect="auto",
-                    cmap=cmap,
-                    vmin=vmin,
-                    vmax=vmax,
-                    interpolation="nearest",
-                )
-                ax.set_xticks(range(len(xs)), [_fmt(v) for v in xs], rotation=45)
-                ax.set_yticks(range(len(ys)), [_fmt(v) for v in ys])
-                ax.set_xlabel(h.x)
-                ax.set_ylabel(h.y)
-                if Z.size <= 100:
-                    for (iy, ix), v in np.ndenumerate(Z):
-                        if np.isfinite(v):
-                            ax.text(ix, iy, _cell(v), ha="center", va="center", fontsize=6)
             if title:
                 ax.set_title(title, fontsize=9)
     if mappable is not None:
@@ -96,6 +57,49 @@ def heatmap_figure(sweep: Sweep, df, h: Heatmap):
     agg = "" if sweep.random else f" ({h.agg} over the other axes; grey: none finite)"
     fig.suptitle(f"{sweep.name}: {h.value}{agg}", fontsize=10)
     return fig
+
+
+def _levels(sweep: Sweep, name: str) -> list:
+    """The distinct values of axis ``name``, in order."""
+    return next(a for a in sweep.axes if a.name == name).points()
+
+
+def _colour_range(values, signed: bool) -> tuple[float, float]:
+    """``(vmin, vmax)`` over the finite values; symmetric about 0 for a signed metric."""
+    vals = values.to_numpy(dtype=float)
+    finite = vals[np.isfinite(vals)]
+    if finite.size:
+        vmax = float(np.max(np.abs(finite))) if signed else float(finite.max())
+        vmin = -vmax if signed else float(finite.min())
+    else:
+        vmin, vmax = -1.0, 1.0
+    if vmin == vmax:
+        vmin, vmax = vmin - 1.0, vmax + 1.0
+    return vmin, vmax
+
+
+def _scatter_panel(ax, sweep: Sweep, sel, h: Heatmap, style: dict):
+    """A random sweep's panel: one dot per run."""
+    return ax.scatter(sel[h.x], sel[h.y], c=sel[h.value], s=18, **style)
+
+
+def _image_panel(ax, sweep: Sweep, sel, h: Heatmap, style: dict):
+    """A grid sweep's panel: the metric aggregated over the other axes, one cell per point."""
+    xs, ys = _levels(sweep, h.x), _levels(sweep, h.y)
+    g = sel.groupby([h.y, h.x], sort=False)[h.value].agg(lambda s, how=h.agg: _aggregate(s, how))
+    Z = np.full((len(ys), len(xs)), np.nan)
+    for (yv, xv), v in g.items():
+        Z[ys.index(yv), xs.index(xv)] = v
+    image = ax.imshow(
+        np.ma.masked_invalid(Z), origin="lower", aspect="auto", interpolation="nearest", **style
+    )
+    ax.set_xticks(range(len(xs)), [_fmt(v) for v in xs], rotation=45)
+    ax.set_yticks(range(len(ys)), [_fmt(v) for v in ys])
+    if Z.size <= 100:
+        for (iy, ix), v in np.ndenumerate(Z):
+            if np.isfinite(v):
+                ax.text(ix, iy, _cell(v), ha="center", va="center", fontsize=6)
+    return image
 
 
 def _cell(v: float) -> str:

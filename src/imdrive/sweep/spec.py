@@ -333,46 +333,84 @@ def _int(value, path: str, lo: int = 1) -> int:
 
 
 def _axis_values(name: str, spec, random: bool, samples: int, rng) -> Axis:
-    """Parse ``axes.NAME``; draws the samples of a random sweep."""
+    """Parse ``axes.NAME``; draws the samples of a random sweep.
+
+    The spec forms, each parsed by its own function: a table of tables (a set axis,
+    :func:`_set_axis`), a list or ``{values = [...]}`` (:func:`_listed_values`), and a range
+    ``{min, max}`` with ``num`` or ``step`` in a grid sweep (:func:`_range_bounds`,
+    :func:`_grid_points`). A random sweep draws from each: uniformly in a range, by an equally
+    likely choice from a list or the sets.
+    """
     where = f"axes.{name}"
-    parts = tuple(_split(name))
-    if name in CONVENIENCE:
-        kind = name
-    elif isinstance(spec, dict) and spec and all(isinstance(v, dict) for v in spec.values()):
-        kind = "sets"
-    else:
-        if not all(parts) or not _schema_allows(list(parts)):
-            raise ConfigError(where, "no such setting (see 'imdrive show PRESET' for the keys)")
-        kind = "path"
+    kind = _axis_kind(name, spec, where)
     if kind == "sets":
-        sets = {}
-        for label, table in spec.items():
-            sets[label] = tuple(_flatten(table, f"{where}.{label}"))
-        labels = tuple(sets)
-        if random:
-            labels = tuple(labels[int(k)] for k in rng.integers(0, len(labels), samples))
-        return Axis(name, "sets", labels, sets, choice=random)
-    if isinstance(spec, dict) and "values" in spec:
-        extra = set(spec) - {"values"}
-        if extra:
-            raise ConfigError(f"{where}.{sorted(extra)[0]}", "unknown key (with 'values')")
-        spec = spec["values"]
+        return _set_axis(name, spec, where, random, samples, rng)
+    path = tuple(_split(name)) if kind == "path" else ()
+    spec = _unwrap_values(spec, where)
     if isinstance(spec, list):
-        if not spec:
-            raise ConfigError(where, "is empty: give at least one value")
-        kinds = {
-            type(v) if not isinstance(v, int | float) or isinstance(v, bool) else float
-            for v in spec
-        }
-        if len(kinds) > 1:
-            raise ConfigError(where, "values must all be numbers, all strings or all booleans")
-        values = tuple(spec)
-        if kind in CONVENIENCE:
-            for k, v in enumerate(values):
-                _number(v, f"{where}[{k}]")
+        values = _listed_values(spec, kind, where)
         if random:
-            values = tuple(values[int(k)] for k in rng.integers(0, len(values), samples))
-        return Axis(name, kind, values, path=parts if kind == "path" else (), choice=random)
+            values = _draw(values, samples, rng)
+        return Axis(name, kind, values, path=path, choice=random)
+    lo, hi = _range_bounds(spec, where, random)
+    if random:
+        return Axis(name, kind, tuple(float(v) for v in rng.uniform(lo, hi, samples)), path=path)
+    return Axis(name, kind, _grid_points(spec, lo, hi, where), path=path)
+
+
+def _axis_kind(name: str, spec, where: str) -> str:
+    """``name`` for a convenience axis, ``"sets"`` for a table of tables, else ``"path"``."""
+    if name in CONVENIENCE:
+        return name
+    if isinstance(spec, dict) and spec and all(isinstance(v, dict) for v in spec.values()):
+        return "sets"
+    parts = _split(name)
+    if not all(parts) or not _schema_allows(list(parts)):
+        raise ConfigError(where, "no such setting (see 'imdrive show PRESET' for the keys)")
+    return "path"
+
+
+def _draw(values: tuple, samples: int, rng) -> tuple:
+    """``samples`` equally likely choices from ``values`` (a random sweep's listed axis)."""
+    return tuple(values[int(k)] for k in rng.integers(0, len(values), samples))
+
+
+def _set_axis(name: str, spec: dict, where: str, random: bool, samples: int, rng) -> Axis:
+    """A set axis: each entry of ``spec`` names a table of overrides."""
+    sets = {label: tuple(_flatten(table, f"{where}.{label}")) for label, table in spec.items()}
+    labels = tuple(sets)
+    if random:
+        labels = _draw(labels, samples, rng)
+    return Axis(name, "sets", labels, sets, choice=random)
+
+
+def _unwrap_values(spec, where: str):
+    """The list of ``{values = [...]}`` (nothing else allowed beside it), else ``spec``."""
+    if not (isinstance(spec, dict) and "values" in spec):
+        return spec
+    extra = set(spec) - {"values"}
+    if extra:
+        raise ConfigError(f"{where}.{sorted(extra)[0]}", "unknown key (with 'values')")
+    return spec["values"]
+
+
+def _listed_values(spec: list, kind: str, where: str) -> tuple:
+    """Explicit values: at least one, all of one type; numbers for a convenience axis."""
+    if not spec:
+        raise ConfigError(where, "is empty: give at least one value")
+    kinds = {
+        type(v) if not isinstance(v, int | float) or isinstance(v, bool) else float for v in spec
+    }
+    if len(kinds) > 1:
+        raise ConfigError(where, "values must all be numbers, all strings or all booleans")
+    if kind in CONVENIENCE:
+        for k, v in enumerate(spec):
+            _number(v, f"{where}[{k}]")
+    return tuple(spec)
+
+
+def _range_bounds(spec, where: str, random: bool) -> tuple[float, float]:
+    """Check a range ``{min, max, ...}`` (its keys, both ends, ``min <= max``): ``(min, max)``."""
     if not isinstance(spec, dict):
         if isinstance(spec, int | float) and not isinstance(spec, bool):
             raise ConfigError(where, "a single value is not an axis: write [value] or use [set]")
@@ -391,68 +429,79 @@ def _axis_values(name: str, spec, random: bool, samples: int, rng) -> Axis:
     hi = _number(spec["max"], f"{where}.max")
     if lo > hi:
         raise ConfigError(f"{where}.min", f"must be <= max (min = {lo:g} > max = {hi:g})")
-    if random:
-        values = tuple(float(v) for v in rng.uniform(lo, hi, samples))
-        return Axis(name, kind, values, path=parts if kind == "path" else ())
+    return lo, hi
+
+
+def _grid_points(spec: dict, lo: float, hi: float, where: str) -> tuple[float, ...]:
+    """The points of a grid range: ``num`` points, ends included, or ``lo, lo + step, ...``."""
     if ("num" in spec) == ("step" in spec):
         raise ConfigError(where, "give exactly one of num or step with min and max")
     if "num" in spec:
         num = _int(spec["num"], f"{where}.num", lo=1)
         if num == 1 and lo != hi:
             raise ConfigError(f"{where}.num", "must be >= 2 when min < max")
-        pts = [lo] if num == 1 else [float(v) for v in np.linspace(lo, hi, num)]
-    else:
-        step = _number(spec["step"], f"{where}.step")
-        if step <= 0:
-            raise ConfigError(f"{where}.step", f"must be > 0 (got {step:g})")
-        n = int(math.floor((hi - lo) / step * (1 + 1e-12) + 1e-9)) + 1
-        if n > 1_000_000:
-            raise ConfigError(f"{where}.step", f"gives {n} points (more than 1e6)")
-        pts = [lo + k * step for k in range(n)]
-    return Axis(name, kind, tuple(pts), path=parts if kind == "path" else ())
+        return (lo,) if num == 1 else tuple(float(v) for v in np.linspace(lo, hi, num))
+    step = _number(spec["step"], f"{where}.step")
+    if step <= 0:
+        raise ConfigError(f"{where}.step", f"must be > 0 (got {step:g})")
+    n = int(math.floor((hi - lo) / step * (1 + 1e-12) + 1e-9)) + 1
+    if n > 1_000_000:
+        raise ConfigError(f"{where}.step", f"gives {n} points (more than 1e6)")
+    return tuple(lo + k * step for k in range(n))
 
 
 def _heatmaps(items, axes: tuple[Axis, ...], random: bool) -> tuple[Heatmap, ...]:
-    from imdrive.run.batch import COLUMNS
-
-    names = [a.name for a in axes]
-    metric_cols = [c for c in COLUMNS if c != "drive"]
+    """The ``[[heatmap]]`` tables, checked against the axes and the metric columns."""
     if items is None:
-        numeric = [a.name for a in axes if a.numeric]
-        if len(numeric) < 2:
-            return ()
-        other = [a.name for a in axes if a.name not in numeric[:2]]
-        cat = [a for a in other if not random or _categorical(axes, a)]
-        return (Heatmap(numeric[0], numeric[1], "speed_error_rpm", cat[0] if cat else None),)
+        return _default_heatmaps(axes, random)
     if not isinstance(items, list):
         raise ConfigError("heatmap", "must be an array of tables: [[heatmap]]")
-    out = []
-    for k, h in enumerate(items):
-        where = f"heatmap[{k}]"
-        if not isinstance(h, dict):
-            raise ConfigError(where, "must be a table")
-        extra = set(h) - {"x", "y", "value", "rows", "cols", "agg"}
-        if extra:
-            raise ConfigError(f"{where}.{sorted(extra)[0]}", "unknown key")
-        for key in ("x", "y"):
-            if h.get(key) not in names:
-                raise ConfigError(f"{where}.{key}", f"must name an axis ({', '.join(names)})")
-        for key in ("rows", "cols"):
-            if key in h:
-                if h[key] not in names:
-                    raise ConfigError(f"{where}.{key}", f"must name an axis ({', '.join(names)})")
-                if random and not _categorical(axes, h[key]):
-                    raise ConfigError(
-                        f"{where}.{key}", "in a random sweep, only an axis of listed values or sets"
-                    )
-        value = h.get("value", "speed_error_rpm")
-        if value not in metric_cols:
-            raise ConfigError(f"{where}.value", f"must be a metric ({', '.join(metric_cols)})")
-        agg = h.get("agg", "mean")
-        if agg not in AGGREGATES:
-            raise ConfigError(f"{where}.agg", f"must be one of {', '.join(AGGREGATES)}")
-        out.append(Heatmap(h["x"], h["y"], value, h.get("rows"), h.get("cols"), agg))
-    return tuple(out)
+    return tuple(_heatmap(h, f"heatmap[{k}]", axes, random) for k, h in enumerate(items))
+
+
+def _default_heatmaps(axes: tuple[Axis, ...], random: bool) -> tuple[Heatmap, ...]:
+    """Without ``[[heatmap]]``: the speed error over the first two numeric axes, if any."""
+    numeric = [a.name for a in axes if a.numeric]
+    if len(numeric) < 2:
+        return ()
+    other = [a.name for a in axes if a.name not in numeric[:2]]
+    cat = [a for a in other if not random or _categorical(axes, a)]
+    return (Heatmap(numeric[0], numeric[1], "speed_error_rpm", cat[0] if cat else None),)
+
+
+def _heatmap(h, where: str, axes: tuple[Axis, ...], random: bool) -> Heatmap:
+    """One ``[[heatmap]]`` table."""
+    from imdrive.run.batch import COLUMNS
+
+    if not isinstance(h, dict):
+        raise ConfigError(where, "must be a table")
+    extra = set(h) - {"x", "y", "value", "rows", "cols", "agg"}
+    if extra:
+        raise ConfigError(f"{where}.{sorted(extra)[0]}", "unknown key")
+    names = [a.name for a in axes]
+    for key in ("x", "y"):
+        if h.get(key) not in names:
+            raise ConfigError(f"{where}.{key}", f"must name an axis ({', '.join(names)})")
+    for key in ("rows", "cols"):
+        if key in h:
+            _check_panel_axis(h[key], f"{where}.{key}", axes, random)
+    metric_cols = [c for c in COLUMNS if c != "drive"]
+    value = h.get("value", "speed_error_rpm")
+    if value not in metric_cols:
+        raise ConfigError(f"{where}.value", f"must be a metric ({', '.join(metric_cols)})")
+    agg = h.get("agg", "mean")
+    if agg not in AGGREGATES:
+        raise ConfigError(f"{where}.agg", f"must be one of {', '.join(AGGREGATES)}")
+    return Heatmap(h["x"], h["y"], value, h.get("rows"), h.get("cols"), agg)
+
+
+def _check_panel_axis(name, where: str, axes: tuple[Axis, ...], random: bool) -> None:
+    """``rows``/``cols`` name an axis; in a random sweep one of few values (list or sets)."""
+    names = [a.name for a in axes]
+    if name not in names:
+        raise ConfigError(where, f"must name an axis ({', '.join(names)})")
+    if random and not _categorical(axes, name):
+        raise ConfigError(where, "in a random sweep, only an axis of listed values or sets")
 
 
 def _categorical(axes, name) -> bool:
@@ -461,7 +510,40 @@ def _categorical(axes, name) -> bool:
 
 
 def parse_sweep(text: str, folder: Path | None = None, default_name: str = "sweep") -> Sweep:
-    """Read and validate a sweep from its TOML text (``folder``: where relative paths start)."""
+    """Read and validate a sweep from its TOML text (``folder``: where relative paths start).
+
+    Every run's scenario is built once here (:func:`_validate`), so a sweep that parses runs.
+    """
+    data = _read_toml(text)
+    name, desc = _name_and_description(data, default_name)
+    base_data = _base_data(data, folder)
+    base = Scenario.from_dict(base_data)
+    window_s = _number(data.get("window_s", 0.5), "window_s")
+    if window_s < 0:
+        raise ConfigError("window_s", f"must be >= 0 (got {window_s:g})")
+    chunk_size = _int(data.get("chunk_size", DEFAULT_CHUNK), "chunk_size")
+    random, samples, seed = _sampling(data)
+    axes = _axes(data.get("axes"), random, samples, np.random.default_rng(seed))
+    sweep = Sweep(
+        name=name,
+        description=desc,
+        base=base,
+        base_data=base_data,
+        axes=axes,
+        random=random,
+        n_runs=samples if random else math.prod(len(a.values) for a in axes),
+        seed=seed,
+        window_s=window_s,
+        chunk_size=chunk_size,
+        heatmaps=_heatmaps(data.get("heatmap"), axes, random),
+        source=text,
+    )
+    _validate(sweep)
+    return sweep
+
+
+def _read_toml(text: str) -> dict:
+    """The sweep file as a dictionary, with only known top-level keys."""
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -469,11 +551,20 @@ def parse_sweep(text: str, folder: Path | None = None, default_name: str = "swee
     for key in data:
         if key not in TOP_KEYS:
             raise ConfigError(key, f"unknown key (a sweep file has {', '.join(TOP_KEYS)})")
+    return data
+
+
+def _name_and_description(data: dict, default_name: str) -> tuple[str, str]:
     name = data.get("name", default_name)
     desc = data.get("description", "")
     for key, v in (("name", name), ("description", desc)):
         if not isinstance(v, str):
             raise ConfigError(key, "must be a string")
+    return name, desc
+
+
+def _base_data(data: dict, folder: Path | None) -> dict:
+    """The base scenario's TOML dictionary with the ``[set]`` overrides applied."""
     if "base" not in data:
         raise ConfigError("base", "is required: a scenario preset name or a scenario file")
     base_ref = data["base"]
@@ -490,54 +581,36 @@ def parse_sweep(text: str, folder: Path | None = None, default_name: str = "swee
         raise ConfigError("set", "must be a table of scenario keys")
     for parts, value in _flatten(sets, "set"):
         _set_data(base_data, parts, value)
-    base = Scenario.from_dict(base_data)
+    return base_data
 
-    window_s = _number(data.get("window_s", 0.5), "window_s")
-    if window_s < 0:
-        raise ConfigError("window_s", f"must be >= 0 (got {window_s:g})")
-    chunk_size = _int(data.get("chunk_size", DEFAULT_CHUNK), "chunk_size")
+
+def _sampling(data: dict) -> tuple[bool, int, int]:
+    """``(random, samples, seed)``: a random sweep has ``samples``; only it has a ``seed``."""
     random = "samples" in data
     samples = _int(data["samples"], "samples") if random else 0
     seed = _int(data.get("seed", 0), "seed", lo=0)
     if "seed" in data and not random:
         raise ConfigError("seed", "only for a random sweep (with samples = N)")
-    rng = np.random.default_rng(seed)
+    return random, samples, seed
 
-    axes_spec = data.get("axes")
-    if not isinstance(axes_spec, dict) or not axes_spec:
+
+def _axes(spec, random: bool, samples: int, rng) -> tuple[Axis, ...]:
+    """Every axis of ``[axes]``, in file order; no two may set the same scenario key."""
+    if not isinstance(spec, dict) or not spec:
         raise ConfigError("axes", "is required and needs at least one axis")
-    axes = tuple(_axis_values(n, s, random, samples, rng) for n, s in axes_spec.items())
+    axes = tuple(_axis_values(n, s, random, samples, rng) for n, s in spec.items())
     targets: dict[str, str] = {}
     for a in axes:
-        keys = (
-            [".".join(a.path)]
-            if a.kind == "path"
-            else [CONVENIENCE_TARGET[a.kind]]
-            if a.kind in CONVENIENCE
-            else []
-        )
-        for key in keys:
-            if key in targets:
-                raise ConfigError(f"axes.{a.name}", f"sets {key}, as axis {targets[key]} does")
-            targets[key] = a.name
-    n_runs = samples if random else math.prod(len(a.values) for a in axes)
-    heatmaps = _heatmaps(data.get("heatmap"), axes, random)
-    sweep = Sweep(
-        name=name,
-        description=desc,
-        base=base,
-        base_data=base_data,
-        axes=axes,
-        random=random,
-        n_runs=n_runs,
-        seed=seed,
-        window_s=window_s,
-        chunk_size=chunk_size,
-        heatmaps=heatmaps,
-        source=text,
-    )
-    _validate(sweep)
-    return sweep
+        if a.kind == "path":
+            key = ".".join(a.path)
+        elif a.kind in CONVENIENCE:
+            key = CONVENIENCE_TARGET[a.kind]
+        else:
+            continue
+        if key in targets:
+            raise ConfigError(f"axes.{a.name}", f"sets {key}, as axis {targets[key]} does")
+        targets[key] = a.name
+    return axes
 
 
 def _validate(sweep: Sweep) -> None:
