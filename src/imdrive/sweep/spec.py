@@ -15,21 +15,21 @@ kernels.
 from __future__ import annotations
 
 import copy
+import functools
 import hashlib
 import json
 import math
 import tomllib
-import typing
-from dataclasses import dataclass, field, is_dataclass, replace
+from dataclasses import dataclass, field, fields, is_dataclass, replace
 from importlib import resources
 from pathlib import Path
 
 import numpy as np
 
-from imdrive.config.overrides import _schema_allows
+from imdrive.config.overrides import is_setting, set_path
 from imdrive.config.presets import scenario_text
 from imdrive.config.profiles import Profile
-from imdrive.config.scenario import SECTIONS, Scenario, _convert
+from imdrive.config.scenario import Scenario
 from imdrive.errors import ConfigError
 
 CONVENIENCE = ("R2_ratio", "speed_rpm", "load_Nm")
@@ -102,7 +102,7 @@ class Sweep:
     name: str
     description: str
     base: Scenario
-    base_data: dict  # TOML-shaped base (after [set]), to rebuild on a machine.preset change
+    base_data: dict  # TOML-shaped base (after [set]): every run's overrides are set on a copy
     axes: tuple[Axis, ...]
     random: bool
     n_runs: int
@@ -111,6 +111,8 @@ class Sweep:
     chunk_size: int
     heatmaps: tuple[Heatmap, ...]
     source: str = ""
+    # validated scenarios by value of the set and key-path axes (see _overridden)
+    _scenarios: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     # -- runs ------------------------------------------------------------------------------
     @property
@@ -170,36 +172,26 @@ class Sweep:
 
 # ------------------------------------------------------------------------------------------
 # building a run's scenario
+#
+# One override mechanism, shared with ``imdrive run --set`` (imdrive.config.overrides): the set
+# axes' overrides, then the key-path axes, are set on a copy of the base's TOML dictionary,
+# which Scenario.from_dict validates once. Runs that differ only in convenience axes share that
+# scenario (cached on the sweep), and the convenience axes replace single fields of it.
 
-
-_HINTS: dict[type, dict] = {}
-
-
-def _hints(cls) -> dict:
-    if cls not in _HINTS:
-        _HINTS[cls] = typing.get_type_hints(cls)
-    return _HINTS[cls]
-
-
-def _set_field(obj, parts: tuple[str, ...], value, path: str):
-    """``obj`` (a frozen dataclass) with the field at ``parts`` set to ``value`` (validated)."""
-    name = parts[0]
-    if len(parts) == 1:
-        return replace(obj, **{name: _convert(_hints(type(obj))[name], value, path)})
-    return replace(obj, **{name: _set_field(getattr(obj, name), parts[1:], value, path)})
+_CACHE_MAX = 1024  # validated scenarios kept per sweep (distinct set / key-path values)
 
 
 def _apply(sc: Scenario, parts: tuple[str, ...], value) -> Scenario:
-    """Scenario ``sc`` with the key ``parts`` set, as ``Scenario.read`` with that override."""
-    path = ".".join(parts)
-    if len(parts) == 1:  # name, description
-        if not isinstance(value, str):
-            raise ConfigError(path, "must be a string")
-        return replace(sc, **{parts[0]: value})
-    if parts[0] == "machine":
-        v = _convert(_hints(type(sc.machine))[parts[1]], value, path)
-        return replace(sc, machine=replace(sc.machine, **{parts[1]: v}))
-    return _set_field(sc, parts, value, path)
+    """Scenario ``sc`` with the key ``parts`` set, as ``Scenario.read`` with that override.
+
+    Goes through :func:`~imdrive.config.overrides.set_path` on ``sc.to_dict()``. A new
+    ``machine.preset`` replaces every machine parameter with the preset's.
+    """
+    data = sc.to_dict()
+    if tuple(parts) == ("machine", "preset"):
+        data["machine"] = {}
+    set_path(data, parts, value)
+    return Scenario.from_dict(data)
 
 
 def _with_final(profile: Profile, value: float) -> Profile:
@@ -207,6 +199,23 @@ def _with_final(profile: Profile, value: float) -> Profile:
     pts = list(profile.points)
     pts[-1] = (pts[-1][0], float(value))
     return Profile(tuple(pts))
+
+
+def _with_R2_ratio(sc: Scenario, ratio: float) -> Scenario:
+    return replace(sc, estimator=replace(sc.estimator, R2_ohm=ratio * sc.machine.R2_ohm))
+
+
+def _with_speed(sc: Scenario, rpm: float) -> Scenario:
+    profile = _with_final(sc.control.speed_ref_rpm, rpm)
+    return replace(sc, control=replace(sc.control, speed_ref_rpm=profile))
+
+
+def _with_load(sc: Scenario, torque: float) -> Scenario:
+    return replace(sc, load=replace(sc.load, torque_Nm=_with_final(sc.load.torque_Nm, torque)))
+
+
+# the convenience axes, applied in this order after the overrides
+CONVENIENCE_APPLY = {"R2_ratio": _with_R2_ratio, "speed_rpm": _with_speed, "load_Nm": _with_load}
 
 
 def _number(value, path: str) -> float:
@@ -217,35 +226,32 @@ def _number(value, path: str) -> float:
 
 def _build(sweep: Sweep, point: dict) -> Scenario:
     """The scenario of one point (axis name -> value) of ``sweep``."""
-    overrides: list[tuple[tuple[str, ...], object]] = []
-    for a in sweep.axes:
-        if a.kind == "sets":
-            overrides.extend(a.sets[point[a.name]])
-    for a in sweep.axes:
-        if a.kind == "path":
-            overrides.append((a.path, point[a.name]))
-    preset = [v for p, v in overrides if p == ("machine", "preset")]
-    sc = sweep.base
-    if preset:
+    sc = _overridden(sweep, point)
+    for kind, apply in CONVENIENCE_APPLY.items():
+        for a in sweep.axes:
+            if a.kind == kind:
+                sc = apply(sc, _number(point[a.name], f"axes.{a.name}"))
+    return sc
+
+
+def _overridden(sweep: Sweep, point: dict) -> Scenario:
+    """The base with the set axes' overrides, then the key-path axes, of ``point`` (cached)."""
+    axes = [a for a in sweep.axes if a.kind in ("sets", "path")]
+    key = tuple(repr(point[a.name]) for a in axes)
+    sc = sweep._scenarios.get(key)
+    if sc is None:
         data = copy.deepcopy(sweep.base_data)
-        data.setdefault("machine", {})["preset"] = preset[-1]
+        for a in axes:
+            if a.kind == "sets":
+                for parts, value in a.sets[point[a.name]]:
+                    set_path(data, parts, value)
+        for a in axes:
+            if a.kind == "path":
+                set_path(data, a.path, point[a.name])
         sc = Scenario.from_dict(data)
-    for parts, value in overrides:
-        if parts != ("machine", "preset"):
-            sc = _apply(sc, parts, value)
-    for a in sweep.axes:
-        if a.kind == "R2_ratio":
-            r = _number(point[a.name], f"axes.{a.name}")
-            sc = _apply(sc, ("estimator", "R2_ohm"), r * sc.machine.R2_ohm)
-        elif a.kind == "speed_rpm":
-            v = _number(point[a.name], f"axes.{a.name}")
-            sc = replace(
-                sc,
-                control=replace(sc.control, speed_ref_rpm=_with_final(sc.control.speed_ref_rpm, v)),
-            )
-        elif a.kind == "load_Nm":
-            v = _number(point[a.name], f"axes.{a.name}")
-            sc = replace(sc, load=replace(sc.load, torque_Nm=_with_final(sc.load.torque_Nm, v)))
+        if len(sweep._scenarios) >= _CACHE_MAX:
+            sweep._scenarios.clear()
+        sweep._scenarios[key] = sc
     return sc
 
 
@@ -291,10 +297,10 @@ def _flatten(table: dict, where: str, prefix: tuple[str, ...] = ()) -> list:
         parts = (*prefix, *_split(key))
         if not all(parts):
             raise ConfigError(f"{where}.{key}", "empty part in a key path")
-        if isinstance(value, dict) and _is_section_path(parts):
+        if isinstance(value, dict) and _is_table(parts):
             out.extend(_flatten(value, where, parts))
             continue
-        if not _schema_allows(list(parts)):
+        if not is_setting(parts):
             raise ConfigError(
                 f"{where}.{'.'.join(parts)}",
                 "no such setting (see 'imdrive show PRESET' for the keys)",
@@ -303,26 +309,25 @@ def _flatten(table: dict, where: str, prefix: tuple[str, ...] = ()) -> list:
     return out
 
 
-def _is_section_path(parts) -> bool:
-    """Whether ``parts`` names a table of the schema (a section or a nested settings table)."""
-    if len(parts) == 1:
-        return parts[0] in SECTIONS or parts[0] == "machine"
-    cls = SECTIONS.get(parts[0])
-    for p in parts[1:]:
-        if cls is None or p not in _hints(cls):
+@functools.cache
+def _default_scenario() -> Scenario:
+    return Scenario.from_dict({})
+
+
+def _is_table(parts) -> bool:
+    """Whether ``parts`` names a table of settings (``machine``, ``compensator``,
+    ``plant.thermal``, ...) rather than a value, read from the shape of a default scenario: a
+    profile, even when written as a table, is a value."""
+    node = _default_scenario()
+    for p in parts:
+        if not _is_settings(node) or p not in {f.name for f in fields(node)}:
             return False
-        cls = _hints(cls)[p]
-    return isinstance(cls, type) and is_dataclass(cls) and cls is not Profile
+        node = getattr(node, p)
+    return _is_settings(node)
 
 
-def _set_data(data: dict, parts, value) -> None:
-    node = data
-    for p in parts[:-1]:
-        nxt = node.setdefault(p, {})
-        if not isinstance(nxt, dict):
-            raise ConfigError(".".join(parts), f"{p} is not a table")
-        node = nxt
-    node[parts[-1]] = value
+def _is_settings(obj) -> bool:
+    return is_dataclass(obj) and not isinstance(obj, type | Profile)
 
 
 def _int(value, path: str, lo: int = 1) -> int:
@@ -365,7 +370,7 @@ def _axis_kind(name: str, spec, where: str) -> str:
     if isinstance(spec, dict) and spec and all(isinstance(v, dict) for v in spec.values()):
         return "sets"
     parts = _split(name)
-    if not all(parts) or not _schema_allows(list(parts)):
+    if not is_setting(parts):
         raise ConfigError(where, "no such setting (see 'imdrive show PRESET' for the keys)")
     return "path"
 
@@ -580,7 +585,7 @@ def _base_data(data: dict, folder: Path | None) -> dict:
     if not isinstance(sets, dict):
         raise ConfigError("set", "must be a table of scenario keys")
     for parts, value in _flatten(sets, "set"):
-        _set_data(base_data, parts, value)
+        set_path(base_data, parts, value)
     return base_data
 
 
