@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from imdrive._io import atomic_path
 from imdrive.sweep.spec import Heatmap, Sweep
 
 SIGNED_METRICS = ("speed_error_rpm", "speed_est_error_rpm", "R2_error_pct")
@@ -120,6 +121,7 @@ def save_heatmaps(sweep: Sweep, df, folder: Path) -> list[Path]:
         extra = "".join(f"_by_{n}" for n in (h.rows, h.cols) if n)
         name = f"{h.value}__{h.y}_vs_{h.x}{extra}.png".replace("/", "_")
         path = folder / name
-        fig.savefig(path, dpi=110)
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, dpi=110, format="png")
         written.append(path)
     return written

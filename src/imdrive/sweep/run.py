@@ -119,8 +119,7 @@ def run_sweep(
         own_client = False
     store.chunks.mkdir(parents=True, exist_ok=True)
     store.clean_partials()
-    if sweep.source and not (store.root / "sweep.toml").exists():
-        store._atomic_write(store.root / "sweep.toml", lambda p: p.write_text(sweep.source))
+    store.write_source(sweep)
     store.write_manifest(sweep, cs, started)
     done = store.completed()
     pending = [j for j in range(sweep.n_chunks(cs)) if j not in done]

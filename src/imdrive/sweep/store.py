@@ -9,12 +9,12 @@ chunks. :func:`open_store` checks that a non-empty folder is the same sweep befo
 from __future__ import annotations
 
 import json
-import os
 import time
 from pathlib import Path
 
 import numpy as np
 
+from imdrive._io import atomic_path, atomic_write_text, remove_partials
 from imdrive.errors import ConfigError
 from imdrive.sweep.spec import Sweep
 
@@ -50,11 +50,6 @@ class Store:
         except (OSError, ValueError) as exc:
             raise ConfigError("--resume", f"cannot read {p}: {exc}") from None
 
-    def _atomic_write(self, path: Path, write) -> None:
-        tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-        write(tmp)
-        os.replace(tmp, path)
-
     def write_manifest(self, sweep: Sweep, chunk_size: int, started: float) -> None:
         done = sorted(self.completed())
         info = {
@@ -70,20 +65,21 @@ class Store:
             "started": started,
             "updated": time.time(),
         }
-        self._atomic_write(
-            self.root / self.MANIFEST,
-            lambda p: p.write_text(json.dumps(info, indent=2) + "\n"),
-        )
+        atomic_write_text(self.root / self.MANIFEST, json.dumps(info, indent=2) + "\n")
+
+    def write_source(self, sweep: Sweep) -> None:
+        """Keep the sweep file's text beside the results (once: a resume does not rewrite it)."""
+        if sweep.source and not (self.root / "sweep.toml").exists():
+            atomic_write_text(self.root / "sweep.toml", sweep.source)
 
     def write_chunk(self, j: int, df) -> None:
-        self._atomic_write(self.chunk_path(j), lambda p: df.to_parquet(p, index=False))
+        with atomic_path(self.chunk_path(j)) as tmp:
+            df.to_parquet(tmp, index=False)
 
     def clean_partials(self) -> None:
+        """Delete the temporary files of chunks and manifests that a killed sweep left."""
         for folder in (self.root, self.chunks):
-            if folder.is_dir():
-                for p in folder.iterdir():
-                    if p.name.startswith(".") and ".tmp-" in p.name:
-                        p.unlink(missing_ok=True)
+            remove_partials(folder)
 
     def consolidate(self, sweep: Sweep, chunk_size: int):
         import pandas as pd
@@ -93,7 +89,8 @@ class Store:
         df = df.reset_index(drop=True)
         if len(df) != sweep.n_runs or not np.array_equal(df["run"], np.arange(sweep.n_runs)):
             raise RuntimeError(f"{self.root}: the chunks do not hold every run exactly once")
-        self._atomic_write(self.root / "runs.parquet", lambda p: df.to_parquet(p, index=False))
+        with atomic_path(self.root / "runs.parquet") as tmp:
+            df.to_parquet(tmp, index=False)
         return df
 
 
