@@ -159,9 +159,9 @@ def test_killed_writer_leaves_only_partials_which_are_removable(tmp_path):
     remove_partials(tmp_path / "missing")  # no folder: nothing to do
 
 
-def test_io_imports_nothing_of_imdrive():
+def test_io_and_progress_import_nothing_of_imdrive():
     src = Path(_io.__file__).parent
-    for name in ("_io.py",):
+    for name in ("_io.py", "_progress.py"):
         tree = ast.parse((src / name).read_text())
         for node in ast.walk(tree):
             if isinstance(node, ast.Import):

@@ -8,12 +8,10 @@ process or machine computed it.
 
 from __future__ import annotations
 
-import math
-import sys
-import time
 import uuid
 from pathlib import Path
 
+from imdrive._progress import Progress
 from imdrive.errors import ConfigError
 from imdrive.sweep.figures import save_heatmaps
 from imdrive.sweep.spec import Sweep, _int
@@ -38,57 +36,6 @@ def run_chunk(sweep: Sweep, j: int, chunk_size: int | None = None, parallel: boo
 def _dask_chunk(sweep: Sweep, j: int, chunk_size: int):
     """Task body on a dask worker: one thread, no GIL (the worker's own parallelism rules)."""
     return j, run_chunk(sweep, j, chunk_size, parallel=False)
-
-
-class Progress:
-    """A plain progress bar on stderr, drawn only when stderr is a terminal."""
-
-    def __init__(self, total: int, label: str, enabled: bool | None = None, stream=None):
-        self.stream = stream or sys.stderr
-        self.enabled = self.stream.isatty() if enabled is None else enabled
-        self.total = total
-        self.label = label
-        self.done = 0
-        self.start_done = 0
-        self.t0 = time.perf_counter()
-
-    def start(self, done: int) -> None:
-        self.done = self.start_done = done
-        self.t0 = time.perf_counter()
-        self._draw()
-
-    def advance(self, n: int) -> None:
-        self.done += n
-        self._draw()
-
-    def close(self) -> None:
-        if self.enabled:
-            self.stream.write("\n")
-            self.stream.flush()
-
-    def _draw(self) -> None:
-        if not self.enabled:
-            return
-        frac = self.done / self.total if self.total else 1.0
-        width = 30
-        bar = "#" * int(round(frac * width))
-        el = time.perf_counter() - self.t0
-        new = self.done - self.start_done
-        eta = el / new * (self.total - self.done) if new else float("nan")
-        self.stream.write(
-            f"\r{self.label} [{bar:<{width}}] {self.done}/{self.total} runs {100 * frac:3.0f}% "
-            f"{_hms(el)} elapsed, ETA {_hms(eta)}  "
-        )
-        self.stream.flush()
-
-
-def _hms(s: float) -> str:
-    if not math.isfinite(s):
-        return "--:--"
-    s = int(round(s))
-    h, rem = divmod(s, 3600)
-    m, sec = divmod(rem, 60)
-    return f"{h}:{m:02d}:{sec:02d}" if h else f"{m:02d}:{sec:02d}"
 
 
 def run_sweep(
@@ -123,7 +70,7 @@ def run_sweep(
     store.write_manifest(sweep, cs, started)
     done = store.completed()
     pending = [j for j in range(sweep.n_chunks(cs)) if j not in done]
-    bar = Progress(sweep.n_runs, f"sweep {sweep.name}", enabled=progress)
+    bar = Progress(sweep.n_runs, f"sweep {sweep.name}", unit="runs", enabled=progress)
     bar.start(sum(len(sweep.chunk_runs(j, cs)) for j in done if j < sweep.n_chunks(cs)))
     try:
         if client is None:
