@@ -3,6 +3,7 @@
 Bad input (an unknown preset, key or type, a value that breaks a rule) prints one line naming
 the field and the rule on stderr and exits with code 2, with nothing written. A run that
 diverges writes its partial results, marked ``"diverged": true`` in summary.json, and exits 1.
+A sweep records its diverging runs in its table (``diverged``, ``status``) and exits 0.
 """
 
 from __future__ import annotations

@@ -1,10 +1,10 @@
 """Parameter sweeps: many runs of one base scenario, on this machine or on a dask cluster.
 
 ``imdrive sweep SWEEP --out STORE`` reads a sweep file (or a built-in sweep by name, e.g.
-``detuning-map``), runs every point with the batch engine (:mod:`imdrive.batch`) and writes a
-tidy Parquet table, one row per run: the run index, the value of every axis and the summary
-metrics of :mod:`imdrive.batch` (speed error, estimate error, ripple, R2 estimate and its error,
-convergence time, peak current, divergence), plus heatmap figures.
+``detuning-map``), runs every point with the batch engine (:mod:`imdrive.run.batch`) and
+writes a tidy Parquet table, one row per run: the run index, the value of every axis and the
+summary metrics of :mod:`imdrive.run.batch` (speed error, estimate error, ripple, R2 estimate
+and its error, convergence time, peak current, divergence), plus heatmap figures.
 
 Sweep file (TOML)
 -----------------
@@ -56,7 +56,8 @@ Axes
     * any name whose value is a table of tables — a set axis: each entry names a set of
       overrides (``{}`` for none), its name is what the table records.
 
-    For each run, a set axis's overrides are applied first, then the key-path axes, then
+    For each run, a set axis's overrides are applied first, then the key-path axes (set on the
+    base's TOML dictionary and validated once, as ``imdrive run --set`` does), then
     ``R2_ratio``, ``speed_rpm``, ``load_Nm``. Two axes may not set the same key.
 
 Bad input (an unknown key or parameter, an empty axis, ``min > max``, a value a scenario

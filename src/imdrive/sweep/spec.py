@@ -8,8 +8,12 @@ Every run's scenario is built and validated when the sweep is read, so bad input
 
 Notes
 -----
-Pure Python on top of :mod:`imdrive.config`: reading a sweep imports neither numba nor the
-kernels.
+A run's scenario goes through the same override mechanism as ``imdrive run --set``
+(:func:`imdrive.config.overrides.set_path` on the base's TOML dictionary, then
+:meth:`Scenario.from_dict <imdrive.config.scenario.Scenario.from_dict>`); only the convenience
+axes ``R2_ratio``, ``speed_rpm`` and ``load_Nm`` then replace fields of the validated scenario.
+Pure Python on top of :mod:`imdrive.config`; only checking the metric names of ``[[heatmap]]``
+tables loads the run layer (:data:`imdrive.run.batch.COLUMNS`).
 """
 
 from __future__ import annotations
@@ -87,6 +91,9 @@ class Axis:
 
 @dataclass(frozen=True)
 class Heatmap:
+    """One ``[[heatmap]]``: metric ``value`` over axes ``x`` and ``y``, panels by ``rows`` and
+    ``cols``, the other axes aggregated by ``agg``."""
+
     x: str
     y: str
     value: str = "speed_error_rpm"
@@ -97,7 +104,11 @@ class Heatmap:
 
 @dataclass(frozen=True)
 class Sweep:
-    """A resolved sweep: base scenario, axes, number of runs. Picklable (sent to dask)."""
+    """A resolved sweep: base scenario, axes, number of runs. Picklable (sent to dask).
+
+    Runs that share the values of the set and key-path axes share one validated scenario
+    (kept, up to a bound, in ``_scenarios``); the convenience axes are applied to it per run.
+    """
 
     name: str
     description: str

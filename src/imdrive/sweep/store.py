@@ -1,9 +1,10 @@
 """The sweep store: a folder of Parquet chunks, a manifest, and resuming.
 
 ``STORE/chunks/chunk-NNNNNN.parquet`` holds runs ``[N*chunk_size, (N+1)*chunk_size)``; each
-chunk, then ``STORE/manifest.json``, is written atomically, so a killed sweep leaves only whole
-chunks. :func:`open_store` checks that a non-empty folder is the same sweep before resuming it;
-:meth:`Store.consolidate` writes ``STORE/runs.parquet``, every run exactly once, sorted.
+chunk, then ``STORE/manifest.json``, is written atomically (:mod:`imdrive._io`), so a killed
+sweep leaves only whole chunks. :func:`open_store` checks that a non-empty folder is the same
+sweep before resuming it; :meth:`Store.consolidate` writes ``STORE/runs.parquet``, every run
+exactly once, sorted.
 """
 
 from __future__ import annotations
@@ -95,6 +96,11 @@ class Store:
 
 
 def open_store(sweep: Sweep, out: Path, resume: bool, chunk_size: int | None) -> tuple:
+    """``(store, chunk_size, started)`` for writing ``sweep`` into the folder ``out``.
+
+    A non-empty ``out`` needs ``resume`` and must hold the same sweep (same fingerprint), with
+    the same chunk size; a resumed store keeps its chunk size and start time.
+    """
     store = Store(out)
     if out.exists() and not out.is_dir():
         raise ConfigError("--out", f"{out} exists and is not a folder")
