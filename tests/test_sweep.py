@@ -295,13 +295,13 @@ def test_progress_bar_only_on_a_terminal():
     from imdrive.sweep import Progress
 
     quiet = io.StringIO()  # not a terminal
-    p = Progress(10, "sweep x", stream=quiet)
+    p = Progress(10, "sweep x", unit="runs", stream=quiet)
     p.start(0)
     p.advance(5)
     p.close()
     assert quiet.getvalue() == ""
     tty = io.StringIO()
-    p = Progress(10, "sweep x", enabled=True, stream=tty)
+    p = Progress(10, "sweep x", unit="runs", enabled=True, stream=tty)
     p.start(2)
     p.advance(8)
     p.close()

@@ -3,6 +3,7 @@
 Bad input (an unknown preset, key or type, a value that breaks a rule) prints one line naming
 the field and the rule on stderr and exits with code 2, with nothing written. A run that
 diverges writes its partial results, marked ``"diverged": true`` in summary.json, and exits 1.
+A sweep records its diverging runs in its table (``diverged``, ``status``) and exits 0.
 """
 
 from __future__ import annotations
@@ -10,10 +11,10 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+import tomllib
 from pathlib import Path
 
 from imdrive.errors import ConfigError
-from imdrive.sweep import add_sweep_parser
 
 EXIT_OK = 0
 EXIT_DIVERGED = 1
@@ -130,6 +131,53 @@ def _cmd_paper(args) -> int:
     return EXIT_OK
 
 
+def _cmd_sweep(args) -> int:
+    from imdrive.sweep import load_sweep, run_sweep, sweep_names, sweep_text
+
+    if args.list:
+        for n in sweep_names():
+            text, _ = sweep_text(n)
+            desc = tomllib.loads(text).get("description", "")
+            print(f"  {n:<22} {desc}")
+        return EXIT_OK
+    if not args.sweep:
+        raise ConfigError("sweep", "name a built-in sweep (see --list) or a sweep file")
+    if args.show:
+        sys.stdout.write(sweep_text(args.sweep)[0])
+        return EXIT_OK
+    if args.chunk_size is not None and args.chunk_size < 1:
+        raise ConfigError("--chunk-size", f"must be >= 1 (got {args.chunk_size})")
+    sweep = load_sweep(args.sweep)
+    out = Path(args.out) if args.out else Path("out") / f"sweep-{sweep.name}"
+    cs = args.chunk_size or sweep.chunk_size
+    if args.dry_run:
+        print(
+            f"sweep {sweep.name}: {sweep.n_runs} runs "
+            f"({' x '.join(str(n) for n in sweep.shape) if not sweep.random else 'random'}), "
+            f"{sweep.n_chunks(cs)} chunks of {cs}, axes: {', '.join(a.name for a in sweep.axes)}"
+        )
+        return EXIT_OK
+    t0 = time.perf_counter()
+    df = run_sweep(
+        sweep,
+        out,
+        scheduler=args.scheduler,
+        resume=args.resume,
+        chunk_size=args.chunk_size,
+        figures=not args.no_figures,
+        progress=None if not args.quiet else False,
+    )
+    if not args.quiet:
+        n_div = int(df["diverged"].sum())
+        print(
+            f"imdrive: sweep {sweep.name}: {len(df)} runs ({n_div} diverged) in "
+            f"{time.perf_counter() - t0:.1f} s -> {out / 'runs.parquet'}",
+            file=sys.stderr,
+        )
+    # diverged runs are results of the sweep (recorded in the table), not a failure
+    return EXIT_OK
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="imdrive", description="Simulate sensorless induction-motor drives.")
     p.add_argument("--version", action="version", version=_version())
@@ -172,7 +220,24 @@ def build_parser() -> argparse.ArgumentParser:
         help="list the cells where the rule-compiled table differs from the printed one",
     )
     ft.set_defaults(func=_cmd_fuzzy_table)
-    add_sweep_parser(sub)
+
+    sw = sub.add_parser(
+        "sweep",
+        help="run a parameter sweep into a Parquet store",
+        description="Run a sweep (a built-in one by name, or a sweep TOML file): a Parquet "
+        "table of summary metrics, one row per run, and heatmap figures.",
+    )
+    sw.add_argument("sweep", nargs="?", metavar="SWEEP_OR_FILE")
+    sw.add_argument("--out", metavar="STORE", help="store folder (default out/sweep-NAME)")
+    sw.add_argument("--scheduler", metavar="ADDRESS", help="dask.distributed scheduler address")
+    sw.add_argument("--resume", action="store_true", help="continue an interrupted sweep")
+    sw.add_argument("--chunk-size", type=int, metavar="N", help="runs per chunk (default 32)")
+    sw.add_argument("--no-figures", action="store_true", help="skip the heatmap PNGs")
+    sw.add_argument("--dry-run", action="store_true", help="validate, print the size, run nothing")
+    sw.add_argument("--list", action="store_true", help="list the built-in sweeps")
+    sw.add_argument("--show", action="store_true", help="print the sweep file")
+    sw.add_argument("-q", "--quiet", action="store_true")
+    sw.set_defaults(func=_cmd_sweep)
     return p
 
 

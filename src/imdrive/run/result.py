@@ -4,9 +4,7 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import platform
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -290,24 +288,19 @@ class SimulationResult:
         """Write ``timeseries.csv``, ``summary.json`` and PNG figures into ``out_dir``.
 
         Files are first written to a temporary folder inside ``out_dir`` and moved in place at
-        the end, ``summary.json`` last, so an interrupted write never looks complete.
+        the end, ``summary.json`` last (an older ``summary.json`` is removed first), so an
+        interrupted write never looks complete (:class:`imdrive._io.AtomicFolder`).
         """
-        out = Path(out_dir)
-        out.mkdir(parents=True, exist_ok=True)
+        from imdrive._io import AtomicFolder
+
         figures = self.scenario.output.figures if figures is None else figures
         csv = self.scenario.output.csv if csv is None else csv
-        written = []
-        with tempfile.TemporaryDirectory(dir=out, prefix=".partial-") as tmp:
-            tmp = Path(tmp)
+        with AtomicFolder(out_dir, marker="summary.json") as staging:
             if csv:
-                self.to_csv(tmp / "timeseries.csv")
+                self.to_csv(staging.path / "timeseries.csv")
             if figures:
                 from imdrive.run.plots import save_figures
 
-                save_figures(self, tmp)
-            (tmp / "summary.json").write_text(json.dumps(self.summary(), indent=2) + "\n")
-            names = sorted(p.name for p in tmp.iterdir() if p.name != "summary.json")
-            for name in [*names, "summary.json"]:
-                os.replace(tmp / name, out / name)
-                written.append(out / name)
-        return written
+                save_figures(self, staging.path)
+            (staging.path / "summary.json").write_text(json.dumps(self.summary(), indent=2) + "\n")
+        return staging.written

@@ -18,8 +18,6 @@ those tables, so a notebook can call them one by one.
 from __future__ import annotations
 
 import json
-import sys
-import time
 from collections.abc import Callable
 from pathlib import Path
 
@@ -28,6 +26,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from imdrive import analysis
+from imdrive._progress import Progress
 from imdrive.config.machine import machine_preset
 from imdrive.config.scenario import Scenario
 from imdrive.run.metrics import steady_means
@@ -343,26 +342,28 @@ def figure_thermal(res) -> Figure:
 # everything at once
 
 
-def _progress_printer(total: int) -> Callable[[str], None]:
-    state = {"k": 0, "t0": time.perf_counter()}
-
-    def progress(msg: str) -> None:
-        state["k"] += 1
-        dt = time.perf_counter() - state["t0"]
-        print(f"[{state['k']:>2}/{total}] {dt:6.1f} s  {msg}", file=sys.stderr, flush=True)
-
-    return progress
+# one line per step: "[ 3/15]   41.2 s  steady-state e_d0 vs Ts" (the step now running)
+STEP_FORMAT = "[{n:>2}/{total}] {elapsed_s:6.1f} s  {desc}"
 
 
 def run_all(out_dir, progress: Callable[[str], None] | None = None) -> dict:
     """Regenerate every figure and table of the reproduction into ``out_dir``.
 
-    Returns the summary written to ``out_dir/results.json``.
+    ``progress`` is called with the name of each step as it starts; by default the steps are
+    shown on stderr (:class:`imdrive._progress.Progress`, :data:`STEP_FORMAT`). Returns the
+    summary written to ``out_dir/results.json``.
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
+    if progress is not None:
+        return _run_all(out, progress)
     steps = len(COMPENSATION_PRESETS) + 7
-    progress = progress or _progress_printer(steps)
+    # on stderr always: drawn in place on a terminal, one line per step in a log
+    with Progress(steps, unit="steps", enabled=True, lines=None, bar_format=STEP_FORMAT) as bar:
+        return _run_all(out, lambda msg: bar.advance(1, note=msg))
+
+
+def _run_all(out: Path, progress: Callable[[str], None]) -> dict:
     results: dict = {}
 
     comp = compensation_table(out, progress)

@@ -1,0 +1,173 @@
+"""Atomic writes: a file, or a folder's set of files, appears whole or not at all.
+
+Everything imdrive writes for later reading (a run's folder, a sweep's chunks, manifest and
+table) goes through this module, so an interrupted or killed process never leaves a file or a
+folder that looks complete but is not.
+
+Functions and classes
+---------------------
+atomic_path
+    Context manager: a temporary path beside the target for writers that take a path
+    (``DataFrame.to_parquet``, ``Figure.savefig``); renamed onto the target on success.
+atomic_write_text, atomic_write_bytes
+    Write a whole file atomically.
+AtomicFolder
+    Context manager: write a set of files into a staging folder, then move them into the
+    target folder with the completion marker (e.g. ``summary.json``) last.
+remove_partials
+    Delete what killed writers left behind (temporary files and staging folders).
+
+Notes
+-----
+A file is written under a temporary name in the target's own folder (``.NAME.tmp-PID-XXXXXXXX``
+with the target's suffix) and renamed with :func:`os.replace`, which is atomic on one file
+system: a reader sees the old file or the new one, never part of one. This protects against
+the process being interrupted, failing or being killed; it is not a durability guarantee
+against a power loss (nothing is fsynced).
+
+This module imports nothing of imdrive.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+import uuid
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+PARTIAL_FOLDER_PREFIX = ".partial-"
+_TMP_MARK = ".tmp-"
+
+
+def _temporary_name(path: Path) -> Path:
+    token = f"{os.getpid()}-{uuid.uuid4().hex[:8]}"
+    return path.with_name(f".{path.stem}{_TMP_MARK}{token}{path.suffix}")
+
+
+def is_partial(name: str) -> bool:
+    """Whether a file or folder name is one of this module's temporary names."""
+    return name.startswith(PARTIAL_FOLDER_PREFIX) or (name.startswith(".") and _TMP_MARK in name)
+
+
+@contextmanager
+def atomic_path(path) -> Iterator[Path]:
+    """Yield a temporary path beside ``path``; on success it replaces ``path``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file to write. Its folder must exist.
+
+    Yields
+    ------
+    pathlib.Path
+        Where to write. It keeps ``path``'s suffix, so writers that pick a format from the
+        suffix still work. If the block raises, the temporary file is removed and ``path`` is
+        left as it was.
+    """
+    path = Path(path)
+    tmp = _temporary_name(path)
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+def atomic_write_bytes(path, data: bytes) -> None:
+    """Write ``data`` to ``path`` atomically (see :func:`atomic_path`)."""
+    with atomic_path(path) as tmp:
+        tmp.write_bytes(data)
+
+
+def atomic_write_text(path, text: str, encoding: str = "utf-8") -> None:
+    """Write ``text`` to ``path`` atomically (see :func:`atomic_path`)."""
+    with atomic_path(path) as tmp:
+        tmp.write_text(text, encoding=encoding)
+
+
+class AtomicFolder:
+    """Write a set of files into ``folder``, the completion marker last.
+
+    Use as a context manager: write every file, the marker included, into :attr:`path` (a
+    staging folder inside ``folder``). On a normal exit an older marker in ``folder`` is
+    removed first, then each file is moved in (:func:`os.replace`) and the marker last, so
+    ``folder`` holds a marker only when every file of the same write is in place. If the block
+    raises, nothing is moved. The staging folder is removed in both cases.
+
+    Parameters
+    ----------
+    folder : str or os.PathLike
+        The target folder, created if missing.
+    marker : str
+        Name of the file whose presence means "complete" (e.g. ``summary.json``); the block
+        must write it.
+
+    Attributes
+    ----------
+    path : pathlib.Path
+        The staging folder (valid inside the ``with`` block).
+    written : list of pathlib.Path
+        The files moved into ``folder``, the marker last (after the block).
+
+    Examples
+    --------
+    >>> with AtomicFolder(out, "summary.json") as staging:  # doctest: +SKIP
+    ...     (staging.path / "data.csv").write_text(csv)
+    ...     (staging.path / "summary.json").write_text(summary)
+    """
+
+    def __init__(self, folder, marker: str):
+        self.folder = Path(folder)
+        self.marker = marker
+        self.written: list[Path] = []
+        self._tmp: tempfile.TemporaryDirectory | None = None
+
+    @property
+    def path(self) -> Path:
+        if self._tmp is None:
+            raise RuntimeError("AtomicFolder.path is only valid inside the with block")
+        return Path(self._tmp.name)
+
+    def __enter__(self) -> AtomicFolder:
+        self.folder.mkdir(parents=True, exist_ok=True)
+        self._tmp = tempfile.TemporaryDirectory(dir=self.folder, prefix=PARTIAL_FOLDER_PREFIX)
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        try:
+            if exc_type is None:
+                self._commit()
+        finally:
+            self._tmp.cleanup()
+            self._tmp = None
+
+    def _commit(self) -> None:
+        staged = self.path
+        if not (staged / self.marker).is_file():
+            raise FileNotFoundError(f"{self.marker} was not written: nothing moved")
+        (self.folder / self.marker).unlink(missing_ok=True)
+        names = sorted(p.name for p in staged.iterdir() if p.name != self.marker)
+        for name in [*names, self.marker]:
+            os.replace(staged / name, self.folder / name)
+            self.written.append(self.folder / name)
+
+
+def remove_partials(folder) -> None:
+    """Delete the temporary files and staging folders that killed writers left in ``folder``.
+
+    Only for a folder no other process is writing to at the same time.
+    """
+    folder = Path(folder)
+    if not folder.is_dir():
+        return
+    for p in folder.iterdir():
+        if not is_partial(p.name):
+            continue
+        if p.is_dir() and not p.is_symlink():
+            shutil.rmtree(p, ignore_errors=True)
+        else:
+            p.unlink(missing_ok=True)

@@ -1,0 +1,133 @@
+"""The sweep store: a folder of Parquet chunks, a manifest, and resuming.
+
+``STORE/chunks/chunk-NNNNNN.parquet`` holds runs ``[N*chunk_size, (N+1)*chunk_size)``; each
+chunk, then ``STORE/manifest.json``, is written atomically (:mod:`imdrive._io`), so a killed
+sweep leaves only whole chunks. :func:`open_store` checks that a non-empty folder is the same
+sweep before resuming it; :meth:`Store.consolidate` writes ``STORE/runs.parquet``, every run
+exactly once, sorted.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+from imdrive._io import atomic_path, atomic_write_text, remove_partials
+from imdrive.errors import ConfigError
+from imdrive.sweep.spec import Sweep
+
+
+class Store:
+    """The sweep's folder: chunk files, manifest, consolidated table, figures."""
+
+    MANIFEST = "manifest.json"
+
+    def __init__(self, root: Path):
+        self.root = Path(root)
+        self.chunks = self.root / "chunks"
+
+    def chunk_path(self, j: int) -> Path:
+        return self.chunks / f"chunk-{j:06d}.parquet"
+
+    def completed(self) -> set[int]:
+        if not self.chunks.is_dir():
+            return set()
+        out = set()
+        for p in self.chunks.iterdir():
+            n = p.name
+            if n.startswith("chunk-") and n.endswith(".parquet") and n[6:-8].isdigit():
+                out.add(int(n[6:-8]))
+        return out
+
+    def read_manifest(self) -> dict | None:
+        p = self.root / self.MANIFEST
+        if not p.is_file():
+            return None
+        try:
+            return json.loads(p.read_text())
+        except (OSError, ValueError) as exc:
+            raise ConfigError("--resume", f"cannot read {p}: {exc}") from None
+
+    def write_manifest(self, sweep: Sweep, chunk_size: int, started: float) -> None:
+        done = sorted(self.completed())
+        info = {
+            "format": 1,
+            "sweep": sweep.name,
+            "fingerprint": sweep.fingerprint(),
+            "n_runs": sweep.n_runs,
+            "chunk_size": chunk_size,
+            "n_chunks": sweep.n_chunks(chunk_size),
+            "completed_chunks": done,
+            "complete": len(done) == sweep.n_chunks(chunk_size),
+            "axes": [a.name for a in sweep.axes],
+            "started": started,
+            "updated": time.time(),
+        }
+        atomic_write_text(self.root / self.MANIFEST, json.dumps(info, indent=2) + "\n")
+
+    def write_source(self, sweep: Sweep) -> None:
+        """Keep the sweep file's text beside the results (once: a resume does not rewrite it)."""
+        if sweep.source and not (self.root / "sweep.toml").exists():
+            atomic_write_text(self.root / "sweep.toml", sweep.source)
+
+    def write_chunk(self, j: int, df) -> None:
+        with atomic_path(self.chunk_path(j)) as tmp:
+            df.to_parquet(tmp, index=False)
+
+    def clean_partials(self) -> None:
+        """Delete the temporary files of chunks and manifests that a killed sweep left."""
+        for folder in (self.root, self.chunks):
+            remove_partials(folder)
+
+    def consolidate(self, sweep: Sweep, chunk_size: int):
+        import pandas as pd
+
+        parts = [pd.read_parquet(self.chunk_path(j)) for j in range(sweep.n_chunks(chunk_size))]
+        df = pd.concat(parts, ignore_index=True).sort_values("run", kind="stable")
+        df = df.reset_index(drop=True)
+        if len(df) != sweep.n_runs or not np.array_equal(df["run"], np.arange(sweep.n_runs)):
+            raise RuntimeError(f"{self.root}: the chunks do not hold every run exactly once")
+        with atomic_path(self.root / "runs.parquet") as tmp:
+            df.to_parquet(tmp, index=False)
+        return df
+
+
+def open_store(sweep: Sweep, out: Path, resume: bool, chunk_size: int | None) -> tuple:
+    """``(store, chunk_size, started)`` for writing ``sweep`` into the folder ``out``.
+
+    A non-empty ``out`` needs ``resume`` and must hold the same sweep (same fingerprint), with
+    the same chunk size; a resumed store keeps its chunk size and start time.
+    """
+    store = Store(out)
+    if out.exists() and not out.is_dir():
+        raise ConfigError("--out", f"{out} exists and is not a folder")
+    nonempty = out.is_dir() and any(out.iterdir())
+    if nonempty and not resume:
+        raise ConfigError(
+            "--out", f"{out} exists and is not empty: add --resume to continue the sweep in it"
+        )
+    man = store.read_manifest() if nonempty else None
+    if nonempty and man is None:
+        raise ConfigError("--resume", f"{out} holds no {Store.MANIFEST}: not a sweep store")
+    if man is not None:
+        if man.get("fingerprint") != sweep.fingerprint():
+            raise ConfigError(
+                "--resume",
+                f"{out} holds another sweep ({man.get('sweep')!r}, different base, axes or "
+                "values): use a new --out folder",
+            )
+        if chunk_size is not None and chunk_size != man["chunk_size"]:
+            raise ConfigError(
+                "--chunk-size",
+                f"the store was written with chunks of {man['chunk_size']} runs: "
+                "resume with the same size (or omit --chunk-size)",
+            )
+        chunk_size = int(man["chunk_size"])
+        started = man.get("started", time.time())
+    else:
+        chunk_size = chunk_size or sweep.chunk_size
+        started = time.time()
+    return store, chunk_size, started
