@@ -119,6 +119,13 @@ class _FileSchema(GenerateJsonSchema):
         return super().encode_default(dft)
 
 
+def _ref(prop: dict) -> str | None:
+    """Name of the definition a property refers to (``$ref``, or ``allOf: [{$ref}]`` as older
+    pydantic versions write it next to a description)."""
+    ref = prop.get("$ref") or (prop.get("allOf") or [{}])[0].get("$ref")
+    return ref.split("/")[-1] if ref else None
+
+
 def json_schema() -> dict:
     """JSON Schema (draft 2020-12) of a scenario file, for editors that validate TOML."""
     schema = TypeAdapter(Scenario).json_schema(schema_generator=_FileSchema)
@@ -126,7 +133,7 @@ def json_schema() -> dict:
     props = schema["properties"]
     preset = props.pop("machine_preset")
     # [machine]: the preset's name and any field overriding it (none required)
-    machine = defs[props["machine"]["$ref"].split("/")[-1]]
+    machine = defs[_ref(props["machine"])]
     machine.pop("required", None)
     names = sorted(machine_presets())
     machine["properties"] = {
@@ -138,12 +145,9 @@ def json_schema() -> dict:
         },
         **machine["properties"],
     }
-    for prop in props.values():  # a table's default is its keys' defaults
-        if "$ref" in prop:
-            prop.pop("default", None)
-    for d in defs.values():
+    for d in [schema, *defs.values()]:  # a table's default is its keys' defaults
         for prop in d.get("properties", {}).values():
-            if "$ref" in prop and not prop["$ref"].endswith("/Profile"):
+            if _ref(prop) not in (None, "Profile"):
                 prop.pop("default", None)
     return {
         "$schema": "https://json-schema.org/draft/2020-12/schema",

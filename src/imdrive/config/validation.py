@@ -53,11 +53,11 @@ def _integral(value):
     return _scalar(value)
 
 
-Float = Annotated[float, BeforeValidator(_scalar), Strict()]
+Float = Annotated[float, Strict(), BeforeValidator(_scalar)]
 """A finite number (an int is accepted and stored as a float; a bool or a string is not)."""
-Int = Annotated[int, BeforeValidator(_integral), Strict()]
+Int = Annotated[int, Strict(), BeforeValidator(_integral)]
 """An integer (``2.0`` is accepted as 2; ``1.5``, ``"2"`` and ``true`` are not)."""
-Bool = Annotated[bool, BeforeValidator(_scalar), Strict()]
+Bool = Annotated[bool, Strict(), BeforeValidator(_scalar)]
 """``true`` or ``false`` (not 0/1)."""
 Str = Annotated[str, Strict()]
 
