@@ -11,16 +11,18 @@ every controller stay unchanged when one is added.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+import typing
+from typing import Annotated, Literal
 
-from imdrive.errors import ConfigError
+from imdrive.config.validation import Float, setting, settings
 
-INVERTER_MODELS = ("average",)
+InverterModel = Literal["average"]
+INVERTER_MODELS = typing.get_args(InverterModel)
 
 
-@dataclass(frozen=True)
+@settings("inverter")
 class InverterParams:
-    """DC-link voltage-source inverter.
+    """DC-link voltage-source inverter (``[inverter]``).
 
     Parameters
     ----------
@@ -30,16 +32,19 @@ class InverterParams:
         ``"average"``: average-value model with the SVM voltage limit.
     """
 
-    Vdc_V: float = 220.0 * math.sqrt(2.0)
-    model: str = "average"
-
-    def __post_init__(self):
-        if isinstance(self.Vdc_V, bool) or not isinstance(self.Vdc_V, int | float):
-            raise ConfigError("inverter.Vdc_V", "must be a number")
-        if not math.isfinite(self.Vdc_V) or self.Vdc_V <= 0:
-            raise ConfigError("inverter.Vdc_V", f"must be > 0 (got {self.Vdc_V})")
-        if self.model not in INVERTER_MODELS:
-            raise ConfigError("inverter.model", f"must be one of {sorted(INVERTER_MODELS)}")
+    Vdc_V: Annotated[
+        Float,
+        setting(
+            "DC-link voltage; the largest voltage vector is Vdc/√3",
+            "V",
+            gt=0.0,
+            default_doc="220·√2 ≈ 311.1 (a diode rectifier on a 220 V line)",
+        ),
+    ] = 220.0 * math.sqrt(2.0)
+    model: Annotated[
+        InverterModel,
+        setting('"average": average-value model limited to the linear range of space-vector PWM'),
+    ] = "average"
 
     @property
     def v_max_V(self) -> float:

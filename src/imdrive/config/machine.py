@@ -18,17 +18,18 @@ Winding temperatures follow a first-order thermal model per winding::
 
 from __future__ import annotations
 
+import functools
 import math
 import tomllib
-from dataclasses import asdict, dataclass, fields, replace
+from dataclasses import asdict, fields, replace
 from importlib import resources
+from typing import Annotated
 
-import numpy as np
-
+from imdrive.config.validation import Float, Int, Str, setting, settings
 from imdrive.errors import ConfigError
 
 
-@dataclass(frozen=True)
+@settings("machine")
 class MachineParams:
     """T-equivalent-circuit parameters of a three-phase induction machine (per phase, SI).
 
@@ -50,30 +51,37 @@ class MachineParams:
         Nameplate (shaft power, line-to-line rms voltage, frequency).
     """
 
-    R1_ohm: float
-    R2_ohm: float
-    Ll1_H: float
-    Ll2_H: float
-    M_H: float
-    pole_pairs: int = 2
-    J_kgm2: float = 0.069
-    B_Nms: float = 0.0
-    rated_power_W: float = 2238.0
-    rated_voltage_V: float = 220.0
-    rated_frequency_Hz: float = 60.0
-    description: str = ""
-
-    def __post_init__(self):
-        for name in ("R1_ohm", "R2_ohm", "Ll1_H", "Ll2_H", "M_H", "J_kgm2"):
-            _positive(f"machine.{name}", getattr(self, name))
-        for name in ("rated_power_W", "rated_voltage_V", "rated_frequency_Hz"):
-            _positive(f"machine.{name}", getattr(self, name))
-        if isinstance(self.pole_pairs, bool) or not isinstance(self.pole_pairs, int | np.integer):
-            raise ConfigError("machine.pole_pairs", "must be an integer")
-        if self.pole_pairs < 1:
-            raise ConfigError("machine.pole_pairs", "must be >= 1")
-        if not math.isfinite(self.B_Nms) or self.B_Nms < 0:
-            raise ConfigError("machine.B_Nms", "must be >= 0")
+    R1_ohm: Annotated[
+        Float, setting("stator resistance at the reference temperature", "ohm", gt=0.0)
+    ]
+    R2_ohm: Annotated[
+        Float,
+        setting(
+            "rotor resistance (referred to the stator) at the reference temperature", "ohm", gt=0.0
+        ),
+    ]
+    Ll1_H: Annotated[Float, setting("stator leakage inductance", "H", gt=0.0)]
+    Ll2_H: Annotated[Float, setting("rotor leakage inductance", "H", gt=0.0)]
+    M_H: Annotated[Float, setting("magnetising (mutual) inductance", "H", gt=0.0)]
+    pole_pairs: Annotated[Int, setting("number of pole pairs n_p", ge=1)] = 2
+    J_kgm2: Annotated[Float, setting("moment of inertia of rotor and load", "kg m²", gt=0.0)] = (
+        0.069
+    )
+    B_Nms: Annotated[Float, setting("viscous friction of the machine", "N m s/rad", ge=0.0)] = 0.0
+    rated_power_W: Annotated[
+        Float,
+        setting("nameplate shaft power: scales the current limits", "W", gt=0.0),
+    ] = 2238.0
+    rated_voltage_V: Annotated[
+        Float,
+        setting(
+            "nameplate line-to-line rms voltage: scales the rated flux and current", "V", gt=0.0
+        ),
+    ] = 220.0
+    rated_frequency_Hz: Annotated[
+        Float, setting("nameplate frequency: scales the rated flux", "Hz", gt=0.0)
+    ] = 60.0
+    description: Annotated[Str, setting("free text")] = ""
 
     # derived quantities -------------------------------------------------------------------
     @property
@@ -121,16 +129,23 @@ class MachineParams:
         return asdict(self)
 
 
-def _positive(field: str, value) -> None:
-    if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer):
-        raise ConfigError(field, f"must be a number, got {type(value).__name__}")
-    if not math.isfinite(value) or value <= 0:
-        raise ConfigError(field, f"must be > 0 (got {value})")
+@functools.cache
+def _presets_toml() -> dict[str, dict]:
+    text = resources.files("imdrive.config").joinpath("data/machines.toml").read_text()
+    return tomllib.loads(text)
 
 
 def _load_presets() -> dict[str, dict]:
-    text = resources.files("imdrive.config").joinpath("data/machines.toml").read_text()
-    return tomllib.loads(text)
+    """The machine parameter sets of ``data/machines.toml`` (a fresh copy: callers may edit)."""
+    return {name: dict(table) for name, table in _presets_toml().items()}
+
+
+def preset_table(name: str) -> dict:
+    """The ``[machine]`` values of preset ``name`` (MachineParams fields, no ``source``)."""
+    presets = _presets_toml()
+    if name not in presets:
+        raise ConfigError("machine.preset", f"unknown preset {name!r}; known: {sorted(presets)}")
+    return {k: v for k, v in presets[name].items() if k != "source"}
 
 
 def machine_presets() -> dict[str, str]:
@@ -144,10 +159,7 @@ def machine_preset(name: str = "paper-table-iv", **overrides) -> MachineParams:
     ``paper-table-iv`` (the paper's Table IV, J = 0.069 kg m^2) and ``krause-3hp`` (the textbook
     machine it comes from, J = 0.089 kg m^2).
     """
-    presets = _load_presets()
-    if name not in presets:
-        raise ConfigError("machine.preset", f"unknown preset {name!r}; known: {sorted(presets)}")
-    data = {k: v for k, v in presets[name].items() if k != "source"}
+    data = preset_table(name)
     known = {f.name for f in fields(MachineParams)}
     for k in overrides:
         if k not in known:

@@ -3,34 +3,19 @@
 from __future__ import annotations
 
 import tomllib
-import typing
-from dataclasses import is_dataclass
 
-from imdrive.config.machine import MachineParams
-from imdrive.config.scenario import SECTIONS
+from imdrive.config.schema import setting_paths
 from imdrive.errors import ConfigError
 
 
 def _schema_allows(path: list[str]) -> bool:
-    """Whether a dotted override path names a field of the scenario schema."""
-    if len(path) == 1:
-        return path[0] in ("name", "description")
-    head, rest = path[0], path[1:]
-    if head == "machine":
-        return len(rest) == 1 and (
-            rest[0] == "preset" or rest[0] in typing.get_type_hints(MachineParams)
-        )
-    cls = SECTIONS.get(head)
-    while cls is not None and rest:
-        hints = typing.get_type_hints(cls)
-        if rest[0] not in hints:
-            return False
-        tp = hints[rest[0]]
-        rest = rest[1:]
-        if not rest:
-            return True
-        cls = tp if is_dataclass(tp) else None
-    return False
+    """Whether a dotted override path names a field of the scenario schema.
+
+    A field is a value (``simulation.Ts_s``, ``machine.preset``) or a table inside a section
+    (``plant.thermal``); a whole section (``simulation``) is not one. The paths are read off
+    the settings classes (:func:`imdrive.config.schema.scenario_keys`).
+    """
+    return tuple(path) in setting_paths()
 
 
 def is_setting(parts) -> bool:

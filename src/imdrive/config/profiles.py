@@ -21,8 +21,57 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from pydantic_core import core_schema
 
 from imdrive.errors import ConfigError
+
+_NUMBER = {"type": "number"}
+
+#: JSON Schema of the scenario-file forms of a profile (editors validate TOML with it).
+PROFILE_JSON_SCHEMA = {
+    "title": "Profile",
+    "description": (
+        "A piecewise-linear function of time: a number (constant), explicit points "
+        "[[t, value], ...] (two points at the same time make a step), or an initial value "
+        "and changes {at, to[, over]} (a step without 'over', else a ramp lasting 'over' s)."
+    ),
+    "anyOf": [
+        _NUMBER,
+        {
+            "type": "object",
+            "properties": {
+                "points": {
+                    "type": "array",
+                    "minItems": 1,
+                    "items": {"type": "array", "items": _NUMBER, "minItems": 2, "maxItems": 2},
+                }
+            },
+            "required": ["points"],
+            "additionalProperties": False,
+        },
+        {
+            "type": "object",
+            "properties": {
+                "initial": _NUMBER,
+                "changes": {
+                    "type": "array",
+                    "items": {
+                        "type": "object",
+                        "properties": {
+                            "at": {"type": "number", "minimum": 0},
+                            "to": _NUMBER,
+                            "over": {"type": "number", "minimum": 0},
+                        },
+                        "required": ["at", "to"],
+                        "additionalProperties": False,
+                    },
+                },
+            },
+            "required": ["initial"],
+            "additionalProperties": False,
+        },
+    ],
+}
 
 
 @dataclass(frozen=True)
@@ -62,6 +111,24 @@ class Profile:
     @property
     def final(self) -> float:
         return self.points[-1][1]
+
+    # as a pydantic field type: validated by parse_profile, written back in file form
+    @classmethod
+    def __get_pydantic_core_schema__(cls, source, handler):
+        return core_schema.no_info_plain_validator_function(
+            _validate,
+            ref="Profile",
+            serialization=core_schema.plain_serializer_function_ser_schema(Profile.to_toml_value),
+        )
+
+    @classmethod
+    def __get_pydantic_json_schema__(cls, schema, handler):
+        return dict(PROFILE_JSON_SCHEMA)
+
+
+def _validate(value) -> Profile:
+    # the field is named by the location pydantic reports (see imdrive.config.validation)
+    return parse_profile("", value)
 
 
 def _number(field: str, value) -> float:

@@ -1,215 +1,268 @@
 """Scenarios: a whole run described by frozen dataclasses, read from and written to TOML.
 
-A scenario file has these tables (every key optional unless said otherwise; ``imdrive show
-PRESET`` prints complete examples)::
+A scenario file has a table per section of :class:`Scenario` (``[machine]``, ``[plant]``,
+``[plant.thermal]``, ``[control]``, ...; :data:`SECTIONS`), every key optional. The settings
+classes below are the one description of those keys: their fields carry type, rule, default,
+unit and meaning, from which validation, ``--set`` paths (:mod:`imdrive.config.overrides`),
+``docs/scenarios.md`` and the JSON Schema (:mod:`imdrive.config.docs`) all follow.
+``imdrive show PRESET`` prints complete examples.
 
-    name, description            strings
-    [machine]      preset = "paper-table-iv" | "krause-3hp", and any MachineParams field
-    [plant]        R1_scale, R2_scale (profiles), speed_mode = "dynamic" | "imposed",
-                   imposed_speed_rpm (profile)
-    [plant.thermal] enabled, alpha1_per_K, alpha2_per_K, theta_ref_C, theta_amb_C, theta_init_C,
-                   Rth1_K_per_W, tau1_s, Rth2_K_per_W, tau2_s
-    [load]         torque_Nm (profile), viscous_Nms, fan_Nms2
-    [inverter]     Vdc_V, model = "average"
-    [drive]        mode = "open-loop" | "vector"
-    [open_loop]    voltage_V (line-to-line rms, profile), frequency_Hz (profile), vf_ramp_s
-    [control]      speed_feedback = "measured" | "mras", speed_ref_rpm (profile),
-                   flux_ref_Wb (profile; default rated flux), speed_bandwidth_Hz,
-                   current_bandwidth_Hz, speed_kp, speed_ki, current_kp, current_ki,
-                   current_limit_A, decoupling
-    [estimator]    the controller's machine model: R1_ohm, R2_ohm (initial R2_hat), Ll1_H,
-                   Ll2_H, M_H (each defaults to the plant's value)
-    [mras]         wc_rad_s, bandwidth_Hz, K1, K2
-    [compensator]  enabled, t_on_s, period_s, gain_E_per_Wb, gain_DE_per_Wb, G_CR_ohm,
-                   R2_min_ohm, R2_max_ohm, table = "paper" | "rules",
-                   input = "e_d0" | "demodulated", average
-    [injection]    amplitude_A, frequency_Hz, t_on_s, lowpass_rad_s (sinusoid added to id*)
-    [sensor]       i_offset_alpha_A, i_offset_beta_A
-    [simulation]   t_end_s, Ts_s, substeps, log_every, divergence_current_A, divergence_speed_rpm
-    [output]       figures, csv
-
-Profiles are written as in :mod:`imdrive.profiles`. Unknown keys, wrong types and values that
-break a rule raise :class:`~imdrive.errors.ConfigError` naming the field.
+Profiles are written as in :mod:`imdrive.config.profiles`. Unknown keys, wrong types and
+values that break a rule raise :class:`~imdrive.errors.ConfigError` naming the field, whether
+the scenario comes from a file (:meth:`Scenario.from_dict`) or is built in Python (the classes'
+constructors, ``dataclasses.replace``).
 """
 
 from __future__ import annotations
 
-import math
 import tomllib
-import types
-import typing
-from dataclasses import dataclass, field, fields, is_dataclass, replace
+from dataclasses import fields, is_dataclass, replace
+from typing import Annotated, Literal
+
+from pydantic import model_validator
 
 from imdrive.config.inverter import InverterParams
-from imdrive.config.machine import MachineParams, machine_preset
-from imdrive.config.profiles import Profile, parse_profile
+from imdrive.config.machine import MachineParams, machine_preset, preset_table
+from imdrive.config.profiles import Profile
+from imdrive.config.validation import (
+    Bool,
+    Float,
+    Int,
+    ProfileValues,
+    Str,
+    setting,
+    settings,
+    validate,
+)
 from imdrive.errors import ConfigError
-
-
-def _check(cond: bool, path: str, rule: str) -> None:
-    if not cond:
-        raise ConfigError(path, rule)
-
-
-def _pos(value: float, path: str) -> None:
-    _check(math.isfinite(value) and value > 0, path, f"must be > 0 (got {value})")
-
-
-def _nonneg(value: float, path: str) -> None:
-    _check(math.isfinite(value) and value >= 0, path, f"must be >= 0 (got {value})")
-
-
-def _choice(value: str, choices: tuple[str, ...], path: str) -> None:
-    _check(value in choices, path, f"must be one of {', '.join(repr(c) for c in choices)}")
-
 
 C = Profile.constant
 
+PositiveProfile = Annotated[Profile, ProfileValues(gt=0.0)]
+NonNegativeProfile = Annotated[Profile, ProfileValues(ge=0.0)]
 
-@dataclass(frozen=True)
+
+@settings("plant.thermal")
 class ThermalSettings:
-    """First-order thermal model of each winding (section ``[plant.thermal]``)."""
+    """First-order thermal model of each winding (section ``[plant.thermal]``).
 
-    enabled: bool = False
-    alpha1_per_K: float = 0.00393  # copper
-    alpha2_per_K: float = 0.00393
-    theta_ref_C: float = 20.0
-    theta_amb_C: float = 20.0
-    theta_init_C: float = 20.0
-    Rth1_K_per_W: float = 0.4
-    tau1_s: float = 1200.0
-    Rth2_K_per_W: float = 0.4
-    tau2_s: float = 1200.0
+    ``tau dtheta/dt = Rth P_cu - (theta - theta_amb)`` and ``R = R_ref (1 + alpha (theta -
+    theta_ref))``, one per winding (1: stator, 2: rotor).
+    """
 
-    def __post_init__(self):
-        for n in ("Rth1_K_per_W", "tau1_s", "Rth2_K_per_W", "tau2_s"):
-            _pos(getattr(self, n), f"plant.thermal.{n}")
-        for n in ("alpha1_per_K", "alpha2_per_K"):
-            _nonneg(getattr(self, n), f"plant.thermal.{n}")
+    enabled: Annotated[
+        Bool, setting("first-order thermal model of each winding; off: resistances stay put")
+    ] = False
+    alpha1_per_K: Annotated[
+        Float, setting("temperature coefficient of the stator resistance (copper)", "1/K", ge=0.0)
+    ] = 0.00393
+    alpha2_per_K: Annotated[
+        Float, setting("temperature coefficient of the rotor resistance (copper)", "1/K", ge=0.0)
+    ] = 0.00393
+    theta_ref_C: Annotated[
+        Float, setting("temperature at which R1_ohm and R2_ohm are given", "°C")
+    ] = 20.0
+    theta_amb_C: Annotated[Float, setting("ambient temperature", "°C")] = 20.0
+    theta_init_C: Annotated[Float, setting("winding temperature at t = 0", "°C")] = 20.0
+    Rth1_K_per_W: Annotated[
+        Float, setting("thermal resistance, stator winding to ambient", "K/W", gt=0.0)
+    ] = 0.4
+    tau1_s: Annotated[Float, setting("thermal time constant of the stator", "s", gt=0.0)] = 1200.0
+    Rth2_K_per_W: Annotated[
+        Float, setting("thermal resistance, rotor winding to ambient", "K/W", gt=0.0)
+    ] = 0.4
+    tau2_s: Annotated[Float, setting("thermal time constant of the rotor", "s", gt=0.0)] = 1200.0
 
 
-@dataclass(frozen=True)
+@settings("plant")
 class PlantSettings:
     """Time-varying plant (section ``[plant]``): resistance changes, imposed speed."""
 
-    R1_scale: Profile = field(default_factory=lambda: C(1.0))
-    R2_scale: Profile = field(default_factory=lambda: C(1.0))
-    speed_mode: str = "dynamic"
-    imposed_speed_rpm: Profile = field(default_factory=lambda: C(0.0))
-    thermal: ThermalSettings = field(default_factory=ThermalSettings)
+    R1_scale: Annotated[
+        PositiveProfile,
+        setting("multiplier of the plant's R1 (> 0): steps and ramps of stator resistance"),
+    ] = C(1.0)
+    R2_scale: Annotated[
+        PositiveProfile,
+        setting("multiplier of the plant's R2 (> 0): steps and ramps of rotor resistance"),
+    ] = C(1.0)
+    speed_mode: Annotated[
+        Literal["dynamic", "imposed"],
+        setting(
+            '"dynamic": J dω/dt = Te − TL − Bω; "imposed": the speed follows imposed_speed_rpm'
+        ),
+    ] = "dynamic"
+    imposed_speed_rpm: Annotated[
+        Profile, setting('the rotor speed with speed_mode = "imposed"', "rpm")
+    ] = C(0.0)
+    thermal: Annotated[ThermalSettings, setting("first-order thermal model of each winding")] = (
+        ThermalSettings()
+    )
 
-    def __post_init__(self):
-        _choice(self.speed_mode, ("dynamic", "imposed"), "plant.speed_mode")
-        for n in ("R1_scale", "R2_scale"):
-            _check(all(v > 0 for _, v in getattr(self, n).points), f"plant.{n}", "must be > 0")
 
-
-@dataclass(frozen=True)
+@settings("load")
 class LoadSettings:
-    """Load torque ``T_L = torque_Nm(t) + viscous_Nms w_m + fan_Nms2 w_m |w_m|`` (``[load]``)."""
+    """Load torque ``T_L = torque_Nm(t) + viscous_Nms ω + fan_Nms2 ω |ω|`` (``[load]``)."""
 
-    torque_Nm: Profile = field(default_factory=lambda: C(0.0))
-    viscous_Nms: float = 0.0
-    fan_Nms2: float = 0.0
+    torque_Nm: Annotated[Profile, setting("time-dependent load torque", "N m")] = C(0.0)
+    viscous_Nms: Annotated[
+        Float, setting("viscous load torque per unit speed, ·ω", "N m s/rad")
+    ] = 0.0
+    fan_Nms2: Annotated[Float, setting("fan load torque, ·ω·|ω|", "N m s²/rad²")] = 0.0
 
 
-@dataclass(frozen=True)
+@settings("drive")
 class DriveSettings:
     """Which controller drives the inverter (``[drive]``)."""
 
-    mode: str = "open-loop"
+    mode: Annotated[
+        Literal["open-loop", "vector"],
+        setting('"open-loop": sinusoidal voltage ([open_loop]); "vector": field-oriented control'),
+    ] = "open-loop"
 
-    def __post_init__(self):
-        _choice(self.mode, ("open-loop", "vector"), "drive.mode")
 
-
-@dataclass(frozen=True)
+@settings("open_loop")
 class OpenLoopSettings:
     """Balanced sinusoidal voltage (``[open_loop]``); voltage is line-to-line rms."""
 
-    voltage_V: Profile = field(default_factory=lambda: C(220.0))
-    frequency_Hz: Profile = field(default_factory=lambda: C(60.0))
-    vf_ramp_s: float = 0.0
+    voltage_V: Annotated[NonNegativeProfile, setting("line-to-line rms voltage (>= 0)", "V")] = C(
+        220.0
+    )
+    frequency_Hz: Annotated[Profile, setting("supply frequency", "Hz")] = C(60.0)
+    vf_ramp_s: Annotated[
+        Float,
+        setting(
+            "V/f ramp from standstill to the (constant) voltage and frequency lasting this long; "
+            "0: direct on line",
+            "s",
+            ge=0.0,
+        ),
+    ] = 0.0
 
-    def __post_init__(self):
-        _nonneg(self.vf_ramp_s, "open_loop.vf_ramp_s")
-        _check(all(v >= 0 for _, v in self.voltage_V.points), "open_loop.voltage_V", "must be >= 0")
-        if self.vf_ramp_s > 0:
-            _check(
-                len(self.voltage_V.points) == 1 and len(self.frequency_Hz.points) == 1,
-                "open_loop.vf_ramp_s",
-                "needs constant voltage_V and frequency_Hz (the ramp ends at them)",
+    @model_validator(mode="after")
+    def _ramp_needs_constant_targets(self):
+        if self.vf_ramp_s > 0 and (
+            len(self.voltage_V.points) != 1 or len(self.frequency_Hz.points) != 1
+        ):
+            raise ConfigError(
+                "vf_ramp_s", "needs constant voltage_V and frequency_Hz (the ramp ends at them)"
             )
+        return self
 
 
-@dataclass(frozen=True)
+@settings("control")
 class ControlSettings:
-    """Indirect field-oriented speed control (``[control]``)."""
+    """Indirect field-oriented speed control (``[control]``).
 
-    speed_feedback: str = "measured"
-    speed_ref_rpm: Profile = field(default_factory=lambda: C(0.0))
-    flux_ref_Wb: Profile | None = None
-    speed_bandwidth_Hz: float = 5.0
-    current_bandwidth_Hz: float = 200.0
-    speed_kp: float | None = None
-    speed_ki: float | None = None
-    current_kp: float | None = None
-    current_ki: float | None = None
-    current_limit_A: float | None = None
-    decoupling: bool = True
+    PI gains not given are derived from the bandwidths (formulas in
+    :mod:`imdrive.design.gains`).
+    """
 
-    def __post_init__(self):
-        _choice(self.speed_feedback, ("measured", "mras"), "control.speed_feedback")
-        _pos(self.speed_bandwidth_Hz, "control.speed_bandwidth_Hz")
-        _pos(self.current_bandwidth_Hz, "control.current_bandwidth_Hz")
-        for n in ("speed_kp", "speed_ki", "current_kp", "current_ki"):
-            v = getattr(self, n)
-            if v is not None:
-                _check(math.isfinite(v), f"control.{n}", "must be finite")
-        if self.current_limit_A is not None:
-            _pos(self.current_limit_A, "control.current_limit_A")
-        if self.flux_ref_Wb is not None:
-            _check(
-                all(v > 0 for _, v in self.flux_ref_Wb.points), "control.flux_ref_Wb", "must be > 0"
-            )
+    speed_feedback: Annotated[
+        Literal["measured", "mras"],
+        setting('"measured": encoder speed; "mras": the MRAS estimate (sensorless)'),
+    ] = "measured"
+    speed_ref_rpm: Annotated[Profile, setting("speed reference", "rpm")] = C(0.0)
+    flux_ref_Wb: Annotated[
+        PositiveProfile | None,
+        setting(
+            "rotor-flux reference (> 0)",
+            "Wb",
+            default_doc="the machine's rated flux ({rated_flux_Wb} Wb for {preset})",
+        ),
+    ] = None
+    speed_bandwidth_Hz: Annotated[
+        Float, setting("speed-loop bandwidth the speed PI gains are derived from", "Hz", gt=0.0)
+    ] = 5.0
+    current_bandwidth_Hz: Annotated[
+        Float,
+        setting("current-loop bandwidth the current PI gains are derived from", "Hz", gt=0.0),
+    ] = 200.0
+    speed_kp: Annotated[
+        Float | None,
+        setting("speed PI proportional gain", "A/(rad/s)", default_doc="from speed_bandwidth_Hz"),
+    ] = None
+    speed_ki: Annotated[
+        Float | None,
+        setting("speed PI integral gain", "A/rad", default_doc="from speed_bandwidth_Hz"),
+    ] = None
+    current_kp: Annotated[
+        Float | None,
+        setting("current PI proportional gain", "V/A", default_doc="from current_bandwidth_Hz"),
+    ] = None
+    current_ki: Annotated[
+        Float | None,
+        setting("current PI integral gain", "V/(A s)", default_doc="from current_bandwidth_Hz"),
+    ] = None
+    current_limit_A: Annotated[
+        Float | None,
+        setting(
+            "stator current limit (peak)",
+            "A",
+            gt=0.0,
+            default_doc="2 × the rated peak current ({current_limit_A} A for {preset})",
+        ),
+    ] = None
+    decoupling: Annotated[
+        Bool, setting("cross-coupling and back-emf feed-forward in the current controllers")
+    ] = True
 
 
-@dataclass(frozen=True)
+@settings("estimator")
 class EstimatorSettings:
-    """The controller's and estimator's machine model (``[estimator]``); None = the plant's."""
+    """The controller's and estimator's machine model (``[estimator]``); unset: the plant's."""
 
-    R1_ohm: float | None = None
-    R2_ohm: float | None = None
-    Ll1_H: float | None = None
-    Ll2_H: float | None = None
-    M_H: float | None = None
+    R1_ohm: Annotated[
+        Float | None, setting("stator resistance", "ohm", gt=0.0, default_doc="the plant's")
+    ] = None
+    R2_ohm: Annotated[
+        Float | None,
+        setting(
+            "rotor resistance: the initial estimate R̂2", "ohm", gt=0.0, default_doc="the plant's"
+        ),
+    ] = None
+    Ll1_H: Annotated[
+        Float | None, setting("stator leakage inductance", "H", gt=0.0, default_doc="the plant's")
+    ] = None
+    Ll2_H: Annotated[
+        Float | None, setting("rotor leakage inductance", "H", gt=0.0, default_doc="the plant's")
+    ] = None
+    M_H: Annotated[
+        Float | None,
+        setting("magnetising inductance", "H", gt=0.0, default_doc="the plant's"),
+    ] = None
 
-    def __post_init__(self):
-        for f in fields(self):
-            v = getattr(self, f.name)
-            if v is not None:
-                _pos(v, f"estimator.{f.name}")
 
-
-@dataclass(frozen=True)
+@settings("mras")
 class MrasSettings:
-    """Schauder's MRAS (``[mras]``). K1, K2 default from ``bandwidth_Hz`` (see mras module)."""
+    """Schauder's MRAS speed estimator (``[mras]``).
 
-    wc_rad_s: float = 5.0
-    bandwidth_Hz: float = 40.0
-    K1: float | None = None
-    K2: float | None = None
+    ``K1``, ``K2`` default from ``bandwidth_Hz`` (:func:`imdrive.design.gains.default_mras_gains`).
+    """
 
-    def __post_init__(self):
-        _nonneg(self.wc_rad_s, "mras.wc_rad_s")
-        _pos(self.bandwidth_Hz, "mras.bandwidth_Hz")
-        for n in ("K1", "K2"):
-            v = getattr(self, n)
-            if v is not None:
-                _check(math.isfinite(v), f"mras.{n}", "must be finite")
+    wc_rad_s: Annotated[
+        Float,
+        setting(
+            "cut-off of the 1/(s + ωc) replacement of the reference model's pure integrator "
+            "(0: pure integrator)",
+            "rad/s",
+            ge=0.0,
+        ),
+    ] = 5.0
+    bandwidth_Hz: Annotated[
+        Float, setting("bandwidth K1 and K2 are derived from", "Hz", gt=0.0)
+    ] = 40.0
+    K1: Annotated[
+        Float | None,
+        setting("adaptation PI proportional gain", "(rad/s)/Wb²", default_doc="from bandwidth_Hz"),
+    ] = None
+    K2: Annotated[
+        Float | None,
+        setting("adaptation PI integral gain", "(rad/s²)/Wb²", default_doc="from bandwidth_Hz"),
+    ] = None
 
 
-@dataclass(frozen=True)
+@settings("compensator")
 class CompensatorSettings:
     """The fuzzy rotor-resistance compensator (``[compensator]``, paper §4).
 
@@ -220,39 +273,64 @@ class CompensatorSettings:
     period with ``input = "demodulated"``.
     """
 
-    enabled: bool = False
-    t_on_s: float = 0.0
-    period_s: float | None = None
-    gain_E_per_Wb: float = 1e6
-    gain_DE_per_Wb: float = 1e6
-    G_CR_ohm: float = 0.001
-    R2_min_ohm: float | None = None
-    R2_max_ohm: float | None = None
-    table: str = "paper"
-    input: str = "e_d0"
-    average: bool = True
+    enabled: Annotated[Bool, setting("run the fuzzy R2 compensator")] = False
+    t_on_s: Annotated[Float, setting("time the compensator starts", "s", ge=0.0)] = 0.0
+    period_s: Annotated[
+        Float | None,
+        setting(
+            "decision period",
+            "s",
+            gt=0.0,
+            default_doc='0.01; one injection period with input = "demodulated"',
+        ),
+    ] = None
+    gain_E_per_Wb: Annotated[
+        Float,
+        setting(
+            "scaling of e_d0 before the 13-level quantiser (1e6: the paper's µWb thresholds)",
+            "1/Wb",
+            gt=0.0,
+        ),
+    ] = 1e6
+    gain_DE_per_Wb: Annotated[
+        Float,
+        setting("scaling of the change of e_d0 per period before the quantiser", "1/Wb", gt=0.0),
+    ] = 1e6
+    G_CR_ohm: Annotated[
+        Float, setting("change of R̂2 per output level and period", "ohm", ge=0.0)
+    ] = 0.001
+    R2_min_ohm: Annotated[
+        Float | None,
+        setting("lower clamp of R̂2", "ohm", gt=0.0, default_doc="0.5 × the initial R̂2"),
+    ] = None
+    R2_max_ohm: Annotated[
+        Float | None,
+        setting("upper clamp of R̂2", "ohm", gt=0.0, default_doc="2 × the initial R̂2"),
+    ] = None
+    table: Annotated[
+        Literal["paper", "rules"],
+        setting('"paper": the printed Table III; "rules": compiled from the fitted rule base'),
+    ] = "paper"
+    input: Annotated[
+        Literal["e_d0", "demodulated"],
+        setting(
+            '"e_d0": the paper\'s input; "demodulated": e_d0 detected synchronously with the '
+            "injection ([injection])"
+        ),
+    ] = "e_d0"
+    average: Annotated[
+        Bool, setting("the input is its mean over the period, not a sample at its end")
+    ] = True
 
-    def __post_init__(self):
-        _nonneg(self.t_on_s, "compensator.t_on_s")
-        if self.period_s is not None:
-            _pos(self.period_s, "compensator.period_s")
-        _pos(self.gain_E_per_Wb, "compensator.gain_E_per_Wb")
-        _pos(self.gain_DE_per_Wb, "compensator.gain_DE_per_Wb")
-        _nonneg(self.G_CR_ohm, "compensator.G_CR_ohm")
-        for n in ("R2_min_ohm", "R2_max_ohm"):
-            if getattr(self, n) is not None:
-                _pos(getattr(self, n), f"compensator.{n}")
-        if self.R2_min_ohm is not None and self.R2_max_ohm is not None:
-            _check(
-                self.R2_min_ohm < self.R2_max_ohm,
-                "compensator.R2_min_ohm",
-                "must be < compensator.R2_max_ohm",
-            )
-        _choice(self.table, ("paper", "rules"), "compensator.table")
-        _choice(self.input, ("e_d0", "demodulated"), "compensator.input")
+    @model_validator(mode="after")
+    def _clamps_in_order(self):
+        lo, hi = self.R2_min_ohm, self.R2_max_ohm
+        if lo is not None and hi is not None and not lo < hi:
+            raise ConfigError("R2_min_ohm", "must be < compensator.R2_max_ohm")
+        return self
 
 
-@dataclass(frozen=True)
+@settings("injection")
 class InjectionSettings:
     """Persistent excitation (``[injection]``): a sinusoid added to the flux-current reference.
 
@@ -261,59 +339,69 @@ class InjectionSettings:
     injection periods (the default compensator period for that input is one).
     """
 
-    amplitude_A: float = 0.0
-    frequency_Hz: float = 2.0
-    t_on_s: float = 0.0
-    lowpass_rad_s: float = 0.0
+    amplitude_A: Annotated[
+        Float, setting("amplitude of the sinusoid added to id* (0: off)", "A", ge=0.0)
+    ] = 0.0
+    frequency_Hz: Annotated[Float, setting("frequency of the sinusoid", "Hz", gt=0.0)] = 2.0
+    t_on_s: Annotated[Float, setting("time the injection starts", "s", ge=0.0)] = 0.0
+    lowpass_rad_s: Annotated[
+        Float,
+        setting(
+            "optional low-pass of the detected product, for display (0: none)", "rad/s", ge=0.0
+        ),
+    ] = 0.0
 
-    def __post_init__(self):
-        _nonneg(self.amplitude_A, "injection.amplitude_A")
-        _nonneg(self.t_on_s, "injection.t_on_s")
-        _pos(self.frequency_Hz, "injection.frequency_Hz")
-        _nonneg(self.lowpass_rad_s, "injection.lowpass_rad_s")
 
-
-@dataclass(frozen=True)
+@settings("sensor")
 class SensorSettings:
     """Current-sensor imperfections (``[sensor]``)."""
 
-    i_offset_alpha_A: float = 0.0
-    i_offset_beta_A: float = 0.0
+    i_offset_alpha_A: Annotated[Float, setting("DC offset of the measured α current", "A")] = 0.0
+    i_offset_beta_A: Annotated[Float, setting("DC offset of the measured β current", "A")] = 0.0
 
 
-@dataclass(frozen=True)
+@settings("simulation")
 class SimulationSettings:
     """Integration and logging (``[simulation]``)."""
 
-    t_end_s: float = 1.0
-    Ts_s: float = 100e-6
-    substeps: int = 1
-    log_every: int = 1
-    divergence_current_A: float | None = None
-    divergence_speed_rpm: float = 20000.0
+    t_end_s: Annotated[Float, setting("run length", "s", gt=0.0)] = 1.0
+    Ts_s: Annotated[Float, setting("control period (sampling and PWM period)", "s", gt=0.0)] = (
+        100e-6
+    )
+    substeps: Annotated[Int, setting("RK4 steps of the plant per control period", ge=1)] = 1
+    log_every: Annotated[Int, setting("logging decimation, in control periods", ge=1)] = 1
+    divergence_current_A: Annotated[
+        Float | None,
+        setting(
+            "current magnitude that stops a diverging run",
+            "A",
+            gt=0.0,
+            default_doc="100 × the rated peak current ({divergence_current_A} A for {preset})",
+        ),
+    ] = None
+    divergence_speed_rpm: Annotated[
+        Float, setting("speed magnitude that stops a diverging run", "rpm", gt=0.0)
+    ] = 20000.0
 
-    def __post_init__(self):
-        _pos(self.t_end_s, "simulation.t_end_s")
-        _pos(self.Ts_s, "simulation.Ts_s")
-        _check(self.Ts_s <= self.t_end_s, "simulation.Ts_s", "must be <= simulation.t_end_s")
-        _check(self.substeps >= 1, "simulation.substeps", f"must be >= 1 (got {self.substeps})")
-        _check(self.log_every >= 1, "simulation.log_every", f"must be >= 1 (got {self.log_every})")
-        _check(self.t_end_s / self.Ts_s <= 2e9, "simulation.Ts_s", "gives more than 2e9 periods")
-        if self.divergence_current_A is not None:
-            _pos(self.divergence_current_A, "simulation.divergence_current_A")
-        _pos(self.divergence_speed_rpm, "simulation.divergence_speed_rpm")
+    @model_validator(mode="after")
+    def _period_fits_run(self):
+        if self.Ts_s > self.t_end_s:
+            raise ConfigError("Ts_s", "must be <= simulation.t_end_s")
+        if self.t_end_s / self.Ts_s > 2e9:
+            raise ConfigError("Ts_s", "gives more than 2e9 periods")
+        return self
 
     @property
     def n_steps(self) -> int:
         return int(round(self.t_end_s / self.Ts_s))
 
 
-@dataclass(frozen=True)
+@settings("output")
 class OutputSettings:
     """What ``imdrive run`` writes besides summary.json (``[output]``)."""
 
-    figures: bool = True
-    csv: bool = True
+    figures: Annotated[Bool, setting("write the PNG figures")] = True
+    csv: Annotated[Bool, setting("write timeseries.csv")] = True
 
 
 SECTIONS: dict[str, type] = {
@@ -332,28 +420,74 @@ SECTIONS: dict[str, type] = {
     "output": OutputSettings,
 }
 
+DEFAULT_MACHINE_PRESET = "paper-table-iv"
 
-@dataclass(frozen=True)
+
+@settings("")
 class Scenario:
-    """A complete run: machine, inverter, drive, profiles, simulation settings, outputs."""
+    """A complete run: machine, inverter, drive, profiles, simulation settings, outputs.
 
-    name: str = "scenario"
-    description: str = ""
-    machine: MachineParams = field(default_factory=machine_preset)
-    machine_preset: str = "paper-table-iv"
-    plant: PlantSettings = field(default_factory=PlantSettings)
-    load: LoadSettings = field(default_factory=LoadSettings)
-    inverter: InverterParams = field(default_factory=InverterParams)
-    drive: DriveSettings = field(default_factory=DriveSettings)
-    open_loop: OpenLoopSettings = field(default_factory=OpenLoopSettings)
-    control: ControlSettings = field(default_factory=ControlSettings)
-    estimator: EstimatorSettings = field(default_factory=EstimatorSettings)
-    mras: MrasSettings = field(default_factory=MrasSettings)
-    compensator: CompensatorSettings = field(default_factory=CompensatorSettings)
-    injection: InjectionSettings = field(default_factory=InjectionSettings)
-    sensor: SensorSettings = field(default_factory=SensorSettings)
-    simulation: SimulationSettings = field(default_factory=SimulationSettings)
-    output: OutputSettings = field(default_factory=OutputSettings)
+    Built from a TOML-shaped dictionary by :meth:`from_dict` (the ``[machine]`` table holds
+    ``preset`` and the fields that override it), or directly from the section objects.
+    """
+
+    name: Annotated[Str, setting("name of the run")] = "scenario"
+    description: Annotated[Str, setting("free text")] = ""
+    machine: Annotated[MachineParams, setting("the plant's machine")] = machine_preset(
+        DEFAULT_MACHINE_PRESET
+    )
+    machine_preset: Annotated[
+        Str,
+        setting(
+            "the published parameter set the machine starts from (in a file: machine.preset); "
+            "the other [machine] keys override its values"
+        ),
+    ] = DEFAULT_MACHINE_PRESET
+    plant: Annotated[PlantSettings, setting("time-varying plant")] = PlantSettings()
+    load: Annotated[LoadSettings, setting("load torque")] = LoadSettings()
+    inverter: Annotated[InverterParams, setting("DC-link inverter")] = InverterParams()
+    drive: Annotated[DriveSettings, setting("which controller drives the inverter")] = (
+        DriveSettings()
+    )
+    open_loop: Annotated[OpenLoopSettings, setting("open-loop sinusoidal voltage")] = (
+        OpenLoopSettings()
+    )
+    control: Annotated[ControlSettings, setting("field-oriented speed control")] = ControlSettings()
+    estimator: Annotated[EstimatorSettings, setting("the controller's machine model")] = (
+        EstimatorSettings()
+    )
+    mras: Annotated[MrasSettings, setting("Schauder's MRAS speed estimator")] = MrasSettings()
+    compensator: Annotated[
+        CompensatorSettings, setting("the fuzzy rotor-resistance compensator")
+    ] = CompensatorSettings()
+    injection: Annotated[InjectionSettings, setting("persistent excitation")] = InjectionSettings()
+    sensor: Annotated[SensorSettings, setting("current-sensor imperfections")] = SensorSettings()
+    simulation: Annotated[SimulationSettings, setting("integration and logging")] = (
+        SimulationSettings()
+    )
+    output: Annotated[OutputSettings, setting("files imdrive run writes")] = OutputSettings()
+
+    @model_validator(mode="before")
+    @classmethod
+    def _machine_table(cls, data):
+        """The file form: ``[machine]`` is a preset name plus the fields that override it."""
+        if not isinstance(data, dict):
+            return data  # direct construction: the objects themselves
+        if "machine_preset" in data:
+            raise ConfigError("machine_preset", "unknown key")
+        if "machine" not in data or isinstance(data["machine"], MachineParams):
+            return data
+        table = data["machine"]
+        if not isinstance(table, dict):
+            raise ConfigError("machine", "must be a table")
+        table = dict(table)
+        preset = table.pop("preset", DEFAULT_MACHINE_PRESET)
+        if not isinstance(preset, str):
+            raise ConfigError("machine.preset", f"must be a string, got {preset!r}")
+        data = dict(data)
+        data["machine"] = preset_table(preset) | table
+        data["machine_preset"] = preset
+        return data
 
     # -- construction ----------------------------------------------------------------------
     @classmethod
@@ -361,18 +495,7 @@ class Scenario:
         """Build and validate a scenario from its TOML-shaped dictionary."""
         if not isinstance(data, dict):
             raise ConfigError("scenario", "must be a table")
-        kw: dict = {}
-        for key, val in data.items():
-            if key in ("name", "description"):
-                _check(isinstance(val, str), key, "must be a string")
-                kw[key] = val
-            elif key == "machine":
-                kw["machine_preset"], kw["machine"] = _machine_from_dict(val)
-            elif key in SECTIONS:
-                kw[key] = _from_dict(SECTIONS[key], val, key)
-            else:
-                raise ConfigError(key, "unknown key")
-        return cls(**kw)
+        return validate(cls, data)
 
     @classmethod
     def from_toml(cls, text: str, overrides: list[str] | tuple[str, ...] = ()) -> Scenario:
@@ -417,64 +540,10 @@ def _to_plain(obj):
     return obj
 
 
-def _machine_from_dict(val) -> tuple[str, MachineParams]:
-    if not isinstance(val, dict):
-        raise ConfigError("machine", "must be a table")
-    val = dict(val)
-    preset = val.pop("preset", "paper-table-iv")
-    _check(isinstance(preset, str), "machine.preset", "must be a string")
-    hints = typing.get_type_hints(MachineParams)
-    conv = {}
-    for k, v in val.items():
-        if k not in hints:
-            raise ConfigError(f"machine.{k}", "unknown key")
-        conv[k] = _convert(hints[k], v, f"machine.{k}")
-    return preset, machine_preset(preset, **conv)
-
-
-def _from_dict(cls, data, path: str):
-    if not isinstance(data, dict):
-        raise ConfigError(path, "must be a table")
-    hints = typing.get_type_hints(cls)
-    names = {f.name for f in fields(cls)}
-    kw = {}
-    for key, val in data.items():
-        if key not in names:
-            raise ConfigError(f"{path}.{key}", "unknown key")
-        kw[key] = _convert(hints[key], val, f"{path}.{key}")
-    return cls(**kw)
-
-
-def _type_name(tp) -> str:
-    return getattr(tp, "__name__", str(tp))
-
-
 def _convert(tp, val, path: str):
-    """Check ``val`` against the annotation ``tp`` and convert it."""
-    origin = typing.get_origin(tp)
-    if origin in (typing.Union, types.UnionType):
-        args = [a for a in typing.get_args(tp) if a is not type(None)]
-        if val is None:
-            return None
-        return _convert(args[0], val, path)
-    if tp is Profile:
-        return parse_profile(path, val)
-    if is_dataclass(tp):
-        return _from_dict(tp, val, path)
-    if tp is bool:
-        _check(isinstance(val, bool), path, f"must be true or false, got {val!r}")
-        return val
-    if tp is int:
-        ok = isinstance(val, int) and not isinstance(val, bool)
-        ok = ok or (isinstance(val, float) and val.is_integer())
-        _check(ok, path, f"must be an integer, got {val!r}")
-        return int(val)
-    if tp is float:
-        ok = isinstance(val, int | float) and not isinstance(val, bool)
-        _check(ok, path, f"must be a number, got {val!r}")
-        _check(math.isfinite(val), path, "must be finite")
-        return float(val)
-    if tp is str:
-        _check(isinstance(val, str), path, f"must be a string, got {val!r}")
-        return val
-    raise TypeError(f"unsupported annotation {_type_name(tp)} at {path}")  # programming error
+    """Kept for :mod:`imdrive.sweep` (which passes the value to ``dataclasses.replace``).
+
+    The settings classes validate their fields themselves now: the value is returned as is and
+    the constructor that receives it checks and converts it, naming the same ``path``.
+    """
+    return val

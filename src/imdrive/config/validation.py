@@ -1,0 +1,249 @@
+"""The validation layer under every settings class: pydantic v2, reported as :class:`ConfigError`.
+
+Settings classes are ``pydantic.dataclasses.dataclass`` es (frozen, unknown keys forbidden), so
+they stay stdlib dataclasses: ``dataclasses.replace``, ``fields`` and ``is_dataclass`` work and
+``replace`` validates again. :func:`settings` makes one; its constructor raises
+:class:`~imdrive.errors.ConfigError` (one line, ``field.path: rule``) instead of pydantic's
+``ValidationError``, with the path prefixed by the class's place in a scenario
+(``machine.R1_ohm``, ``plant.thermal.tau1_s``).
+
+Scalar types are strict (a boolean is not a number, a string is not an integer, ``nan`` and
+``inf`` are refused); an integer-valued float is accepted as an integer and numpy scalars as
+the Python number they hold.
+
+A :class:`ConfigError` raised inside a validator names its field *relative to where pydantic
+reports it*: ``""`` for the value itself, ``".points[1]"`` or ``"[2]"`` below it, ``"Ts_s"``
+for a field of the class a model validator checks. :func:`config_error` prefixes it with that
+location.
+"""
+
+from __future__ import annotations
+
+import functools
+import re
+from typing import Annotated, Any
+
+import numpy as np
+from pydantic import BeforeValidator, ConfigDict, Field, Strict, ValidationError
+from pydantic.dataclasses import dataclass as _pydantic_dataclass
+from pydantic_core import core_schema
+
+from imdrive.errors import ConfigError
+
+CONFIG = ConfigDict(
+    extra="forbid",  # unknown keys are errors
+    allow_inf_nan=False,  # every float is finite
+    revalidate_instances="never",  # a section object passed in is already valid
+)
+
+
+# ------------------------------------------------------------------------------------------
+# scalar types
+
+
+def _scalar(value):
+    """A numpy scalar as the Python number it holds; anything else unchanged."""
+    return value.item() if isinstance(value, np.generic) else value
+
+
+def _integral(value):
+    """An integer-valued float (``2.0``) or a numpy integer as an int; anything else unchanged."""
+    if isinstance(value, float) and value.is_integer():
+        return int(value)
+    return _scalar(value)
+
+
+Float = Annotated[float, Strict(), BeforeValidator(_scalar)]
+"""A finite number (an int is accepted and stored as a float; a bool or a string is not)."""
+Int = Annotated[int, Strict(), BeforeValidator(_integral)]
+"""An integer (``2.0`` is accepted as 2; ``1.5``, ``"2"`` and ``true`` are not)."""
+Bool = Annotated[bool, Strict(), BeforeValidator(_scalar)]
+"""``true`` or ``false`` (not 0/1)."""
+Str = Annotated[str, Strict()]
+
+
+def setting(
+    description: str, unit: str | None = None, *, default_doc: str | None = None, **constraints
+):
+    """Field metadata of a setting: what it means, its unit, its constraints (``gt=0``, ...).
+
+    ``default_doc`` says what a ``None`` default means (``"the plant's"``); the docs print it
+    in place of the default. Use inside ``Annotated[...]``; the default is the plain value
+    after ``=`` so that ``dataclasses.fields`` shows it.
+    """
+    extra: dict[str, Any] = {}
+    if unit:
+        extra["unit"] = unit
+    if default_doc:
+        extra["default_doc"] = default_doc
+    return Field(description=description, json_schema_extra=extra or None, **constraints)
+
+
+class ProfileValues:
+    """Constraint on every breakpoint value of a :class:`~imdrive.config.profiles.Profile`.
+
+    ``Annotated[Profile, ProfileValues(gt=0)]``; the error says ``must be > 0`` on the field.
+    """
+
+    def __init__(self, *, gt: float | None = None, ge: float | None = None):
+        self.gt = gt
+        self.ge = ge
+
+    @property
+    def rule(self) -> str:
+        return f"> {self.gt:g}" if self.gt is not None else f">= {self.ge:g}"
+
+    def _check(self, profile):
+        if profile is None:
+            return profile
+        for _, v in profile.points:
+            if (self.gt is not None and not v > self.gt) or (
+                self.ge is not None and not v >= self.ge
+            ):
+                raise ConfigError("", f"must be {self.rule}")
+        return profile
+
+    def __get_pydantic_core_schema__(self, source, handler):
+        return core_schema.no_info_after_validator_function(self._check, handler(source))
+
+    def __repr__(self) -> str:
+        return f"ProfileValues({self.rule})"
+
+
+# ------------------------------------------------------------------------------------------
+# settings classes
+
+
+def settings(path: str):
+    """Class decorator: a frozen pydantic dataclass validated as the scenario table ``path``.
+
+    ``path`` (``"machine"``, ``"plant.thermal"``; ``""`` for the scenario itself) prefixes the
+    field named by a :class:`ConfigError` when the class is built directly (``MachineParams(...)``,
+    ``dataclasses.replace``).
+    """
+
+    def wrap(cls):
+        cls = _pydantic_dataclass(frozen=True, config=CONFIG)(cls)
+        pydantic_init = cls.__init__
+
+        @functools.wraps(pydantic_init)
+        def __init__(self, *args, **kwargs):
+            try:
+                pydantic_init(self, *args, **kwargs)
+            except ValidationError as exc:
+                raise config_error(exc, path) from None
+
+        cls.__init__ = __init__
+        cls.table_path = path
+        return cls
+
+    return wrap
+
+
+def validate(cls, data, path: str = ""):
+    """``cls`` built from its TOML-shaped dictionary ``data``; errors as :class:`ConfigError`."""
+    try:
+        return cls.__pydantic_validator__.validate_python(data)
+    except ValidationError as exc:
+        raise config_error(exc, path) from None
+
+
+# ------------------------------------------------------------------------------------------
+# ValidationError -> ConfigError
+
+
+def join_path(head: str, tail: str) -> str:
+    """``head`` and a relative field path: ``a`` + ``b`` -> ``a.b``, ``a`` + ``[1]`` -> ``a[1]``."""
+    if not head:
+        return tail.lstrip(".")
+    if not tail:
+        return head
+    if tail[0] in ".[":
+        return head + tail
+    return f"{head}.{tail}"
+
+
+def _loc_path(prefix: str, loc) -> str:
+    path = prefix
+    for part in loc:
+        path = join_path(path, f"[{part}]" if isinstance(part, int) else str(part))
+    return path
+
+
+def _show(value) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _bound(value) -> str:
+    if isinstance(value, float) and value.is_integer():
+        return str(int(value))
+    return str(value)
+
+
+_COMPARISONS = {
+    "greater_than": ("gt", ">"),
+    "greater_than_equal": ("ge", ">="),
+    "less_than": ("lt", "<"),
+    "less_than_equal": ("le", "<="),
+}
+_TYPE_RULES = {
+    "bool_type": "must be true or false",
+    "bool_parsing": "must be true or false",
+    "int_type": "must be an integer",
+    "int_parsing": "must be an integer",
+    "int_from_float": "must be an integer",
+    "float_type": "must be a number",
+    "float_parsing": "must be a number",
+    "string_type": "must be a string",
+}
+_TABLE_TYPES = {"dataclass_type", "dataclass_exact_type", "dict_type", "model_type"}
+_UNKNOWN_KEY = {"extra_forbidden", "unexpected_keyword_argument"}
+
+
+def _rule(err: dict) -> tuple[str, str]:
+    """``(relative field, rule)`` of one pydantic error (see :func:`config_error`)."""
+    kind = err["type"]
+    ctx = err.get("ctx") or {}
+    value = err.get("input")
+    if kind == "value_error" and isinstance(ctx.get("error"), ConfigError):
+        inner = ctx["error"]
+        return inner.field, inner.rule
+    if kind in _COMPARISONS:
+        key, op = _COMPARISONS[kind]
+        bound = ctx.get(key)
+        if isinstance(bound, float) and isinstance(value, int) and not isinstance(value, bool):
+            value = float(value)  # the field is a float: show the value as one
+        return "", f"must be {op} {_bound(bound)} (got {value})"
+    if kind == "finite_number":
+        return "", "must be finite"
+    if kind in _TYPE_RULES:
+        return "", f"{_TYPE_RULES[kind]}, got {_show(value)}"
+    if kind == "literal_error":
+        choices = re.findall(r"'([^']*)'", ctx.get("expected", ""))
+        return "", "must be one of " + ", ".join(repr(c) for c in choices)
+    if kind in _UNKNOWN_KEY:
+        return "", "unknown key"
+    if kind in ("missing", "missing_argument"):
+        return "", "is required"
+    if kind in _TABLE_TYPES:
+        return "", "must be a table"
+    if kind == "unexpected_positional_argument":
+        return "", "too many positional arguments"
+    if kind == "multiple_argument_values":
+        return "", "given twice"
+    if kind == "value_error" and "error" in ctx:
+        return "", str(ctx["error"])
+    return "", err["msg"][:1].lower() + err["msg"][1:]
+
+
+def config_error(exc: ValidationError, prefix: str = "") -> ConfigError:
+    """The first error of ``exc`` as a one-line :class:`ConfigError` ``field.path: rule``.
+
+    ``prefix`` is the table the validated object sits at (``"machine"``); the location pydantic
+    reports is appended, then the field a :class:`ConfigError` raised inside a validator names.
+    """
+    err = exc.errors(include_url=False)[0]
+    field, rule = _rule(err)
+    path = join_path(_loc_path(prefix, err["loc"]), field)
+    return ConfigError(path or "scenario", rule)
