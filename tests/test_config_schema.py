@@ -62,7 +62,7 @@ FROM_DICT = [
     ),
     ({"simulation": {"substeps": 0}}, "simulation.substeps: must be >= 1 (got 0)"),
     ({"drive": {"mode": "sideways"}}, "drive.mode: must be one of 'open-loop', 'vector'"),
-    ({"inverter": {"model": "svpwm"}}, "inverter.model: must be one of 'average'"),
+    ({"inverter": {"model": "svpwm"}}, "inverter.model: must be one of 'average', 'switching'"),
     ({"simulation": {"substepz": 2}}, "simulation.substepz: unknown key"),
     ({"plant": {"thermal": {"tau3_s": 2}}}, "plant.thermal.tau3_s: unknown key"),
     ({"machine": {"R3_ohm": 1.0}}, "machine.R3_ohm: unknown key"),

@@ -1,11 +1,11 @@
-"""Voltage-source inverter.
+"""Voltage-source inverter settings (``[inverter]``); the models are in
+:mod:`imdrive.kernels.inverter`.
 
-The inverter turns the controller's voltage reference (held over one control period) into the
-voltage the machine sees during that period, as a sequence of *segments* ``(duration, v_ab)``.
-The average-value model returns one segment: the reference limited to the linear range of
-space-vector modulation, ``|v| <= Vdc/sqrt(3)``, direction kept. A switching model (SVPWM with
-dead time) returns up to seven segments per period from the same arguments, so the engine and
-every controller stay unchanged when one is added.
+``"average"``: the reference limited to the linear range of space-vector modulation,
+``|v| <= Vdc/sqrt(3)``, with dead time and device drops in averaged form.
+``"switching"``: a two-level bridge with a symmetric triangular carrier at the control period
+(regular sampling, single update: ``Ts = 1/f_sw``), min-max zero-sequence injection, exact
+switching instants, dead time and device drops.
 """
 
 from __future__ import annotations
@@ -14,9 +14,12 @@ import math
 import typing
 from typing import Annotated, Literal
 
-from imdrive.config.validation import Float, setting, settings
+from pydantic import model_validator
 
-InverterModel = Literal["average"]
+from imdrive.config.validation import Float, setting, settings
+from imdrive.errors import ConfigError
+
+InverterModel = Literal["average", "switching"]
 INVERTER_MODELS = typing.get_args(InverterModel)
 
 
@@ -29,7 +32,16 @@ class InverterParams:
     Vdc_V : float
         DC-link voltage, V. Default ``220*sqrt(2)``: a diode rectifier on a 220 V line.
     model : str
-        ``"average"``: average-value model with the SVM voltage limit.
+        ``"average"``: average-value model with the SVM voltage limit; ``"switching"``: the
+        two-level bridge switched at ``switching_frequency_Hz``.
+    switching_frequency_Hz : float
+        Carrier frequency, Hz. The switching model needs ``Ts = 1/f_sw``.
+    dead_time_s : float
+        Dead time of every leg, s (< half a switching period).
+    device_drop_V : float
+        Forward drop of the conducting device, V.
+    sign_band_A : float
+        Current band over which the averaged dead-time error changes sign, A.
     """
 
     Vdc_V: Annotated[
@@ -43,8 +55,44 @@ class InverterParams:
     ] = 220.0 * math.sqrt(2.0)
     model: Annotated[
         InverterModel,
-        setting('"average": average-value model limited to the linear range of space-vector PWM'),
+        setting(
+            '"average": average-value model limited to the linear range of space-vector PWM; '
+            '"switching": two-level bridge, exact switching instants'
+        ),
     ] = "average"
+    switching_frequency_Hz: Annotated[
+        Float,
+        setting(
+            "carrier (switching) frequency; the switching model needs simulation.Ts_s = 1/f_sw",
+            "Hz",
+            gt=0.0,
+        ),
+    ] = 10_000.0
+    dead_time_s: Annotated[
+        Float, setting("dead time of each leg (< half a switching period)", "s", ge=0.0)
+    ] = 0.0
+    device_drop_V: Annotated[
+        Float, setting("forward voltage drop of the conducting switch or diode", "V", ge=0.0)
+    ] = 0.0
+    sign_band_A: Annotated[
+        Float,
+        setting(
+            "current band over which the averaged dead-time error (average model) and the "
+            "dead-time compensation change sign linearly",
+            "A",
+            gt=0.0,
+        ),
+    ] = 0.2
+
+    @model_validator(mode="after")
+    def _dead_time_fits(self):
+        if not self.dead_time_s < 0.5 / self.switching_frequency_Hz:
+            raise ConfigError(
+                "dead_time_s",
+                f"must be < half a switching period, 0.5/switching_frequency_Hz = "
+                f"{0.5 / self.switching_frequency_Hz:g} s (got {self.dead_time_s:g})",
+            )
+        return self
 
     @property
     def v_max_V(self) -> float:

@@ -206,6 +206,38 @@ class ControlSettings:
     decoupling: Annotated[
         Bool, setting("cross-coupling and back-emf feed-forward in the current controllers")
     ] = True
+    dead_time_compensation: Annotated[
+        Literal["none", "feedforward"],
+        setting(
+            '"feedforward": add sgn(i) t_d f_sw Vdc_meas to each phase voltage reference '
+            "(measured current, smooth over inverter.sign_band_A)"
+        ),
+    ] = "none"
+    dead_time_compensation_s: Annotated[
+        Float | None,
+        setting(
+            "the dead time the compensation assumes",
+            "s",
+            ge=0.0,
+            default_doc="inverter.dead_time_s (perfect knowledge)",
+        ),
+    ] = None
+    delay_periods: Annotated[
+        Int,
+        setting(
+            "computation delay: 0, or 1 (the reference computed at sample k acts over the next "
+            "period, as on a DSP)",
+            ge=0,
+            le=1,
+        ),
+    ] = 0
+    delay_compensation: Annotated[
+        Bool,
+        setting(
+            "advance the dq-to-alpha-beta angle by the delay (1.5 Ts instead of 0.5 Ts with "
+            "delay_periods = 1)"
+        ),
+    ] = True
 
 
 @settings("estimator")
@@ -354,10 +386,50 @@ class InjectionSettings:
 
 @settings("sensor")
 class SensorSettings:
-    """Current-sensor imperfections (``[sensor]``)."""
+    """Sensor imperfections (``[sensor]``).
+
+    Two phase-current sensors (a and b; ``i_c = -i_a - i_b``), each with gain, offset, Gaussian
+    noise (seeded) and ADC quantisation, plus the DC-link voltage sensor's gain; and the 0.1
+    offsets of the α/β current. Models in :mod:`imdrive.kernels.sensors`.
+    """
 
     i_offset_alpha_A: Annotated[Float, setting("DC offset of the measured α current", "A")] = 0.0
     i_offset_beta_A: Annotated[Float, setting("DC offset of the measured β current", "A")] = 0.0
+    gain_a: Annotated[Float, setting("gain of the phase-a current sensor", gt=0.0)] = 1.0
+    gain_b: Annotated[Float, setting("gain of the phase-b current sensor", gt=0.0)] = 1.0
+    offset_a_A: Annotated[Float, setting("offset of the phase-a current sensor", "A")] = 0.0
+    offset_b_A: Annotated[Float, setting("offset of the phase-b current sensor", "A")] = 0.0
+    noise_rms_A: Annotated[
+        Float, setting("rms of the Gaussian noise of each current sensor", "A", ge=0.0)
+    ] = 0.0
+    adc_bits: Annotated[
+        Int | None,
+        setting("ADC resolution of the current sensors", "bit", ge=2, le=32, default_doc="none"),
+    ] = None
+    adc_range_A: Annotated[
+        Float, setting("ADC full scale of the current sensors (±)", "A", gt=0.0)
+    ] = 50.0
+    seed: Annotated[Int, setting("seed of the sensor noise (same seed, same run)", ge=0)] = 0
+    vdc_gain: Annotated[
+        Float,
+        setting(
+            "gain of the DC-link voltage sensor: the controller turns volts into duty cycles "
+            "with gain × Vdc",
+            gt=0.0,
+        ),
+    ] = 1.0
+
+    @property
+    def per_phase(self) -> bool:
+        """Whether the per-phase current-sensor model is needed (anything not ideal)."""
+        return (
+            self.gain_a != 1.0
+            or self.gain_b != 1.0
+            or self.offset_a_A != 0.0
+            or self.offset_b_A != 0.0
+            or self.noise_rms_A != 0.0
+            or self.adc_bits is not None
+        )
 
 
 @settings("simulation")
@@ -488,6 +560,27 @@ class Scenario:
         data["machine"] = preset_table(preset) | table
         data["machine_preset"] = preset
         return data
+
+    @model_validator(mode="after")
+    def _joint_rules(self):
+        """Rules between sections, checked on the final scenario."""
+        inv = self.inverter
+        if inv.model == "switching":
+            f_Ts = inv.switching_frequency_Hz * self.simulation.Ts_s
+            if abs(f_Ts - 1.0) > 1e-9:
+                raise ConfigError(
+                    "simulation.Ts_s",
+                    f"must be 1/inverter.switching_frequency_Hz = "
+                    f"{1.0 / inv.switching_frequency_Hz:g} s with the switching model (one "
+                    f"carrier period per control period; got {self.simulation.Ts_s:g})",
+                )
+        t_dc = self.control.dead_time_compensation_s
+        if t_dc is not None and not t_dc < 0.5 / inv.switching_frequency_Hz:
+            raise ConfigError(
+                "control.dead_time_compensation_s",
+                "must be < half a switching period, 0.5/inverter.switching_frequency_Hz",
+            )
+        return self
 
     # -- construction ----------------------------------------------------------------------
     @classmethod

@@ -24,7 +24,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from imdrive.kernels import compensator, estimators, ifoc, inverter, machine, model
+from imdrive.kernels import compensator, estimators, ifoc, inverter, machine, model, sensors
 from imdrive.kernels.compensator import (
     compensator_step,
     demodulate,
@@ -32,8 +32,19 @@ from imdrive.kernels.compensator import (
     log_compensator,
 )
 from imdrive.kernels.estimators.mras import log_mras, mras_step
-from imdrive.kernels.ifoc import foc_step, log_control, open_loop_voltage
-from imdrive.kernels.inverter import MAX_SEGMENTS, inverter_segments
+from imdrive.kernels.ifoc import dead_time_feedforward, foc_step, log_control, open_loop_voltage
+from imdrive.kernels.inverter import (
+    INV_SWITCHING,
+    MAX_EVENTS,
+    MAX_SEGMENTS,
+    apply_command,
+    duty_cycles,
+    gate_commands,
+    inverter_segments,
+    limit_magnitude,
+    phase_values,
+    pole_voltages_ab,
+)
 from imdrive.kernels.machine import PLANT_STATE, integrate_segment, log_plant, stator_current
 from imdrive.kernels.profiles import (
     PR_FLUX_REF,
@@ -67,14 +78,18 @@ SIM_PARAMS = record_dtype(
         ("w_lim", f8),  # divergence bound on |w_m|, rad/s
         ("mode", i8),  # DRIVE_OPEN_LOOP or DRIVE_FOC
         ("sensorless", b1),  # speed feedback: the MRAS estimate instead of the measured speed
+        ("delay", i8),  # computation delay, periods: 0, or 1 (the reference of sample k acts
+        # over the next period, as on a DSP)
     ]
 )
 
 #: What the controller keeps from one sample to the next.
 SAMPLE_STATE = record_dtype(
     [
-        ("v_prev_ab", c16),  # period-average voltage applied over the last period, V
+        ("v_prev_ab", c16),  # voltage the controller commanded for the last period, V
         ("i_prev_ab", c16),  # current measured at the last sample, A
+        ("v_hold_ab", c16),  # with a one-period delay: the reference waiting for the next period
+        ("dv_hold_ab", c16),  # and the dead-time compensation it contains, V
     ]
 )
 
@@ -83,6 +98,7 @@ LOG_FIELDS = (
     ("time",)
     + machine.LOG_FIELDS
     + inverter.LOG_FIELDS
+    + sensors.LOG_FIELDS
     + ifoc.LOG_FIELDS
     + estimators.mras.LOG_FIELDS
     + model.LOG_FIELDS
@@ -117,6 +133,7 @@ class DriveState(NamedTuple):
     control: np.ndarray  # ifoc.CONTROL_STATE
     mras: np.ndarray  # estimators.mras.MRAS_STATE
     comp: np.ndarray  # compensator.COMPENSATOR_STATE
+    inverter: np.ndarray  # inverter.INVERTER_STATE
 
 
 @njit(cache=True)
@@ -133,6 +150,63 @@ def _finite_state(smp, mdl, ctl, est, cmp):
     ok = ok and f(est.w_r_hat) and c(est.e_dq0)
     ok = ok and f(cmp.E_prev) and f(cmp.cr) and f(cmp.acc) and f(cmp.inj_phase)
     return ok and f(cmp.demod)
+
+
+@njit(cache=True)
+def switching_period(pinv, sinv, pp, x, v_a, v_b, Vdc_meas, R1b, R2b, TL0, Ts, nsub, work, ev):
+    """Integrate the plant over one carrier period of the switching bridge (updates ``x``).
+
+    The gate commands of the period (:func:`imdrive.kernels.inverter.gate_commands`) and the
+    dead-time transitions they cause are events in time order; between two events the pole
+    states are constant and the plant is integrated over that exact interval. The phase
+    current at a command instant (from the integrated state) decides its dead-time
+    transition. Returns the period-average voltage applied at the terminals, V.
+
+    ``ev`` is float64[3, MAX_EVENTS] scratch (times, legs, states).
+    """
+    d = duty_cycles(v_a, v_b, Vdc_meas)
+    ev_t = ev[0]
+    ev_leg = ev[1]
+    ev_state = ev[2]
+    n = gate_commands(sinv, d, Ts, ev_t, ev_leg, ev_state)
+    t = 0.0
+    j = 0
+    acc_a = 0.0
+    acc_b = 0.0
+    while True:
+        t_next = Ts
+        kind = 0  # 0: end of period, 1: gate command, 2: dead-time transition
+        leg = -1
+        for q in range(3):
+            if 0.0 <= sinv.pend_t[q] < Ts and sinv.pend_t[q] <= t_next:
+                t_next = sinv.pend_t[q]
+                kind = 2
+                leg = q
+        if j < n and ev_t[j] < t_next:
+            t_next = ev_t[j]
+            kind = 1
+            leg = int(ev_leg[j])
+        if t_next > t:
+            i_s_a, i_s_b = stator_current(pp, x)
+            va, vb = pole_voltages_ab(pinv, sinv, pinv.Vdc, i_s_a, i_s_b)
+            integrate_segment(pp, x, va, vb, R1b, R2b, TL0, t_next - t, nsub, work)
+            acc_a += (t_next - t) * va
+            acc_b += (t_next - t) * vb
+            t = t_next
+        if kind == 0:
+            break
+        if kind == 1:
+            i_s_a, i_s_b = stator_current(pp, x)
+            i_ph = phase_values(i_s_a, i_s_b)
+            apply_command(pinv, sinv, leg, ev_state[j], i_ph[leg], t)
+            j += 1
+        else:
+            sinv.pole[leg] = sinv.pend_s[leg]
+            sinv.pend_t[leg] = -1.0
+    for q in range(3):  # a dead time running past the period ends in the next one
+        if sinv.pend_t[q] >= 0.0:
+            sinv.pend_t[q] -= Ts
+    return acc_a / Ts, acc_b / Ts
 
 
 @njit(cache=True)
@@ -179,6 +253,7 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
     pn = P.prof_n[i]
     table = P.tables[P.table_idx[i]]
     x = S.plant[i]
+    sinv = S.inverter[i]
     smp = S.sample[i]
     mdl = S.model[i]
     ctl = S.control[i]
@@ -191,12 +266,17 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
     foc = sim.mode == DRIVE_FOC
     sensorless = sim.sensorless
     injecting = pk.inj_amp != 0.0
+    switching = pinv.model == INV_SWITCHING
+    delayed = sim.delay > 0
+    dtc = pc.dtc_u > 0.0
+    Vdc_meas = psen.vdc_gain * pinv.Vdc
     n_rows = log.shape[0]
 
     work = np.empty(5, dtype=PLANT_STATE)  # RK4 scratch
     seg_dt = np.empty(MAX_SEGMENTS)
     seg_va = np.empty(MAX_SEGMENTS)
     seg_vb = np.empty(MAX_SEGMENTS)
+    ev = np.empty((3, MAX_EVENTS))
 
     for k in range(n_steps + 1 if final else n_steps):
         t = (k0 + k) * Ts
@@ -208,7 +288,7 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
 
         # --- sample
         i_s_a, i_s_b = stator_current(pp, x)
-        i_meas_a, i_meas_b = measure_current(psen, i_s_a, i_s_b)
+        i_meas_a, i_meas_b = measure_current(psen, i_s_a, i_s_b, k0 + k)
         w_m = x.w_m
 
         # --- estimator, controller
@@ -246,14 +326,59 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
             f_Hz = profile_at(pt, pv, pn, PR_FREQ, t)
             v_ref_a, v_ref_b = open_loop_voltage(ctl, v_amp, f_Hz, Ts)
 
-        n_seg = inverter_segments(pinv, v_ref_a, v_ref_b, i_s_a, i_s_b, Ts, seg_dt, seg_va, seg_vb)
-        # the controller knows the period-average voltage it commanded (used by the MRAS)
-        v_avg_a = 0.0
-        v_avg_b = 0.0
-        for s in range(n_seg):
-            v_avg_a += seg_dt[s] * seg_va[s]
-            v_avg_b += seg_dt[s] * seg_vb[s]
-        smp.v_prev_ab = complex(v_avg_a / Ts, v_avg_b / Ts)
+        dv_a = 0.0
+        dv_b = 0.0
+        if dtc:  # dead-time compensation, on the measured current
+            dv_a, dv_b = dead_time_feedforward(pc, i_meas_a, i_meas_b)
+            v_ref_a += dv_a
+            v_ref_b += dv_b
+        v_log_a = v_ref_a  # the reference of this sample, logged
+        v_log_b = v_ref_b
+        if delayed:  # the reference of the last sample acts now, this one next period
+            held = smp.v_hold_ab
+            held_dv = smp.dv_hold_ab
+            smp.v_hold_ab = complex(v_ref_a, v_ref_b)
+            smp.dv_hold_ab = complex(dv_a, dv_b)
+            v_ref_a = held.real
+            v_ref_b = held.imag
+            dv_a = held_dv.real
+            dv_b = held_dv.imag
+
+        if switching:
+            # what the controller commands and believes it applies over this period
+            v_cmd_a, v_cmd_b = limit_magnitude(v_ref_a, v_ref_b, Vdc_meas / math.sqrt(3.0))
+            v_app_a = v_cmd_a  # replaced by the true average once the period is integrated
+            v_app_b = v_cmd_b
+        else:
+            # the DC-link sensor's gain error scales what the bridge really applies
+            k_dc = pinv.Vdc / Vdc_meas
+            if k_dc != 1.0:
+                v_ref_a *= k_dc
+                v_ref_b *= k_dc
+            n_seg = inverter_segments(
+                pinv, v_ref_a, v_ref_b, i_s_a, i_s_b, Ts, seg_dt, seg_va, seg_vb
+            )
+            v_app_a = 0.0
+            v_app_b = 0.0
+            for s in range(n_seg):
+                v_app_a += seg_dt[s] * seg_va[s]
+                v_app_b += seg_dt[s] * seg_vb[s]
+            v_app_a /= Ts
+            v_app_b /= Ts
+            v_cmd_a, v_cmd_b = limit_magnitude(v_ref_a, v_ref_b, pinv.Vdc / math.sqrt(3.0))
+            v_cmd_a = (Ts * v_cmd_a) / Ts  # the 0.1 rounding of a one-segment average
+            v_cmd_b = (Ts * v_cmd_b) / Ts
+            if k_dc != 1.0:
+                v_cmd_a /= k_dc
+                v_cmd_b /= k_dc
+        # the controller knows the voltage it commanded for this period (used by the MRAS);
+        # the dead-time compensation is not part of it: it is meant to cancel the dead time's
+        # loss, so the commanded voltage less the compensation is the controller's best
+        # estimate of what reaches the terminals
+        if dtc:
+            smp.v_prev_ab = complex(v_cmd_a - dv_a, v_cmd_b - dv_b)
+        else:
+            smp.v_prev_ab = complex(v_cmd_a, v_cmd_b)
         smp.i_prev_ab = complex(i_meas_a, i_meas_b)
 
         # --- log
@@ -263,8 +388,12 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
                 row = log[r]
                 row.time = t
                 log_plant(row, pp, x, i_s_a, i_s_b, TL0, R1b, R2b)
-                row.v_alpha = smp.v_prev_ab.real
-                row.v_beta = smp.v_prev_ab.imag
+                row.v_alpha = v_app_a
+                row.v_beta = v_app_b
+                row.v_ref_alpha = v_log_a
+                row.v_ref_beta = v_log_b
+                row.i_alpha_meas = i_meas_a
+                row.i_beta_meas = i_meas_b
                 log_control(row, ctl, w_ref, theta_k)
                 log_mras(row, est, n_p)
                 row.R2_est = mdl.R2_hat
@@ -273,8 +402,16 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
             break
 
         # --- plant over the period
-        for s in range(n_seg):
-            integrate_segment(pp, x, seg_va[s], seg_vb[s], R1b, R2b, TL0, seg_dt[s], nsub, work)
+        if switching:
+            v_app_a, v_app_b = switching_period(
+                pinv, sinv, pp, x, v_cmd_a, v_cmd_b, Vdc_meas, R1b, R2b, TL0, Ts, nsub, work, ev
+            )
+            if log_every > 0 and k % log_every == 0 and k // log_every < n_rows:
+                log[k // log_every].v_alpha = v_app_a  # the true average, known only now
+                log[k // log_every].v_beta = v_app_b
+        else:
+            for s in range(n_seg):
+                integrate_segment(pp, x, seg_va[s], seg_vb[s], R1b, R2b, TL0, seg_dt[s], nsub, work)
 
         # --- divergence
         i_s_a, i_s_b = stator_current(pp, x)

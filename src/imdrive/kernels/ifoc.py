@@ -37,7 +37,7 @@ import math
 
 from numba import njit
 
-from imdrive.kernels.inverter import limit_magnitude
+from imdrive.kernels.inverter import clarke, limit_magnitude, phase_values, smooth_sign
 from imdrive.kernels.model import model_inductances
 from imdrive.kernels.records import b1, c16, f8, record_dtype
 
@@ -52,6 +52,9 @@ CONTROL_PARAMS = record_dtype(
         ("i_max", f8),  # stator current magnitude limit, A
         ("v_max", f8),  # voltage magnitude limit (the inverter's linear range), V
         ("decouple", b1),  # cross-coupling and back-emf feed-forward on
+        ("angle_advance", f8),  # where in the next periods the voltage acts, periods (0.5, 1.5)
+        ("dtc_u", f8),  # dead-time compensation: assumed t_d f_sw Vdc_meas per phase, V (0: off)
+        ("dtc_band", f8),  # its current band (smooth sign), A
     ]
 )
 
@@ -175,8 +178,9 @@ def foc_step(p, m, s, i_a, i_b, w_fb_m, w_ref_m, psi_ref, i_inj, Ts):
         s.int_dq.imag + (ki * Ts * e_q + (v_q - v_q_unsat)),
     )
 
-    # back to the stationary frame at the middle of the period, where the held voltage acts
-    th_mid = th + 0.5 * w_e * Ts
+    # back to the stationary frame at the middle of the period where the held voltage acts:
+    # half a period ahead, or 1.5 periods with a one-period computation delay
+    th_mid = th + p.angle_advance * w_e * Ts
     cm = math.cos(th_mid)
     sm = math.sin(th_mid)
     v_a = cm * v_d - sm * v_q
@@ -203,3 +207,20 @@ def log_control(row, s, w_ref_m, theta_k):
     row.i_d = s.i_s_dq.real
     row.i_q = s.i_s_dq.imag
     row.theta_e = theta_k
+
+
+@njit(cache=True)
+def dead_time_feedforward(p, i_a, i_b):
+    """Dead-time compensation added to the voltage reference, ``(alpha, beta)``, V.
+
+    Each phase's pole voltage is raised by ``sgn_b(i_x) u`` with ``u = t_d,assumed f_sw
+    Vdc_meas`` (``p.dtc_u``), the averaged loss the dead time causes, signed by the measured
+    phase current (smooth inside ``p.dtc_band``).
+    """
+    ia, ib, ic = phase_values(i_a, i_b)
+    u = p.dtc_u
+    return clarke(
+        smooth_sign(ia, p.dtc_band) * u,
+        smooth_sign(ib, p.dtc_band) * u,
+        smooth_sign(ic, p.dtc_band) * u,
+    )

@@ -1,22 +1,100 @@
 """Sensors: what the controller measures of the plant.
 
-Today the current sensor adds a constant offset to the stator current space vector (the
-``[sensor]`` section); gain errors, noise and quantisation plug in here.
+Current sensors
+    The 0.1 model (``phase_model`` off, the default) adds a constant offset to the stator current
+    space vector. The per-phase model measures phases a and b (two sensors, ``i_c = -i_a - i_b``
+    as in most drives), each with its own gain and offset, Gaussian noise (seeded, reproducible:
+    a counter-based generator keyed by seed, drive sample and phase, so a run, a continued run
+    and a batch run draw the same numbers) and ADC quantisation (``bits`` over ``±range``,
+    mid-tread, clipped at the range)::
+
+        i_x,meas = Q(g_x i_x + o_x + n_x),   Q(u) = clip(q round(u/q), -range, range - q),
+        q = 2 range / 2^bits
+
+DC-link voltage sensor
+    The controller turns voltages into duty cycles with ``Vdc_meas = g_dc Vdc``; a gain error
+    scales every applied voltage by ``1/g_dc``.
 """
 
+import math
+
+import numpy as np
 from numba import njit
 
-from imdrive.kernels.records import c16, record_dtype
+from imdrive.kernels.records import b1, c16, f8, i8, record_dtype
 
 #: Parameters of the sensors.
 SENSOR_PARAMS = record_dtype(
     [
-        ("i_offset_ab", c16),  # offset added to the measured stator current, A
+        ("i_offset_ab", c16),  # offset added to the measured stator current vector, A (0.1)
+        ("phase_model", b1),  # per-phase current sensors below are active
+        ("gain_a", f8),  # gain of the phase-a current sensor
+        ("gain_b", f8),
+        ("offset_a", f8),  # offset of the phase-a current sensor, A
+        ("offset_b", f8),
+        ("noise_rms", f8),  # rms of the Gaussian noise of each current sensor, A
+        ("adc_bits", i8),  # ADC resolution, bits (0: no quantisation)
+        ("adc_range", f8),  # ADC full scale, ±A
+        ("seed", i8),  # noise seed
+        ("vdc_gain", f8),  # gain of the DC-link voltage sensor
     ]
 )
 
+#: Log fields written by the engine: the measured current, A.
+LOG_FIELDS = ("i_alpha_meas", "i_beta_meas")
+
+_GOLDEN = np.uint64(0x9E3779B97F4A7C15)
+_M1 = np.uint64(0xBF58476D1CE4E5B9)
+_M2 = np.uint64(0x94D049BB133111EB)
+
 
 @njit(cache=True)
-def measure_current(p, i_s_a, i_s_b):
-    """Measured stator current ``(i_alpha, i_beta)``, A: the true one plus the offset."""
-    return i_s_a + p.i_offset_ab.real, i_s_b + p.i_offset_ab.imag
+def _mix(z):
+    """splitmix64's finaliser: a 64-bit hash with good avalanche (Steele, Lea, Flood 2014)."""
+    z = (z ^ (z >> np.uint64(30))) * _M1
+    z = (z ^ (z >> np.uint64(27))) * _M2
+    return z ^ (z >> np.uint64(31))
+
+
+@njit(cache=True)
+def _uniform(seed, k, channel):
+    """A uniform number in (0, 1) for (seed, sample, channel), independent of call order."""
+    z = _mix(np.uint64(seed) * _GOLDEN + np.uint64(k))
+    z = _mix(z + np.uint64(channel + 1) * _GOLDEN)
+    return ((z >> np.uint64(11)) + np.uint64(1)) * (1.0 / 9007199254740994.0)
+
+
+@njit(cache=True)
+def gaussian(seed, k, channel):
+    """A standard normal number for (seed, sample, channel) (Box-Muller on two uniforms)."""
+    u1 = _uniform(seed, k, 2 * channel)
+    u2 = _uniform(seed, k, 2 * channel + 1)
+    return math.sqrt(-2.0 * math.log(u1)) * math.cos(2.0 * math.pi * u2)
+
+
+@njit(cache=True)
+def quantise(u, bits, full_scale):
+    """Mid-tread ADC: ``bits`` over ``±full_scale`` (``bits = 0``: no quantisation)."""
+    if bits <= 0:
+        return u
+    q = 2.0 * full_scale / (2.0**bits)
+    v = q * round(u / q)
+    return min(max(v, -full_scale), full_scale - q)
+
+
+@njit(cache=True)
+def measure_current(p, i_s_a, i_s_b, k):
+    """Measured stator current ``(i_alpha, i_beta)`` at sample ``k``, A."""
+    if not p.phase_model:
+        return i_s_a + p.i_offset_ab.real, i_s_b + p.i_offset_ab.imag
+    ia = i_s_a
+    ib = -0.5 * i_s_a + 0.5 * math.sqrt(3.0) * i_s_b
+    ma = p.gain_a * ia + p.offset_a
+    mb = p.gain_b * ib + p.offset_b
+    if p.noise_rms > 0.0:
+        ma += p.noise_rms * gaussian(p.seed, k, 0)
+        mb += p.noise_rms * gaussian(p.seed, k, 1)
+    ma = quantise(ma, p.adc_bits, p.adc_range)
+    mb = quantise(mb, p.adc_bits, p.adc_range)
+    # two sensors, i_c = -i_a - i_b: alpha = i_a, beta = (i_a + 2 i_b)/sqrt(3)
+    return ma + p.i_offset_ab.real, (ma + 2.0 * mb) / math.sqrt(3.0) + p.i_offset_ab.imag

@@ -31,7 +31,7 @@ from imdrive.kernels.engine import (
 )
 from imdrive.kernels.estimators.mras import MRAS_PARAMS, MRAS_STATE
 from imdrive.kernels.ifoc import CONTROL_PARAMS, CONTROL_STATE
-from imdrive.kernels.inverter import INVERTER_CODES, INVERTER_PARAMS
+from imdrive.kernels.inverter import INVERTER_CODES, INVERTER_PARAMS, INVERTER_STATE
 from imdrive.kernels.machine import PLANT_PARAMS, initial_plant_state
 from imdrive.kernels.model import MODEL_STATE
 from imdrive.kernels.records import new_record
@@ -95,6 +95,12 @@ def _vf_profiles(sc: Scenario) -> tuple[Profile, Profile]:
     return v_peak, ol.frequency_Hz
 
 
+def _assumed_dead_time(sc: Scenario) -> float:
+    """The dead time the controller's compensation assumes, s (default: the inverter's)."""
+    t = sc.control.dead_time_compensation_s
+    return sc.inverter.dead_time_s if t is None else t
+
+
 def build_arrays(sc: Scenario) -> DriveArrays:
     """Fill every block's parameter and state records from the scenario."""
     check_log_size(sc)
@@ -136,13 +142,34 @@ def build_arrays(sc: Scenario) -> DriveArrays:
         w_lim=sc.simulation.divergence_speed_rpm * RPM,
         mode=DRIVE_FOC if sc.drive.mode == "vector" else DRIVE_OPEN_LOOP,
         sensorless=ctl.speed_feedback == "mras",
+        delay=ctl.delay_periods,
     )
+    inv = sc.inverter
     inverter = new_record(
-        INVERTER_PARAMS, Vdc=sc.inverter.Vdc_V, model=INVERTER_CODES[sc.inverter.model]
+        INVERTER_PARAMS,
+        Vdc=inv.Vdc_V,
+        model=INVERTER_CODES[inv.model],
+        t_d=inv.dead_time_s,
+        v_drop=inv.device_drop_V,
+        i_band=inv.sign_band_A,
+        f_sw=inv.switching_frequency_Hz,
     )
+    sen = sc.sensor
     sensor = new_record(
-        SENSOR_PARAMS, i_offset_ab=complex(sc.sensor.i_offset_alpha_A, sc.sensor.i_offset_beta_A)
+        SENSOR_PARAMS,
+        i_offset_ab=complex(sen.i_offset_alpha_A, sen.i_offset_beta_A),
+        phase_model=sen.per_phase,
+        gain_a=sen.gain_a,
+        gain_b=sen.gain_b,
+        offset_a=sen.offset_a_A,
+        offset_b=sen.offset_b_A,
+        noise_rms=sen.noise_rms_A,
+        adc_bits=sen.adc_bits or 0,
+        adc_range=sen.adc_range_A,
+        seed=sen.seed,
+        vdc_gain=sen.vdc_gain,
     )
+    Vdc_meas = sen.vdc_gain * inv.Vdc_V
 
     # the controller's own machine model
     R1h = est.R1_ohm if est.R1_ohm is not None else m.R1_ohm
@@ -179,8 +206,15 @@ def build_arrays(sc: Scenario) -> DriveArrays:
         kp_i=gains["current_kp"],
         ki_i=gains["current_ki"],
         i_max=i_max,
-        v_max=sc.inverter.Vdc_V / math.sqrt(3.0),
+        v_max=Vdc_meas / math.sqrt(3.0),
         decouple=ctl.decoupling,
+        angle_advance=0.5 + (ctl.delay_periods if ctl.delay_compensation else 0),
+        dtc_u=(
+            _assumed_dead_time(sc) * inv.switching_frequency_Hz * Vdc_meas
+            if ctl.dead_time_compensation == "feedforward"
+            else 0.0
+        ),
+        dtc_band=inv.sign_band_A,
     )
     mras = new_record(MRAS_PARAMS, wc=sc.mras.wc_rad_s, K1=gains["mras_K1"], K2=gains["mras_K2"])
 
@@ -248,6 +282,7 @@ def build_arrays(sc: Scenario) -> DriveArrays:
         control=np.zeros(1, dtype=CONTROL_STATE),
         mras=np.zeros(1, dtype=MRAS_STATE),
         comp=np.zeros(1, dtype=COMPENSATOR_STATE),
+        inverter=np.zeros(1, dtype=INVERTER_STATE),
     )
 
     derived = dict(gains)
