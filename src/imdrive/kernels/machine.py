@@ -11,6 +11,16 @@ states the electrical equations are::
     T_e = 1.5 n_p (psi_s x i_s)
     J dw_m/dt = T_e - T_L(t, w_m) - B w_m
 
+Main-flux saturation (``p.saturation``): the magnetising flux ``psi_m = psi_s - Ll1 i_s =
+psi_r - Ll2 i_r`` and current ``i_m = i_s + i_r`` follow the magnetising curve::
+
+    i_m = (psi_m / Lm0) (1 + (|psi_m| / psi_sat)^S)     i.e.  Lm(psi_m) = Lm0 / (1 + (|psi_m|/psi_sat)^S)
+
+a power-law curve, monotone for S > 0 (see :func:`magnetising_current`). Given the states,
+``psi_m`` is parallel to ``psi_s/Ll1 + psi_r/Ll2`` and its magnitude solves a scalar monotone
+equation (Newton, :func:`saturated_currents`). With ``p.saturation`` off the linear T-circuit
+with ``M`` is used, exactly as before.
+
 Winding temperatures follow a first-order thermal model per winding::
 
     tau dtheta/dt = R_th P_cu - (theta - theta_amb),   R = R_ref (1 + alpha (theta - theta_ref))
@@ -59,6 +69,10 @@ PLANT_PARAMS = record_dtype(
         ("tau2", f8),  # rotor thermal time constant, s
         ("thermal", b1),  # thermal model on
         ("speed_imposed", b1),  # w_m follows a profile instead of J dw/dt = Te - TL
+        ("saturation", b1),  # main-flux saturation on (else the linear M above)
+        ("Lm0", f8),  # unsaturated magnetising inductance of the curve, H
+        ("psi_sat", f8),  # saturation flux of the curve, Wb
+        ("S", f8),  # exponent of the curve
     ]
 )
 
@@ -110,12 +124,81 @@ def currents_from_fluxes(psi_s_a, psi_s_b, psi_r_a, psi_r_b, L1, L2, M):
 
 
 @njit(cache=True)
-def stator_current(p, x):
-    """Stator current ``(i_s_alpha, i_s_beta)`` of plant state ``x``, A."""
+def _power(y, S):
+    """``y**S`` for ``y >= 0``; by repeated squaring when ``S`` is a small whole number (the
+    saturation curve is evaluated several times per RK4 stage: ``pow`` would dominate)."""
+    n = int(S)
+    if n == S and 0 < n <= 64:
+        r = 1.0
+        b = y
+        while n > 0:
+            if n & 1:
+                r *= b
+            b *= b
+            n >>= 1
+        return r
+    return y**S
+
+
+@njit(cache=True)
+def magnetising_current(psi_m, Lm0, psi_sat, S):
+    """Magnitude of the magnetising current on the curve at flux magnitude ``psi_m``, A."""
+    return psi_m / Lm0 * (1.0 + _power(psi_m / psi_sat, S))
+
+
+@njit(cache=True)
+def magnetising_energy(psi_m, Lm0, psi_sat, S):
+    """Energy of the magnetising branch per unit 1.5, ``int_0^psi_m i_m dpsi``, J."""
+    return psi_m * psi_m / (2.0 * Lm0) + psi_m ** (S + 2.0) / ((S + 2.0) * Lm0 * psi_sat**S)
+
+
+@njit(cache=True)
+def saturated_currents(p, psi_s_a, psi_s_b, psi_r_a, psi_r_b):
+    """Stator and rotor currents with main-flux saturation, A; and ``|psi_m|``, Wb.
+
+    ``psi_m = k psi_x`` with ``psi_x = psi_s/Ll1 + psi_r/Ll2``, where ``m = |psi_m|`` solves
+    ``G m + i_m(m) = |psi_x|``, ``G = 1/Ll1 + 1/Ll2`` (monotone and convex: Newton from the
+    linear solution with ``M`` converges in two or three steps near rated flux).
+    """
+    x_a = psi_s_a / p.Ll1 + psi_r_a / p.Ll2
+    x_b = psi_s_b / p.Ll1 + psi_r_b / p.Ll2
+    X = math.sqrt(x_a * x_a + x_b * x_b)
+    G = 1.0 / p.Ll1 + 1.0 / p.Ll2
+    m = X / (G + 1.0 / p.M)  # the linear solution with M, the curve's value near rated flux
+    for _ in range(30):
+        r = _power(m / p.psi_sat, p.S)
+        F = G * m + m / p.Lm0 * (1.0 + r) - X
+        dF = G + (1.0 + (p.S + 1.0) * r) / p.Lm0
+        step = F / dF
+        m -= step
+        if abs(step) <= 1e-14 * (m + 1e-300):
+            break
+    k = m / X if X > 0.0 else 0.0
+    pm_a = k * x_a
+    pm_b = k * x_b
+    i_s_a = (psi_s_a - pm_a) / p.Ll1
+    i_s_b = (psi_s_b - pm_b) / p.Ll1
+    i_r_a = (psi_r_a - pm_a) / p.Ll2
+    i_r_b = (psi_r_b - pm_b) / p.Ll2
+    return i_s_a, i_s_b, i_r_a, i_r_b, m
+
+
+@njit(cache=True)
+def plant_currents(p, psi_s_a, psi_s_b, psi_r_a, psi_r_b):
+    """Stator and rotor currents of the plant (linear or saturated), A."""
+    if p.saturation:
+        i_s_a, i_s_b, i_r_a, i_r_b, _ = saturated_currents(p, psi_s_a, psi_s_b, psi_r_a, psi_r_b)
+        return i_s_a, i_s_b, i_r_a, i_r_b
     L1 = p.Ll1 + p.M
     L2 = p.Ll2 + p.M
-    i_s_a, i_s_b, _, _ = currents_from_fluxes(
-        x.psi_s_ab.real, x.psi_s_ab.imag, x.psi_r_ab.real, x.psi_r_ab.imag, L1, L2, p.M
+    return currents_from_fluxes(psi_s_a, psi_s_b, psi_r_a, psi_r_b, L1, L2, p.M)
+
+
+@njit(cache=True)
+def stator_current(p, x):
+    """Stator current ``(i_s_alpha, i_s_beta)`` of plant state ``x``, A."""
+    i_s_a, i_s_b, _, _ = plant_currents(
+        p, x.psi_s_ab.real, x.psi_s_ab.imag, x.psi_r_ab.real, x.psi_r_ab.imag
     )
     return i_s_a, i_s_b
 
@@ -159,9 +242,6 @@ def machine_derivative(p, x, v_a, v_b, R1_base, R2_base, TL0, dx):
     dx : PLANT_STATE record
         Output.
     """
-    L1 = p.Ll1 + p.M
-    L2 = p.Ll2 + p.M
-    M = p.M
     n_p = p.n_p
     psi_s_a = x.psi_s_ab.real
     psi_s_b = x.psi_s_ab.imag
@@ -169,7 +249,7 @@ def machine_derivative(p, x, v_a, v_b, R1_base, R2_base, TL0, dx):
     psi_r_b = x.psi_r_ab.imag
     w_m = x.w_m
     R1, R2 = winding_resistances(p, x, R1_base, R2_base)
-    i_s_a, i_s_b, i_r_a, i_r_b = currents_from_fluxes(psi_s_a, psi_s_b, psi_r_a, psi_r_b, L1, L2, M)
+    i_s_a, i_s_b, i_r_a, i_r_b = plant_currents(p, psi_s_a, psi_s_b, psi_r_a, psi_r_b)
     w_r = n_p * w_m
     dx.psi_s_ab = complex(v_a - R1 * i_s_a, v_b - R1 * i_s_b)
     dx.psi_r_ab = complex(-R2 * i_r_a - w_r * psi_r_b, -R2 * i_r_b + w_r * psi_r_a)
@@ -269,13 +349,21 @@ def integrate_segment(p, x, v_a, v_b, R1b, R2b, TL0, dt, nsub, work):
 
 @njit(cache=True)
 def magnetic_energy(p, x):
-    """Energy stored in the magnetic field, 1.5 * 0.5 * (psi_s.i_s + psi_r.i_r), J."""
-    L1 = p.Ll1 + p.M
-    L2 = p.Ll2 + p.M
+    """Energy stored in the magnetic field, J.
+
+    Linear: ``1.5 * 0.5 * (psi_s.i_s + psi_r.i_r)``. Saturated: the leakage energies
+    ``1.5 * 0.5 (Ll1 |i_s|^2 + Ll2 |i_r|^2)`` plus ``1.5 int i_m dpsi_m`` along the curve.
+    """
     psi_s_a = x.psi_s_ab.real
     psi_s_b = x.psi_s_ab.imag
     psi_r_a = x.psi_r_ab.real
     psi_r_b = x.psi_r_ab.imag
+    if p.saturation:
+        i_s_a, i_s_b, i_r_a, i_r_b, m = saturated_currents(p, psi_s_a, psi_s_b, psi_r_a, psi_r_b)
+        leak = p.Ll1 * (i_s_a**2 + i_s_b**2) + p.Ll2 * (i_r_a**2 + i_r_b**2)
+        return 0.75 * leak + 1.5 * magnetising_energy(m, p.Lm0, p.psi_sat, p.S)
+    L1 = p.Ll1 + p.M
+    L2 = p.Ll2 + p.M
     i_s_a, i_s_b, i_r_a, i_r_b = currents_from_fluxes(
         psi_s_a, psi_s_b, psi_r_a, psi_r_b, L1, L2, p.M
     )

@@ -95,6 +95,18 @@ def _vf_profiles(sc: Scenario) -> tuple[Profile, Profile]:
     return v_peak, ol.frequency_Hz
 
 
+def saturation_curve(sc: Scenario) -> dict:
+    """The plant's magnetising-curve fields (see ``SaturationSettings``)."""
+    sat = sc.plant.saturation
+    m = sc.machine
+    rho, S = sat.rated_ratio, sat.exponent
+    Lm0 = sat.Lm0_H if sat.Lm0_H is not None else m.M_H / rho
+    psi_sat = sat.psi_sat_Wb
+    if psi_sat is None:
+        psi_sat = m.rated_flux_Wb * (rho / (1.0 - rho)) ** (1.0 / S)
+    return {"saturation": sat.enabled, "Lm0": Lm0, "psi_sat": psi_sat, "S": S}
+
+
 def _assumed_dead_time(sc: Scenario) -> float:
     """The dead time the controller's compensation assumes, s (default: the inverter's)."""
     t = sc.control.dead_time_compensation_s
@@ -133,6 +145,7 @@ def build_arrays(sc: Scenario) -> DriveArrays:
         tau2=th.tau2_s,
         thermal=th.enabled,
         speed_imposed=sc.plant.speed_mode == "imposed",
+        **saturation_curve(sc),
     )
     sim = new_record(
         SIM_PARAMS,
