@@ -153,7 +153,9 @@ def _finite_state(smp, mdl, ctl, est, cmp):
 
 
 @njit(cache=True)
-def switching_period(pinv, sinv, pp, x, v_a, v_b, Vdc_meas, R1b, R2b, TL0, Ts, nsub, work, ev):
+def switching_period(
+    pinv, sinv, pp, x, v_a, v_b, Vdc_meas, R1b, R2b, TL0, Ts, nsub, work, ev, trace
+):
     """Integrate the plant over one carrier period of the switching bridge (updates ``x``).
 
     The gate commands of the period (:func:`imdrive.kernels.inverter.gate_commands`) and the
@@ -162,7 +164,9 @@ def switching_period(pinv, sinv, pp, x, v_a, v_b, Vdc_meas, R1b, R2b, TL0, Ts, n
     current at a command instant (from the integrated state) decides its dead-time
     transition. Returns the period-average voltage applied at the terminals, V.
 
-    ``ev`` is float64[3, MAX_EVENTS] scratch (times, legs, states).
+    ``ev`` is float64[3, MAX_EVENTS] scratch (times, legs, states). ``trace``, float64[n, 3],
+    receives ``(t, i_alpha, i_beta)`` at the start of every interval while it has rows (pass a
+    zero-row array for none): the current ripple's extremes are at these instants.
     """
     d = duty_cycles(v_a, v_b, Vdc_meas)
     ev_t = ev[0]
@@ -171,6 +175,7 @@ def switching_period(pinv, sinv, pp, x, v_a, v_b, Vdc_meas, R1b, R2b, TL0, Ts, n
     n = gate_commands(sinv, d, Ts, ev_t, ev_leg, ev_state)
     t = 0.0
     j = 0
+    n_tr = 0
     acc_a = 0.0
     acc_b = 0.0
     while True:
@@ -188,6 +193,11 @@ def switching_period(pinv, sinv, pp, x, v_a, v_b, Vdc_meas, R1b, R2b, TL0, Ts, n
             leg = int(ev_leg[j])
         if t_next > t:
             i_s_a, i_s_b = stator_current(pp, x)
+            if n_tr < trace.shape[0]:
+                trace[n_tr, 0] = t
+                trace[n_tr, 1] = i_s_a
+                trace[n_tr, 2] = i_s_b
+                n_tr += 1
             va, vb = pole_voltages_ab(pinv, sinv, pinv.Vdc, i_s_a, i_s_b)
             integrate_segment(pp, x, va, vb, R1b, R2b, TL0, t_next - t, nsub, work)
             acc_a += (t_next - t) * va
@@ -277,6 +287,7 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
     seg_va = np.empty(MAX_SEGMENTS)
     seg_vb = np.empty(MAX_SEGMENTS)
     ev = np.empty((3, MAX_EVENTS))
+    no_trace = np.empty((0, 3))
 
     for k in range(n_steps + 1 if final else n_steps):
         t = (k0 + k) * Ts
@@ -404,7 +415,21 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
         # --- plant over the period
         if switching:
             v_app_a, v_app_b = switching_period(
-                pinv, sinv, pp, x, v_cmd_a, v_cmd_b, Vdc_meas, R1b, R2b, TL0, Ts, nsub, work, ev
+                pinv,
+                sinv,
+                pp,
+                x,
+                v_cmd_a,
+                v_cmd_b,
+                Vdc_meas,
+                R1b,
+                R2b,
+                TL0,
+                Ts,
+                nsub,
+                work,
+                ev,
+                no_trace,
             )
             if log_every > 0 and k % log_every == 0 and k // log_every < n_rows:
                 log[k // log_every].v_alpha = v_app_a  # the true average, known only now

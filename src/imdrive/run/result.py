@@ -32,7 +32,11 @@ STATUS_TEXT = {
 STATUS_SIGNAL = {S_NAN: "state", S_CURRENT: "i_s_A", S_SPEED: "speed_rpm"}
 
 #: The units table: log field (SI, see each block's LOG_FIELDS) -> (unit, scale). The exported
-#: column is ``f"{field}_{unit}"`` holding ``log[field] * scale``.
+#: column is ``f"{field}_{unit}"`` holding ``log[field] * scale``. ``v_alpha_V``/``v_beta_V``
+#: are the period-average voltage applied at the terminals over [t_k, t_k + Ts) (the bridge's
+#: true average with the switching model, dead time included; the commanded one at the last
+#: sample, which has no period after it); ``v_ref_*`` the controller's reference at sample k;
+#: ``i_*_meas_A`` what the current sensors report, ``i_alpha_A``/``i_beta_A`` the true current.
 LOG_UNITS = {
     "time": ("s", 1.0),
     "speed": ("rpm", 1.0 / RPM),
@@ -49,6 +53,10 @@ LOG_UNITS = {
     "theta2": ("C", 1.0),
     "v_alpha": ("V", 1.0),
     "v_beta": ("V", 1.0),
+    "v_ref_alpha": ("V", 1.0),
+    "v_ref_beta": ("V", 1.0),
+    "i_alpha_meas": ("A", 1.0),
+    "i_beta_meas": ("A", 1.0),
     "speed_ref": ("rpm", 1.0 / RPM),
     "id_ref": ("A", 1.0),
     "iq_ref": ("A", 1.0),
@@ -71,7 +79,8 @@ _DIRECT["w_m_rad_s"] = ("speed", 1.0)  # the speed in SI as well
 
 OPEN_LOOP_COLUMNS = (
     "time_s speed_rpm w_m_rad_s torque_Nm load_torque_Nm i_a_A i_b_A i_c_A i_alpha_A i_beta_A "
-    "psi_r_alpha_Wb psi_r_beta_Wb v_alpha_V v_beta_V R1_ohm R2_ohm flux_Wb theta1_C theta2_C"
+    "i_alpha_meas_A i_beta_meas_A psi_r_alpha_Wb psi_r_beta_Wb v_alpha_V v_beta_V "
+    "v_ref_alpha_V v_ref_beta_V R1_ohm R2_ohm flux_Wb theta1_C theta2_C"
 ).split()
 VECTOR_COLUMNS = (
     OPEN_LOOP_COLUMNS
