@@ -81,7 +81,7 @@ class SaturationSettings:
 
     The magnetising curve (:mod:`imdrive.kernels.machine`)::
 
-        i_m = (psi_m / Lm0) (1 + (|psi_m| / psi_sat)^S),   Lm(psi_m) = Lm0 / (1 + (psi_m/psi_sat)^S)
+        i_m = (psi_m / Lm0) (1 + (|psi_m| / psi_sat)^S),  Lm = Lm0 / (1 + (psi_m/psi_sat)^S)
 
     The paper gives no magnetising curve and none was measured for its 3 hp machine, so the
     default is a modelling choice, stated: the curve passes through the machine's ``M_H`` at

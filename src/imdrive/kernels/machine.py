@@ -14,7 +14,7 @@ states the electrical equations are::
 Main-flux saturation (``p.saturation``): the magnetising flux ``psi_m = psi_s - Ll1 i_s =
 psi_r - Ll2 i_r`` and current ``i_m = i_s + i_r`` follow the magnetising curve::
 
-    i_m = (psi_m / Lm0) (1 + (|psi_m| / psi_sat)^S)     i.e.  Lm(psi_m) = Lm0 / (1 + (|psi_m|/psi_sat)^S)
+    i_m = (psi_m / Lm0) (1 + (|psi_m| / psi_sat)^S),  i.e.  Lm = Lm0 / (1 + (|psi_m|/psi_sat)^S)
 
 a power-law curve, monotone for S > 0 (see :func:`magnetising_current`). Given the states,
 ``psi_m`` is parallel to ``psi_s/Ll1 + psi_r/Ll2`` and its magnitude solves a scalar monotone
