@@ -43,7 +43,8 @@ def bench_kernel(repeat: int, preset: str = "free-acceleration") -> dict:
     from imdrive.config.scenario import Scenario
     from imdrive.run.simulate import simulate
 
-    sc = Scenario.read(preset)
+    name, _, sets = preset.partition(":")
+    sc = Scenario.read(name, [o for o in sets.split(",") if o])
     t_sim = sc.simulation.t_end_s
     res = simulate(sc)  # compile or load from the cache; not timed
     kernel, whole = [], []
@@ -130,7 +131,8 @@ def main(argv=None) -> int:
     ap.add_argument(
         "--preset",
         action="append",
-        help="preset(s) whose kernel time to measure (repeatable; default free-acceleration)",
+        help="preset(s) whose kernel time to measure, each optionally with overrides as "
+        "NAME:key=value,key=value (repeatable; default free-acceleration)",
     )
     ap.add_argument("--no-cli", action="store_true", help="skip the cold/warm CLI runs")
     ap.add_argument("--motulator", action="store_true", help="also run bench_motulator.py")

@@ -45,7 +45,13 @@ from imdrive.kernels.inverter import (
     phase_values,
     pole_voltages_ab,
 )
-from imdrive.kernels.machine import PLANT_STATE, integrate_segment, log_plant, stator_current
+from imdrive.kernels.machine import (
+    PLANT_STATE,
+    integrate_segment,
+    integrate_short,
+    log_plant,
+    stator_current,
+)
 from imdrive.kernels.profiles import (
     PR_FLUX_REF,
     PR_FREQ,
@@ -176,6 +182,8 @@ def switching_period(
     t = 0.0
     j = 0
     n_tr = 0
+    need_current = pinv.v_drop > 0.0 or trace.shape[0] > 0
+    short = Ts / (40.0 * nsub)  # intervals up to this long take one RK2 step
     acc_a = 0.0
     acc_b = 0.0
     while True:
@@ -192,23 +200,31 @@ def switching_period(
             kind = 1
             leg = int(ev_leg[j])
         if t_next > t:
-            i_s_a, i_s_b = stator_current(pp, x)
+            i_s_a = 0.0
+            i_s_b = 0.0
+            if need_current:  # the device drops' sign, or the trace
+                i_s_a, i_s_b = stator_current(pp, x)
             if n_tr < trace.shape[0]:
                 trace[n_tr, 0] = t
                 trace[n_tr, 1] = i_s_a
                 trace[n_tr, 2] = i_s_b
                 n_tr += 1
             va, vb = pole_voltages_ab(pinv, sinv, pinv.Vdc, i_s_a, i_s_b)
-            integrate_segment(pp, x, va, vb, R1b, R2b, TL0, t_next - t, nsub, work)
+            if t_next - t <= short:
+                integrate_short(pp, x, va, vb, R1b, R2b, TL0, t_next - t)
+            else:
+                integrate_segment(pp, x, va, vb, R1b, R2b, TL0, t_next - t, nsub, work)
             acc_a += (t_next - t) * va
             acc_b += (t_next - t) * vb
             t = t_next
         if kind == 0:
             break
         if kind == 1:
-            i_s_a, i_s_b = stator_current(pp, x)
-            i_ph = phase_values(i_s_a, i_s_b)
-            apply_command(pinv, sinv, leg, ev_state[j], i_ph[leg], t)
+            i_leg = 0.0
+            if pinv.t_d > 0.0:  # the dead time's direction needs the leg's current
+                i_s_a, i_s_b = stator_current(pp, x)
+                i_leg = phase_values(i_s_a, i_s_b)[leg]
+            apply_command(pinv, sinv, leg, ev_state[j], i_leg, t)
             j += 1
         else:
             sinv.pole[leg] = sinv.pend_s[leg]
