@@ -1,0 +1,1 @@
+"""Stability maps of the sensorless drive: steady state, small-signal model, maps."""
