@@ -280,3 +280,38 @@ def propagate(P, S, i, z, n_steps, th1, th2, zout):
     status, _ = run_drive(P, S, i, n_steps, np.empty(0, dtype=LOG), 0, 0, False)
     pack_state(S, i, zout)
     return status
+
+
+@njit(cache=True, parallel=True)
+def step_check(P, S, Z, TH, n_steps, n_win, peaks, status):
+    """Simulate every drive ``i`` from its fixed point ``Z[i]``; peak speed-loop error per window.
+
+    The caller has already moved each drive's speed reference (a small step). The error is the
+    speed feedback minus the reference (MRAS estimate or measured speed, mechanical rad/s);
+    ``peaks[i, w]`` is its largest magnitude over periods ``w n_win ... (w + 1) n_win - 1``.
+    ``status[i]`` is the engine status (a diverged drive keeps NaN in the windows not reached).
+    """
+    n = Z.shape[0]
+    for i in prange(n):
+        unpack_state(Z[i], S, i)
+        x = S.plant[i]
+        est = S.mras[i]
+        x.theta1 = TH[i, 0]
+        x.theta2 = TH[i, 1]
+        n_p = P.plant[i].n_p
+        sensorless = P.sim[i].sensorless
+        w_ref = P.prof_v[i][PR_SPEED_REF, 0]
+        for w in range(peaks.shape[1]):
+            peaks[i, w] = np.nan
+        st = S_OK
+        for k in range(n_steps):
+            st, _ = run_drive(P, S, i, 1, np.empty(0, dtype=LOG), 0, k, False)
+            if st != S_OK:
+                break
+            w_fb = est.w_r_hat / n_p if sensorless else x.w_m
+            e = abs(w_fb - w_ref)
+            w = k // n_win
+            if w < peaks.shape[1]:
+                if not (peaks[i, w] >= e):
+                    peaks[i, w] = e
+        status[i] = st

@@ -388,7 +388,6 @@ def solve_operating_points(sc: Scenario, speeds_rpm, torques_Nm) -> OperatingPoi
         Z[good] = _initial_state(c, d.Ts, iq[good], w_m[good], w_ref[good])
     A = np.full((n, kl.N_Z, kl.N_Z), np.nan)
     B = np.full((n, kl.N_Z, kl.N_U), np.nan)
-    st = np.zeros(n, dtype=np.int64)
     res = np.full(n, np.nan)
     its = np.zeros(n, dtype=np.int64)
     idx = np.flatnonzero(good)
