@@ -283,24 +283,23 @@ def propagate(P, S, i, z, n_steps, th1, th2, zout):
 
 
 @njit(cache=True, parallel=True)
-def step_check(P, S, Z, TH, n_steps, n_win, peaks, status):
-    """Simulate every drive ``i`` from its fixed point ``Z[i]``; peak speed-loop error per window.
+def step_check(P, S, Z0, Z1, TH, n_steps, n_win, peaks, status):
+    """Simulate every drive ``i`` from ``Z0[i]``; per window, its largest distance to ``Z1[i]``.
 
-    The caller has already moved each drive's speed reference (a small step). The error is the
-    speed feedback minus the reference (MRAS estimate or measured speed, mechanical rad/s);
-    ``peaks[i, w]`` is its largest magnitude over periods ``w n_win ... (w + 1) n_win - 1``.
-    ``status[i]`` is the engine status (a diverged drive keeps NaN in the windows not reached).
+    ``Z0`` is the starting reduced state (a fixed point, perturbed), ``Z1`` the fixed point of
+    the drive's own (stepped) references, the state a stable loop settles to. The distance is
+    ``max_j |z_j - Z1_j| / (|Z1_j| + Z_SCALE_j)`` of the reduced state (rotated into the
+    controller's frame every period); ``peaks[i, w]`` is its largest value over periods
+    ``w n_win ... (w + 1) n_win - 1``. ``status[i]`` is the engine status (a diverged drive
+    keeps NaN in the windows it did not reach).
     """
-    n = Z.shape[0]
+    n = Z0.shape[0]
     for i in prange(n):
-        unpack_state(Z[i], S, i)
+        unpack_state(Z0[i], S, i)
         x = S.plant[i]
-        est = S.mras[i]
         x.theta1 = TH[i, 0]
         x.theta2 = TH[i, 1]
-        n_p = P.plant[i].n_p
-        sensorless = P.sim[i].sensorless
-        w_ref = P.prof_v[i][PR_SPEED_REF, 0]
+        z = np.empty(N_Z)
         for w in range(peaks.shape[1]):
             peaks[i, w] = np.nan
         st = S_OK
@@ -308,8 +307,10 @@ def step_check(P, S, Z, TH, n_steps, n_win, peaks, status):
             st, _ = run_drive(P, S, i, 1, np.empty(0, dtype=LOG), 0, k, False)
             if st != S_OK:
                 break
-            w_fb = est.w_r_hat / n_p if sensorless else x.w_m
-            e = abs(w_fb - w_ref)
+            pack_state(S, i, z)
+            e = 0.0
+            for j in range(N_Z):
+                e = max(e, abs(z[j] - Z1[i, j]) / (abs(Z1[i, j]) + Z_SCALE[j]))
             w = k // n_win
             if w < peaks.shape[1]:
                 if not (peaks[i, w] >= e):

@@ -73,7 +73,7 @@ STATUS_NONE = "no_steady_state"  # no equilibrium (e.g. zero stator frequency wi
 STATUS_DIVERGED = "diverged"  # the one-period map left the engine's bounds
 
 _NEWTON_TOL = 1e-10
-_NEWTON_ITER = 12
+_NEWTON_ITER = 40
 
 
 # ------------------------------------------------------------------------------------------
@@ -330,6 +330,8 @@ class OperatingPoints:
         ``dF/du`` for ``u`` = (speed reference in mechanical rad/s, load torque in N m).
     residual : ndarray
         Scaled fixed-point residual.
+    iterations : ndarray
+        Newton iterations on the discrete map.
     Ts : float
         Control period, s.
     drive : _Drive
@@ -343,6 +345,7 @@ class OperatingPoints:
     A: np.ndarray
     B: np.ndarray
     residual: np.ndarray
+    iterations: np.ndarray
     Ts: float
     drive: _Drive = field(repr=False)
     coeffs: dict = field(repr=False, default_factory=dict)
@@ -364,8 +367,10 @@ def solve_operating_points(sc: Scenario, speeds_rpm, torques_Nm) -> OperatingPoi
     """
     speeds = np.atleast_1d(np.asarray(speeds_rpm, dtype=float))
     torques = np.atleast_1d(np.asarray(torques_Nm, dtype=float))
-    if speeds.shape != torques.shape or speeds.ndim != 1:
-        raise ConfigError("points", "speeds and torques must be 1-D arrays of equal length")
+    if speeds.shape != torques.shape or speeds.ndim != 1 or speeds.size == 0:
+        raise ConfigError("points", "speeds and torques must be 1-D, non-empty, of equal length")
+    if not (np.all(np.isfinite(speeds)) and np.all(np.isfinite(torques))):
+        raise ConfigError("points", "speeds and torques must be finite")
     if sc.compensator.enabled or sc.injection.amplitude_A != 0.0:
         sc = map_scenario(sc)
     n = len(speeds)
@@ -434,6 +439,7 @@ def solve_operating_points(sc: Scenario, speeds_rpm, torques_Nm) -> OperatingPoi
         A=A,
         B=B,
         residual=res,
+        iterations=its,
         Ts=d.Ts,
         drive=d,
         coeffs=c,
