@@ -184,7 +184,7 @@ def test_cli_writes_table_and_figures(tmp_path, capsys):
     out = tmp_path / "st"
     code = main(
         [
-            "stability", "sensorless", "--speeds", "0:1500:6", "--torques", "-20:20:5",
+            "stability", "sensorless", "--speeds", "0:1500:6", "--torques=-20:20:5",
             "--r1-ratios", "1.1", "--out", str(out), "-q",
         ]
     )  # fmt: skip
@@ -204,7 +204,7 @@ def test_cli_writes_table_and_figures(tmp_path, capsys):
         (["--speeds", "1500:0:10"], "--speeds"),
         (["--speeds", "0:1500"], "--speeds"),
         (["--torques", "a:b:3"], "--torques"),
-        (["--torques", "-5:5:1"], "--torques"),
+        (["--torques=-5:5:1"], "--torques"),
         (["--r1-ratios", "1,-1"], "--r1-ratios"),
         (["--set", "mras.wc_rad_s=-1"], "mras.wc_rad_s"),
     ],

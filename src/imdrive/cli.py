@@ -333,7 +333,12 @@ def build_parser() -> argparse.ArgumentParser:
         "--set", action="append", metavar="KEY.PATH=VALUE", help="override (repeatable)"
     )
     st.add_argument("--speeds", default="0:1500:50", metavar="MIN:MAX:N", help="speed refs, rpm")
-    st.add_argument("--torques", default="-24:24:40", metavar="MIN:MAX:N", help="load torques, N m")
+    st.add_argument(
+        "--torques",
+        default="-24:24:40",
+        metavar="MIN:MAX:N",
+        help="load torques, N m (write --torques=-24:24:40 for a negative start)",
+    )
     st.add_argument(
         "--r1-ratios", dest="R1_ratios", metavar="A,B,...", help="overlay maps for R1_hat/R1"
     )
