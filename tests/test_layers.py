@@ -90,6 +90,7 @@ RANK = {
     "run": 5,
     "sweep": 6,
     "studies": 6,
+    "stability": 6,
     "cli": 7,
     "__main__": 7,
 }

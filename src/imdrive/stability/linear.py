@@ -1,0 +1,626 @@
+"""Steady state and small-signal model of the whole sensorless closed loop.
+
+Method
+------
+*Steady state.* With constant references and the compensator frozen, every state of the drive
+is constant in the controller's synchronous frame at the sample instants (the drive is
+rotation-invariant; :mod:`imdrive.kernels.linearise`). The operating point is the fixed point
+``z* = F(z*)`` of the one-period map ``F`` of the discrete closed loop seen in that frame (the
+engine's own period: RK4 plant, MRAS, IFOC, inverter), found by Newton's method on ``F(z) - z``
+with a central-difference Jacobian. Newton needs a good start; it comes from the continuous
+steady state of the loop with imposed currents, solved for the two unknowns ``iq*`` and the
+true speed ``w_m`` (:func:`continuous_steady_state`):
+
+* speed loop (integral action): speed feedback = reference, so in the controller's frame
+  ``w_e = n_p w_fb + w_sl*``, ``w_sl* = (R2_hat/L2_hat) iq*/id*``, ``id* = psi*/M_hat``;
+* current loops (integral action): ``i_s = id* + j iq*`` in that frame;
+* plant: ``psi_r = M i_s / (1 + j (w_e - n_p w_m) T2)``, ``psi_s = L1 i_s + M i_r``,
+  ``T_e = 1.5 n_p Im(psi_s* i_s) = T_L + (B + b) w_m + k_fan w_m |w_m|``;
+* MRAS at rest (Schauder 1992, eqs. 8, 9 of the paper): ``e = Im(lam_hat* lam) = 0``. The
+  adjustable model gives ``lam_hat = M_hat id*`` (real), so the reference model's flux
+  ``(L2_hat/M_hat)[(v - R1_hat i_s)/(j w_e) - sigma_hat L1_hat i_s]`` must be real too; with
+  ``v = R1 i_s + j w_e psi_s``::
+
+      sigma_hat L1_hat iq* - Im(psi_s) + (R1 - R1_hat) id* / w_e = 0
+
+  (the measured-speed drive replaces this by ``w_m = w_ref``). With exact R1 and inductances it
+  says ``Im(psi_r) = 0``: correct orientation, and the R2 error goes into the speed, as in
+  :func:`imdrive.analysis.foc.foc_operating_point` (which this generalises to R1_hat, M_hat,
+  friction and fan loads; a test checks the two agree). The ``1/w_e`` term is the classic
+  difficulty of voltage-model estimators near zero stator frequency (Ohtani, Takada, Tanaka,
+  IEEE Trans. Ind. Appl. 28(1), 1992; Kubota, Matsuse, Nakano, IEEE Trans. Ind. Appl. 29(2),
+  1993): with an R1 error there is no steady state at ``w_e = 0``.
+
+*Linearisation.* The Jacobians ``A = dF/dz``, ``B = dF/du`` at ``z*`` (``u`` = speed
+reference, load torque) are the exact small-signal model of the discrete closed loop at the
+control period Ts: the controller is discrete, so a discrete model represents its sampling and
+one-period computation delay without a Padé or delay approximation; the continuous-time
+eigenvalues reported are ``s = ln(lambda) / Ts``. Why discrete, measured: the linear model
+matches the nonlinear loop's response to 1e-3 relative (tests/test_stability.py).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from imdrive.config.scenario import Scenario
+from imdrive.errors import ConfigError
+from imdrive.kernels import linearise as kl
+from imdrive.kernels import profiles as kp
+from imdrive.kernels.engine import DriveParams, DriveState
+from imdrive.run.build import build_arrays
+
+RPM = 2.0 * math.pi / 60.0  # rad/s per rpm
+
+#: names of the reduced state (see imdrive.kernels.linearise), synchronous frame, SI units
+STATE_NAMES = (
+    "psi_s_d", "psi_s_q", "psi_r_d", "psi_r_q", "w_m",
+    "v_prev_d", "v_prev_q", "i_prev_d", "i_prev_q",
+    "int_w", "int_d", "int_q", "psi_hat",
+    "lam_v_d", "lam_v_q", "lam_i_d", "lam_i_q", "lam_f_d", "lam_f_q", "int_e", "w_r_hat",
+)  # fmt: skip
+INPUT_NAMES = ("speed_ref_rpm", "load_torque_Nm")
+OUTPUT_NAMES = ("speed_rpm", "speed_est_rpm", "i_d_A", "i_q_A")
+
+#: per-point status strings of :func:`solve_operating_points` and the maps
+STATUS_OK = "ok"
+STATUS_CURRENT = "current_limit"  # the load needs more than the controller's current limit
+STATUS_VOLTAGE = "voltage_limit"  # the steady state needs more than the inverter's voltage
+STATUS_NONE = "no_steady_state"  # no equilibrium (e.g. zero stator frequency with R1 error)
+STATUS_DIVERGED = "diverged"  # the one-period map left the engine's bounds
+
+_NEWTON_TOL = 1e-10
+_NEWTON_ITER = 40
+
+
+# ------------------------------------------------------------------------------------------
+# the drive, made stationary
+
+
+def map_scenario(
+    sc: Scenario,
+    *,
+    R1_ratio: float | None = None,
+    R2_ratio: float | None = None,
+    M_ratio: float | None = None,
+) -> Scenario:
+    """The scenario the maps analyse: compensator and injection off, estimates optionally scaled.
+
+    ``R1_ratio`` sets the controller's ``R1_hat = R1_ratio * R1`` (plant R1 at the reference
+    temperature times the final value of ``plant.R1_scale``); likewise ``R2_ratio`` and
+    ``M_ratio`` (``M_hat``). Gains that default from the model (current PIs, MRAS K2) follow
+    the estimates, as they would in a drive commissioned with them.
+    """
+    est = sc.estimator
+    m = sc.machine
+    ch = {}
+    for name, ratio, base in (
+        ("R1_ohm", R1_ratio, m.R1_ohm * sc.plant.R1_scale.final),
+        ("R2_ohm", R2_ratio, m.R2_ohm * sc.plant.R2_scale.final),
+        ("M_H", M_ratio, m.M_H),
+    ):
+        if ratio is not None:
+            if not (math.isfinite(ratio) and ratio > 0):
+                raise ConfigError(f"{name[:2]}_ratio", f"must be finite and > 0 (got {ratio})")
+            ch[name] = ratio * base
+    comp = replace(sc.compensator, enabled=False)
+    inj = replace(sc.injection, amplitude_A=0.0)
+    return replace(sc, estimator=replace(est, **ch), compensator=comp, injection=inj)
+
+
+@dataclass
+class _Drive:
+    """One drive's records with constant profiles, replicated to ``n`` rows."""
+
+    P: DriveParams
+    S: DriveState
+    TH: np.ndarray  # (n, 2) frozen winding temperatures, degC
+    Ts: float
+    v_max: float
+    i_max: float
+
+
+def _stationary_drive(sc: Scenario, speeds_rad_s, torques_Nm) -> _Drive:
+    """Records of ``sc`` with every profile at its final value, references set per row."""
+    if sc.drive.mode != "vector":
+        raise ConfigError("drive.mode", "stability maps need the vector (IFOC) drive")
+    if sc.plant.speed_mode == "imposed":
+        raise ConfigError("plant.speed_mode", "stability maps need the mechanical model")
+    if sc.sensor.i_offset_alpha_A != 0.0 or sc.sensor.i_offset_beta_A != 0.0:
+        raise ConfigError(
+            "sensor", "a current-sensor offset breaks rotation invariance (no fixed point)"
+        )
+    a = build_arrays(replace(sc, simulation=replace(sc.simulation, t_end_s=sc.simulation.Ts_s)))
+    n = len(speeds_rad_s)
+    rep = lambda arr: np.repeat(arr, n, axis=0)  # noqa: E731
+    pv = a.params.prof_v[0]
+    pn = a.params.prof_n[0]
+    final = np.array([pv[s, pn[s] - 1] for s in range(kp.N_PROF)])
+    prof_t = np.zeros((n, kp.N_PROF, 1))
+    prof_v = np.repeat(final[None, :, None], n, axis=0)
+    prof_v[:, kp.PR_SPEED_REF, 0] = speeds_rad_s
+    prof_v[:, kp.PR_LOAD, 0] = torques_Nm
+    P = a.params._replace(
+        sim=rep(a.params.sim),
+        plant=rep(a.params.plant),
+        inverter=rep(a.params.inverter),
+        sensor=rep(a.params.sensor),
+        control=rep(a.params.control),
+        mras=rep(a.params.mras),
+        comp=rep(a.params.comp),
+        prof_t=prof_t,
+        prof_v=prof_v,
+        prof_n=np.ones((n, kp.N_PROF), dtype=np.int64),
+        table_idx=np.zeros(n, dtype=np.int64),
+    )
+    S = DriveState(*(rep(f) for f in a.state0))
+    TH = np.repeat(np.array([[S.plant["theta1"][0], S.plant["theta2"][0]]]), n, axis=0)
+    return _Drive(
+        P=P,
+        S=S,
+        TH=TH,
+        Ts=a.Ts,
+        v_max=float(a.params.control["v_max"][0]),
+        i_max=float(a.params.control["i_max"][0]),
+    )
+
+
+# ------------------------------------------------------------------------------------------
+# continuous steady state (initial guess)
+
+
+def _coefficients(P: DriveParams, S: DriveState) -> dict:
+    """Plant, model and controller constants of row 0 (SI)."""
+    pp = P.plant[0]
+    md = S.model[0]
+    c = {k: float(pp[k]) for k in ("R1", "R2", "Ll1", "Ll2", "M", "n_p", "J", "B", "k_visc")}
+    c["k_fan"] = float(pp["k_fan"])
+    pv = P.prof_v[0]
+    c["R1"] *= pv[kp.PR_R1_SCALE, 0]
+    c["R2"] *= pv[kp.PR_R2_SCALE, 0]
+    c["L1"] = c["Ll1"] + c["M"]
+    c["L2"] = c["Ll2"] + c["M"]
+    for k in ("R1_hat", "R2_hat", "Ll1_hat", "Ll2_hat", "M_hat"):
+        c[k] = float(md[k])
+    c["L1_hat"] = c["Ll1_hat"] + c["M_hat"]
+    c["L2_hat"] = c["Ll2_hat"] + c["M_hat"]
+    c["sL1_hat"] = c["L1_hat"] - c["M_hat"] ** 2 / c["L2_hat"]
+    c["psi_ref"] = float(pv[kp.PR_FLUX_REF, 0])
+    c["sensorless"] = bool(P.sim[0]["sensorless"])
+    c["wc"] = float(P.mras[0]["wc"])
+    c["K2"] = float(P.mras[0]["K2"])
+    c["decouple"] = bool(P.control[0]["decouple"])
+    return c
+
+
+def _plant_in_frame(c, iq, w_m, w_ref):
+    """Currents, fluxes, synchronous speed and torque for imposed ``id* + j iq*``."""
+    i_d = min(c["psi_ref"] / c["M_hat"], 1e300)
+    I = i_d + 1j * iq
+    w_fb = w_ref if c["sensorless"] else w_m
+    w_sl_cmd = c["R2_hat"] * iq / (c["L2_hat"] * i_d)
+    w_e = c["n_p"] * w_fb + w_sl_cmd
+    slip = w_e - c["n_p"] * w_m
+    psi_r = c["M"] * I / (1.0 + 1j * slip * c["L2"] / c["R2"])
+    i_r = (psi_r - c["M"] * I) / c["L2"]
+    psi_s = c["L1"] * I + c["M"] * i_r
+    T_e = 1.5 * c["n_p"] * (psi_s.real * iq - psi_s.imag * i_d)
+    return I, psi_s, psi_r, w_e, T_e
+
+
+def _residuals(c, iq, w_m, w_ref, T_L):
+    I, psi_s, _, w_e, T_e = _plant_in_frame(c, iq, w_m, w_ref)
+    T_load = T_L + (c["B"] + c["k_visc"]) * w_m + c["k_fan"] * w_m * np.abs(w_m)
+    r1 = (T_e - T_load) / (1.5 * c["n_p"] * c["psi_ref"])  # in A of iq
+    if c["sensorless"]:
+        w_safe = np.where(np.abs(w_e) < 1e-9, 1e-9, w_e)
+        r2 = c["sL1_hat"] * iq - psi_s.imag + (c["R1"] - c["R1_hat"]) * I.real / w_safe
+        r2 = r2 / c["psi_ref"] * (c["psi_ref"] / c["M_hat"])  # in A
+    else:
+        r2 = (w_m - w_ref) * c["J"]
+    return r1, r2
+
+
+def continuous_steady_state(c: dict, w_ref, T_L, n_iter: int = 40):
+    """Solve the continuous steady state for ``(iq*, w_m)`` at every ``(w_ref, T_L)`` pair.
+
+    Newton's method, vectorised over the points, with a finite-difference 2 x 2 Jacobian
+    (equations in the module docstring).
+
+    Returns
+    -------
+    iq, w_m : ndarray
+        q current (A) and true mechanical speed (rad/s).
+    ok : ndarray of bool
+        Converged to a residual below 1e-9 A.
+    """
+    w_ref = np.asarray(w_ref, dtype=float)
+    T_L = np.asarray(T_L, dtype=float)
+    k_t = 1.5 * c["n_p"] * c["M"] / c["L2"] * c["psi_ref"]
+    T_req = T_L + (c["B"] + c["k_visc"]) * w_ref + c["k_fan"] * w_ref * np.abs(w_ref)
+    iq = T_req / k_t
+    w_m = w_ref + (c["R2_hat"] / c["R2"] - 1.0) * (c["R2"] / c["L2"]) * iq / (
+        c["psi_ref"] / c["M_hat"]
+    ) / c["n_p"] * float(c["sensorless"])
+    ok = np.zeros(w_ref.shape, dtype=bool)
+    with np.errstate(all="ignore"):
+        for _ in range(n_iter):
+            r1, r2 = _residuals(c, iq, w_m, w_ref, T_L)
+            ok = np.isfinite(r1) & np.isfinite(r2) & (np.abs(r1) < 1e-9) & (np.abs(r2) < 1e-9)
+            if ok.all():
+                break
+            h1 = 1e-7 * (np.abs(iq) + 1.0)
+            h2 = 1e-7 * (np.abs(w_m) + 1.0)
+            a1, a2 = _residuals(c, iq + h1, w_m, w_ref, T_L)
+            b1, b2 = _residuals(c, iq, w_m + h2, w_ref, T_L)
+            j11, j21 = (a1 - r1) / h1, (a2 - r2) / h1
+            j12, j22 = (b1 - r1) / h2, (b2 - r2) / h2
+            det = j11 * j22 - j12 * j21
+            d_iq = (-r1 * j22 + r2 * j12) / det
+            d_wm = (-j11 * r2 + j21 * r1) / det
+            # limit the step: at most 20 A and 50 rad/s per iteration
+            d_iq = np.clip(d_iq, -20.0, 20.0)
+            d_wm = np.clip(d_wm, -50.0, 50.0)
+            iq = np.where(ok, iq, iq + d_iq)
+            w_m = np.where(ok, w_m, w_m + d_wm)
+    return iq, w_m, ok & np.isfinite(iq) & np.isfinite(w_m)
+
+
+def _initial_state(c: dict, Ts: float, iq, w_m, w_ref) -> np.ndarray:
+    """Reduced states (N, N_Z) of the continuous steady state, as seen at a sample instant."""
+    I, psi_s, psi_r, w_e, _ = _plant_in_frame(c, iq, w_m, w_ref)
+    n = len(iq)
+    z = np.zeros((n, kl.N_Z))
+    i_d = I.real
+    v = c["R1"] * I + 1j * w_e * psi_s
+    # the voltage held over the last period and the last sample, in this sample's frame
+    v_prev = v * np.exp(-0.5j * w_e * Ts)
+    i_prev = I * np.exp(-1j * w_e * Ts)
+    psi_hat = c["M_hat"] * i_d
+    ff = np.zeros(n, dtype=complex)
+    if c["decouple"]:
+        ff = -w_e * c["sL1_hat"] * iq + 1j * w_e * (
+            c["sL1_hat"] * i_d + c["M_hat"] / c["L2_hat"] * psi_hat
+        )
+    int_dq = v - ff
+    w_r_hat = c["n_p"] * (w_ref if c["sensorless"] else w_m)
+    T2h = c["L2_hat"] / c["R2_hat"]
+    lam_i = c["M_hat"] * I / (1.0 + 1j * (w_e - w_r_hat) * T2h)
+    filt = 1j * w_e / (1j * w_e + c["wc"]) if c["wc"] > 0 else np.ones(n)
+    lam_f = lam_i * filt
+    den = 1j * w_e + c["wc"]
+    den = np.where(np.abs(den) < 1e-9, 1e-9, den)
+    lam_v = (c["L2_hat"] / c["M_hat"]) * ((v - c["R1_hat"] * I) - 1j * w_e * c["sL1_hat"] * I) / den
+    for k, val in ((0, psi_s), (2, psi_r), (5, v_prev), (7, i_prev), (10, int_dq)):
+        z[:, k] = val.real
+        z[:, k + 1] = val.imag
+    z[:, 4] = w_m
+    z[:, 9] = iq
+    z[:, 12] = psi_hat
+    for k, val in ((13, lam_v), (15, lam_i), (17, lam_f)):
+        z[:, k] = val.real
+        z[:, k + 1] = val.imag
+    z[:, 19] = w_r_hat / c["K2"] if c["K2"] != 0 else 0.0
+    z[:, 20] = w_r_hat
+    return z
+
+
+# ------------------------------------------------------------------------------------------
+# operating points
+
+
+@dataclass
+class OperatingPoints:
+    """Fixed points and Jacobians of many (speed, torque) pairs of one drive.
+
+    Attributes
+    ----------
+    speed_ref_rpm, torque_Nm : ndarray
+        The requested points (speed reference, load torque).
+    status : ndarray of str
+        ``ok``, ``current_limit``, ``voltage_limit``, ``no_steady_state`` or ``diverged``.
+    z : ndarray (N, N_Z)
+        Fixed points (:data:`STATE_NAMES`), NaN where no steady state.
+    A : ndarray (N, N_Z, N_Z)
+        ``dF/dz``: the discrete small-signal model, one period Ts.
+    B : ndarray (N, N_Z, 2)
+        ``dF/du`` for ``u`` = (speed reference in mechanical rad/s, load torque in N m).
+    residual : ndarray
+        Scaled fixed-point residual.
+    iterations : ndarray
+        Newton iterations on the discrete map.
+    Ts : float
+        Control period, s.
+    drive : _Drive
+        The records (row ``i`` is point ``i``), for :func:`propagate`.
+    """
+
+    speed_ref_rpm: np.ndarray
+    torque_Nm: np.ndarray
+    status: np.ndarray
+    z: np.ndarray
+    A: np.ndarray
+    B: np.ndarray
+    residual: np.ndarray
+    iterations: np.ndarray
+    Ts: float
+    drive: _Drive = field(repr=False)
+    coeffs: dict = field(repr=False, default_factory=dict)
+
+    def eigenvalues(self) -> np.ndarray:
+        """Eigenvalues of every ``A`` (N, N_Z), z-plane; NaN rows where status is not ok."""
+        ev = np.full((len(self.status), kl.N_Z), np.nan + 0j)
+        ok = self.status == STATUS_OK
+        if ok.any():
+            ev[ok] = np.linalg.eigvals(self.A[ok])
+        return ev
+
+
+def solve_operating_points(sc: Scenario, speeds_rpm, torques_Nm) -> OperatingPoints:
+    """Steady states and linearisations of ``sc`` at paired ``speeds_rpm[i], torques_Nm[i]``.
+
+    ``sc`` is analysed as given (call :func:`map_scenario` first to switch the compensator off,
+    which the maps do). Points the drive cannot hold get a status, never an exception.
+    """
+    speeds = np.atleast_1d(np.asarray(speeds_rpm, dtype=float))
+    torques = np.atleast_1d(np.asarray(torques_Nm, dtype=float))
+    if speeds.shape != torques.shape or speeds.ndim != 1 or speeds.size == 0:
+        raise ConfigError("points", "speeds and torques must be 1-D, non-empty, of equal length")
+    if not (np.all(np.isfinite(speeds)) and np.all(np.isfinite(torques))):
+        raise ConfigError("points", "speeds and torques must be finite")
+    if sc.compensator.enabled or sc.injection.amplitude_A != 0.0:
+        sc = map_scenario(sc)
+    n = len(speeds)
+    w_ref = speeds * RPM
+    d = _stationary_drive(sc, w_ref, torques)
+    c = _coefficients(d.P, d.S)
+    iq, w_m, ok = continuous_steady_state(c, w_ref, torques)
+    status = np.full(n, STATUS_OK, dtype=object)
+    status[~ok] = STATUS_NONE
+    i_d = c["psi_ref"] / c["M_hat"]
+    with np.errstate(all="ignore"):
+        I_mag = np.hypot(i_d, iq)
+        I, psi_s, _, w_e, _ = _plant_in_frame(c, iq, w_m, w_ref)
+        V_mag = np.abs(c["R1"] * I + 1j * w_e * psi_s)
+    status[ok & (I_mag > d.i_max)] = STATUS_CURRENT
+    status[ok & (I_mag <= d.i_max) & (V_mag > d.v_max)] = STATUS_VOLTAGE
+    Z = np.zeros((n, kl.N_Z))
+    good = status == STATUS_OK
+    if good.any():
+        Z[good] = _initial_state(c, d.Ts, iq[good], w_m[good], w_ref[good])
+    A = np.full((n, kl.N_Z, kl.N_Z), np.nan)
+    B = np.full((n, kl.N_Z, kl.N_U), np.nan)
+    res = np.full(n, np.nan)
+    its = np.zeros(n, dtype=np.int64)
+    idx = np.flatnonzero(good)
+    if len(idx):
+        sub_P = DriveParams(*(f[idx] if f.ndim >= 1 and f.shape[0] == n else f for f in d.P))
+        sub_S = DriveState(*(f[idx].copy() for f in d.S))
+        Zs = np.ascontiguousarray(Z[idx])
+        As = np.empty((len(idx), kl.N_Z, kl.N_Z))
+        Bs = np.empty((len(idx), kl.N_Z, kl.N_U))
+        sts = np.empty(len(idx), dtype=np.int64)
+        rs = np.empty(len(idx))
+        its_s = np.empty(len(idx), dtype=np.int64)
+        kl.solve_points(
+            sub_P,
+            sub_S,
+            Zs,
+            np.ascontiguousarray(d.TH[idx]),
+            As,
+            Bs,
+            sts,
+            rs,
+            its_s,
+            _NEWTON_TOL,
+            _NEWTON_ITER,
+        )
+        Z[idx], A[idx], B[idx], res[idx], its[idx] = Zs, As, Bs, rs, its_s
+        status[idx[sts == kl.P_NO_CONVERGENCE]] = STATUS_NONE
+        status[idx[sts == kl.P_DIVERGED]] = STATUS_DIVERGED
+    bad = status != STATUS_OK
+    Z[bad] = np.nan
+    A[bad] = np.nan
+    B[bad] = np.nan
+    # a fixed point on a limit is not the requested operating point
+    with np.errstate(invalid="ignore"):
+        v_fix = np.hypot(Z[:, 5], Z[:, 6])
+        iq_max = math.sqrt(max(d.i_max**2 - i_d**2, 0.0))
+        status[(status == STATUS_OK) & (v_fix >= d.v_max * (1 - 1e-9))] = STATUS_VOLTAGE
+        status[(status == STATUS_OK) & (np.abs(Z[:, 9]) >= iq_max * (1 - 1e-9))] = STATUS_CURRENT
+    return OperatingPoints(
+        speed_ref_rpm=speeds,
+        torque_Nm=torques,
+        status=status,
+        z=Z,
+        A=A,
+        B=B,
+        residual=res,
+        iterations=its,
+        Ts=d.Ts,
+        drive=d,
+        coeffs=c,
+    )
+
+
+# ------------------------------------------------------------------------------------------
+# one operating point, for users
+
+
+def output_matrix(c: dict) -> np.ndarray:
+    """``C`` (4, N_Z): speed (rpm), speed estimate (rpm), i_d, i_q (A) from the reduced state.
+
+    The currents are the plant's stator current at the sample, in the controller's frame:
+    ``i_s = (L2 psi_s - M psi_r) / (L1 L2 - M^2)``.
+    """
+    C = np.zeros((4, kl.N_Z))
+    C[0, 4] = 1.0 / RPM
+    C[1, 20] = 1.0 / (c["n_p"] * RPM)
+    D = c["L1"] * c["L2"] - c["M"] ** 2
+    for r, (s, p) in enumerate(((0, 2), (1, 3))):
+        C[2 + r, s] = c["L2"] / D
+        C[2 + r, p] = -c["M"] / D
+    return C
+
+
+@dataclass
+class Mode:
+    """One eigenvalue of the discrete loop and its continuous equivalent ``s = ln(z)/Ts``."""
+
+    z: complex
+    s: complex
+    damping: float  # -Re(s)/|s|
+    frequency_Hz: float  # |Im(s)| / 2 pi
+
+
+def modes_from_eigenvalues(ev: np.ndarray, Ts: float) -> list[Mode]:
+    """Modes sorted from the least stable (largest ``Re s``); zero eigenvalues are skipped."""
+    out = []
+    for lam in ev:
+        if abs(lam) < 1e-12:
+            continue
+        s = np.log(lam) / Ts
+        zeta = -s.real / abs(s) if abs(s) > 0 else 1.0
+        out.append(Mode(complex(lam), complex(s), float(zeta), abs(s.imag) / (2 * math.pi)))
+    out.sort(key=lambda m: -m.s.real)
+    return out
+
+
+@dataclass
+class OperatingPoint:
+    """The steady state of one (speed, load) point and its small-signal model.
+
+    Attributes
+    ----------
+    speed_ref_rpm, torque_Nm : float
+    status : str
+        ``ok`` or why there is no usable steady state (see :data:`STATUS_OK` ...).
+    z : ndarray
+        Fixed point of the rotated one-period map, :data:`STATE_NAMES` (SI).
+    A, B, C : ndarray
+        ``z[k+1] = z* + A dz[k] + B du[k]``, ``dy = C dz``; ``u`` in rpm and N m (B is scaled
+        from rad/s), ``y`` = :data:`OUTPUT_NAMES`.
+    Ts : float
+        Sampling period of the discrete model, s.
+    """
+
+    speed_ref_rpm: float
+    torque_Nm: float
+    status: str
+    z: np.ndarray
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+    Ts: float
+    _ops: OperatingPoints = field(repr=False, default=None)
+
+    @property
+    def speed_rpm(self) -> float:
+        """True speed at the operating point, rpm."""
+        return float(self.z[4] / RPM)
+
+    @property
+    def speed_est_rpm(self) -> float:
+        """MRAS speed estimate at the operating point, rpm."""
+        return float(self.z[20] / (self._ops.coeffs["n_p"] * RPM))
+
+    @property
+    def current_dq_A(self) -> complex:
+        """Stator current at the sample, controller's frame, A."""
+        y = self.C @ self.z
+        return complex(y[2], y[3])
+
+    def eigenvalues(self) -> np.ndarray:
+        """Eigenvalues of ``A`` (z-plane)."""
+        return np.linalg.eigvals(self.A)
+
+    def modes(self) -> list[Mode]:
+        """Modes from the least stable; see :func:`modes_from_eigenvalues`."""
+        return modes_from_eigenvalues(self.eigenvalues(), self.Ts)
+
+    @property
+    def stable(self) -> bool:
+        """All eigenvalues strictly inside the unit circle."""
+        return bool(np.max(np.abs(self.eigenvalues())) < 1.0)
+
+    def to_statespace(self):
+        """The small-signal model as a discrete-time state-space system at ``Ts``.
+
+        Inputs :data:`INPUT_NAMES` (speed reference in rpm, load torque in N m), outputs
+        :data:`OUTPUT_NAMES`, states :data:`STATE_NAMES` (deviations from the operating point).
+        A python-control ``StateSpace`` (named signals, ``control.bode_plot``,
+        ``control.step_response``) when python-control is installed (``pip install
+        imdrive[control]``), else a ``scipy.signal.StateSpace`` with the names in its attributes
+        ``input_names``, ``output_names``, ``state_names``.
+        """
+        D = np.zeros((len(OUTPUT_NAMES), len(INPUT_NAMES)))
+        try:
+            import control
+        except ImportError:
+            from scipy.signal import StateSpace
+
+            sys = StateSpace(self.A, self.B, self.C, D, dt=self.Ts)
+            sys.input_names = list(INPUT_NAMES)
+            sys.output_names = list(OUTPUT_NAMES)
+            sys.state_names = list(STATE_NAMES)
+            return sys
+        return control.ss(
+            self.A,
+            self.B,
+            self.C,
+            D,
+            self.Ts,
+            inputs=list(INPUT_NAMES),
+            outputs=list(OUTPUT_NAMES),
+            states=list(STATE_NAMES),
+            name=f"imdrive {self.speed_ref_rpm:g} rpm {self.torque_Nm:g} Nm",
+        )
+
+    def propagate(self, dz, n_steps: int, du=(0.0, 0.0)) -> np.ndarray:
+        """The nonlinear loop's state deviation after ``n_steps`` periods from ``z* + dz``.
+
+        ``du`` = (speed reference step in rpm, load step in N m), held. Runs the engine itself
+        (:func:`imdrive.kernels.linearise.propagate`); for checking the linear model.
+        """
+        d = self._ops.drive
+        P = d.P
+        saved = P.prof_v[0, [kp.PR_SPEED_REF, kp.PR_LOAD], 0].copy()
+        P.prof_v[0, kp.PR_SPEED_REF, 0] += du[0] * RPM
+        P.prof_v[0, kp.PR_LOAD, 0] += du[1]
+        try:
+            S = DriveState(*(f.copy() for f in d.S))
+            out = np.empty(kl.N_Z)
+            z0 = np.ascontiguousarray(self.z + np.asarray(dz, dtype=float))
+            st = kl.propagate(P, S, 0, z0, int(n_steps), d.TH[0, 0], d.TH[0, 1], out)
+        finally:
+            P.prof_v[0, [kp.PR_SPEED_REF, kp.PR_LOAD], 0] = saved
+        if st != 0:
+            return np.full(kl.N_Z, np.nan)
+        return out - self.z
+
+
+def operating_point(sc: Scenario, speed_rpm: float, torque_Nm: float) -> OperatingPoint:
+    """Steady state and discrete small-signal model of ``sc`` at one (speed, load) point.
+
+    The compensator and injection are switched off (R2_hat frozen at the scenario's initial
+    estimate). Estimation errors come from ``[estimator]`` (``R1_ohm``, ``R2_ohm``, ``M_H``) or
+    :func:`map_scenario`. A point without steady state is returned with its ``status`` and NaNs.
+    """
+    ops = solve_operating_points(map_scenario(sc), [speed_rpm], [torque_Nm])
+    C = output_matrix(ops.coeffs)
+    B = ops.B[0].copy()
+    B[:, 0] *= RPM  # per rpm of speed reference
+    return OperatingPoint(
+        speed_ref_rpm=float(speed_rpm),
+        torque_Nm=float(torque_Nm),
+        status=str(ops.status[0]),
+        z=ops.z[0],
+        A=ops.A[0],
+        B=B,
+        C=C,
+        Ts=ops.Ts,
+        _ops=ops,
+    )

@@ -1,0 +1,82 @@
+"""Figures of the stability maps (matplotlib, Agg): heatmap and boundary overlays."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from imdrive.stability.linear import STATUS_OK
+
+
+def _grid(df, column):
+    sp = np.unique(df["speed_rpm"].to_numpy())
+    tq = np.unique(df["torque_Nm"].to_numpy())
+    g = df.pivot_table(index="speed_rpm", columns="torque_Nm", values=column, dropna=False)
+    return sp, tq, g.reindex(index=sp, columns=tq).to_numpy(dtype=float)
+
+
+def plot_map(df, path: Path, title: str = "", clip: float = 20.0) -> Path:
+    """Heatmap of the least stable mode's real part over speed x torque, boundary in black.
+
+    Points without a usable steady state (current or voltage limit, none) are grey.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    d = df.copy()
+    d["_re"] = np.where(d["status"] == STATUS_OK, d["max_real_1_per_s"], np.nan)
+    d["_st"] = np.where(d["status"] == STATUS_OK, d["stable"].astype(float), np.nan)
+    sp, tq, re = _grid(d, "_re")
+    _, _, st = _grid(d, "_st")
+    fig, ax = plt.subplots(figsize=(7.5, 5.0), dpi=120)
+    ax.set_facecolor("0.8")
+    mesh = ax.pcolormesh(
+        tq, sp, np.clip(re, -clip, clip), cmap="RdBu_r", vmin=-clip, vmax=clip, shading="nearest"
+    )
+    cb = fig.colorbar(mesh, ax=ax)
+    cb.set_label("largest Re(s) of the closed loop, 1/s (clipped)")
+    if np.nanmin(st) < 0.5 < np.nanmax(st):
+        ax.contour(tq, sp, np.nan_to_num(st, nan=1.0), levels=[0.5], colors="k", linewidths=1.5)
+    ax.axvline(0.0, color="0.3", lw=0.6, ls=":")
+    ax.set_xlabel("load torque, N m  (< 0: regenerating)")
+    ax.set_ylabel("speed reference, rpm")
+    n_un = int((d["status"] == STATUS_OK).sum() - d["stable"].sum())
+    ax.set_title(title or f"small-signal stability: {n_un} unstable points, grey = no steady state")
+    fig.tight_layout()
+    path = Path(path)
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+def plot_overlay(frames: dict, path: Path, title: str = "") -> Path:
+    """Stable-region boundaries of several maps (label -> table) over speed x torque."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7.5, 5.0), dpi=120)
+    colors = plt.cm.viridis(np.linspace(0.0, 0.9, max(len(frames), 1)))
+    handles = []
+    for (label, df), col in zip(frames.items(), colors, strict=False):
+        d = df.copy()
+        d["_st"] = np.where(d["status"] == STATUS_OK, d["stable"].astype(float), 0.0)
+        sp, tq, st = _grid(d, "_st")
+        if np.nanmin(st) < 0.5 < np.nanmax(st):
+            ax.contourf(tq, sp, st, levels=[-0.5, 0.5], colors=[col], alpha=0.18)
+            ax.contour(tq, sp, st, levels=[0.5], colors=[col], linewidths=1.8)
+        handles.append(plt.Line2D([], [], color=col, lw=2, label=label))
+    ax.axvline(0.0, color="0.3", lw=0.6, ls=":")
+    ax.set_xlabel("load torque, N m  (< 0: regenerating)")
+    ax.set_ylabel("speed reference, rpm")
+    ax.legend(handles=handles, title="unstable or no steady state (shaded)", fontsize=8)
+    ax.set_title(title or "boundary of the stable region")
+    fig.tight_layout()
+    path = Path(path)
+    fig.savefig(path)
+    plt.close(fig)
+    return path
