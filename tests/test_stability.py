@@ -225,3 +225,22 @@ def test_cli_bad_input(tmp_path, args, field):
 
 def test_rpm_constant():
     assert RPM == pytest.approx(math.pi / 30)
+
+
+@pytest.mark.parametrize(
+    "override, field",
+    [
+        ("inverter.model=switching", "inverter.model"),
+        ("inverter.dead_time_s=2e-6", "inverter.dead_time_s"),
+        ("sensor.gain_a=1.01", "sensor"),
+        ("control.delay_periods=1", "control.delay_periods"),
+    ],
+)
+def test_settings_outside_the_linear_model_are_refused(override, field):
+    from imdrive.config.scenario import Scenario
+    from imdrive.errors import ConfigError
+    from imdrive.stability import stability_map
+
+    with pytest.raises(ConfigError) as exc:
+        stability_map(Scenario.read("sensorless", [override]), [500.0], [6.0])
+    assert exc.value.field == field

@@ -133,6 +133,24 @@ def _stationary_drive(sc: Scenario, speeds_rad_s, torques_Nm) -> _Drive:
         raise ConfigError(
             "sensor", "a current-sensor offset breaks rotation invariance (no fixed point)"
         )
+    # the reduced state covers the average-value drive; per-phase effects are not rotation
+    # invariant (no fixed point in the controller's frame), and the delay's held voltage is
+    # not part of the state yet
+    if sc.inverter.model != "average":
+        raise ConfigError("inverter.model", 'stability maps need the "average" inverter model')
+    if sc.inverter.dead_time_s > 0.0 or sc.inverter.device_drop_V > 0.0:
+        raise ConfigError(
+            "inverter.dead_time_s",
+            "dead time and device drops act per phase: no fixed point (set both to 0)",
+        )
+    if sc.sensor.per_phase or sc.sensor.vdc_gain != 1.0:
+        raise ConfigError(
+            "sensor", "per-phase sensor errors break rotation invariance (no fixed point)"
+        )
+    if sc.control.delay_periods != 0:
+        raise ConfigError(
+            "control.delay_periods", "stability maps model the drive without computation delay"
+        )
     a = build_arrays(replace(sc, simulation=replace(sc.simulation, t_end_s=sc.simulation.Ts_s)))
     n = len(speeds_rad_s)
     rep = lambda arr: np.repeat(arr, n, axis=0)  # noqa: E731
