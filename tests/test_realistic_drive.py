@@ -404,3 +404,21 @@ def test_realistic_presets_load_with_every_non_ideality_on(name):
     assert sc.control.dead_time_compensation_s == pytest.approx(1.6e-6)
     assert sc.sensor.adc_bits == 12 and sc.sensor.noise_rms_A == 0.02
     assert sc.plant.saturation.enabled
+
+
+def test_batch_and_sweeps_run_the_realistic_drive_bit_identical_to_single_runs():
+    from imdrive.run.batch import simulate_batch
+
+    scs = [
+        Scenario.read("sensorless-realistic", ["simulation.t_end_s=0.4", "simulation.log_every=1"]),
+        Scenario.read(
+            "sensorless-realistic",
+            ["simulation.t_end_s=0.4", "simulation.log_every=1", "sensor.seed=7"],
+        ),
+    ]
+    batch = simulate_batch(scs, logs=True)
+    for sc, many in zip(scs, batch.results, strict=True):
+        one = simulate(sc)
+        for name, v in one.signals.items():
+            assert np.array_equal(many.signals[name], v), name
+        assert np.array_equal(many.c_final, one.c_final)

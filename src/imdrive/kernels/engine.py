@@ -51,6 +51,7 @@ from imdrive.kernels.machine import (
     integrate_short,
     log_plant,
     stator_current,
+    stator_current_m,
 )
 from imdrive.kernels.profiles import (
     PR_FLUX_REF,
@@ -184,6 +185,7 @@ def switching_period(
     n_tr = 0
     need_current = pinv.v_drop > 0.0 or trace.shape[0] > 0
     short = Ts / (40.0 * nsub)  # intervals up to this long take one RK2 step
+    m_sat = -1.0  # |psi_m| of the last saturated solve, the start of the next (saturation)
     acc_a = 0.0
     acc_b = 0.0
     while True:
@@ -203,7 +205,7 @@ def switching_period(
             i_s_a = 0.0
             i_s_b = 0.0
             if need_current:  # the device drops' sign, or the trace
-                i_s_a, i_s_b = stator_current(pp, x)
+                i_s_a, i_s_b, m_sat = stator_current_m(pp, x, m_sat)
             if n_tr < trace.shape[0]:
                 trace[n_tr, 0] = t
                 trace[n_tr, 1] = i_s_a
@@ -211,9 +213,11 @@ def switching_period(
                 n_tr += 1
             va, vb = pole_voltages_ab(pinv, sinv, pinv.Vdc, i_s_a, i_s_b)
             if t_next - t <= short:
-                integrate_short(pp, x, va, vb, R1b, R2b, TL0, t_next - t)
+                m_sat = integrate_short(pp, x, va, vb, R1b, R2b, TL0, t_next - t, m_sat)
             else:
-                integrate_segment(pp, x, va, vb, R1b, R2b, TL0, t_next - t, nsub, work)
+                m_sat = integrate_segment(
+                    pp, x, va, vb, R1b, R2b, TL0, t_next - t, nsub, work, m_sat
+                )
             acc_a += (t_next - t) * va
             acc_b += (t_next - t) * vb
             t = t_next
@@ -222,7 +226,7 @@ def switching_period(
         if kind == 1:
             i_leg = 0.0
             if pinv.t_d > 0.0:  # the dead time's direction needs the leg's current
-                i_s_a, i_s_b = stator_current(pp, x)
+                i_s_a, i_s_b, m_sat = stator_current_m(pp, x, m_sat)
                 i_leg = phase_values(i_s_a, i_s_b)[leg]
             apply_command(pinv, sinv, leg, ev_state[j], i_leg, t)
             j += 1

@@ -153,25 +153,31 @@ def magnetising_energy(psi_m, Lm0, psi_sat, S):
 
 
 @njit(cache=True)
-def saturated_currents(p, psi_s_a, psi_s_b, psi_r_a, psi_r_b):
+def saturated_currents(p, psi_s_a, psi_s_b, psi_r_a, psi_r_b, m0=-1.0):
     """Stator and rotor currents with main-flux saturation, A; and ``|psi_m|``, Wb.
 
     ``psi_m = k psi_x`` with ``psi_x = psi_s/Ll1 + psi_r/Ll2``, where ``m = |psi_m|`` solves
     ``G m + i_m(m) = |psi_x|``, ``G = 1/Ll1 + 1/Ll2`` (monotone and convex: Newton from the
-    linear solution with ``M`` converges in two or three steps near rated flux).
+    linear solution with ``M`` converges in two or three steps near rated flux; ``m0 >= 0`` is
+    a better start, e.g. the solution of the previous RK4 stage).
     """
     x_a = psi_s_a / p.Ll1 + psi_r_a / p.Ll2
     x_b = psi_s_b / p.Ll1 + psi_r_b / p.Ll2
     X = math.sqrt(x_a * x_a + x_b * x_b)
     G = 1.0 / p.Ll1 + 1.0 / p.Ll2
-    m = X / (G + 1.0 / p.M)  # the linear solution with M, the curve's value near rated flux
+    if m0 >= 0.0:
+        m = m0
+    else:
+        m = X / (G + 1.0 / p.M)  # the linear solution with M, the curve's value near rated flux
     for _ in range(30):
         r = _power(m / p.psi_sat, p.S)
         F = G * m + m / p.Lm0 * (1.0 + r) - X
         dF = G + (1.0 + (p.S + 1.0) * r) / p.Lm0
         step = F / dF
         m -= step
-        if abs(step) <= 1e-14 * (m + 1e-300):
+        # Newton converges quadratically: after a step of relative size 1e-8 the error left
+        # is of order 1e-16, so one more iteration would only confirm it
+        if abs(step) <= 1e-8 * m:
             break
     k = m / X if X > 0.0 else 0.0
     pm_a = k * x_a
@@ -186,12 +192,31 @@ def saturated_currents(p, psi_s_a, psi_s_b, psi_r_a, psi_r_b):
 @njit(cache=True)
 def plant_currents(p, psi_s_a, psi_s_b, psi_r_a, psi_r_b):
     """Stator and rotor currents of the plant (linear or saturated), A."""
+    i_s_a, i_s_b, i_r_a, i_r_b, _ = plant_currents_m(p, psi_s_a, psi_s_b, psi_r_a, psi_r_b, -1.0)
+    return i_s_a, i_s_b, i_r_a, i_r_b
+
+
+@njit(cache=True)
+def plant_currents_m(p, psi_s_a, psi_s_b, psi_r_a, psi_r_b, m0):
+    """:func:`plant_currents` and ``|psi_m|`` (0 when linear), from a start ``m0`` for the
+    saturated solve (``m0 < 0``: the default start)."""
     if p.saturation:
-        i_s_a, i_s_b, i_r_a, i_r_b, _ = saturated_currents(p, psi_s_a, psi_s_b, psi_r_a, psi_r_b)
-        return i_s_a, i_s_b, i_r_a, i_r_b
+        return saturated_currents(p, psi_s_a, psi_s_b, psi_r_a, psi_r_b, m0)
     L1 = p.Ll1 + p.M
     L2 = p.Ll2 + p.M
-    return currents_from_fluxes(psi_s_a, psi_s_b, psi_r_a, psi_r_b, L1, L2, p.M)
+    i_s_a, i_s_b, i_r_a, i_r_b = currents_from_fluxes(
+        psi_s_a, psi_s_b, psi_r_a, psi_r_b, L1, L2, p.M
+    )
+    return i_s_a, i_s_b, i_r_a, i_r_b, 0.0
+
+
+@njit(cache=True)
+def stator_current_m(p, x, m0):
+    """:func:`stator_current` and ``|psi_m|`` from the start ``m0`` of the saturated solve."""
+    i_s_a, i_s_b, _, _, m = plant_currents_m(
+        p, x.psi_s_ab.real, x.psi_s_ab.imag, x.psi_r_ab.real, x.psi_r_ab.imag, m0
+    )
+    return i_s_a, i_s_b, m
 
 
 @njit(cache=True)
@@ -226,12 +251,13 @@ def electromagnetic_torque(psi_s_a, psi_s_b, i_s_a, i_s_b, n_p):
 
 
 @njit(cache=True)
-def _rates(p, psa, psb, pra, prb, w_m, th1, th2, v_a, v_b, R1_base, R2_base, TL0):
+def _rates(p, psa, psb, pra, prb, w_m, th1, th2, v_a, v_b, R1_base, R2_base, TL0, m0=-1.0):
     """The plant's time derivatives from its state variables (the equations of the module
     docstring), as a 12-tuple in the field order of ``PLANT_STATE``.
 
     Scalars in, scalars out: the RK4 of :func:`integrate_segment` keeps its stages in
-    registers instead of records.
+    registers instead of records. The 13th element is ``|psi_m|`` of the saturated solve, the
+    start ``m0`` of the next stage's.
     """
     n_p = p.n_p
     if p.thermal:
@@ -240,7 +266,7 @@ def _rates(p, psa, psb, pra, prb, w_m, th1, th2, v_a, v_b, R1_base, R2_base, TL0
     else:
         R1 = R1_base
         R2 = R2_base
-    i_s_a, i_s_b, i_r_a, i_r_b = plant_currents(p, psa, psb, pra, prb)
+    i_s_a, i_s_b, i_r_a, i_r_b, m = plant_currents_m(p, psa, psb, pra, prb, m0)
     w_r = n_p * w_m
     T_e = electromagnetic_torque(psa, psb, i_s_a, i_s_b, n_p)
     T_L = load_torque(p, TL0, w_m)
@@ -269,6 +295,7 @@ def _rates(p, psa, psb, pra, prb, w_m, th1, th2, v_a, v_b, R1_base, R2_base, TL0
         p_cu1 + p_cu2,
         T_e * w_m,
         (T_L + p.B * w_m) * w_m,
+        m,
     )
 
 
@@ -342,11 +369,13 @@ def _rk4_sum(x0, x1, x2, x3, h6):
 
 
 @njit(cache=True)
-def integrate_segment(p, x, v_a, v_b, R1b, R2b, TL0, dt, nsub, work):
+def integrate_segment(p, x, v_a, v_b, R1b, R2b, TL0, dt, nsub, work, m0=-1.0):
     """Integrate the plant over ``dt`` with ``nsub`` RK4 steps at constant voltage (in place).
 
     The stages live in local 12-tuples (registers), the state record is read once and written
-    once. ``work`` is unused scratch kept for the call signature.
+    once. ``work`` is unused scratch kept for the call signature. ``m0`` starts the saturated
+    solve of the first stage (``< 0``: the default start); returns the last stage's
+    ``|psi_m|``, a start for the next call.
     """
     h = dt / nsub
     y = (
@@ -363,14 +392,17 @@ def integrate_segment(p, x, v_a, v_b, R1b, R2b, TL0, dt, nsub, work):
         x.E_em,
         x.E_load,
     )
+    m = m0
     for _ in range(nsub):
-        k1 = _rates(p, y[0], y[1], y[2], y[3], y[4], y[6], y[7], v_a, v_b, R1b, R2b, TL0)
+        k1 = _rates(p, y[0], y[1], y[2], y[3], y[4], y[6], y[7], v_a, v_b, R1b, R2b, TL0, m)
         yt = _axpy12(y, 0.5 * h, k1)
-        k2 = _rates(p, yt[0], yt[1], yt[2], yt[3], yt[4], yt[6], yt[7], v_a, v_b, R1b, R2b, TL0)
+        m = k1[12]
+        k2 = _rates(p, yt[0], yt[1], yt[2], yt[3], yt[4], yt[6], yt[7], v_a, v_b, R1b, R2b, TL0, m)
         yt = _axpy12(y, 0.5 * h, k2)
-        k3 = _rates(p, yt[0], yt[1], yt[2], yt[3], yt[4], yt[6], yt[7], v_a, v_b, R1b, R2b, TL0)
+        k3 = _rates(p, yt[0], yt[1], yt[2], yt[3], yt[4], yt[6], yt[7], v_a, v_b, R1b, R2b, TL0, m)
         yt = _axpy12(y, h, k3)
-        k4 = _rates(p, yt[0], yt[1], yt[2], yt[3], yt[4], yt[6], yt[7], v_a, v_b, R1b, R2b, TL0)
+        k4 = _rates(p, yt[0], yt[1], yt[2], yt[3], yt[4], yt[6], yt[7], v_a, v_b, R1b, R2b, TL0, m)
+        m = k4[12]
         h6 = h / 6.0
         y = (
             y[0] + _rk4_sum(k1[0], k2[0], k3[0], k4[0], h6),
@@ -396,10 +428,11 @@ def integrate_segment(p, x, v_a, v_b, R1b, R2b, TL0, dt, nsub, work):
     x.E_cu = y[9]
     x.E_em = y[10]
     x.E_load = y[11]
+    return m
 
 
 @njit(cache=True)
-def integrate_short(p, x, v_a, v_b, R1b, R2b, TL0, dt):
+def integrate_short(p, x, v_a, v_b, R1b, R2b, TL0, dt, m0=-1.0):
     """One midpoint (RK2) step over a short interval (a dead time, a narrow pulse; in place).
 
     Its local error, ``~(lambda dt)^3/6`` with ``|lambda| ~ 500 1/s`` the fastest electrical
@@ -410,7 +443,7 @@ def integrate_short(p, x, v_a, v_b, R1b, R2b, TL0, dt):
     y1 = x.psi_s_ab.imag
     y2 = x.psi_r_ab.real
     y3 = x.psi_r_ab.imag
-    k1 = _rates(p, y0, y1, y2, y3, x.w_m, x.theta1, x.theta2, v_a, v_b, R1b, R2b, TL0)
+    k1 = _rates(p, y0, y1, y2, y3, x.w_m, x.theta1, x.theta2, v_a, v_b, R1b, R2b, TL0, m0)
     a = 0.5 * dt
     k2 = _rates(
         p,
@@ -426,6 +459,7 @@ def integrate_short(p, x, v_a, v_b, R1b, R2b, TL0, dt):
         R1b,
         R2b,
         TL0,
+        k1[12],
     )
     x.psi_s_ab = complex(y0 + dt * k2[0], y1 + dt * k2[1])
     x.psi_r_ab = complex(y2 + dt * k2[2], y3 + dt * k2[3])
@@ -437,6 +471,7 @@ def integrate_short(p, x, v_a, v_b, R1b, R2b, TL0, dt):
     x.E_cu += dt * k2[9]
     x.E_em += dt * k2[10]
     x.E_load += dt * k2[11]
+    return k2[12]
 
 
 @njit(cache=True)
