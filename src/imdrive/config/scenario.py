@@ -526,6 +526,12 @@ class OutputSettings:
 
     figures: Annotated[Bool, setting("write the PNG figures")] = True
     csv: Annotated[Bool, setting("write timeseries.csv")] = True
+    mat: Annotated[
+        Bool, setting("write timeseries.mat (MATLAB; one vector per column, a units struct)")
+    ] = False
+    parquet: Annotated[Bool, setting("write timeseries.parquet (units in the schema metadata)")] = (
+        False
+    )
 
 
 SECTIONS: dict[str, type] = {
@@ -663,7 +669,46 @@ class Scenario:
         return cls.from_toml(scenario_text(preset_or_path), overrides)
 
     def with_(self, **changes) -> Scenario:
+        """A copy with whole sections replaced (``sc.with_(simulation=...)``), validated again."""
         return replace(self, **changes)
+
+    def with_overrides(self, overrides) -> Scenario:
+        """A new, validated scenario with dotted-key overrides applied.
+
+        Parameters
+        ----------
+        overrides : list of str or dict
+            ``["control.speed_ref_rpm=1500", "estimator.R2_ohm=0.9"]`` (values parsed as TOML,
+            as ``--set`` does) or ``{"control.speed_ref_rpm": 1500, ...}``.
+
+        Returns
+        -------
+        Scenario
+
+        Raises
+        ------
+        ConfigError
+            Naming the key for an unknown setting or a value that breaks a rule.
+        """
+        from imdrive.config.overrides import is_setting, parse_override, set_path
+
+        if isinstance(overrides, str):
+            raise ConfigError("overrides", "must be a list of 'key=value' strings, not a string")
+        data = self.to_dict()
+        if isinstance(overrides, dict):
+            items = []
+            for key, value in overrides.items():
+                parts = tuple(str(key).split("."))
+                if not is_setting(parts):
+                    raise ConfigError(str(key), "no such setting")
+                items.append((parts, value))
+        else:
+            items = [parse_override(o) for o in overrides]
+        for parts, value in items:
+            if parts[0] == "machine" and parts[-1] != "preset":
+                data.setdefault("machine", {})
+            set_path(data, parts, value)
+        return Scenario.from_dict(data)
 
     # -- export ----------------------------------------------------------------------------
     def to_dict(self) -> dict:

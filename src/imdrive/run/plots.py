@@ -124,3 +124,32 @@ def save_figures(res, out_dir) -> list[Path]:
         fig.savefig(out / name, dpi=110)
         paths.append(out / name)
     return paths
+
+
+def _default_groups(res) -> list[list[str]]:
+    cols = set(res.columns)
+    groups = [[c for c in ("speed_rpm", "speed_ref_rpm", "speed_est_rpm") if c in cols]]
+    groups.append([c for c in ("torque_Nm", "load_torque_Nm") if c in cols])
+    groups.append([c for c in ("i_alpha_A", "i_beta_A") if c in cols])
+    if "e_d0_Wb" in cols:
+        groups.append(["e_d0_Wb"])
+        groups.append(["R2_est_ohm", "R2_ohm"])
+    return [g for g in groups if g]
+
+
+def result_figure(res, signals=None, t0: float = 0.0, t1=None) -> Figure:
+    """Figure of a result: given columns one panel each, or the default groups (see
+    :meth:`imdrive.run.result.SimulationResult.plot`)."""
+    unknown = [s for s in (signals or []) if s not in res.signals]
+    if unknown:
+        raise KeyError(f"no such column(s) {unknown}; see res.columns")
+    groups = [[s] for s in signals] if signals else _default_groups(res)
+    w = res.window(t0, t1)
+    fig, axes = _fig(len(groups), res.scenario.name)
+    for ax, group in zip(axes, groups, strict=True):
+        for name in group:
+            ax.plot(w["time_s"], w[name], lw=0.9, label=name)
+        ax.legend(loc="best", fontsize=8)
+        ax.grid(alpha=0.3)
+    axes[-1].set_xlabel("time, s")
+    return fig

@@ -218,6 +218,41 @@ class SimulationResult:
             raise SimulationDiverged(self.end_time_s, STATUS_TEXT[self.status], self)
         return self
 
+    def _write_exports(self, folder: Path) -> None:
+        """The optional exports the scenario's ``[output]`` asks for (MAT, Parquet)."""
+        from imdrive.run import export
+
+        out = self.scenario.output
+        if out.mat:
+            export.to_mat(self, folder / "timeseries.mat")
+        if out.parquet:
+            export.to_parquet(self, folder / "timeseries.parquet")
+
+    def to_xarray(self):
+        """The signals as an ``xarray.Dataset`` (units as attributes; needs xarray)."""
+        from imdrive.run.export import to_xarray
+
+        return to_xarray(self)
+
+    def plot(self, signals: list[str] | None = None, t0: float = 0.0, t1: float | None = None):
+        """A matplotlib figure of the run: one panel per signal (or per group of same unit).
+
+        Parameters
+        ----------
+        signals : list of str, optional
+            Column names (``res.columns``); default: speed (actual, reference, estimate),
+            torque, stator current magnitude, and for vector drives e_d0 and R̂2 against R2.
+        t0, t1 : float
+            Time window, s.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+        """
+        from imdrive.run.plots import result_figure
+
+        return result_figure(self, signals, t0, t1)
+
     def to_pandas(self):
         """The signals as a pandas DataFrame (one column per signal, unit in the name)."""
         import pandas as pd
@@ -307,6 +342,7 @@ class SimulationResult:
         with AtomicFolder(out_dir, marker="summary.json") as staging:
             if csv:
                 self.to_csv(staging.path / "timeseries.csv")
+            self._write_exports(staging.path)
             if figures:
                 from imdrive.run.plots import save_figures
 
