@@ -14,6 +14,9 @@ atomic_write_text, atomic_write_bytes
 AtomicFolder
     Context manager: write a set of files into a staging folder, then move them into the
     target folder with the completion marker (e.g. ``summary.json``) last.
+replace_folder
+    Context manager: write a folder's files into a staging folder beside it, then put the
+    staging folder in its place: the old folder's files are all gone, the new ones all there.
 remove_partials
     Delete what killed writers left behind (temporary files and staging folders).
 
@@ -263,3 +266,83 @@ class FolderLock:
 
     def __exit__(self, *exc) -> None:
         self.release()
+
+
+def _pid_alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OSError):
+        return True  # exists, owned by someone else (or cannot tell: keep its files)
+    return True
+
+
+def _staging_prefix(folder: Path) -> str:
+    return f"{PARTIAL_FOLDER_PREFIX}{folder.name}-"
+
+
+def remove_stale_staging(folder) -> None:
+    """Delete the staging and old copies :func:`replace_folder` left beside ``folder``.
+
+    Only those of writers that are no longer running (their process id is in the name), so a
+    writer of the same folder that is still at work keeps its staging folder. Also removes the
+    temporary files and staging folders inside ``folder`` itself (:func:`remove_partials`).
+    """
+    folder = Path(folder)
+    parent = folder.parent
+    prefix = _staging_prefix(folder)
+    if parent.is_dir():
+        for p in parent.iterdir():
+            if not p.name.startswith(prefix):
+                continue
+            pid = p.name[len(prefix) :].split("-", 1)[0]
+            if pid.isdigit() and not _pid_alive(int(pid)):
+                shutil.rmtree(p, ignore_errors=True)
+    if folder.is_dir():
+        remove_partials(folder)
+
+
+@contextmanager
+def replace_folder(folder) -> Iterator[Path]:
+    """Write a whole folder, replacing an older one as a whole.
+
+    Yields a staging folder beside ``folder`` (``.partial-NAME-PID-XXXXXXXX`` in its parent).
+    On success every file in it is fsynced, the old ``folder`` (if any) is renamed aside, the
+    staging folder renamed to ``folder``, and the old copy deleted: no file of an earlier write
+    survives next to the new ones. If the block raises, ``folder`` is left as it was. A writer
+    killed in between leaves only ``.partial-NAME-*`` folders, which the next
+    :func:`replace_folder` of the same folder removes (:func:`remove_stale_staging`).
+
+    Parameters
+    ----------
+    folder : str or os.PathLike
+        The folder to write; its parent is created if missing.
+
+    Yields
+    ------
+    pathlib.Path
+        The staging folder to write into.
+    """
+    folder = Path(folder)
+    folder.parent.mkdir(parents=True, exist_ok=True)
+    remove_stale_staging(folder)
+    token = f"{os.getpid()}-{uuid.uuid4().hex[:8]}"
+    staging = folder.parent / f"{_staging_prefix(folder)}{token}"
+    old = folder.parent / f"{_staging_prefix(folder)}{token}-old"
+    staging.mkdir()
+    try:
+        yield staging
+        for p in staging.iterdir():
+            if p.is_file():
+                fsync_file(p)
+        fsync_folder(staging)
+        if folder.exists():
+            os.replace(folder, old)
+        os.replace(staging, folder)
+        fsync_folder(folder.parent)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+        shutil.rmtree(old, ignore_errors=True)

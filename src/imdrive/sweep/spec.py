@@ -35,6 +35,7 @@ from imdrive.config.overrides import is_setting, set_path
 from imdrive.config.presets import scenario_text
 from imdrive.config.profiles import Profile
 from imdrive.config.scenario import Scenario
+from imdrive.config.validation import check_name, slug
 from imdrive.errors import ConfigError
 
 CONVENIENCE = ("R2_ratio", "speed_rpm", "load_Nm")
@@ -293,7 +294,7 @@ def sweep_text(ref: str) -> tuple[str, Path | None]:
     p = Path(ref)
     if p.is_file():
         try:
-            return p.read_text(encoding="utf-8"), p.resolve().parent
+            return p.read_text(encoding="utf-8-sig"), p.resolve().parent
         except (OSError, UnicodeDecodeError) as exc:
             raise ConfigError("sweep", f"cannot read {p}: {exc}") from None
     raise ConfigError(
@@ -599,7 +600,7 @@ def parse_sweep(
 def _read_toml(text: str) -> dict:
     """The sweep file as a dictionary, with only known top-level keys."""
     try:
-        data = tomllib.loads(text)
+        data = tomllib.loads(text.removeprefix("\ufeff"))
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError("sweep", f"invalid TOML: {exc}") from None
     for key in data:
@@ -614,6 +615,10 @@ def _name_and_description(data: dict, default_name: str) -> tuple[str, str]:
     for key, v in (("name", name), ("description", desc)):
         if not isinstance(v, str):
             raise ConfigError(key, "must be a string")
+    try:
+        check_name(name)
+    except ConfigError as exc:
+        raise ConfigError("name", exc.rule) from None
     return name, desc
 
 
@@ -627,7 +632,9 @@ def _base_data(data: dict, folder: Path | None) -> dict:
     if folder is not None and not Path(base_ref).is_absolute() and (folder / base_ref).is_file():
         base_ref = str(folder / base_ref)
     try:
-        base_data = tomllib.loads(scenario_text(base_ref))
+        base_data = tomllib.loads(scenario_text(base_ref).removeprefix("\ufeff"))
+    except ConfigError as exc:
+        raise ConfigError("base", exc.rule) from None
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError("base", f"invalid TOML in {base_ref}: {exc}") from None
     sets = data.get("set", {})
@@ -771,8 +778,9 @@ def _build_one_axis(sweep: Sweep, axis: Axis, value) -> Scenario:
     return single.scenario(0)
 
 
-def load_sweep(ref: str) -> Sweep:
-    """A built-in sweep by name, or a sweep file by path."""
+def load_sweep(ref: str, max_runs: int | None = None) -> Sweep:
+    """A built-in sweep by name, or a sweep file by path (``max_runs``: see
+    :func:`parse_sweep`; default :data:`DEFAULT_MAX_RUNS`)."""
     text, folder = sweep_text(ref)
-    default = ref if folder is None else Path(ref).stem
-    return parse_sweep(text, folder, default)
+    default = ref if folder is None else slug(Path(ref).stem)
+    return parse_sweep(text, folder, default, DEFAULT_MAX_RUNS if max_runs is None else max_runs)
