@@ -13,9 +13,17 @@ class ConfigError(ValueError):
     """
 
     def __init__(self, field: str, rule: str):
-        self.field = field
-        self.rule = rule
-        super().__init__(f"{field}: {rule}")
+        self.field = _one_line(field)
+        self.rule = _one_line(rule)
+        super().__init__(f"{self.field}: {self.rule}")
+
+
+def _one_line(text: str) -> str:
+    """``text`` with control characters escaped (a key may hold a newline): one line."""
+    text = str(text)
+    if text.isprintable():
+        return text
+    return "".join(c if c.isprintable() else c.encode("unicode_escape").decode() for c in text)
 
 
 class SimulationDiverged(RuntimeError):
