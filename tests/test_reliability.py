@@ -617,3 +617,16 @@ def test_manifest_complete_only_after_the_figures(tmp_path, monkeypatch):
         run_sweep(parse_sweep(TINY), out, progress=False)
     assert json.loads((out / "manifest.json").read_text())["complete"] is False
     assert math.isfinite(pd.read_parquet(out / "runs.parquet")["speed_error_rpm"].iloc[0])
+
+
+def test_final_values_are_at_t_end_whatever_log_every():
+    from imdrive.run.simulate import simulate
+
+    common = ["simulation.t_end_s=0.05", "output.figures=false"]
+    every = simulate(Scenario.read("sensorless", [*common, "simulation.log_every=1"]))
+    for le in (7, 10**6):
+        sparse = simulate(Scenario.read("sensorless", [*common, f"simulation.log_every={le}"]))
+        assert sparse.final_values() == every.final_values()
+        assert sparse.summary()["final"]["time_s"] == pytest.approx(0.05)
+        for k in every.columns:  # the logged rows are unchanged
+            assert np.array_equal(sparse[k], every[k][::le]), k

@@ -135,6 +135,9 @@ class SimulationResult:
     wall_time_s: float = 0.0
     derived: dict = field(default_factory=dict)
     startup_s: float = 0.0  # kernel load (from the on-disk cache) or compilation
+    #: the signals at t_end when the last logged row is earlier (log_every does not divide the
+    #: number of periods); None: the last logged row is the final state
+    end_values: dict | None = None
 
     @classmethod
     def from_log(cls, scenario, log, state0, state, params, status, k_end, wall, derived):
@@ -255,7 +258,15 @@ class SimulationResult:
         return drive_metrics(self, window_s)
 
     # -- summary and export ------------------------------------------------------------------
+    @property
+    def vector(self) -> bool:
+        return self.scenario.drive.mode == "vector"
+
     def final_values(self) -> dict[str, float]:
+        """Every signal at the end of the run: at t_end (or at the divergence), not at the
+        last logged row when ``log_every`` does not divide the number of periods."""
+        if self.end_values is not None:
+            return dict(self.end_values)
         return {k: float(v[-1]) for k, v in self.signals.items() if len(v)}
 
     def summary(self) -> dict:
