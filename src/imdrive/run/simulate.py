@@ -65,8 +65,6 @@ def simulate(scenario: Scenario, arrays: DriveArrays | None = None) -> Simulatio
         scenario, log, a.state0, state, a.params, int(status), int(k_end), wall, a.derived
     )
     if end_row is not None:
-        res.end_values = {
-            k: float(v[0]) for k, v in columns_from_log(end_row, res.vector).items()
-        }
+        res.end_values = {k: float(v[0]) for k, v in columns_from_log(end_row, res.vector).items()}
     res.startup_s = startup
     return res
