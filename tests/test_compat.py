@@ -62,3 +62,13 @@ def test_readme_example_of_0_1_still_runs():
     df = res.to_pandas()
     assert list(df.columns[:3]) == ["time_s", "speed_rpm", "w_m_rad_s"]
     assert {"speed_est_rpm", "R2_est_ohm", "e_d0_Wb"} <= set(df.columns)
+
+
+def test_top_level_simulate_stays_callable_after_the_old_module_is_imported():
+    import imdrive as im
+
+    with pytest.warns(DeprecationWarning):
+        sys.modules.pop("imdrive.simulate", None)
+        importlib.import_module("imdrive.simulate")
+    sc = im.Scenario.read("sensorless", ["simulation.t_end_s=0.01"])
+    assert im.simulate(sc).time_s[-1] == pytest.approx(0.01)

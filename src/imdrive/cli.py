@@ -1,24 +1,80 @@
 """The ``imdrive`` command.
 
-Bad input (an unknown preset, key or type, a value that breaks a rule) prints one line naming
-the field and the rule on stderr and exits with code 2, with nothing written. A run that
-diverges writes its partial results, marked ``"diverged": true`` in summary.json, and exits 1.
-A sweep records its diverging runs in its table (``diverged``, ``status``) and exits 0.
+Exit codes
+----------
+0 (``EXIT_OK``)
+    Done.
+1 (``EXIT_DIVERGED``)
+    A physical outcome: the run diverged. Its partial results are written, marked
+    ``"diverged": true`` in summary.json.
+2 (``EXIT_BAD_INPUT``)
+    Bad input (an unknown preset, key or type, a value that breaks a rule, a derived quantity
+    that overflows, an unsafe name, a sweep above ``--max-runs``, an ``--out`` folder that
+    holds other files): one line ``imdrive: error: field: rule`` on stderr, nothing written.
+3 (``EXIT_LOST_CONTROL``)
+    A physical outcome: the drive lost control (reserved).
+4 (``EXIT_ENVIRONMENT``)
+    The environment failed: an I/O error, a full disk, a permission, memory, a path longer
+    than the file system allows at write time, a dask cluster that lost its workers or
+    scheduler, a sweep store locked by another process. One line naming the cause, no
+    traceback; what was already written stays and looks incomplete (no summary.json, a sweep
+    manifest without ``"complete": true``; ``--resume`` continues a sweep).
+5 (``EXIT_INTERNAL``)
+    An unexpected error (a bug): one line; set ``IMDRIVE_DEBUG=1`` for the traceback.
+130
+    Interrupted (Ctrl-C).
+
+A sweep records its diverging runs (``diverged``, ``status``) and the runs that could not be
+built (``status`` -1, ``error``) in its table and exits 0.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 import tomllib
 from pathlib import Path
 
-from imdrive.errors import ConfigError
+from imdrive.errors import ConfigError, EnvironmentFailure, describe_os_error
 
 EXIT_OK = 0
 EXIT_DIVERGED = 1
 EXIT_BAD_INPUT = 2
+EXIT_LOST_CONTROL = 3
+EXIT_ENVIRONMENT = 4
+EXIT_INTERNAL = 5
+
+OUT_ROOT = Path("out")  # default output root: out/NAME, out/sweep-NAME
+NAME_MAX_BYTES = 255  # longest file name on common file systems (ext4, xfs, btrfs, apfs)
+PATH_MAX_BYTES = 4096
+
+
+def _out_path(given: str | None, name: str, prefix: str = "") -> Path:
+    """The output folder: ``--out`` if given (checked), else ``out/PREFIX+NAME``.
+
+    The default never leaves :data:`OUT_ROOT`: ``name`` was validated by the scenario or sweep
+    (a safe character set), and the resolved path is checked to be a folder inside the root.
+    """
+    if given is not None:
+        if not given.strip():
+            raise ConfigError("--out", "is empty: give a folder (or leave --out out)")
+        out = Path(given)
+    else:
+        root = OUT_ROOT.resolve()
+        out = OUT_ROOT / f"{prefix}{name}"
+        inside = out.resolve()
+        if inside == root or root not in inside.parents:
+            raise ConfigError("name", f"{name!r} does not name a folder inside {OUT_ROOT}/")
+    for part in out.parts:
+        if len(os.fsencode(part)) > NAME_MAX_BYTES:
+            raise ConfigError(
+                "--out", f"a part of the path is longer than {NAME_MAX_BYTES} bytes: {part[:40]}..."
+            )
+    if len(os.fsencode(str(out.absolute()))) > PATH_MAX_BYTES:
+        raise ConfigError("--out", f"the path is longer than {PATH_MAX_BYTES} bytes")
+    return out
 
 
 class _Parser(argparse.ArgumentParser):
@@ -52,19 +108,21 @@ def _cmd_show(args) -> int:
 
 def _cmd_run(args) -> int:
     from imdrive.config.scenario import Scenario
+    from imdrive.run.build import build_arrays
+    from imdrive.run.result import check_result_folder
     from imdrive.run.simulate import simulate
 
     scenario = Scenario.read(args.scenario, args.set or [])
-    out = Path(args.out) if args.out else Path("out") / scenario.name
-    if out.exists() and not out.is_dir():
-        raise ConfigError("--out", f"{out} exists and is not a folder")
+    out = _out_path(args.out, scenario.name)
+    check_result_folder(out, args.force)
+    arrays = build_arrays(scenario)  # every derived quantity checked before anything runs
     if not args.quiet:
         print(
             f"imdrive: running {scenario.name} ({scenario.simulation.t_end_s:g} s) ...",
             file=sys.stderr,
         )
-    res = simulate(scenario)
-    res.save(out)
+    res = simulate(scenario, arrays)
+    res.save(out, force=args.force)
     s = res.summary()
     if res.diverged:
         print(
@@ -147,15 +205,31 @@ def _cmd_sweep(args) -> int:
         return EXIT_OK
     if args.chunk_size is not None and args.chunk_size < 1:
         raise ConfigError("--chunk-size", f"must be >= 1 (got {args.chunk_size})")
-    sweep = load_sweep(args.sweep)
-    out = Path(args.out) if args.out else Path("out") / f"sweep-{sweep.name}"
+    sweep = load_sweep(args.sweep, max_runs=args.max_runs)
+    out = _out_path(args.out, sweep.name, "sweep-")
     cs = args.chunk_size or sweep.chunk_size
+    val = sweep.validation
     if args.dry_run:
         print(
             f"sweep {sweep.name}: {sweep.n_runs} runs "
             f"({' x '.join(str(n) for n in sweep.shape) if not sweep.random else 'random'}), "
             f"{sweep.n_chunks(cs)} chunks of {cs}, axes: {', '.join(a.name for a in sweep.axes)}"
         )
+        print(
+            f"validated: {val.get('checked', 0)} distinct scenarios"
+            + (
+                ""
+                if val.get("complete", True)
+                else " (each axis value alone; the combinations are checked as they run)"
+            )
+        )
+    if val.get("n_failing"):
+        print(
+            f"imdrive: {val['n_failing']} combination(s) of axis values cannot run and will be "
+            f"recorded as failed, e.g. {val['failing'][0][0]}: {val['failing'][0][1]}",
+            file=sys.stderr,
+        )
+    if args.dry_run:
         return EXIT_OK
     t0 = time.perf_counter()
     df = run_sweep(
@@ -169,8 +243,9 @@ def _cmd_sweep(args) -> int:
     )
     if not args.quiet:
         n_div = int(df["diverged"].sum())
+        n_fail = int((df["status"] < 0).sum())
         print(
-            f"imdrive: sweep {sweep.name}: {len(df)} runs ({n_div} diverged) in "
+            f"imdrive: sweep {sweep.name}: {len(df)} runs ({n_div} diverged, {n_fail} failed) in "
             f"{time.perf_counter() - t0:.1f} s -> {out / 'runs.parquet'}",
             file=sys.stderr,
         )
@@ -275,6 +350,11 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="KEY.PATH=VALUE",
         help="override a scenario value, e.g. --set simulation.t_end_s=2 (repeatable)",
     )
+    r.add_argument(
+        "--force",
+        action="store_true",
+        help="replace an --out folder that holds files other than an imdrive result",
+    )
     r.add_argument("-q", "--quiet", action="store_true")
     r.set_defaults(func=_cmd_run)
 
@@ -317,6 +397,13 @@ def build_parser() -> argparse.ArgumentParser:
     sw.add_argument("--chunk-size", type=int, metavar="N", help="runs per chunk (default 32)")
     sw.add_argument("--no-figures", action="store_true", help="skip the heatmap PNGs")
     sw.add_argument("--dry-run", action="store_true", help="validate, print the size, run nothing")
+    sw.add_argument(
+        "--max-runs",
+        type=int,
+        default=None,
+        metavar="N",
+        help="refuse a sweep of more runs (default 10000000)",
+    )
     sw.add_argument("--list", action="store_true", help="list the built-in sweeps")
     sw.add_argument("--show", action="store_true", help="print the sweep file")
     sw.add_argument("-q", "--quiet", action="store_true")
@@ -363,11 +450,30 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return args.func(args)
     except ConfigError as exc:
-        print(f"imdrive: error: {exc}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+        return _fail(f"{exc}", EXIT_BAD_INPUT)
+    except EnvironmentFailure as exc:
+        return _fail(exc.cause, EXIT_ENVIRONMENT)
+    except MemoryError:
+        return _fail("out of memory (a smaller sweep, chunk or log_every?)", EXIT_ENVIRONMENT)
+    except OSError as exc:
+        return _fail(describe_os_error(exc), EXIT_ENVIRONMENT)
     except KeyboardInterrupt:
         print("imdrive: interrupted", file=sys.stderr)
         return 130
+    except Exception as exc:
+        if os.environ.get("IMDRIVE_DEBUG"):
+            raise
+        msg = str(exc).splitlines()[0][:300] if str(exc) else ""
+        return _fail(
+            f"internal error ({type(exc).__name__}: {msg}); set IMDRIVE_DEBUG=1 for the traceback",
+            EXIT_INTERNAL,
+        )
+
+
+def _fail(message: str, code: int) -> int:
+    """Print one line on stderr and return the exit code."""
+    print(f"imdrive: error: {message}", file=sys.stderr)
+    return code
 
 
 if __name__ == "__main__":

@@ -1,4 +1,4 @@
-"""Errors raised for bad input. The CLI turns them into one-line messages and exit code 2."""
+"""Errors: bad input (exit code 2 in the CLI) and environment failures (exit code 4)."""
 
 
 class ConfigError(ValueError):
@@ -13,9 +13,17 @@ class ConfigError(ValueError):
     """
 
     def __init__(self, field: str, rule: str):
-        self.field = field
-        self.rule = rule
-        super().__init__(f"{field}: {rule}")
+        self.field = _one_line(field)
+        self.rule = _one_line(rule)
+        super().__init__(f"{self.field}: {self.rule}")
+
+
+def _one_line(text: str) -> str:
+    """``text`` with control characters escaped (a key may hold a newline): one line."""
+    text = str(text)
+    if text.isprintable():
+        return text
+    return "".join(c if c.isprintable() else c.encode("unicode_escape").decode() for c in text)
 
 
 class SimulationDiverged(RuntimeError):
@@ -26,3 +34,47 @@ class SimulationDiverged(RuntimeError):
         self.signal = signal
         self.result = result
         super().__init__(f"simulation diverged at t = {time_s:.6g} s: {signal}")
+
+
+class EnvironmentFailure(RuntimeError):
+    """The environment failed a run that was valid: I/O, full disk, permissions, memory, cluster.
+
+    The CLI prints the message on one line and exits with code 4; what was written stays, and
+    looks incomplete (no ``summary.json``, a manifest that does not say ``complete``).
+
+    Parameters
+    ----------
+    cause : str
+        One line naming the cause, e.g. ``cannot write out/x/summary.json: No space left on
+        device``.
+    """
+
+    def __init__(self, cause: str):
+        self.cause = cause
+        super().__init__(cause)
+
+
+def describe_os_error(exc: OSError, doing: str = "") -> str:
+    """One line for an :class:`OSError`: what was being done, the path, the system's reason.
+
+    Parameters
+    ----------
+    exc : OSError
+        The error.
+    doing : str
+        What failed, e.g. ``"cannot write"``; default ``"I/O error on"``.
+
+    Returns
+    -------
+    str
+        E.g. ``cannot write out/run/summary.json: No space left on device (ENOSPC)``.
+    """
+    import errno
+
+    reason = exc.strerror or str(exc) or type(exc).__name__
+    code = errno.errorcode.get(exc.errno or -1)
+    if code:
+        reason = f"{reason} ({code})"
+    if exc.filename is None:
+        return f"{doing or 'I/O error'}: {reason}"
+    return f"{doing or 'I/O error on'} {exc.filename}: {reason}"

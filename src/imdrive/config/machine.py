@@ -63,7 +63,10 @@ class MachineParams:
     Ll1_H: Annotated[Float, setting("stator leakage inductance", "H", gt=0.0)]
     Ll2_H: Annotated[Float, setting("rotor leakage inductance", "H", gt=0.0)]
     M_H: Annotated[Float, setting("magnetising (mutual) inductance", "H", gt=0.0)]
-    pole_pairs: Annotated[Int, setting("number of pole pairs n_p", ge=1)] = 2
+    pole_pairs: Annotated[
+        Int,
+        setting("number of pole pairs n_p (<= 100: more than any machine built)", ge=1, le=100),
+    ] = 2
     J_kgm2: Annotated[Float, setting("moment of inertia of rotor and load", "kg m²", gt=0.0)] = (
         0.069
     )

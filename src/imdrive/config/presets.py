@@ -28,7 +28,7 @@ def scenario_text(preset_or_path: str) -> str:
     p = Path(preset_or_path)
     if p.is_file():
         try:
-            return p.read_text(encoding="utf-8")
+            return p.read_text(encoding="utf-8-sig")  # a byte-order mark is not part of TOML
         except (OSError, UnicodeDecodeError) as exc:
             raise ConfigError("scenario", f"cannot read {p}: {exc}") from None
     raise ConfigError(

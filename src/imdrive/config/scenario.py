@@ -28,6 +28,7 @@ from imdrive.config.validation import (
     Bool,
     Float,
     Int,
+    Name,
     ProfileValues,
     Str,
     setting,
@@ -60,10 +61,33 @@ class ThermalSettings:
         Float, setting("temperature coefficient of the rotor resistance (copper)", "1/K", ge=0.0)
     ] = 0.00393
     theta_ref_C: Annotated[
-        Float, setting("temperature at which R1_ohm and R2_ohm are given", "°C")
+        Float,
+        setting(
+            "temperature at which R1_ohm and R2_ohm are given (above absolute zero, below "
+            "copper's melting point)",
+            "°C",
+            gt=-273.15,
+            le=1000.0,
+        ),
     ] = 20.0
-    theta_amb_C: Annotated[Float, setting("ambient temperature", "°C")] = 20.0
-    theta_init_C: Annotated[Float, setting("winding temperature at t = 0", "°C")] = 20.0
+    theta_amb_C: Annotated[
+        Float,
+        setting(
+            "ambient temperature (above absolute zero, below copper's melting point)",
+            "°C",
+            gt=-273.15,
+            le=1000.0,
+        ),
+    ] = 20.0
+    theta_init_C: Annotated[
+        Float,
+        setting(
+            "winding temperature at t = 0 (above absolute zero, below copper's melting point)",
+            "°C",
+            gt=-273.15,
+            le=1000.0,
+        ),
+    ] = 20.0
     Rth1_K_per_W: Annotated[
         Float, setting("thermal resistance, stator winding to ambient", "K/W", gt=0.0)
     ] = 0.4
@@ -72,6 +96,18 @@ class ThermalSettings:
         Float, setting("thermal resistance, rotor winding to ambient", "K/W", gt=0.0)
     ] = 0.4
     tau2_s: Annotated[Float, setting("thermal time constant of the rotor", "s", gt=0.0)] = 1200.0
+
+    @model_validator(mode="after")
+    def _resistances_stay_positive(self):
+        for winding, alpha in (("1", self.alpha1_per_K), ("2", self.alpha2_per_K)):
+            for key in ("theta_amb_C", "theta_init_C"):
+                if not 1.0 + alpha * (getattr(self, key) - self.theta_ref_C) > 0.0:
+                    raise ConfigError(
+                        key,
+                        f"gives R{winding} <= 0 (1 + alpha{winding}_per_K (theta - theta_ref_C) "
+                        "must be > 0: a resistance is positive)",
+                    )
+        return self
 
 
 @settings("plant.saturation")
@@ -158,9 +194,18 @@ class LoadSettings:
 
     torque_Nm: Annotated[Profile, setting("time-dependent load torque", "N m")] = C(0.0)
     viscous_Nms: Annotated[
-        Float, setting("viscous load torque per unit speed, ·ω", "N m s/rad")
+        Float,
+        setting(
+            "viscous load torque per unit speed, ·ω (>= 0: a passive load brakes, a negative "
+            "one would drive the shaft from nothing)",
+            "N m s/rad",
+            ge=0.0,
+        ),
     ] = 0.0
-    fan_Nms2: Annotated[Float, setting("fan load torque, ·ω·|ω|", "N m s²/rad²")] = 0.0
+    fan_Nms2: Annotated[
+        Float,
+        setting("fan load torque, ·ω·|ω| (>= 0: a fan absorbs power)", "N m s²/rad²", ge=0.0),
+    ] = 0.0
 
 
 @settings("drive")
@@ -232,19 +277,40 @@ class ControlSettings:
     ] = 200.0
     speed_kp: Annotated[
         Float | None,
-        setting("speed PI proportional gain", "A/(rad/s)", default_doc="from speed_bandwidth_Hz"),
+        setting(
+            "speed PI proportional gain (> 0: a negative gain is positive feedback, never a "
+            "controller)",
+            "A/(rad/s)",
+            gt=0.0,
+            default_doc="from speed_bandwidth_Hz",
+        ),
     ] = None
     speed_ki: Annotated[
         Float | None,
-        setting("speed PI integral gain", "A/rad", default_doc="from speed_bandwidth_Hz"),
+        setting(
+            "speed PI integral gain (>= 0: a negative one integrates the error the wrong way)",
+            "A/rad",
+            ge=0.0,
+            default_doc="from speed_bandwidth_Hz",
+        ),
     ] = None
     current_kp: Annotated[
         Float | None,
-        setting("current PI proportional gain", "V/A", default_doc="from current_bandwidth_Hz"),
+        setting(
+            "current PI proportional gain (a negative value is positive feedback and diverges: "
+            "accepted only as a deliberate way to provoke a divergence)",
+            "V/A",
+            default_doc="from current_bandwidth_Hz",
+        ),
     ] = None
     current_ki: Annotated[
         Float | None,
-        setting("current PI integral gain", "V/(A s)", default_doc="from current_bandwidth_Hz"),
+        setting(
+            "current PI integral gain (>= 0: a negative one integrates the error the wrong way)",
+            "V/(A s)",
+            ge=0.0,
+            default_doc="from current_bandwidth_Hz",
+        ),
     ] = None
     current_limit_A: Annotated[
         Float | None,
@@ -338,11 +404,23 @@ class MrasSettings:
     ] = 40.0
     K1: Annotated[
         Float | None,
-        setting("adaptation PI proportional gain", "(rad/s)/Wb²", default_doc="from bandwidth_Hz"),
+        setting(
+            "adaptation PI proportional gain (>= 0: Popov's hyperstability proof needs "
+            "non-negative gains)",
+            "(rad/s)/Wb²",
+            ge=0.0,
+            default_doc="from bandwidth_Hz",
+        ),
     ] = None
     K2: Annotated[
         Float | None,
-        setting("adaptation PI integral gain", "(rad/s²)/Wb²", default_doc="from bandwidth_Hz"),
+        setting(
+            "adaptation PI integral gain (> 0: the integral makes the estimate track; a "
+            "negative one drives it away)",
+            "(rad/s²)/Wb²",
+            gt=0.0,
+            default_doc="from bandwidth_Hz",
+        ),
     ] = None
 
 
@@ -461,7 +539,14 @@ class SensorSettings:
     adc_range_A: Annotated[
         Float, setting("ADC full scale of the current sensors (±)", "A", gt=0.0)
     ] = 50.0
-    seed: Annotated[Int, setting("seed of the sensor noise (same seed, same run)", ge=0)] = 0
+    seed: Annotated[
+        Int,
+        setting(
+            "seed of the sensor noise (same seed, same run; a 63-bit integer)",
+            ge=0,
+            le=2**63 - 1,
+        ),
+    ] = 0
     vdc_gain: Annotated[
         Float,
         setting(
@@ -492,8 +577,23 @@ class SimulationSettings:
     Ts_s: Annotated[Float, setting("control period (sampling and PWM period)", "s", gt=0.0)] = (
         100e-6
     )
-    substeps: Annotated[Int, setting("RK4 steps of the plant per control period", ge=1)] = 1
-    log_every: Annotated[Int, setting("logging decimation, in control periods", ge=1)] = 1
+    substeps: Annotated[
+        Int,
+        setting(
+            "RK4 steps of the plant per control period (<= 1000: beyond, the step is far below "
+            "any time constant of the machine and the run only gets slower)",
+            ge=1,
+            le=1000,
+        ),
+    ] = 1
+    log_every: Annotated[
+        Int,
+        setting(
+            "logging decimation, in control periods (<= 2e9, the most periods a run may have)",
+            ge=1,
+            le=2_000_000_000,
+        ),
+    ] = 1
     divergence_current_A: Annotated[
         Float | None,
         setting(
@@ -561,7 +661,13 @@ class Scenario:
     ``preset`` and the fields that override it), or directly from the section objects.
     """
 
-    name: Annotated[Str, setting("name of the run")] = "scenario"
+    name: Annotated[
+        Name,
+        setting(
+            "name of the run; the default output folder is out/NAME, so 1-100 characters "
+            "from A-Z a-z 0-9 . _ + -, starting with a letter or digit"
+        ),
+    ] = "scenario"
     description: Annotated[Str, setting("free text")] = ""
     machine: Annotated[MachineParams, setting("the plant's machine")] = machine_preset(
         DEFAULT_MACHINE_PRESET
@@ -638,7 +744,41 @@ class Scenario:
                 "control.dead_time_compensation_s",
                 "must be < half a switching period, 0.5/inverter.switching_frequency_Hz",
             )
+        self._compensator_rules()
         return self
+
+    def _compensator_rules(self) -> None:
+        """The R̂2 clamps in order, given or default (one given clamp against the other's
+        default: ``R2_min_ohm`` above the default ``R2_max_ohm`` made R̂2 jump); the decision
+        period and the injection against the run and the machine."""
+        comp = self.compensator
+        R2h = self.estimator.R2_ohm if self.estimator.R2_ohm is not None else self.machine.R2_ohm
+        lo = comp.R2_min_ohm if comp.R2_min_ohm is not None else 0.5 * R2h
+        hi = comp.R2_max_ohm if comp.R2_max_ohm is not None else 2.0 * R2h
+        if not lo < hi:
+            field = (
+                "compensator.R2_min_ohm"
+                if comp.R2_min_ohm is not None
+                else ("compensator.R2_max_ohm")
+            )
+            raise ConfigError(
+                field,
+                f"the clamps of R̂2 must satisfy R2_min_ohm < R2_max_ohm (got {lo:g} >= {hi:g}; "
+                f"an unset clamp is 0.5 or 2 × the initial R̂2 = {R2h:g} ohm)",
+            )
+        Ts = self.simulation.Ts_s
+        if comp.period_s is not None and comp.period_s / Ts > 2e9:
+            raise ConfigError("compensator.period_s", "is more than 2e9 control periods")
+        inj = self.injection
+        if 1.0 / (inj.frequency_Hz * Ts) > 2e9:
+            raise ConfigError("injection.frequency_Hz", "has a period of more than 2e9 periods")
+        i_rated = self.machine.rated_current_A
+        if inj.amplitude_A > i_rated:
+            raise ConfigError(
+                "injection.amplitude_A",
+                f"must be <= the machine's rated peak current {i_rated:.3g} A (a persistent "
+                f"excitation is a small perturbation of the flux current; got {inj.amplitude_A:g})",
+            )
 
     # -- construction ----------------------------------------------------------------------
     @classmethod
@@ -652,7 +792,7 @@ class Scenario:
     def from_toml(cls, text: str, overrides: list[str] | tuple[str, ...] = ()) -> Scenario:
         """Parse TOML text, apply ``key.path=value`` overrides, validate."""
         try:
-            data = tomllib.loads(text)
+            data = tomllib.loads(text.removeprefix("\ufeff"))  # a UTF-8 byte-order mark
         except tomllib.TOMLDecodeError as exc:
             raise ConfigError("scenario", f"invalid TOML: {exc}") from None
         from imdrive.config.overrides import apply_override

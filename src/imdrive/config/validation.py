@@ -24,7 +24,7 @@ import re
 from typing import Annotated, Any
 
 import numpy as np
-from pydantic import BeforeValidator, ConfigDict, Field, Strict, ValidationError
+from pydantic import AfterValidator, BeforeValidator, ConfigDict, Field, Strict, ValidationError
 from pydantic.dataclasses import dataclass as _pydantic_dataclass
 from pydantic_core import core_schema
 
@@ -60,6 +60,34 @@ Int = Annotated[int, Strict(), BeforeValidator(_integral)]
 Bool = Annotated[bool, Strict(), BeforeValidator(_scalar)]
 """``true`` or ``false`` (not 0/1)."""
 Str = Annotated[str, Strict()]
+
+NAME_MAX = 100
+_NAME_RE = re.compile(r"[A-Za-z0-9][A-Za-z0-9._+-]*")
+NAME_RULE = (
+    f"must be 1 to {NAME_MAX} characters from A-Z a-z 0-9 . _ + -, starting with a letter or "
+    "digit (it names the output folder)"
+)
+
+
+def check_name(value: str) -> str:
+    """A run's or sweep's name, which becomes a folder name: a safe character set and length.
+
+    Refuses ``..``, ``/``, an absolute path, an empty name and one over :data:`NAME_MAX`
+    characters with :class:`ConfigError` (field ``""``: the caller's field).
+    """
+    if not (isinstance(value, str) and len(value) <= NAME_MAX and _NAME_RE.fullmatch(value)):
+        raise ConfigError("", f"{NAME_RULE}, got {_show(value)}")
+    return value
+
+
+def slug(text: str, default: str = "sweep") -> str:
+    """``text`` made a valid name (:func:`check_name`): other characters become ``-``."""
+    out = re.sub(r"[^A-Za-z0-9._+-]", "-", text).lstrip("._+-")[:NAME_MAX]
+    return out or default
+
+
+Name = Annotated[str, Strict(), AfterValidator(check_name)]
+"""A name that becomes a folder name (:func:`check_name`)."""
 
 
 def setting(

@@ -64,7 +64,23 @@ from imdrive.kernels.batch import (
 from imdrive.kernels.engine import LOG, S_OK, DriveParams, DriveState
 from imdrive.kernels.profiles import N_PROF
 
-COLUMNS = ("drive", "status", "diverged", "diverged_at_s", "simulated_s", *METRICS)
+COLUMNS = ("drive", "status", "diverged", "diverged_at_s", "simulated_s", *METRICS, "error")
+
+#: ``status`` of a drive that could not be run (its derived parameters could not be computed,
+#: or its scenario was refused when built): recorded with its message in ``error``, metrics NaN.
+#: The kernel's own codes (``S_OK`` = 0, divergence 1-3) are never negative.
+S_FAILED = -1
+
+
+@dataclass(frozen=True)
+class FailedRun:
+    """An item of :func:`simulate_batch`'s input that stands for a run that could not be built.
+
+    With ``errors="record"`` it becomes a row with ``status`` :data:`S_FAILED` and ``message``
+    in the ``error`` column.
+    """
+
+    message: str
 
 
 @dataclass
@@ -173,6 +189,7 @@ def simulate_batch(
     window_s: float = 0.5,
     parallel: bool = True,
     block_size: int = 512,
+    errors: str = "raise",
 ) -> BatchResult:
     """Simulate many independent drives at once.
 
@@ -190,6 +207,12 @@ def simulate_batch(
         Use all numba threads (default); False runs on the calling thread without the GIL.
     block_size : int
         Drives per group of kernel calls (bounds the memory of the flat arrays).
+    errors : {"raise", "record"}
+        What a drive whose arrays cannot be built does (a :class:`~imdrive.errors.ConfigError`
+        from :func:`~imdrive.run.build.build_arrays`, e.g. a derived gain that overflows):
+        ``"raise"`` stops the batch; ``"record"`` gives it a row with ``status`` =
+        :data:`S_FAILED` and the message in ``error``, and the other drives go on. A
+        :class:`FailedRun` item is recorded the same way.
 
     Returns
     -------
@@ -208,8 +231,10 @@ def simulate_batch(
         raise ConfigError("window_s", f"must be >= 0 (got {window_s})")
     if block_size < 1:
         raise ConfigError("block_size", f"must be >= 1 (got {block_size})")
+    if errors not in ("raise", "record"):
+        raise ConfigError("errors", f'must be "raise" or "record" (got {errors!r})')
     t_start = time.perf_counter()
-    chunks_m, chunks_s, chunks_k, chunks_ts = [], [], [], []
+    chunks_m, chunks_s, chunks_k, chunks_ts, chunks_e = [], [], [], [], []
     results: list = []
     kernel_wall = 0.0
     it = iter(scenarios)
@@ -228,9 +253,21 @@ def simulate_batch(
         k_blk = np.empty(B, dtype=np.int64)
         ts_blk = np.empty(B)
         res_blk: list = [None] * B
+        e_blk = np.full(B, "", dtype=object)
         groups: dict[tuple[int, int], list] = {}
         for i, sc in enumerate(block):
-            a = build_arrays(sc)
+            try:
+                if isinstance(sc, FailedRun):
+                    raise ConfigError("scenario", sc.message)
+                a = build_arrays(sc)
+            except ConfigError as exc:
+                if errors == "raise":
+                    raise
+                for name in METRICS:
+                    m_blk[name][i] = np.nan
+                s_blk[i], k_blk[i], ts_blk[i] = S_FAILED, 0, 0.0
+                e_blk[i] = sc.message if isinstance(sc, FailedRun) else str(exc)
+                continue
             le = (log_every or a.log_every) if logs else 1
             groups.setdefault((a.n_steps, int(le)), []).append((i, sc, a))
         for (n_steps, le), items in groups.items():
@@ -260,6 +297,7 @@ def simulate_batch(
         chunks_s.append(s_blk)
         chunks_k.append(k_blk)
         chunks_ts.append(ts_blk)
+        chunks_e.append(e_blk)
         if logs:
             results.extend(res_blk)
         offset += B
@@ -268,13 +306,15 @@ def simulate_batch(
         status = np.concatenate(chunks_s)
         k_end = np.concatenate(chunks_k)
         Ts = np.concatenate(chunks_ts)
-        del chunks_m, chunks_s, chunks_k, chunks_ts
+        err = np.concatenate(chunks_e)
+        del chunks_m, chunks_s, chunks_k, chunks_ts, chunks_e
     else:
         met = np.empty(0, dtype=BATCH_METRICS)
         status = np.empty(0, dtype=np.int64)
         k_end = np.empty(0, dtype=np.int64)
         Ts = np.empty(0)
-    diverged = status != S_OK
+        err = np.empty(0, dtype=object)
+    diverged = (status != S_OK) & (status != S_FAILED)
     simulated = k_end * Ts
     cols = {
         "drive": np.arange(offset, dtype=np.int64),
@@ -285,6 +325,7 @@ def simulate_batch(
     }
     for name in METRICS:
         cols[name] = np.ascontiguousarray(met[name])
+    cols["error"] = err
     del met
     df = pd.DataFrame(cols, copy=False)
     return BatchResult(

@@ -113,8 +113,101 @@ def _assumed_dead_time(sc: Scenario) -> float:
     return sc.inverter.dead_time_s if t is None else t
 
 
+#: The setting a derived quantity (summary.json "derived", or a record field) comes from, to
+#: name it when the derived value overflows.
+DERIVED_SOURCE = {
+    "current_kp": "control.current_bandwidth_Hz",
+    "current_ki": "control.current_bandwidth_Hz",
+    "speed_kp": "control.speed_bandwidth_Hz",
+    "speed_ki": "control.speed_bandwidth_Hz",
+    "mras_K1": "mras.bandwidth_Hz",
+    "mras_K2": "mras.bandwidth_Hz",
+    "flux_ref_Wb": "control.flux_ref_Wb",
+    "torque_constant_Nm_per_A": "control.flux_ref_Wb",
+    "current_limit_A": "control.current_limit_A",
+    "divergence_current_A": "simulation.divergence_current_A",
+    "rated_current_A": "machine.rated_power_W",
+    "sigma": "machine.M_H",
+    "T2_s": "machine.R2_ohm",
+    "v_max_V": "inverter.Vdc_V",
+    "R2_hat_min_ohm": "compensator.R2_min_ohm",
+    "R2_hat_max_ohm": "compensator.R2_max_ohm",
+    "sim.w_lim": "simulation.divergence_speed_rpm",
+    "sim.i_lim": "simulation.divergence_current_A",
+    "control.v_max": "inverter.Vdc_V",
+    "control.dtc_u": "control.dead_time_compensation_s",
+    "plant.k_visc": "load.viscous_Nms",
+    "plant.k_fan": "load.fan_Nms2",
+    "sensor.adc_range": "sensor.adc_range_A",
+    "comp.inj_amp": "injection.amplitude_A",
+    "prof_v": "scenario",
+}
+_GAIN_OVERRIDE = {
+    "current_kp": "control.current_kp",
+    "current_ki": "control.current_ki",
+    "speed_kp": "control.speed_kp",
+    "speed_ki": "control.speed_ki",
+    "mras_K1": "mras.K1",
+    "mras_K2": "mras.K2",
+}
+
+
+def _not_finite(name: str, value, sc: Scenario) -> ConfigError:
+    field = DERIVED_SOURCE.get(name, "scenario")
+    if name in _GAIN_OVERRIDE:
+        section, key = _GAIN_OVERRIDE[name].split(".")
+        if getattr(getattr(sc, section), key) is not None:
+            field = _GAIN_OVERRIDE[name]
+    return ConfigError(
+        field,
+        f"gives a derived quantity {name} = {value} that is not a finite number (an overflow "
+        "of extreme values): bring the settings it is computed from into a physical range",
+    )
+
+
+def check_finite(arrays: DriveArrays, sc: Scenario) -> None:
+    """Refuse arrays holding a non-finite number: every derived quantity must be finite.
+
+    Checks the reported derived quantities, then every float and complex field of the
+    parameter and initial-state records and the profiles. Raises
+    :class:`~imdrive.errors.ConfigError` naming the setting the first bad value comes from.
+    """
+    for name, value in arrays.derived.items():
+        if not math.isfinite(float(value)):
+            raise _not_finite(name, value, sc)
+    for records in (arrays.params, arrays.state0):
+        for rec_name, rec in zip(records._fields, records, strict=True):
+            fields_ = rec.dtype.names or (None,)
+            for f in fields_:
+                arr = rec[f] if f is not None else rec
+                if arr.dtype.kind in "fc" and not np.all(np.isfinite(arr)):
+                    key = f"{rec_name}.{f}" if f is not None else rec_name
+                    bad = arr[~np.isfinite(arr)].ravel()[0]
+                    raise _not_finite(key, bad, sc)
+
+
 def build_arrays(sc: Scenario) -> DriveArrays:
-    """Fill every block's parameter and state records from the scenario."""
+    """Fill every block's parameter and state records from the scenario.
+
+    Every derived quantity is checked: a scenario whose derived parameters overflow (to
+    infinity, NaN, or beyond a 64-bit integer) raises :class:`~imdrive.errors.ConfigError`
+    naming the setting, before anything runs (:func:`check_finite`).
+    """
+    try:
+        arrays = _build_arrays(sc)
+    except ConfigError:
+        raise
+    except (ArithmeticError, ValueError) as exc:  # overflow of a float or of an int64 field
+        raise ConfigError(
+            "scenario",
+            f"its derived parameters cannot be computed ({type(exc).__name__}: {exc}): some "
+            "values are far outside a physical range",
+        ) from None
+    check_finite(arrays, sc)
+    return arrays
+
+
+def _build_arrays(sc: Scenario) -> DriveArrays:
     check_log_size(sc)
     m = sc.machine
     est = sc.estimator

@@ -144,6 +144,9 @@ class SimulationResult:
     wall_time_s: float = 0.0
     derived: dict = field(default_factory=dict)
     startup_s: float = 0.0  # kernel load (from the on-disk cache) or compilation
+    #: the signals at t_end when the last logged row is earlier (log_every does not divide the
+    #: number of periods); None: the last logged row is the final state
+    end_values: dict | None = None
 
     @classmethod
     def from_log(cls, scenario, log, state0, state, params, status, k_end, wall, derived):
@@ -299,7 +302,15 @@ class SimulationResult:
         return drive_metrics(self, window_s)
 
     # -- summary and export ------------------------------------------------------------------
+    @property
+    def vector(self) -> bool:
+        return self.scenario.drive.mode == "vector"
+
     def final_values(self) -> dict[str, float]:
+        """Every signal at the end of the run: at t_end (or at the divergence), not at the
+        last logged row when ``log_every`` does not divide the number of periods."""
+        if self.end_values is not None:
+            return dict(self.end_values)
         return {k: float(v[-1]) for k, v in self.signals.items() if len(v)}
 
     def summary(self) -> dict:
@@ -328,24 +339,108 @@ class SimulationResult:
         data = np.column_stack([self.signals[n] for n in names])
         np.savetxt(path, data, delimiter=",", header=",".join(names), comments="", fmt="%.9g")
 
-    def save(self, out_dir, figures: bool | None = None, csv: bool | None = None) -> list[Path]:
-        """Write ``timeseries.csv``, ``summary.json`` and PNG figures into ``out_dir``.
+    def save(
+        self,
+        out_dir,
+        figures: bool | None = None,
+        csv: bool | None = None,
+        force: bool = False,
+    ) -> list[Path]:
+        """Write ``timeseries.csv``, ``summary.json`` and PNG figures as the folder ``out_dir``.
 
-        Files are first written to a temporary folder inside ``out_dir`` and moved in place at
-        the end, ``summary.json`` last (an older ``summary.json`` is removed first), so an
-        interrupted write never looks complete (:class:`imdrive._io.AtomicFolder`).
+        The folder is replaced as a whole (:func:`imdrive._io.replace_folder`): the files are
+        written into a staging folder beside it, fsynced, and the staging folder takes its
+        place, so no file of an earlier result stays beside the new ones, and an interrupted
+        write leaves the earlier folder as it was (staging leftovers are removed by the next
+        save). An existing ``out_dir`` must be empty or an imdrive result
+        (:func:`is_result_folder`) unless ``force``: other files would be deleted.
+
+        Raises
+        ------
+        ConfigError
+            ``out_dir`` holds other files and ``force`` is False (nothing written).
         """
-        from imdrive._io import AtomicFolder
+        from imdrive._io import replace_folder
 
+        out_dir = Path(out_dir)
+        check_result_folder(out_dir, force)
         figures = self.scenario.output.figures if figures is None else figures
         csv = self.scenario.output.csv if csv is None else csv
-        with AtomicFolder(out_dir, marker="summary.json") as staging:
+        with replace_folder(out_dir) as staging:
             if csv:
-                self.to_csv(staging.path / "timeseries.csv")
-            self._write_exports(staging.path)
+                self.to_csv(staging / "timeseries.csv")
+            self._write_exports(staging)
             if figures:
                 from imdrive.run.plots import save_figures
 
-                save_figures(self, staging.path)
-            (staging.path / "summary.json").write_text(json.dumps(self.summary(), indent=2) + "\n")
-        return staging.written
+                save_figures(self, staging)
+            (staging / "summary.json").write_text(summary_json(self.summary()))
+            names = sorted(p.name for p in staging.iterdir())
+        return [out_dir / n for n in names if n != "summary.json"] + [out_dir / "summary.json"]
+
+
+NULL_NOTE = (
+    "null stands for a value that is not a finite number (NaN or infinite: a diverged run's "
+    "last states, a metric with no samples); JSON has no NaN or Infinity"
+)
+
+
+def _finite_or_null(obj):
+    """``obj`` with every non-finite float replaced by None (recursively); and whether any was."""
+    if isinstance(obj, float):
+        return (obj, False) if math.isfinite(obj) else (None, True)
+    if isinstance(obj, dict):
+        out, any_null = {}, False
+        for k, v in obj.items():
+            out[k], n = _finite_or_null(v)
+            any_null |= n
+        return out, any_null
+    if isinstance(obj, list | tuple):
+        items = [_finite_or_null(v) for v in obj]
+        return [v for v, _ in items], any(n for _, n in items)
+    return obj, False
+
+
+def summary_json(summary: dict) -> str:
+    """``summary`` as strict JSON: NaN and infinities written as null, with a ``"note"`` saying
+    so when there are any (most JSON parsers refuse bare ``NaN``/``Infinity``)."""
+    clean, any_null = _finite_or_null(summary)
+    if any_null:
+        clean["note"] = NULL_NOTE
+    return json.dumps(clean, indent=2, allow_nan=False) + "\n"
+
+
+def is_result_folder(folder) -> bool:
+    """Whether ``folder`` is missing, empty, or holds only what :meth:`SimulationResult.save`
+    writes (``summary.json``, ``timeseries.csv``, PNG figures, staging leftovers)."""
+    from imdrive._io import LOCK_NAME, is_partial
+
+    folder = Path(folder)
+    if not folder.exists():
+        return True
+    if not folder.is_dir():
+        return False
+    for p in folder.iterdir():
+        n = p.name
+        if is_partial(n) or n == LOCK_NAME:
+            continue
+        if p.is_file() and (n in ("summary.json", "timeseries.csv") or n.endswith(".png")):
+            continue
+        return False
+    return True
+
+
+def check_result_folder(folder, force: bool = False) -> None:
+    """Refuse (:class:`~imdrive.errors.ConfigError` on ``--out``) to replace a folder that is
+    not an imdrive result, unless ``force``."""
+    from imdrive.errors import ConfigError
+
+    folder = Path(folder)
+    if folder.exists() and not folder.is_dir():
+        raise ConfigError("--out", f"{folder} exists and is not a folder")
+    if not force and not is_result_folder(folder):
+        raise ConfigError(
+            "--out",
+            f"{folder} holds files that are not an imdrive result and would be deleted: choose "
+            "another folder, or add --force to replace it as a whole",
+        )

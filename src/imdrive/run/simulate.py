@@ -9,7 +9,7 @@ import numpy as np
 from imdrive.config.scenario import Scenario
 from imdrive.kernels.engine import LOG, S_OK, run_drive
 from imdrive.run.build import DriveArrays, build_arrays, copy_state
-from imdrive.run.result import SimulationResult
+from imdrive.run.result import SimulationResult, columns_from_log
 
 __all__ = ["DriveArrays", "build_arrays", "logged_rows", "new_log", "simulate"]
 
@@ -42,11 +42,29 @@ def simulate(scenario: Scenario, arrays: DriveArrays | None = None) -> Simulatio
     run_drive(a.params, copy_state(a.state0), 0, 0, log[:0], 1)
     startup = time.perf_counter() - t0
     t0 = time.perf_counter()
-    status, k_end = run_drive(a.params, state, 0, a.n_steps, log, a.log_every)
+    n_main = (a.n_steps // a.log_every) * a.log_every
+    end_row = None
+    if n_main == a.n_steps:
+        status, k_end = run_drive(a.params, state, 0, a.n_steps, log, a.log_every)
+    else:
+        # the last logged row is before t_end: run the rest in a second call (consecutive calls
+        # reproduce one long call exactly), which logs the row at n_main (the one the first
+        # call, without its closing sample, left out) and the state at t_end
+        status, k_end = run_drive(a.params, state, 0, n_main, log, a.log_every, 0, False)
+        if status == S_OK:
+            tail = new_log(2)
+            rest = a.n_steps - n_main
+            status, k_rest = run_drive(a.params, state, 0, rest, tail, rest, n_main, True)
+            log[-1] = tail[0]
+            k_end = n_main + k_rest
+            if status == S_OK:
+                end_row = tail[1:2]
     wall = time.perf_counter() - t0
     log = logged_rows(log, status, k_end, a.log_every)
     res = SimulationResult.from_log(
         scenario, log, a.state0, state, a.params, int(status), int(k_end), wall, a.derived
     )
+    if end_row is not None:
+        res.end_values = {k: float(v[0]) for k, v in columns_from_log(end_row, res.vector).items()}
     res.startup_s = startup
     return res

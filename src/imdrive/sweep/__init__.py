@@ -61,21 +61,30 @@ Axes
     ``R2_ratio``, ``speed_rpm``, ``load_Nm``. Two axes may not set the same key.
 
 Bad input (an unknown key or parameter, an empty axis, ``min > max``, a value a scenario
-rejects) raises :class:`~imdrive.errors.ConfigError` naming the field before anything runs:
-every run's scenario is built and validated first. A run that diverges is recorded
-(``diverged = True``, ``status``, ``diverged_at_s``; window metrics NaN) and the others go on.
+rejects, an unsafe ``name``, more runs than ``max_runs``) raises
+:class:`~imdrive.errors.ConfigError` naming the field before anything runs. The size is
+computed from the axes before any value is built (``--max-runs``, default 10 000 000); then
+every distinct scenario is built and validated, derived quantities included (the
+``speed_rpm`` and ``load_Nm`` axes only change a profile's last value, so a million-run grid
+builds few scenarios; beyond 20 000 distinct ones each axis value is validated alone and the
+combinations as they run). A run that diverges is recorded (``diverged = True``, ``status``,
+``diverged_at_s``; window metrics NaN), and so is a run that cannot be built or whose derived
+parameters overflow (``status`` = -1, its message in ``error``); the others go on.
 
 Store
 -----
 ``STORE/chunks/chunk-NNNNNN.parquet`` holds runs ``[N*chunk_size, (N+1)*chunk_size)``; each is
 written to a temporary name and renamed into place (atomic), then ``STORE/manifest.json``
 (sweep name, fingerprint of the resolved sweep, number of runs, chunk size, completed chunks) is
-rewritten the same way. ``--resume`` runs only the chunks whose file is missing, so an
-interrupted sweep loses at most the chunks in progress and duplicates nothing; without it, a
-non-empty STORE is an error. At the end the chunks are read back, sorted by run and written as
-``STORE/runs.parquet``; the figures go to ``STORE/figures/``. A run's results do not depend on
-which chunk, process or machine computed it, so a resumed or distributed sweep gives the same
-table as a local, uninterrupted one.
+rewritten the same way; every file is fsynced before its rename and its folder after. A
+writer holds ``STORE/.lock`` (``flock``): a second process on the same store fails at once.
+``--resume`` reads every chunk back and recomputes those missing or damaged (unreadable,
+other columns, not exactly its runs), saying so, so an interrupted sweep loses at most the
+chunks in progress and duplicates nothing; without it, a non-empty STORE is an error. At the
+end the chunks are read back, sorted by run and written as ``STORE/runs.parquet``; the
+figures go to ``STORE/figures/``; only then does the manifest say ``"complete": true``. A
+run's results do not depend on which chunk, process or machine computed it, so a resumed or
+distributed sweep gives the same table as a local, uninterrupted one.
 
 Execution: locally (default) each chunk is one call of the batch engine over all cores. With
 ``--scheduler ADDRESS`` (needs ``pip install 'imdrive[dask]'``) every chunk is a task on that

@@ -1,25 +1,48 @@
 """Running a sweep: chunk by chunk, here with the batch engine or on a dask cluster.
 
-:func:`run_sweep` opens the store (:mod:`imdrive.sweep.store`), runs the chunks that are
-missing, writes each as it completes, shows the progress, then consolidates the table and draws
-the heatmaps (:mod:`imdrive.sweep.figures`). A run's results do not depend on which chunk,
-process or machine computed it.
+:func:`run_sweep` opens and locks the store (:mod:`imdrive.sweep.store`), verifies the chunks
+already there (a damaged one is removed and recomputed, with a notice), runs the chunks that
+are missing, writes each as it completes, shows the progress, then consolidates the table,
+draws the heatmaps (:mod:`imdrive.sweep.figures`) and only then marks the manifest complete.
+A run's results do not depend on which chunk, process or machine computed it. A run that
+cannot be built (a rule between axis values, a derived gain that overflows) is a row with
+``status`` = -1 and its message in ``error``; the others go on.
+
+Failures of the environment (a disk error, a dask cluster that loses its workers or its
+scheduler) raise :class:`~imdrive.errors.EnvironmentFailure`: the chunks written so far stay,
+the manifest does not say complete, and ``--resume`` continues.
 """
 
 from __future__ import annotations
 
+import sys
 import uuid
 from pathlib import Path
 
 from imdrive._progress import Progress
-from imdrive.errors import ConfigError
+from imdrive.errors import ConfigError, EnvironmentFailure
 from imdrive.sweep.figures import save_heatmaps
 from imdrive.sweep.spec import Sweep, _int
-from imdrive.sweep.store import open_store
+from imdrive.sweep.store import lock_store, open_store
+
+
+def _scenarios(sweep: Sweep, runs: range):
+    """Each run's scenario, or a :class:`~imdrive.run.batch.FailedRun` saying why it has none."""
+    from imdrive.run.batch import FailedRun
+
+    for i in runs:
+        try:
+            yield sweep.scenario(i)
+        except ConfigError as exc:
+            yield FailedRun(str(exc))
 
 
 def run_chunk(sweep: Sweep, j: int, chunk_size: int | None = None, parallel: bool = True):
-    """Run chunk ``j`` of ``sweep``: its table (run, axis values, metrics), sorted by run."""
+    """Run chunk ``j`` of ``sweep``: its table (run, axis values, metrics), sorted by run.
+
+    A run that cannot be built or whose derived parameters overflow is recorded as failed
+    (``status`` -1, ``error``), the others go on.
+    """
     import pandas as pd
 
     from imdrive.run.batch import simulate_batch
@@ -27,7 +50,7 @@ def run_chunk(sweep: Sweep, j: int, chunk_size: int | None = None, parallel: boo
     runs = sweep.chunk_runs(j, chunk_size)
     inputs = sweep.inputs(runs)
     res = simulate_batch(
-        (sweep.scenario(i) for i in runs), window_s=sweep.window_s, parallel=parallel
+        _scenarios(sweep, runs), window_s=sweep.window_s, parallel=parallel, errors="record"
     )
     met = res.metrics.drop(columns=["drive"])
     return pd.concat([inputs, met], axis=1)
@@ -48,24 +71,46 @@ def run_sweep(
     figures: bool = True,
     progress: bool | None = None,
     client=None,
+    notice=None,
 ):
     """Run ``sweep`` into the store ``out``; returns the consolidated table (pandas).
 
     ``scheduler`` is a dask.distributed scheduler address (or pass a ``client``); without
     either, chunks run here with the batch engine on all cores. ``progress`` None: a bar on
-    stderr if it is a terminal.
+    stderr if it is a terminal. ``notice`` receives one line per repaired chunk (default:
+    printed on stderr).
     """
     out = Path(out)
     if chunk_size is not None:
         chunk_size = _int(chunk_size, "--chunk-size")
+    if notice is None:
+
+        def notice(line):
+            print(f"imdrive: {line}", file=sys.stderr)
+
     store, cs, started = open_store(sweep, out, resume, chunk_size)
     if client is None and scheduler is not None:
         client = _connect(scheduler)
         own_client = True
     else:
         own_client = False
-    store.chunks.mkdir(parents=True, exist_ok=True)
+    try:
+        lock = lock_store(store)
+    except BaseException:
+        if own_client:
+            client.close()
+        raise
+    try:
+        return _run_locked(sweep, store, cs, started, client, own_client, figures, progress, notice)
+    finally:
+        lock.release()
+
+
+def _run_locked(sweep, store, cs, started, client, own_client, figures, progress, notice):
+    """The body of :func:`run_sweep`, with the store's lock held."""
     store.clean_partials()
+    for line in store.verify_chunks(sweep, cs):
+        notice(line)
     store.write_source(sweep)
     store.write_manifest(sweep, cs, started)
     done = store.completed()
@@ -87,19 +132,43 @@ def run_sweep(
                 client.submit(_dask_chunk, remote, j, cs, pure=False, key=f"{tag}-{j}")
                 for j in pending
             ]
-            for fut in as_completed(futures, loop=client.loop):
-                j, df = fut.result()
-                store.write_chunk(j, df)
-                store.write_manifest(sweep, cs, started)
-                bar.advance(len(df))
+            try:
+                for fut in as_completed(futures, loop=client.loop):
+                    j, df = fut.result()
+                    store.write_chunk(j, df)
+                    store.write_manifest(sweep, cs, started)
+                    bar.advance(len(df))
+            except (ConfigError, EnvironmentFailure, OSError, MemoryError):
+                raise
+            except Exception as exc:
+                if not _from_dask(exc):
+                    raise
+                raise EnvironmentFailure(
+                    f"the dask cluster failed ({type(exc).__name__}: "
+                    f"{str(exc).splitlines()[0][:200] if str(exc) else 'no message'}); "
+                    f"{len(store.completed())} of {sweep.n_chunks(cs)} chunks are in "
+                    f"{store.root}: add --resume to continue"
+                ) from None
     finally:
         bar.close()
         if own_client:
-            client.close()
+            try:
+                client.close()
+            except Exception:  # a cluster already gone: nothing to close
+                pass
     df = store.consolidate(sweep, cs)
     if figures:
         save_heatmaps(sweep, df, store.root / "figures")
+    store.write_manifest(sweep, cs, started, complete=True)
     return df
+
+
+def _from_dask(exc: BaseException) -> bool:
+    """Whether an exception comes from dask/distributed (a lost worker, scheduler, comm)."""
+    mod = type(exc).__module__ or ""
+    return mod.split(".")[0] in ("distributed", "dask", "tornado", "asyncio") or isinstance(
+        exc, TimeoutError
+    )
 
 
 def _connect(address: str):

@@ -21,6 +21,7 @@ from __future__ import annotations
 import copy
 import functools
 import hashlib
+import itertools
 import json
 import math
 import tomllib
@@ -34,6 +35,7 @@ from imdrive.config.overrides import is_setting, set_path
 from imdrive.config.presets import scenario_text
 from imdrive.config.profiles import Profile
 from imdrive.config.scenario import Scenario
+from imdrive.config.validation import check_name, slug
 from imdrive.errors import ConfigError
 
 CONVENIENCE = ("R2_ratio", "speed_rpm", "load_Nm")
@@ -56,6 +58,13 @@ TOP_KEYS = (
 )
 AGGREGATES = ("mean", "min", "max", "absmax")
 DEFAULT_CHUNK = 32
+#: Largest sweep accepted (runs), unless ``max_runs`` (``--max-runs``) says otherwise: the size
+#: is computed from the axes before any value is built, so an absurd grid is refused at once.
+DEFAULT_MAX_RUNS = 10_000_000
+#: Distinct scenarios built when a sweep is read (every combination of the axes other than
+#: ``speed_rpm`` and ``load_Nm``, which change nothing but a profile's last value). Beyond,
+#: each axis value is validated alone and the combinations as they run.
+VALIDATE_ALL_MAX = 20_000
 
 
 # ------------------------------------------------------------------------------------------
@@ -122,6 +131,8 @@ class Sweep:
     chunk_size: int
     heatmaps: tuple[Heatmap, ...]
     source: str = ""
+    #: what reading the sweep checked, and the runs known to fail (see :func:`_validate`)
+    validation: dict = field(default_factory=dict, compare=False)
     # validated scenarios by value of the set and key-path axes (see _overridden)
     _scenarios: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
@@ -283,7 +294,7 @@ def sweep_text(ref: str) -> tuple[str, Path | None]:
     p = Path(ref)
     if p.is_file():
         try:
-            return p.read_text(encoding="utf-8"), p.resolve().parent
+            return p.read_text(encoding="utf-8-sig"), p.resolve().parent
         except (OSError, UnicodeDecodeError) as exc:
             raise ConfigError("sweep", f"cannot read {p}: {exc}") from None
     raise ConfigError(
@@ -348,7 +359,9 @@ def _int(value, path: str, lo: int = 1) -> int:
     return int(value)
 
 
-def _axis_values(name: str, spec, random: bool, samples: int, rng) -> Axis:
+def _axis_values(
+    name: str, spec, random: bool, samples: int, rng, limit: int = DEFAULT_MAX_RUNS
+) -> Axis:
     """Parse ``axes.NAME``; draws the samples of a random sweep.
 
     The spec forms, each parsed by its own function: a table of tables (a set axis,
@@ -371,7 +384,7 @@ def _axis_values(name: str, spec, random: bool, samples: int, rng) -> Axis:
     lo, hi = _range_bounds(spec, where, random)
     if random:
         return Axis(name, kind, tuple(float(v) for v in rng.uniform(lo, hi, samples)), path=path)
-    return Axis(name, kind, _grid_points(spec, lo, hi, where), path=path)
+    return Axis(name, kind, _grid_points(spec, lo, hi, where, limit), path=path)
 
 
 def _axis_kind(name: str, spec, where: str) -> str:
@@ -448,21 +461,39 @@ def _range_bounds(spec, where: str, random: bool) -> tuple[float, float]:
     return lo, hi
 
 
-def _grid_points(spec: dict, lo: float, hi: float, where: str) -> tuple[float, ...]:
-    """The points of a grid range: ``num`` points, ends included, or ``lo, lo + step, ...``."""
+def _too_many(where: str, n: int, limit: int) -> ConfigError:
+    return ConfigError(
+        where,
+        f"gives {n:.4g} points: the sweep would exceed its limit of runs (max_runs, "
+        f"--max-runs; {limit:.4g} left for this axis)",
+    )
+
+
+def _grid_points(
+    spec: dict, lo: float, hi: float, where: str, limit: int = DEFAULT_MAX_RUNS
+) -> tuple[float, ...]:
+    """The points of a grid range: ``num`` points, ends included, or ``lo, lo + step, ...``.
+
+    The number of points is computed first: more than ``limit`` is refused before any is built.
+    """
     if ("num" in spec) == ("step" in spec):
         raise ConfigError(where, "give exactly one of num or step with min and max")
     if "num" in spec:
         num = _int(spec["num"], f"{where}.num", lo=1)
+        if num > limit:
+            raise _too_many(f"{where}.num", num, limit)
         if num == 1 and lo != hi:
             raise ConfigError(f"{where}.num", "must be >= 2 when min < max")
         return (lo,) if num == 1 else tuple(float(v) for v in np.linspace(lo, hi, num))
     step = _number(spec["step"], f"{where}.step")
     if step <= 0:
         raise ConfigError(f"{where}.step", f"must be > 0 (got {step:g})")
-    n = int(math.floor((hi - lo) / step * (1 + 1e-12) + 1e-9)) + 1
-    if n > 1_000_000:
-        raise ConfigError(f"{where}.step", f"gives {n} points (more than 1e6)")
+    span = (hi - lo) / step * (1 + 1e-12) + 1e-9
+    if not math.isfinite(span) or span >= 1_000_000:
+        raise ConfigError(f"{where}.step", f"gives {span:.4g} points (more than 1e6)")
+    n = int(math.floor(span)) + 1
+    if n > limit:
+        raise _too_many(f"{where}.step", n, limit)
     return tuple(lo + k * step for k in range(n))
 
 
@@ -525,11 +556,20 @@ def _categorical(axes, name) -> bool:
     return next(a for a in axes if a.name == name).choice
 
 
-def parse_sweep(text: str, folder: Path | None = None, default_name: str = "sweep") -> Sweep:
+def parse_sweep(
+    text: str,
+    folder: Path | None = None,
+    default_name: str = "sweep",
+    max_runs: int = DEFAULT_MAX_RUNS,
+) -> Sweep:
     """Read and validate a sweep from its TOML text (``folder``: where relative paths start).
 
-    Every run's scenario is built once here (:func:`_validate`), so a sweep that parses runs.
+    The size is computed from the axes before any value is built and refused above
+    ``max_runs``. Every run's scenario is validated here, derived quantities included
+    (:func:`_validate`), so a sweep that parses runs; a run whose derived parameters cannot be
+    computed is listed in :attr:`Sweep.validation` and recorded as failed when it runs.
     """
+    max_runs = _int(max_runs, "--max-runs")
     data = _read_toml(text)
     name, desc = _name_and_description(data, default_name)
     base_data = _base_data(data, folder)
@@ -538,8 +578,8 @@ def parse_sweep(text: str, folder: Path | None = None, default_name: str = "swee
     if window_s < 0:
         raise ConfigError("window_s", f"must be >= 0 (got {window_s:g})")
     chunk_size = _int(data.get("chunk_size", DEFAULT_CHUNK), "chunk_size")
-    random, samples, seed = _sampling(data)
-    axes = _axes(data.get("axes"), random, samples, np.random.default_rng(seed))
+    random, samples, seed = _sampling(data, max_runs)
+    axes = _axes(data.get("axes"), random, samples, np.random.default_rng(seed), max_runs)
     sweep = Sweep(
         name=name,
         description=desc,
@@ -554,14 +594,13 @@ def parse_sweep(text: str, folder: Path | None = None, default_name: str = "swee
         heatmaps=_heatmaps(data.get("heatmap"), axes, random),
         source=text,
     )
-    _validate(sweep)
-    return sweep
+    return replace(sweep, validation=_validate(sweep))
 
 
 def _read_toml(text: str) -> dict:
     """The sweep file as a dictionary, with only known top-level keys."""
     try:
-        data = tomllib.loads(text)
+        data = tomllib.loads(text.removeprefix("\ufeff"))
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError("sweep", f"invalid TOML: {exc}") from None
     for key in data:
@@ -576,6 +615,10 @@ def _name_and_description(data: dict, default_name: str) -> tuple[str, str]:
     for key, v in (("name", name), ("description", desc)):
         if not isinstance(v, str):
             raise ConfigError(key, "must be a string")
+    try:
+        check_name(name)
+    except ConfigError as exc:
+        raise ConfigError("name", exc.rule) from None
     return name, desc
 
 
@@ -589,7 +632,9 @@ def _base_data(data: dict, folder: Path | None) -> dict:
     if folder is not None and not Path(base_ref).is_absolute() and (folder / base_ref).is_file():
         base_ref = str(folder / base_ref)
     try:
-        base_data = tomllib.loads(scenario_text(base_ref))
+        base_data = tomllib.loads(scenario_text(base_ref).removeprefix("\ufeff"))
+    except ConfigError as exc:
+        raise ConfigError("base", exc.rule) from None
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError("base", f"invalid TOML in {base_ref}: {exc}") from None
     sets = data.get("set", {})
@@ -600,21 +645,44 @@ def _base_data(data: dict, folder: Path | None) -> dict:
     return base_data
 
 
-def _sampling(data: dict) -> tuple[bool, int, int]:
+def _sampling(data: dict, max_runs: int = DEFAULT_MAX_RUNS) -> tuple[bool, int, int]:
     """``(random, samples, seed)``: a random sweep has ``samples``; only it has a ``seed``."""
     random = "samples" in data
     samples = _int(data["samples"], "samples") if random else 0
+    if samples > max_runs:
+        raise ConfigError(
+            "samples", f"{samples:.4g} runs: more than the limit of {max_runs:.4g} (--max-runs)"
+        )
     seed = _int(data.get("seed", 0), "seed", lo=0)
     if "seed" in data and not random:
         raise ConfigError("seed", "only for a random sweep (with samples = N)")
     return random, samples, seed
 
 
-def _axes(spec, random: bool, samples: int, rng) -> tuple[Axis, ...]:
-    """Every axis of ``[axes]``, in file order; no two may set the same scenario key."""
+def _axes(
+    spec, random: bool, samples: int, rng, max_runs: int = DEFAULT_MAX_RUNS
+) -> tuple[Axis, ...]:
+    """Every axis of ``[axes]``, in file order; no two may set the same scenario key.
+
+    A grid's size (the product of the axes' lengths) is kept below ``max_runs`` axis by axis,
+    each axis's length known before its points are built.
+    """
     if not isinstance(spec, dict) or not spec:
         raise ConfigError("axes", "is required and needs at least one axis")
-    axes = tuple(_axis_values(n, s, random, samples, rng) for n, s in spec.items())
+    axes_list: list[Axis] = []
+    size = 1
+    for n, s in spec.items():
+        a = _axis_values(n, s, random, samples, rng, max(max_runs // size, 1))
+        if not random:
+            size *= len(a.values)
+            if size > max_runs:
+                raise ConfigError(
+                    f"axes.{n}",
+                    f"makes the grid {size:.4g} runs: more than the limit of {max_runs:.4g} "
+                    "(--max-runs)",
+                )
+        axes_list.append(a)
+    axes = tuple(axes_list)
     targets: dict[str, str] = {}
     for a in axes:
         if a.kind == "path":
@@ -629,22 +697,80 @@ def _axes(spec, random: bool, samples: int, rng) -> tuple[Axis, ...]:
     return axes
 
 
-def _validate(sweep: Sweep) -> None:
-    """Build every axis value alone on the base, then every run: errors name the axis."""
+def _validate(sweep: Sweep) -> dict:
+    """Validate every run before anything runs; return what was checked and what will fail.
+
+    First each axis value alone on the base (an error names the axis), then every distinct
+    combination of the axes other than ``speed_rpm`` and ``load_Nm`` (these change only a
+    profile's last value, checked finite when read), at most :data:`VALIDATE_ALL_MAX` of them:
+    a combination a scenario rule refuses raises :class:`~imdrive.errors.ConfigError` naming
+    the run. Each scenario's arrays are built too (:func:`imdrive.run.build.build_arrays`):
+    one whose derived quantities overflow is not refused but listed (``failing``), since its
+    row will be recorded as failed while the others run.
+
+    Returns
+    -------
+    dict
+        ``complete`` (every combination checked), ``checked`` (scenarios built),
+        ``failing`` (``[(axis values, message)]`` of the combinations that will fail, first 20),
+        ``n_failing`` (their number).
+    """
+    from imdrive.run.build import build_arrays
+
+    failing: list = []
+    n_failing = 0
+
+    def derived(sc: Scenario, label: str) -> None:
+        nonlocal n_failing
+        try:
+            build_arrays(sc)
+        except ConfigError as exc:
+            n_failing += 1
+            if len(failing) < 20:
+                failing.append((label, str(exc)))
+
+    checked = 0
     for a in sweep.axes:
         for v in a.points():
             try:
-                _build_one_axis(sweep, a, v)
+                sc = _build_one_axis(sweep, a, v)
             except ConfigError as exc:
                 raise ConfigError(f"axes.{a.name}", f"value {v!r} is rejected: {exc}") from None
-    for i in range(sweep.n_runs):
-        try:
-            sweep.scenario(i)
-        except ConfigError as exc:
-            pt = ", ".join(
-                f"{a.name} = {v!r}" for a, v in zip(sweep.axes, sweep.run_values(i), strict=True)
-            )
-            raise ConfigError(f"axes (run {i}: {pt})", str(exc)) from None
+            checked += 1
+            if a.kind not in ("speed_rpm", "load_Nm"):
+                derived(sc, f"{a.name} = {v!r}")
+    joint = [k for k, a in enumerate(sweep.axes) if a.kind not in ("speed_rpm", "load_Nm")]
+    combos = _combinations(sweep, joint)
+    complete = combos is not None
+    if combos is not None and len(joint) > 1:
+        failing.clear()
+        n_failing = 0
+        first = tuple(a.values[0] for a in sweep.axes)
+        for combo in combos:
+            values = list(first)
+            for k, v in zip(joint, combo, strict=True):
+                values[k] = v
+            pt = ", ".join(f"{sweep.axes[k].name} = {values[k]!r}" for k in joint)
+            try:
+                sc = sweep.scenario_for(tuple(values))
+            except ConfigError as exc:
+                raise ConfigError(f"axes ({pt})", str(exc)) from None
+            checked += 1
+            derived(sc, pt)
+    return {"complete": complete, "checked": checked, "failing": failing, "n_failing": n_failing}
+
+
+def _combinations(sweep: Sweep, joint: list[int]):
+    """The distinct value tuples of the axes ``joint`` over the runs, or None if too many."""
+    if sweep.random:
+        seen = dict.fromkeys(
+            zip(*(sweep.axes[k].values for k in joint), strict=True) if joint else ()
+        )
+        return list(seen) if len(seen) <= VALIDATE_ALL_MAX else None
+    points = [sweep.axes[k].points() for k in joint]
+    if math.prod(len(p) for p in points) > VALIDATE_ALL_MAX:
+        return None
+    return list(itertools.product(*points))
 
 
 def _build_one_axis(sweep: Sweep, axis: Axis, value) -> Scenario:
@@ -652,8 +778,9 @@ def _build_one_axis(sweep: Sweep, axis: Axis, value) -> Scenario:
     return single.scenario(0)
 
 
-def load_sweep(ref: str) -> Sweep:
-    """A built-in sweep by name, or a sweep file by path."""
+def load_sweep(ref: str, max_runs: int | None = None) -> Sweep:
+    """A built-in sweep by name, or a sweep file by path (``max_runs``: see
+    :func:`parse_sweep`; default :data:`DEFAULT_MAX_RUNS`)."""
     text, folder = sweep_text(ref)
-    default = ref if folder is None else Path(ref).stem
-    return parse_sweep(text, folder, default)
+    default = ref if folder is None else slug(Path(ref).stem)
+    return parse_sweep(text, folder, default, DEFAULT_MAX_RUNS if max_runs is None else max_runs)

@@ -1,10 +1,15 @@
 """The sweep store: a folder of Parquet chunks, a manifest, and resuming.
 
 ``STORE/chunks/chunk-NNNNNN.parquet`` holds runs ``[N*chunk_size, (N+1)*chunk_size)``; each
-chunk, then ``STORE/manifest.json``, is written atomically (:mod:`imdrive._io`), so a killed
-sweep leaves only whole chunks. :func:`open_store` checks that a non-empty folder is the same
-sweep before resuming it; :meth:`Store.consolidate` writes ``STORE/runs.parquet``, every run
-exactly once, sorted.
+chunk, then ``STORE/manifest.json``, is written atomically and durably (:mod:`imdrive._io`:
+temporary file, fsync, rename, fsync of the folder), so a killed sweep leaves only whole
+chunks. :func:`open_store` checks that a non-empty folder is the same sweep before resuming
+it; a writer holds the store's lock (:class:`imdrive._io.FolderLock`) so two processes cannot
+both write one store. On resume :meth:`Store.verify_chunks` reads every chunk back: one that
+cannot be read (truncated, empty), has other columns, or does not hold exactly its runs (a
+foreign file) is removed and recomputed. :meth:`Store.consolidate` writes
+``STORE/runs.parquet``, every run exactly once, sorted; the manifest says ``"complete": true``
+only after the table and the figures are written.
 """
 
 from __future__ import annotations
@@ -15,8 +20,14 @@ from pathlib import Path
 
 import numpy as np
 
-from imdrive._io import atomic_path, atomic_write_text, remove_partials
-from imdrive.errors import ConfigError
+from imdrive._io import (
+    FolderBusy,
+    FolderLock,
+    atomic_path,
+    atomic_write_text,
+    remove_partials,
+)
+from imdrive.errors import ConfigError, EnvironmentFailure
 from imdrive.sweep.spec import Sweep
 
 
@@ -51,7 +62,10 @@ class Store:
         except (OSError, ValueError) as exc:
             raise ConfigError("--resume", f"cannot read {p}: {exc}") from None
 
-    def write_manifest(self, sweep: Sweep, chunk_size: int, started: float) -> None:
+    def write_manifest(
+        self, sweep: Sweep, chunk_size: int, started: float, complete: bool = False
+    ) -> None:
+        """Rewrite the manifest; ``complete`` only once the table and figures are written."""
         done = sorted(self.completed())
         info = {
             "format": 1,
@@ -61,7 +75,7 @@ class Store:
             "chunk_size": chunk_size,
             "n_chunks": sweep.n_chunks(chunk_size),
             "completed_chunks": done,
-            "complete": len(done) == sweep.n_chunks(chunk_size),
+            "complete": complete and len(done) == sweep.n_chunks(chunk_size),
             "axes": [a.name for a in sweep.axes],
             "started": started,
             "updated": time.time(),
@@ -77,6 +91,40 @@ class Store:
         with atomic_path(self.chunk_path(j)) as tmp:
             df.to_parquet(tmp, index=False)
 
+    def verify_chunks(self, sweep: Sweep, chunk_size: int) -> list[str]:
+        """Check every chunk file; remove the damaged ones so they are recomputed.
+
+        A chunk is good when it can be read, has the table's columns and holds exactly the runs
+        of its index, each once. Returns one line per removed file, saying why.
+        """
+        import pyarrow.parquet as pq
+
+        expected = set(chunk_columns(sweep))
+        n_chunks = sweep.n_chunks(chunk_size)
+        notes = []
+        for j in sorted(self.completed()):
+            path = self.chunk_path(j)
+            if j >= n_chunks:
+                why = f"index beyond the sweep's {n_chunks} chunks"
+            else:
+                try:
+                    table = pq.read_table(path)
+                    names = set(table.column_names)
+                    runs = table.column("run").to_numpy() if "run" in names else None
+                except Exception as exc:  # any unreadable file: pyarrow raises several kinds
+                    why = f"unreadable ({type(exc).__name__}: {str(exc).splitlines()[0][:120]})"
+                else:
+                    want = np.arange(*_bounds(sweep.chunk_runs(j, chunk_size)))
+                    if names != expected:
+                        why = "other columns than this sweep's table (a foreign file)"
+                    elif not np.array_equal(np.sort(runs), want):
+                        why = f"does not hold exactly runs {want[0]}..{want[-1]} once each"
+                    else:
+                        continue
+            path.unlink(missing_ok=True)
+            notes.append(f"chunk {j} ({path.name}): {why}; removed, it will be recomputed")
+        return notes
+
     def clean_partials(self) -> None:
         """Delete the temporary files of chunks and manifests that a killed sweep left."""
         for folder in (self.root, self.chunks):
@@ -89,10 +137,38 @@ class Store:
         df = pd.concat(parts, ignore_index=True).sort_values("run", kind="stable")
         df = df.reset_index(drop=True)
         if len(df) != sweep.n_runs or not np.array_equal(df["run"], np.arange(sweep.n_runs)):
-            raise RuntimeError(f"{self.root}: the chunks do not hold every run exactly once")
+            raise EnvironmentFailure(
+                f"{self.root}: the chunks do not hold every run exactly once (changed while "
+                "the sweep ran?): resume with --resume to verify and recompute them"
+            )
         with atomic_path(self.root / "runs.parquet") as tmp:
             df.to_parquet(tmp, index=False)
         return df
+
+
+def _bounds(r: range) -> tuple[int, int]:
+    return r.start, r.stop
+
+
+def chunk_columns(sweep: Sweep) -> list[str]:
+    """The columns of every chunk of ``sweep``: run, the axes, then the batch table's."""
+    from imdrive.run.batch import COLUMNS
+
+    return ["run", *(a.name for a in sweep.axes), *(c for c in COLUMNS if c != "drive")]
+
+
+def lock_store(store: Store) -> FolderLock:
+    """Create the store folder and take its lock (:class:`~imdrive.errors.EnvironmentFailure`
+    if another process holds it)."""
+    store.chunks.mkdir(parents=True, exist_ok=True)
+    try:
+        return FolderLock(store.root).acquire()
+    except FolderBusy as exc:
+        raise EnvironmentFailure(str(exc)) from None
+
+
+def _is_store_entry(name: str) -> bool:
+    return name != ".lock"
 
 
 def open_store(sweep: Sweep, out: Path, resume: bool, chunk_size: int | None) -> tuple:
@@ -104,7 +180,7 @@ def open_store(sweep: Sweep, out: Path, resume: bool, chunk_size: int | None) ->
     store = Store(out)
     if out.exists() and not out.is_dir():
         raise ConfigError("--out", f"{out} exists and is not a folder")
-    nonempty = out.is_dir() and any(out.iterdir())
+    nonempty = out.is_dir() and any(_is_store_entry(p.name) for p in out.iterdir())
     if nonempty and not resume:
         raise ConfigError(
             "--out", f"{out} exists and is not empty: add --resume to continue the sweep in it"
