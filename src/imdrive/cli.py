@@ -3,7 +3,11 @@
 Bad input (an unknown preset, key or type, a value that breaks a rule) prints one line naming
 the field and the rule on stderr and exits with code 2, with nothing written. A run that
 diverges writes its partial results, marked ``"diverged": true`` in summary.json, and exits 1.
-A sweep records its diverging runs in its table (``diverged``, ``status``) and exits 0.
+A run that completes but loses control of the speed (it stays more than
+``simulation.lost_control_rpm`` from its reference for ``simulation.lost_control_s``: a
+runaway, a sustained limit cycle) writes its results, marked ``"lost_control": true``, and
+exits 3. A sweep records its diverging runs and those that lost control in its table
+(``diverged``, ``status``, ``lost_control``, ``lost_control_at_s``) and exits 0.
 """
 
 from __future__ import annotations
@@ -19,6 +23,7 @@ from imdrive.errors import ConfigError
 EXIT_OK = 0
 EXIT_DIVERGED = 1
 EXIT_BAD_INPUT = 2
+EXIT_LOST_CONTROL = 3
 
 
 class _Parser(argparse.ArgumentParser):
@@ -71,6 +76,9 @@ def _cmd_run(args) -> int:
             f"imdrive: error: {res.divergence_message}; partial results in {out}", file=sys.stderr
         )
         return EXIT_DIVERGED
+    if res.lost_control:
+        print(f"imdrive: error: {res.lost_control_message}; results in {out}", file=sys.stderr)
+        return EXIT_LOST_CONTROL
     if not args.quiet:
         fin = s["final"]
         print(
@@ -169,8 +177,10 @@ def _cmd_sweep(args) -> int:
     )
     if not args.quiet:
         n_div = int(df["diverged"].sum())
+        n_lc = int(df["lost_control"].sum()) if "lost_control" in df else 0
         print(
-            f"imdrive: sweep {sweep.name}: {len(df)} runs ({n_div} diverged) in "
+            f"imdrive: sweep {sweep.name}: {len(df)} runs ({n_div} diverged, "
+            f"{n_lc} lost control) in "
             f"{time.perf_counter() - t0:.1f} s -> {out / 'runs.parquet'}",
             file=sys.stderr,
         )

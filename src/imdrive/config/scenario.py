@@ -506,6 +506,19 @@ class SimulationSettings:
     divergence_speed_rpm: Annotated[
         Float, setting("speed magnitude that stops a diverging run", "rpm", gt=0.0)
     ] = 20000.0
+    lost_control_rpm: Annotated[
+        Float,
+        setting(
+            "loss of control: the actual speed departs from its reference by more than this "
+            "(vector control, free speed; 0: not checked)",
+            "rpm",
+            ge=0.0,
+        ),
+    ] = 200.0
+    lost_control_s: Annotated[
+        Float,
+        setting("... for at least this long without interruption", "s", gt=0.0),
+    ] = 1.0
 
     @model_validator(mode="after")
     def _period_fits_run(self):

@@ -18,6 +18,8 @@ from imdrive.run.metrics import (
     DEFAULT_WINDOW_S,
     compensation_metrics,
     drive_metrics,
+    lost_control_check,
+    lost_control_time,
 )
 
 RPM = 2.0 * math.pi / 60.0
@@ -199,6 +201,40 @@ class SimulationResult:
         return self.status != S_OK
 
     @property
+    def lost_control_at_s(self) -> float:
+        """Start of the first departure of the actual speed from its reference by more than
+        ``simulation.lost_control_rpm`` that lasted ``simulation.lost_control_s`` or longer, s
+        (NaN if none; on the logged samples, see :func:`imdrive.run.metrics.drive_metrics`)."""
+        if "speed_ref_rpm" not in self.signals:
+            return math.nan
+        bound, duration = lost_control_check(self.scenario)
+        s = self.signals
+        return lost_control_time(
+            s["time_s"], s["speed_rpm"], s["speed_ref_rpm"], bound * 30.0 / math.pi, duration
+        )
+
+    @property
+    def lost_control(self) -> bool:
+        """Whether the drive lost control of the speed (see :attr:`lost_control_at_s`).
+
+        Distinct from :attr:`diverged`: the run completed (or diverged later) with finite
+        states, but the speed stayed far from its reference for too long (a runaway, a
+        sustained limit cycle, a stall).
+        """
+        return not math.isnan(self.lost_control_at_s)
+
+    @property
+    def lost_control_message(self) -> str | None:
+        if not self.lost_control:
+            return None
+        sim = self.scenario.simulation
+        return (
+            f"lost control at t = {self.lost_control_at_s:.6g} s: the speed stayed more than "
+            f"{sim.lost_control_rpm:g} rpm from its reference for {sim.lost_control_s:g} s or "
+            "longer (simulation.lost_control_rpm, lost_control_s)"
+        )
+
+    @property
     def end_time_s(self) -> float:
         return self.k_end * self.scenario.simulation.Ts_s
 
@@ -277,6 +313,8 @@ class SimulationResult:
             "diverged": self.diverged,
             "diverged_at_s": self.end_time_s if self.diverged else None,
             "diverged_signal": STATUS_SIGNAL.get(self.status),
+            "lost_control": self.lost_control,
+            "lost_control_at_s": None if not self.lost_control else self.lost_control_at_s,
             "simulated_time_s": self.end_time_s,
             "control_periods": self.k_end,
             "wall_time_s": self.wall_time_s,
