@@ -328,14 +328,17 @@ class MrasSettings:
         Float,
         setting(
             "cut-off of the 1/(s + ωc) replacement of the reference model's pure integrator "
-            "(0: pure integrator)",
+            "(0: pure integrator; default derived from the stability maps, docs/stability.md)",
             "rad/s",
             ge=0.0,
         ),
-    ] = 5.0
+    ] = 15.0
     bandwidth_Hz: Annotated[
-        Float, setting("bandwidth K1 and K2 are derived from", "Hz", gt=0.0)
-    ] = 40.0
+        Float,
+        setting(
+            "bandwidth K1 and K2 are derived from (default: docs/stability.md)", "Hz", gt=0.0
+        ),
+    ] = 20.0
     K1: Annotated[
         Float | None,
         setting("adaptation PI proportional gain", "(rad/s)/Wb²", default_doc="from bandwidth_Hz"),
