@@ -335,9 +335,7 @@ class MrasSettings:
     ] = 15.0
     bandwidth_Hz: Annotated[
         Float,
-        setting(
-            "bandwidth K1 and K2 are derived from (default: docs/stability.md)", "Hz", gt=0.0
-        ),
+        setting("bandwidth K1 and K2 are derived from (default: docs/stability.md)", "Hz", gt=0.0),
     ] = 20.0
     K1: Annotated[
         Float | None,
