@@ -74,6 +74,8 @@ LOG_UNITS = {
     "lam_i_beta": ("Wb", 1.0),
     "R2_est": ("ohm", 1.0),
     "e_d0_demod": ("Wb", 1.0),
+    "comp_frozen": ("flags", 1.0),
+    "inj_freq": ("Hz", 1.0),
 }
 # column -> (log field, scale) for every column taken straight from the log
 _DIRECT = {f"{f}_{u}": (f, k) for f, (u, k) in LOG_UNITS.items()}
@@ -88,7 +90,8 @@ VECTOR_COLUMNS = (
     OPEN_LOOP_COLUMNS
     + (
         "speed_ref_rpm speed_est_rpm id_ref_A iq_ref_A i_d_A i_q_A R2_est_ohm e_d0_Wb e_q0_Wb "
-        "theta_e_rad lam_v_alpha_Wb lam_v_beta_Wb lam_i_alpha_Wb lam_i_beta_Wb e_d0_demod_Wb"
+        "theta_e_rad lam_v_alpha_Wb lam_v_beta_Wb lam_i_alpha_Wb lam_i_beta_Wb e_d0_demod_Wb "
+        "comp_frozen_flags inj_freq_Hz"
     ).split()
 )
 
