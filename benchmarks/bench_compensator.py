@@ -8,7 +8,8 @@ printed too:
 
 * ``off``        : no compensator (the preset as shipped);
 * ``paper``      : the paper's fuzzy compensator active for the whole run (10 ms period);
-* ``injection``  : the persistent-excitation variant (injection + synchronous detection +
+* ``injection``  : the persistent-excitation variant (prior art: Kubota & Matsuse, IEEE Trans.
+                   Ind. Appl. 30(5), 1994) (injection + synchronous detection +
                    the same table), active for the whole run.
 
 Usage::

@@ -33,7 +33,9 @@ from imdrive.stability.maps import MAP_COLUMNS, stability_map, validate_map
 
 @pytest.fixture(scope="module")
 def sensorless():
-    return Scenario.read("sensorless")
+    """The sensorless preset with the first release's MRAS tuning (wc = 5 rad/s, 40 Hz), the
+    drive the measurements of docs/stability.md were made on (issue 10 changed the defaults)."""
+    return Scenario.read("sensorless", ["mras.wc_rad_s=5", "mras.bandwidth_Hz=40"])
 
 
 def _long_run(preset, speed, torque, t_end=6.0):

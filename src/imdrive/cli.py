@@ -12,7 +12,9 @@ Exit codes
     that overflows, an unsafe name, a sweep above ``--max-runs``, an ``--out`` folder that
     holds other files): one line ``imdrive: error: field: rule`` on stderr, nothing written.
 3 (``EXIT_LOST_CONTROL``)
-    A physical outcome: the drive lost control (reserved).
+    A physical outcome: the run completed but lost control of the speed (it stayed more than
+    ``simulation.lost_control_rpm`` from its reference for ``simulation.lost_control_s``: a
+    runaway, a sustained limit cycle). Results written, marked ``"lost_control": true``.
 4 (``EXIT_ENVIRONMENT``)
     The environment failed: an I/O error, a full disk, a permission, memory, a path longer
     than the file system allows at write time, a dask cluster that lost its workers or
@@ -24,8 +26,9 @@ Exit codes
 130
     Interrupted (Ctrl-C).
 
-A sweep records its diverging runs (``diverged``, ``status``) and the runs that could not be
-built (``status`` -1, ``error``) in its table and exits 0.
+A sweep records its diverging runs (``diverged``, ``status``), those that lost control
+(``lost_control``, ``lost_control_at_s``) and the runs that could not be built (``status`` -1,
+``error``) in its table and exits 0.
 """
 
 from __future__ import annotations
@@ -129,6 +132,9 @@ def _cmd_run(args) -> int:
             f"imdrive: error: {res.divergence_message}; partial results in {out}", file=sys.stderr
         )
         return EXIT_DIVERGED
+    if res.lost_control:
+        print(f"imdrive: error: {res.lost_control_message}; results in {out}", file=sys.stderr)
+        return EXIT_LOST_CONTROL
     if not args.quiet:
         fin = s["final"]
         print(
@@ -244,8 +250,10 @@ def _cmd_sweep(args) -> int:
     if not args.quiet:
         n_div = int(df["diverged"].sum())
         n_fail = int((df["status"] < 0).sum())
+        n_lc = int(df["lost_control"].sum()) if "lost_control" in df else 0
         print(
-            f"imdrive: sweep {sweep.name}: {len(df)} runs ({n_div} diverged, {n_fail} failed) in "
+            f"imdrive: sweep {sweep.name}: {len(df)} runs ({n_div} diverged, {n_lc} lost "
+            f"control, {n_fail} failed) in "
             f"{time.perf_counter() - t0:.1f} s -> {out / 'runs.parquet'}",
             file=sys.stderr,
         )

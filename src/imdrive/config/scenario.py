@@ -394,14 +394,15 @@ class MrasSettings:
         Float,
         setting(
             "cut-off of the 1/(s + ωc) replacement of the reference model's pure integrator "
-            "(0: pure integrator)",
+            "(0: pure integrator; default derived from the stability maps, docs/stability.md)",
             "rad/s",
             ge=0.0,
         ),
-    ] = 5.0
+    ] = 15.0
     bandwidth_Hz: Annotated[
-        Float, setting("bandwidth K1 and K2 are derived from", "Hz", gt=0.0)
-    ] = 40.0
+        Float,
+        setting("bandwidth K1 and K2 are derived from (default: docs/stability.md)", "Hz", gt=0.0),
+    ] = 20.0
     K1: Annotated[
         Float | None,
         setting(
@@ -483,6 +484,51 @@ class CompensatorSettings:
     average: Annotated[
         Bool, setting("the input is its mean over the period, not a sample at its end")
     ] = True
+    gating: Annotated[
+        Bool | None,
+        setting(
+            "freeze R̂2 during speed and load transients and in voltage saturation, and move "
+            "the injection frequency away from the stator frequency (kernels/compensator.py)",
+            default_doc='on with input = "demodulated", off with "e_d0"',
+        ),
+    ] = None
+    gate_speed_rpm: Annotated[
+        Float,
+        setting(
+            "gating: speed-reference change within a period, or mean speed error over it, "
+            "above which the period is a transient",
+            "rpm",
+            gt=0.0,
+        ),
+    ] = 1.0
+    gate_iq_A: Annotated[
+        Float,
+        setting(
+            "gating: change of the period-mean iq* from one period to the next above which the "
+            "period is a load transient",
+            "A",
+            gt=0.0,
+        ),
+    ] = 0.3
+    gate_voltage: Annotated[
+        Float,
+        setting(
+            "gating: voltage use (fraction of Vdc/√3) from which the period counts as saturated",
+            gt=0.0,
+        ),
+    ] = 0.97
+    gate_band_Hz: Annotated[
+        Float,
+        setting(
+            "gating: the injection frequency is switched when |stator frequency| is within this "
+            "of it (0: never)",
+            "Hz",
+            ge=0.0,
+        ),
+    ] = 1.0
+    gate_hold_periods: Annotated[
+        Int, setting("gating: decisions still skipped after a gated one", ge=0)
+    ] = 1
 
     @model_validator(mode="after")
     def _clamps_in_order(self):
@@ -496,6 +542,9 @@ class CompensatorSettings:
 class InjectionSettings:
     """Persistent excitation (``[injection]``): a sinusoid added to the flux-current reference.
 
+    R2 identification from a low-frequency AC flux component is Kubota & Matsuse (IEEE Trans.
+    Ind. Appl. 30(5), 1994); feeding its demodulated flux error to the paper's table is ours.
+
     ``amplitude_A`` = 0 switches it off. The compensator's ``input = "demodulated"`` feeds on
     e_d0 detected synchronously with this sinusoid; its period should be a whole number of
     injection periods (the default compensator period for that input is one).
@@ -505,6 +554,16 @@ class InjectionSettings:
         Float, setting("amplitude of the sinusoid added to id* (0: off)", "A", ge=0.0)
     ] = 0.0
     frequency_Hz: Annotated[Float, setting("frequency of the sinusoid", "Hz", gt=0.0)] = 2.0
+    frequency2_Hz: Annotated[
+        Float | None,
+        setting(
+            "the alternative frequency the gating switches to near the stator frequency; "
+            "the compensator period must hold whole periods of both",
+            "Hz",
+            gt=0.0,
+            default_doc="2 × frequency_Hz",
+        ),
+    ] = None
     t_on_s: Annotated[Float, setting("time the injection starts", "s", ge=0.0)] = 0.0
     lowpass_rad_s: Annotated[
         Float,
@@ -606,6 +665,19 @@ class SimulationSettings:
     divergence_speed_rpm: Annotated[
         Float, setting("speed magnitude that stops a diverging run", "rpm", gt=0.0)
     ] = 20000.0
+    lost_control_rpm: Annotated[
+        Float,
+        setting(
+            "loss of control: the actual speed departs from its reference by more than this "
+            "(vector control, free speed; 0: not checked)",
+            "rpm",
+            ge=0.0,
+        ),
+    ] = 200.0
+    lost_control_s: Annotated[
+        Float,
+        setting("... for at least this long without interruption", "s", gt=0.0),
+    ] = 1.0
 
     @model_validator(mode="after")
     def _period_fits_run(self):

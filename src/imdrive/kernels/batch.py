@@ -38,6 +38,7 @@ BATCH_METRICS = record_dtype(
         ("final_speed_rpm", f8),
         ("final_speed_ref_rpm", f8),
         ("final_speed_est_rpm", f8),
+        ("lost_control_at_s", f8),
     ]
 )
 METRICS = BATCH_METRICS.names
@@ -54,6 +55,8 @@ ACCUMULATOR = record_dtype(
         ("torque", f8),  # N m
         ("speed_min", f8),  # rpm
         ("speed_max", f8),
+        ("lc_start", i8),  # first sample of the current departure from the reference (-1: none)
+        ("lc_at", i8),  # first sample of the first departure that lasted too long (-1: none)
     ]
 )
 
@@ -65,6 +68,8 @@ class BatchOut(NamedTuple):
     status: np.ndarray  # int64[N]: S_OK or a divergence code
     k_end: np.ndarray  # int64[N]: periods completed
     n_win: np.ndarray  # int64[N] (input): length of the steady-state window, periods
+    lc_bound: np.ndarray  # float64[N] (input): loss-of-control speed bound, rad/s (<= 0: off)
+    lc_n: np.ndarray  # int64[N] (input): loss-of-control duration, periods
 
 
 def num_threads() -> int:
@@ -79,16 +84,31 @@ def new_accumulator():
     a.last_bad = -1
     a.speed_min = np.inf
     a.speed_max = -np.inf
+    a.lc_start = -1
+    a.lc_at = -1
     return acc
 
 
 @njit(cache=True)
-def accumulate(log, n_rows, k_first, k_win0, acc_arr):
-    """Fold full-rate log rows ``0 .. n_rows-1`` (samples ``k_first ...``) into ``acc_arr[0]``."""
+def accumulate(log, n_rows, k_first, k_win0, acc_arr, lc_bound=0.0, lc_n=0):
+    """Fold full-rate log rows ``0 .. n_rows-1`` (samples ``k_first ...``) into ``acc_arr[0]``.
+
+    Loss of control (``lc_bound > 0``, rad/s): a departure is a run of consecutive samples
+    with ``|speed - speed_ref| > lc_bound``; the first that lasts ``lc_n`` periods or more
+    (last sample minus first) sets ``acc.lc_at`` to its first sample.
+    """
     acc = acc_arr[0]
     for r in range(n_rows):
         row = log[r]
         k = k_first + r
+        if lc_bound > 0.0 and acc.lc_at < 0:
+            if abs(row.speed - row.speed_ref) > lc_bound:
+                if acc.lc_start < 0:
+                    acc.lc_start = k
+                if k - acc.lc_start >= lc_n:
+                    acc.lc_at = acc.lc_start
+            else:
+                acc.lc_start = -1
         i_mag = math.sqrt(row.i_alpha**2 + row.i_beta**2)
         if i_mag > acc.peak:
             acc.peak = i_mag
@@ -138,10 +158,11 @@ def summarize(acc, last, n_valid, ok, Ts, out):
     out.final_speed_rpm = last.speed * _INV_RPM
     out.final_speed_ref_rpm = last.speed_ref * _INV_RPM
     out.final_speed_est_rpm = last.speed_est * _INV_RPM
+    out.lost_control_at_s = acc.lc_at * Ts if acc.lc_at >= 0 else nan
 
 
 @njit(cache=True)
-def one_drive(P, S, i, n_steps, n_win, log_out, log_every, metrics, scratch):
+def one_drive(P, S, i, n_steps, n_win, log_out, log_every, metrics, scratch, lc_bound=0.0, lc_n=0):
     """Run drive ``i`` at full rate, ``scratch.shape[0] - 1`` periods per engine call, folding
     each chunk into the metrics and copying its decimated rows into ``log_out``.
 
@@ -162,7 +183,7 @@ def one_drive(P, S, i, n_steps, n_win, log_out, log_every, metrics, scratch):
         status, ke = run_drive(P, S, i, steps, scratch, 1, k0, final)
         ok = status == S_OK
         rows = ke + 1 if (ok and final) else ke
-        accumulate(scratch, rows, k0, k_win0, acc_arr)
+        accumulate(scratch, rows, k0, k_win0, acc_arr, lc_bound, lc_n)
         for r in range(rows):
             k = k0 + r
             if k % log_every == 0 and k // log_every < log_out.shape[0]:
@@ -183,7 +204,17 @@ def _worker(P, S, n_steps, log, log_every, out, first, stride, scratch):
     """Drives ``first, first + stride, ...`` one after the other, sharing ``scratch``."""
     for n in range(first, P.sim.shape[0], stride):
         s, ke = one_drive(
-            P, S, n, n_steps, out.n_win[n], log[n], log_every, out.metrics[n], scratch
+            P,
+            S,
+            n,
+            n_steps,
+            out.n_win[n],
+            log[n],
+            log_every,
+            out.metrics[n],
+            scratch,
+            out.lc_bound[n],
+            out.lc_n[n],
         )
         out.status[n] = s
         out.k_end[n] = ke

@@ -26,6 +26,7 @@ from numba import njit
 
 from imdrive.kernels import compensator, estimators, ifoc, inverter, machine, model, sensors
 from imdrive.kernels.compensator import (
+    compensator_gate_sample,
     compensator_step,
     demodulate,
     injection_sine,
@@ -345,7 +346,12 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
                 demodulate(pk, cmp, est.e_dq0.real, sine, Ts)
                 i_inj = pk.inj_amp * sine
             if pk.enabled:
-                compensator_step(pk, cmp, mdl, table, est.e_dq0.real, t, k0 + k)
+                if pk.gate and t >= pk.t_on:  # issue 10: the compensator's gating signals
+                    w_fb_g = est.w_r_hat / n_p if sensorless else w_m
+                    v_use = abs(smp.v_prev_ab) / (Vdc_meas / math.sqrt(3.0))
+                    w_ref_g = profile_at(pt, pv, pn, PR_SPEED_REF, t)
+                    compensator_gate_sample(pk, cmp, w_ref_g, w_fb_g, ctl.i_ref_dq.imag, v_use)
+                compensator_step(pk, cmp, mdl, table, est.e_dq0.real, t, k0 + k, ctl.w_e)
             w_ref = profile_at(pt, pv, pn, PR_SPEED_REF, t)
             psi_ref = profile_at(pt, pv, pn, PR_FLUX_REF, t)
             w_fb = est.w_r_hat / n_p if sensorless else w_m

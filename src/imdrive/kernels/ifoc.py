@@ -9,7 +9,8 @@ where ``w_fb`` is the speed feedback (measured, or the MRAS estimate) and ``R2_h
 *estimated* rotor resistance, so a wrong R2_hat shows up exactly where it does in a real drive.
 In steady state ``psi_hat = M_hat id*`` and the slip is the paper's ``(R2_hat/L2_hat) iq*/id*``;
 the flux model keeps the orientation right while the flux changes (magnetising, or the injected
-sinusoid of the persistent-excitation compensator).
+sinusoid of the persistent-excitation compensator; the AC flux component for R2
+identification is Kubota & Matsuse, IEEE Trans. Ind. Appl. 30(5), 1994).
 The rotor-flux reference is expressed as the flux-current reference ``id* = psi* / M_hat`` (plus
 an optional injected sinusoid); the speed PI gives a torque command, expressed as the q current
 at the reference flux and divided by the flux model, ``iq* = u psi*/psi_hat``, so the torque

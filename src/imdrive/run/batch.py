@@ -32,7 +32,7 @@ builds and stacks the drives' records (:func:`imdrive.run.build.build_arrays`,
 periods (one ``n_steps`` per kernel call) and, with logs, by ``log_every``; profiles with
 different numbers of breakpoints are padded (the kernel reads ``prof_n`` of them); fuzzy tables
 are shared (a small stack of the distinct tables plus an index per drive). Without logs, what is
-kept per drive is its metrics record and status: 12 float64 + 2 int64 = 112 bytes (plus pandas'
+kept per drive is its metrics record and status: 13 float64 + 2 int64 = 120 bytes (plus pandas'
 per-row cost of the final table, about the same again), so memory is linear in N at well under
 1 kB per drive; the per-block arrays and the per-thread scratch logs are a fixed cost. With
 ``logs=True`` every drive's decimated log is kept,
@@ -63,8 +63,18 @@ from imdrive.kernels.batch import (
 )
 from imdrive.kernels.engine import LOG, S_OK, DriveParams, DriveState
 from imdrive.kernels.profiles import N_PROF
+from imdrive.run.metrics import lost_control_check
 
-COLUMNS = ("drive", "status", "diverged", "diverged_at_s", "simulated_s", *METRICS, "error")
+COLUMNS = (
+    "drive",
+    "status",
+    "diverged",
+    "diverged_at_s",
+    "simulated_s",
+    "lost_control",
+    *METRICS,
+    "error",
+)
 
 #: ``status`` of a drive that could not be run (its derived parameters could not be computed,
 #: or its scenario was refused when built): recorded with its message in ``error``, metrics NaN.
@@ -165,12 +175,19 @@ def _stack(items, log_every: int, n_rows: int, window_s: float, parallel: bool):
     n_steps = arrays[0].n_steps
     params, state = stack_drives(arrays)
     n_win = np.array([int(round(window_s / a.Ts)) for a in arrays], dtype=np.int64)
+    lc = [lost_control_check(sc) for _, sc, _ in items]
+    lc_bound = np.array([b for b, _ in lc])
+    lc_n = np.array(
+        [int(round(d / a.Ts)) for (_, d), a in zip(lc, arrays, strict=True)], dtype=np.int64
+    )
     log = np.full((G, n_rows), np.nan, dtype=LOG)
     out = BatchOut(
         metrics=np.empty(G, dtype=BATCH_METRICS),
         status=np.empty(G, dtype=np.int64),
         k_end=np.empty(G, dtype=np.int64),
         n_win=n_win,
+        lc_bound=lc_bound,
+        lc_n=lc_n,
     )
     t0 = time.perf_counter()
     if parallel:
@@ -322,6 +339,7 @@ def simulate_batch(
         "diverged": diverged,
         "diverged_at_s": np.where(diverged, simulated, np.nan),
         "simulated_s": simulated,
+        "lost_control": np.isfinite(met["lost_control_at_s"]),
     }
     for name in METRICS:
         cols[name] = np.ascontiguousarray(met[name])

@@ -351,6 +351,7 @@ def _build_arrays(sc: Scenario) -> DriveArrays:
         inj_freq=inj.frequency_Hz,
         inj_lpf=inj.lowpass_rad_s,
         inj_t_on=inj.t_on_s,
+        **_gating(sc),
     )
     table = fuzzy_table(comp.table).astype(np.float64)
 
@@ -387,7 +388,7 @@ def _build_arrays(sc: Scenario) -> DriveArrays:
         model=model,
         control=np.zeros(1, dtype=CONTROL_STATE),
         mras=np.zeros(1, dtype=MRAS_STATE),
-        comp=np.zeros(1, dtype=COMPENSATOR_STATE),
+        comp=_compensator_state(sc),
         inverter=np.zeros(1, dtype=INVERTER_STATE),
     )
 
@@ -414,3 +415,30 @@ def _build_arrays(sc: Scenario) -> DriveArrays:
         log_every=sc.simulation.log_every,
         derived=derived,
     )
+
+
+def _gating(sc) -> dict:
+    """The compensator's gating and frequency-schedule parameters (issue 10; off: zeros)."""
+    comp = sc.compensator
+    on = comp.gating if comp.gating is not None else comp.input == "demodulated"
+    if not (on and comp.enabled):
+        return {}
+    f2 = sc.injection.frequency2_Hz
+    if f2 is None:
+        f2 = 2.0 * sc.injection.frequency_Hz
+    return {
+        "gate": True,
+        "gate_dw": comp.gate_speed_rpm * RPM,
+        "gate_diq": comp.gate_iq_A,
+        "gate_v": comp.gate_voltage,
+        "gate_df": comp.gate_band_Hz if sc.injection.amplitude_A > 0.0 else 0.0,
+        "gate_hold": float(comp.gate_hold_periods),
+        "inj_freq2": f2 if sc.injection.amplitude_A > 0.0 and comp.gate_band_Hz > 0 else 0.0,
+    }
+
+
+def _compensator_state(sc) -> np.ndarray:
+    """Initial COMPENSATOR_STATE: zeros (no previous iq* yet), the injection frequency in use."""
+    st = np.zeros(1, dtype=COMPENSATOR_STATE)
+    st[0]["inj_f"] = sc.injection.frequency_Hz
+    return st

@@ -17,11 +17,11 @@ _SUFFIXES = ("rad_s", "ohm", "rpm", "Nm", "Wb", "rad", "A", "V", "C", "s")
 
 
 def unit_of(column: str) -> str:
-    """The unit a column's name ends with (``""`` if none)."""
+    """The unit a column's name ends with; ``"1"`` for a dimensionless column."""
     for u in _SUFFIXES:
         if column.endswith("_" + u):
             return "rad/s" if u == "rad_s" else u
-    return ""
+    return "1"
 
 
 def to_mat(res, path) -> Path:

@@ -32,6 +32,14 @@ seconds, both ends included; the whole run if ``window_s >= t_end``).
 ``peak_current_A``       ``max sqrt(i_alpha^2 + i_beta^2)`` of the plant's stator current over
                          all samples
 ``final_speed_rpm``, ``final_speed_ref_rpm``, ``final_speed_est_rpm``   at the last sample
+``lost_control_at_s``    loss of control: the time of the first sample of the first
+                         *departure* (a run of consecutive samples with
+                         ``|speed - speed_ref| > simulation.lost_control_rpm``) that lasts
+                         ``simulation.lost_control_s`` or longer (its last sample time minus
+                         its first); NaN if there is none. Checked only in vector control with
+                         a free speed (not ``plant.speed_mode = "imposed"``) and a bound > 0.
+                         Also on the samples of a diverged run before the divergence.
+``lost_control``         ``lost_control_at_s`` is not NaN (a boolean column)
 
 plus ``status`` (0 ok, else the divergence code of :mod:`imdrive.kernels.engine`), ``diverged``,
 ``diverged_at_s`` (the time the divergence was found, ``k_end Ts``; NaN if not diverged) and
@@ -56,8 +64,37 @@ __all__ = [
     "METRICS",
     "compensation_metrics",
     "drive_metrics",
+    "lost_control_check",
+    "lost_control_time",
     "steady_means",
 ]
+
+
+def lost_control_check(scenario) -> tuple[float, float]:
+    """``(bound, duration)`` of the loss-of-control check: rad/s (0: off) and s."""
+    sim = scenario.simulation
+    on = (
+        scenario.drive.mode == "vector"
+        and scenario.plant.speed_mode != "imposed"
+        and sim.lost_control_rpm > 0.0
+    )
+    return (sim.lost_control_rpm * math.pi / 30.0 if on else 0.0), sim.lost_control_s
+
+
+def lost_control_time(time_s, speed_rpm, speed_ref_rpm, bound_rpm, duration_s) -> float:
+    """Start of the first departure of ``speed`` from ``speed_ref`` by more than ``bound_rpm``
+    lasting ``duration_s`` or longer, s (NaN if none; see the module docstring)."""
+    if bound_rpm <= 0.0 or len(time_s) == 0:
+        return math.nan
+    out = np.abs(np.asarray(speed_rpm) - np.asarray(speed_ref_rpm)) > bound_rpm
+    if not out.any():
+        return math.nan
+    # runs of consecutive out-of-band samples: their first and last indices
+    d = np.diff(np.concatenate(([0], out.astype(np.int8), [0])))
+    first = np.flatnonzero(d == 1)
+    last = np.flatnonzero(d == -1) - 1
+    long = np.flatnonzero(time_s[last] - time_s[first] >= duration_s - 1e-12)
+    return float(time_s[first[long[0]]]) if long.size else math.nan
 
 
 def drive_metrics(res, window_s: float = DEFAULT_WINDOW_S) -> dict:
@@ -125,6 +162,10 @@ def drive_metrics(res, window_s: float = DEFAULT_WINDOW_S) -> dict:
             "final_speed_est_rpm": speed_est[-1],
         }
     )
+    bound, duration = lost_control_check(sc)
+    t_lc = lost_control_time(s["time_s"], speed, speed_ref, bound * 30.0 / math.pi, duration)
+    out["lost_control"] = not math.isnan(t_lc)
+    out["lost_control_at_s"] = t_lc
     return out
 
 

@@ -59,6 +59,12 @@ COLUMN_DOCS = {
     "lam_i_beta_Wb": "the same, beta",
     "e_d0_demod_Wb": "e_d0 detected synchronously with the injected sinusoid (2 e_d0 sin), the "
     "injection compensator's input",
+    "comp_frozen_flags": "why the compensator's last decision was frozen, a bit mask: 1 speed "
+    "error or reference moving, 2 load (iq*) change, 4 voltage limit, 8 injection frequency "
+    "switched, 16 within the hold periods after any of these (0: R2_hat updated); see "
+    "imdrive.kernels.compensator",
+    "inj_freq_Hz": "injection frequency in use (the compensator moves it away from the stator "
+    "frequency)",
 }
 
 SUMMARY_DOCS = {

@@ -18,6 +18,8 @@ from imdrive.run.metrics import (
     DEFAULT_WINDOW_S,
     compensation_metrics,
     drive_metrics,
+    lost_control_check,
+    lost_control_time,
 )
 
 RPM = 2.0 * math.pi / 60.0
@@ -72,6 +74,8 @@ LOG_UNITS = {
     "lam_i_beta": ("Wb", 1.0),
     "R2_est": ("ohm", 1.0),
     "e_d0_demod": ("Wb", 1.0),
+    "comp_frozen": ("flags", 1.0),
+    "inj_freq": ("Hz", 1.0),
 }
 # column -> (log field, scale) for every column taken straight from the log
 _DIRECT = {f"{f}_{u}": (f, k) for f, (u, k) in LOG_UNITS.items()}
@@ -86,7 +90,8 @@ VECTOR_COLUMNS = (
     OPEN_LOOP_COLUMNS
     + (
         "speed_ref_rpm speed_est_rpm id_ref_A iq_ref_A i_d_A i_q_A R2_est_ohm e_d0_Wb e_q0_Wb "
-        "theta_e_rad lam_v_alpha_Wb lam_v_beta_Wb lam_i_alpha_Wb lam_i_beta_Wb e_d0_demod_Wb"
+        "theta_e_rad lam_v_alpha_Wb lam_v_beta_Wb lam_i_alpha_Wb lam_i_beta_Wb e_d0_demod_Wb "
+        "comp_frozen_flags inj_freq_Hz"
     ).split()
 )
 
@@ -200,6 +205,40 @@ class SimulationResult:
     @property
     def diverged(self) -> bool:
         return self.status != S_OK
+
+    @property
+    def lost_control_at_s(self) -> float:
+        """Start of the first departure of the actual speed from its reference by more than
+        ``simulation.lost_control_rpm`` that lasted ``simulation.lost_control_s`` or longer, s
+        (NaN if none; on the logged samples, see :func:`imdrive.run.metrics.drive_metrics`)."""
+        if "speed_ref_rpm" not in self.signals:
+            return math.nan
+        bound, duration = lost_control_check(self.scenario)
+        s = self.signals
+        return lost_control_time(
+            s["time_s"], s["speed_rpm"], s["speed_ref_rpm"], bound * 30.0 / math.pi, duration
+        )
+
+    @property
+    def lost_control(self) -> bool:
+        """Whether the drive lost control of the speed (see :attr:`lost_control_at_s`).
+
+        Distinct from :attr:`diverged`: the run completed (or diverged later) with finite
+        states, but the speed stayed far from its reference for too long (a runaway, a
+        sustained limit cycle, a stall).
+        """
+        return not math.isnan(self.lost_control_at_s)
+
+    @property
+    def lost_control_message(self) -> str | None:
+        if not self.lost_control:
+            return None
+        sim = self.scenario.simulation
+        return (
+            f"lost control at t = {self.lost_control_at_s:.6g} s: the speed stayed more than "
+            f"{sim.lost_control_rpm:g} rpm from its reference for {sim.lost_control_s:g} s or "
+            "longer (simulation.lost_control_rpm, lost_control_s)"
+        )
 
     @property
     def end_time_s(self) -> float:
@@ -323,6 +362,8 @@ class SimulationResult:
             "diverged": self.diverged,
             "diverged_at_s": self.end_time_s if self.diverged else None,
             "diverged_signal": STATUS_SIGNAL.get(self.status),
+            "lost_control": self.lost_control,
+            "lost_control_at_s": None if not self.lost_control else self.lost_control_at_s,
             "simulated_time_s": self.end_time_s,
             "control_periods": self.k_end,
             "wall_time_s": self.wall_time_s,
