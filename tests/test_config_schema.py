@@ -137,7 +137,7 @@ DIRECT = [
     (lambda: MachineParams(**M, bogus=1), "machine.bogus: unknown key"),
     (
         lambda: ControlSettings(speed_feedback="x"),
-        "control.speed_feedback: must be one of 'measured', 'mras'",
+        "control.speed_feedback: must be one of 'measured', 'mras', 'reactive-mras', 'afo', 'ekf'",
     ),
     (lambda: ThermalSettings(tau1_s=0), "plant.thermal.tau1_s: must be > 0 (got 0.0)"),
     (lambda: SimulationSettings(substeps="a"), "simulation.substeps: must be an integer, got 'a'"),

@@ -91,6 +91,7 @@ RANK = {
     "sweep": 6,
     "studies": 6,
     "stability": 6,
+    "bench": 6,
     "cli": 7,
     "__main__": 7,
 }

@@ -256,8 +256,12 @@ class ControlSettings:
     """
 
     speed_feedback: Annotated[
-        Literal["measured", "mras"],
-        setting('"measured": encoder speed; "mras": the MRAS estimate (sensorless)'),
+        Literal["measured", "mras", "reactive-mras", "afo", "ekf"],
+        setting(
+            '"measured": encoder speed; sensorless, the estimate of: "mras" Schauder\'s MRAS, '
+            '"reactive-mras" the reactive-power MRAS, "afo" the adaptive full-order observer, '
+            '"ekf" the extended Kalman filter (docs/estimators.md)'
+        ),
     ] = "measured"
     speed_ref_rpm: Annotated[Profile, setting("speed reference", "rpm")] = C(0.0)
     flux_ref_Wb: Annotated[
@@ -381,6 +385,128 @@ class EstimatorSettings:
         Float | None,
         setting("magnetising inductance", "H", gt=0.0, default_doc="the plant's"),
     ] = None
+    R2_adaptation: Annotated[
+        Literal["compensator", "afo", "ekf"],
+        setting(
+            'who adapts R̂2: "compensator" the [compensator] section (the fuzzy compensator on '
+            'the MRAS, or its injection variant; off unless compensator.enabled), "afo" the '
+            'full-order observer\'s law (needs control.speed_feedback = "afo"), "ekf" the '
+            'EKF\'s R2 state (needs "ekf")'
+        ),
+    ] = "compensator"
+
+
+@settings("reactive_mras")
+class ReactiveMrasSettings:
+    """Reactive-power MRAS speed estimator (``[reactive_mras]``, Peng & Fukao 1994).
+
+    ``K1``, ``K2`` default from ``bandwidth_Hz``
+    (:func:`imdrive.design.estimators.default_reactive_mras_gains`).
+    """
+
+    bandwidth_Hz: Annotated[
+        Float, setting("bandwidth K1 and K2 are derived from", "Hz", gt=0.0)
+    ] = 20.0
+    K1: Annotated[
+        Float | None,
+        setting(
+            "adaptation PI proportional gain", "(rad/s)/(A V)", default_doc="from bandwidth_Hz"
+        ),
+    ] = None
+    K2: Annotated[
+        Float | None,
+        setting("adaptation PI integral gain", "(rad/s²)/(A V)", default_doc="from bandwidth_Hz"),
+    ] = None
+
+
+@settings("afo")
+class AfoSettings:
+    """Adaptive full-order flux observer (``[afo]``, Kubota, Matsuse & Nakano 1993).
+
+    Gains default from the bandwidths (:mod:`imdrive.design.estimators`).
+    """
+
+    gain: Annotated[
+        Literal["regeneration", "fixed"],
+        setting(
+            'observer gain: "regeneration" g2 = -rho (R̂1 + σL1 g1) L2/M, for stable '
+            'low-speed regeneration; "fixed" g1, g2 as given (g1 = g2 = 0: the plain observer)'
+        ),
+    ] = "regeneration"
+    rho: Annotated[
+        Float,
+        setting(
+            "share of the regeneration gain (1: no unstable band but an undamped flux mode at "
+            "zero stator frequency)",
+            ge=0.0,
+            le=1.0,
+        ),
+    ] = 0.9
+    g1_per_s: Annotated[Float, setting("current-equation gain g1", "1/s", ge=0.0)] = 0.0
+    g2_ohm: Annotated[Float, setting('flux-equation gain g2 (gain = "fixed")', "ohm")] = 0.0
+    bandwidth_Hz: Annotated[
+        Float, setting("speed-adaptation bandwidth Kp, Ki are derived from", "Hz", gt=0.0)
+    ] = 40.0
+    Kp: Annotated[
+        Float | None,
+        setting(
+            "speed adaptation proportional gain", "(rad/s)/(A Wb)", default_doc="from bandwidth_Hz"
+        ),
+    ] = None
+    Ki: Annotated[
+        Float | None,
+        setting(
+            "speed adaptation integral gain", "(rad/s²)/(A Wb)", default_doc="from bandwidth_Hz"
+        ),
+    ] = None
+    R1_adaptation: Annotated[Bool, setting("adapt R̂1 (Kubota et al. 1993)")] = False
+    R1_bandwidth_rad_s: Annotated[
+        Float, setting("R̂1 adaptation rate the gain is derived from", "rad/s", gt=0.0)
+    ] = 2.0
+    R2_bandwidth_rad_s: Annotated[
+        Float,
+        setting(
+            'R̂2 adaptation rate (estimator.R2_adaptation = "afo"; needs [flux_injection])',
+            "rad/s",
+            gt=0.0,
+        ),
+    ] = 2.0
+
+
+@settings("ekf")
+class EkfSettings:
+    """Extended Kalman filter for speed and R2 (``[ekf]``); noise as standard deviations.
+
+    Per-period variances: currents ``(voltage_noise_V Ts / σL1)²``, fluxes
+    ``(flux_noise_Wb_per_s Ts)²``... see :func:`imdrive.design.estimators.default_ekf_noise`.
+    """
+
+    voltage_noise_V: Annotated[
+        Float, setting("voltage uncertainty behind the current's process noise", "V", gt=0.0)
+    ] = 5.0
+    flux_noise_Wb_per_s: Annotated[
+        Float, setting("rotor-flux process noise density", "Wb/s", gt=0.0)
+    ] = 0.1
+    acceleration_noise_rad_s2: Annotated[
+        Float, setting("speed process noise: electrical acceleration uncertainty", "rad/s²", gt=0.0)
+    ] = 2000.0
+    R2_drift_ohm_per_s: Annotated[
+        Float, setting("R2 process noise: drift-rate uncertainty", "ohm/s", gt=0.0)
+    ] = 0.5
+    current_noise_A: Annotated[
+        Float, setting("measurement noise per current component (rms)", "A", gt=0.0)
+    ] = 0.05
+
+
+@settings("flux_injection")
+class FluxInjectionSettings:
+    """A sinusoid on the rotor-flux command (``[flux_injection]``), the excitation under which
+    R2 and the speed are estimated together (Kubota & Matsuse 1994); 0 = off."""
+
+    amplitude: Annotated[
+        Float, setting("relative amplitude of the sinusoid on the flux command", ge=0.0, lt=1.0)
+    ] = 0.0
+    frequency_Hz: Annotated[Float, setting("frequency of the sinusoid", "Hz", gt=0.0)] = 2.0
 
 
 @settings("mras")
@@ -715,6 +841,10 @@ SECTIONS: dict[str, type] = {
     "control": ControlSettings,
     "estimator": EstimatorSettings,
     "mras": MrasSettings,
+    "reactive_mras": ReactiveMrasSettings,
+    "afo": AfoSettings,
+    "ekf": EkfSettings,
+    "flux_injection": FluxInjectionSettings,
     "compensator": CompensatorSettings,
     "injection": InjectionSettings,
     "sensor": SensorSettings,
@@ -765,6 +895,14 @@ class Scenario:
         EstimatorSettings()
     )
     mras: Annotated[MrasSettings, setting("Schauder's MRAS speed estimator")] = MrasSettings()
+    reactive_mras: Annotated[
+        ReactiveMrasSettings, setting("reactive-power MRAS speed estimator")
+    ] = ReactiveMrasSettings()
+    afo: Annotated[AfoSettings, setting("adaptive full-order flux observer")] = AfoSettings()
+    ekf: Annotated[EkfSettings, setting("extended Kalman filter for speed and R2")] = EkfSettings()
+    flux_injection: Annotated[FluxInjectionSettings, setting("sinusoid on the flux command")] = (
+        FluxInjectionSettings()
+    )
     compensator: Annotated[
         CompensatorSettings, setting("the fuzzy rotor-resistance compensator")
     ] = CompensatorSettings()
@@ -809,6 +947,22 @@ class Scenario:
                     f"must be 1/inverter.switching_frequency_Hz = "
                     f"{1.0 / inv.switching_frequency_Hz:g} s with the switching model (one "
                     f"carrier period per control period; got {self.simulation.Ts_s:g})",
+                )
+        fb = self.control.speed_feedback
+        if fb not in ("measured", "mras") and (
+            self.compensator.enabled or self.injection.amplitude_A != 0.0
+        ):
+            raise ConfigError(
+                "control.speed_feedback",
+                f'"{fb}" gives no flux error e_d0: the compensator and the injection need '
+                '"mras" or "measured"',
+            )
+        r2a = self.estimator.R2_adaptation
+        if r2a != "compensator":
+            if fb != r2a:
+                raise ConfigError(
+                    "estimator.R2_adaptation",
+                    f'"{r2a}" needs control.speed_feedback = "{r2a}" (got "{fb}")',
                 )
         t_dc = self.control.dead_time_compensation_s
         if t_dc is not None and not t_dc < 0.5 / inv.switching_frequency_Hz:

@@ -32,7 +32,10 @@ from imdrive.kernels.compensator import (
     injection_sine,
     log_compensator,
 )
+from imdrive.kernels.estimators.afo import afo_step
+from imdrive.kernels.estimators.ekf import ekf_step
 from imdrive.kernels.estimators.mras import log_mras, mras_step
+from imdrive.kernels.estimators.reactive_mras import reactive_mras_step
 from imdrive.kernels.ifoc import dead_time_feedforward, foc_step, log_control, open_loop_voltage
 from imdrive.kernels.inverter import (
     INV_SWITCHING,
@@ -71,6 +74,21 @@ from imdrive.kernels.sensors import measure_current
 DRIVE_OPEN_LOOP = 0
 DRIVE_FOC = 1
 
+# speed estimators (SIM_PARAMS.estimator); the one selected feeds the controller when
+# sensorless and is the one logged as speed_est
+EST_MRAS = 0  # Schauder's MRAS (estimators/mras.py), also run with measured feedback
+EST_REACTIVE_MRAS = 1  # estimators/reactive_mras.py
+EST_AFO = 2  # estimators/afo.py
+EST_EKF = 3  # estimators/ekf.py
+#: control.speed_feedback -> SIM_PARAMS.estimator ("measured" runs the MRAS, as before)
+ESTIMATOR_CODES = {
+    "measured": EST_MRAS,
+    "mras": EST_MRAS,
+    "reactive-mras": EST_REACTIVE_MRAS,
+    "afo": EST_AFO,
+    "ekf": EST_EKF,
+}
+
 # status codes returned by the engine
 S_OK = 0
 S_NAN = 1
@@ -88,6 +106,9 @@ SIM_PARAMS = record_dtype(
         ("sensorless", b1),  # speed feedback: the MRAS estimate instead of the measured speed
         ("delay", i8),  # computation delay, periods: 0, or 1 (the reference of sample k acts
         # over the next period, as on a DSP)
+        ("estimator", i8),  # EST_MRAS (default), EST_REACTIVE_MRAS, EST_AFO, EST_EKF
+        ("flux_inj_amp", f8),  # flux-command injection: relative amplitude (0: off)
+        ("flux_inj_freq", f8),  # its frequency, Hz
     ]
 )
 
@@ -125,6 +146,9 @@ class DriveParams(NamedTuple):
     control: np.ndarray  # ifoc.CONTROL_PARAMS
     mras: np.ndarray  # estimators.mras.MRAS_PARAMS
     comp: np.ndarray  # compensator.COMPENSATOR_PARAMS
+    rmras: np.ndarray  # estimators.reactive_mras.REACTIVE_MRAS_PARAMS
+    afo: np.ndarray  # estimators.afo.AFO_PARAMS
+    ekf: np.ndarray  # estimators.ekf.EKF_PARAMS
     prof_t: np.ndarray  # float64[N, N_PROF, K] profile breakpoint times, s
     prof_v: np.ndarray  # float64[N, N_PROF, K] profile values (SI)
     prof_n: np.ndarray  # int64[N, N_PROF] breakpoints per profile
@@ -142,6 +166,9 @@ class DriveState(NamedTuple):
     mras: np.ndarray  # estimators.mras.MRAS_STATE
     comp: np.ndarray  # compensator.COMPENSATOR_STATE
     inverter: np.ndarray  # inverter.INVERTER_STATE
+    rmras: np.ndarray  # estimators.reactive_mras.REACTIVE_MRAS_STATE
+    afo: np.ndarray  # estimators.afo.AFO_STATE
+    ekf: np.ndarray  # estimators.ekf.EKF_STATE
 
 
 @njit(cache=True)
@@ -290,6 +317,14 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
     ctl = S.control[i]
     est = S.mras[i]
     cmp = S.comp[i]
+    est_code = sim.estimator
+    p_rm = P.rmras[i]
+    s_rm = S.rmras[i]
+    p_afo = P.afo[i]
+    s_afo = S.afo[i]
+    p_ekf = P.ekf[i]
+    s_ekf = S.ekf[i]
+    flux_inj = sim.flux_inj_amp != 0.0
 
     Ts = sim.Ts
     nsub = max(sim.nsub, 1)
@@ -326,20 +361,45 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
         # --- estimator, controller
         w_ref = 0.0
         theta_k = ctl.theta_e  # the controller's d-axis angle at this sample
+        w_hat = 0.0  # the selected estimator's speed, electrical rad/s
         if foc:
-            mras_step(
-                pm,
-                mdl,
-                est,
-                smp.v_prev_ab.real,
-                smp.v_prev_ab.imag,
-                smp.i_prev_ab.real,
-                smp.i_prev_ab.imag,
-                i_meas_a,
-                i_meas_b,
-                theta_k,
-                Ts,
-            )
+            v_pa = smp.v_prev_ab.real
+            v_pb = smp.v_prev_ab.imag
+            if est_code == EST_MRAS:
+                mras_step(
+                    pm,
+                    mdl,
+                    est,
+                    v_pa,
+                    v_pb,
+                    smp.i_prev_ab.real,
+                    smp.i_prev_ab.imag,
+                    i_meas_a,
+                    i_meas_b,
+                    theta_k,
+                    Ts,
+                )
+                w_hat = est.w_r_hat
+            elif est_code == EST_REACTIVE_MRAS:
+                reactive_mras_step(
+                    p_rm,
+                    mdl,
+                    s_rm,
+                    v_pa,
+                    v_pb,
+                    smp.i_prev_ab.real,
+                    smp.i_prev_ab.imag,
+                    i_meas_a,
+                    i_meas_b,
+                    Ts,
+                )
+                w_hat = s_rm.w_r_hat
+            elif est_code == EST_AFO:
+                afo_step(p_afo, mdl, s_afo, v_pa, v_pb, i_meas_a, i_meas_b, Ts)
+                w_hat = s_afo.w_r_hat
+            else:
+                ekf_step(p_ekf, mdl, s_ekf, v_pa, v_pb, i_meas_a, i_meas_b, Ts)
+                w_hat = s_ekf.w_r_hat
             i_inj = 0.0
             if injecting:
                 sine = injection_sine(pk, cmp, t, Ts)
@@ -354,7 +414,9 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
                 compensator_step(pk, cmp, mdl, table, est.e_dq0.real, t, k0 + k, ctl.w_e)
             w_ref = profile_at(pt, pv, pn, PR_SPEED_REF, t)
             psi_ref = profile_at(pt, pv, pn, PR_FLUX_REF, t)
-            w_fb = est.w_r_hat / n_p if sensorless else w_m
+            if flux_inj:  # excitation for R2 adaptation (Kubota & Matsuse 1994)
+                psi_ref *= 1.0 + sim.flux_inj_amp * math.sin(2.0 * math.pi * sim.flux_inj_freq * t)
+            w_fb = w_hat / n_p if sensorless else w_m
             v_ref_a, v_ref_b = foc_step(
                 pc, mdl, ctl, i_meas_a, i_meas_b, w_fb, w_ref, psi_ref, i_inj, Ts
             )
@@ -433,6 +495,8 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
                 row.i_beta_meas = i_meas_b
                 log_control(row, ctl, w_ref, theta_k)
                 log_mras(row, est, n_p)
+                if est_code != EST_MRAS:
+                    row.speed_est = w_hat / n_p
                 row.R2_est = mdl.R2_hat
                 log_compensator(row, cmp)
         if k == n_steps:
@@ -470,6 +534,8 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
         if not (math.isfinite(i_mag) and math.isfinite(x.w_m)):
             return S_NAN, k + 1
         if not _finite_state(smp, mdl, ctl, est, cmp):
+            return S_NAN, k + 1
+        if not math.isfinite(w_hat):
             return S_NAN, k + 1
         if i_mag > sim.i_lim:
             return S_CURRENT, k + 1

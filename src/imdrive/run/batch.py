@@ -153,7 +153,8 @@ def stack_drives(arrays) -> tuple[DriveParams, DriveState]:
         table_idx[g] = seen[key]
     records = {
         name: np.concatenate([getattr(a.params, name) for a in arrays])
-        for name in ("sim", "plant", "inverter", "sensor", "control", "mras", "comp", "prof_n")
+        for name in DriveParams._fields
+        if name not in ("prof_t", "prof_v", "tables", "table_idx")
     }
     params = DriveParams(
         **records,

@@ -15,6 +15,12 @@ import numpy as np
 
 from imdrive.config.profiles import Profile
 from imdrive.config.scenario import Scenario
+from imdrive.design.estimators import (
+    afo_regeneration_gain,
+    default_afo_gains,
+    default_ekf_noise,
+    default_reactive_mras_gains,
+)
 from imdrive.design.gains import default_current_gains, default_mras_gains, default_speed_gains
 from imdrive.errors import ConfigError
 from imdrive.fuzzy import fuzzy_table
@@ -23,13 +29,17 @@ from imdrive.kernels.compensator import COMPENSATOR_PARAMS, COMPENSATOR_STATE
 from imdrive.kernels.engine import (
     DRIVE_FOC,
     DRIVE_OPEN_LOOP,
+    ESTIMATOR_CODES,
     LOG,
     SAMPLE_STATE,
     SIM_PARAMS,
     DriveParams,
     DriveState,
 )
+from imdrive.kernels.estimators.afo import AFO_PARAMS, AFO_STATE
+from imdrive.kernels.estimators.ekf import EKF_PARAMS, EKF_STATE
 from imdrive.kernels.estimators.mras import MRAS_PARAMS, MRAS_STATE
+from imdrive.kernels.estimators.reactive_mras import REACTIVE_MRAS_PARAMS, REACTIVE_MRAS_STATE
 from imdrive.kernels.ifoc import CONTROL_PARAMS, CONTROL_STATE
 from imdrive.kernels.inverter import INVERTER_CODES, INVERTER_PARAMS, INVERTER_STATE
 from imdrive.kernels.machine import PLANT_PARAMS, initial_plant_state
@@ -186,6 +196,80 @@ def check_finite(arrays: DriveArrays, sc: Scenario) -> None:
                     raise _not_finite(key, bad, sc)
 
 
+def _estimator_records(sc: Scenario, Ts, psi0, R1h, R2h, Mh, L2h, sigma_L1):
+    """The alternative estimators' parameter records (all filled; the engine runs the selected
+    one) and their derived gains, each overridable in its section."""
+    r2a = sc.estimator.R2_adaptation
+    rm = sc.reactive_mras
+    K1, K2 = default_reactive_mras_gains(psi0, L2h, 2 * math.pi * rm.bandwidth_Hz)
+    K1 = rm.K1 if rm.K1 is not None else K1
+    K2 = rm.K2 if rm.K2 is not None else K2
+    rmras = new_record(REACTIVE_MRAS_PARAMS, K1=K1, K2=K2)
+
+    af = sc.afo
+    Kp, Ki, k_R1, k_R2 = default_afo_gains(
+        psi0,
+        R1h,
+        R2h,
+        sigma_L1,
+        Mh,
+        L2h,
+        af.g1_per_s,
+        2 * math.pi * af.bandwidth_Hz,
+        af.R1_bandwidth_rad_s,
+        af.R2_bandwidth_rad_s,
+        sc.flux_injection.amplitude,
+        2 * math.pi * sc.flux_injection.frequency_Hz,
+    )
+    regen = af.gain == "regeneration"
+    g2 = afo_regeneration_gain(R1h, sigma_L1, Mh, L2h, af.g1_per_s, af.rho) if regen else af.g2_ohm
+    afo = new_record(
+        AFO_PARAMS,
+        gain_mode=1 if regen else 0,
+        rho=af.rho,
+        g1=af.g1_per_s,
+        g2=af.g2_ohm,
+        Kp=af.Kp if af.Kp is not None else Kp,
+        Ki=af.Ki if af.Ki is not None else Ki,
+        k_R1=k_R1 if af.R1_adaptation else 0.0,
+        k_R2=k_R2 if r2a == "afo" else 0.0,
+        R_min=0.5,
+        R_max=2.0,
+    )
+
+    ek = sc.ekf
+    q, r, p0 = default_ekf_noise(
+        Ts,
+        sigma_L1,
+        psi0,
+        R2h,
+        ek.voltage_noise_V,
+        ek.flux_noise_Wb_per_s,
+        ek.acceleration_noise_rad_s2,
+        ek.R2_drift_ohm_per_s,
+        ek.current_noise_A,
+    )
+    ekf = new_record(
+        EKF_PARAMS,
+        q=q,
+        r=r,
+        p0=p0,
+        estimate_R2=r2a == "ekf",
+        R2_min=0.5 * R2h,
+        R2_max=2.0 * R2h,
+        write_R2=r2a == "ekf",
+    )
+    derived = {
+        "reactive_mras_K1": float(rmras["K1"][0]),
+        "reactive_mras_K2": float(rmras["K2"][0]),
+        "afo_Kp": float(afo["Kp"][0]),
+        "afo_Ki": float(afo["Ki"][0]),
+        "afo_g1_per_s": af.g1_per_s,
+        "afo_g2_ohm": g2,
+    }
+    return {"rmras": rmras, "afo": afo, "ekf": ekf}, derived
+
+
 def build_arrays(sc: Scenario) -> DriveArrays:
     """Fill every block's parameter and state records from the scenario.
 
@@ -247,8 +331,11 @@ def _build_arrays(sc: Scenario) -> DriveArrays:
         i_lim=i_div,
         w_lim=sc.simulation.divergence_speed_rpm * RPM,
         mode=DRIVE_FOC if sc.drive.mode == "vector" else DRIVE_OPEN_LOOP,
-        sensorless=ctl.speed_feedback == "mras",
+        sensorless=ctl.speed_feedback != "measured",
         delay=ctl.delay_periods,
+        estimator=ESTIMATOR_CODES.get(ctl.speed_feedback, 0),
+        flux_inj_amp=sc.flux_injection.amplitude,
+        flux_inj_freq=sc.flux_injection.frequency_Hz,
     )
     inv = sc.inverter
     inverter = new_record(
@@ -324,6 +411,9 @@ def _build_arrays(sc: Scenario) -> DriveArrays:
     )
     mras = new_record(MRAS_PARAMS, wc=sc.mras.wc_rad_s, K1=gains["mras_K1"], K2=gains["mras_K2"])
 
+    est_params, est_derived = _estimator_records(sc, Ts, psi0, R1h, R2h, Mh, L2h, sigma_L1)
+    gains.update(est_derived)
+
     comp = sc.compensator
     inj = sc.injection
     if comp.period_s is not None:
@@ -376,6 +466,7 @@ def _build_arrays(sc: Scenario) -> DriveArrays:
         control=control,
         mras=mras,
         comp=compensator,
+        **est_params,
         prof_t=prof_t[None],
         prof_v=prof_v[None],
         prof_n=prof_n[None],
@@ -390,6 +481,9 @@ def _build_arrays(sc: Scenario) -> DriveArrays:
         mras=np.zeros(1, dtype=MRAS_STATE),
         comp=_compensator_state(sc),
         inverter=np.zeros(1, dtype=INVERTER_STATE),
+        rmras=np.zeros(1, dtype=REACTIVE_MRAS_STATE),
+        afo=np.zeros(1, dtype=AFO_STATE),
+        ekf=np.zeros(1, dtype=EKF_STATE),
     )
 
     derived = dict(gains)

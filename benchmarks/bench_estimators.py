@@ -1,0 +1,76 @@
+"""Real-time factor of each speed estimator, one drive on one core, and the bench's wall time.
+
+Run from the repository root with the imdrive venv::
+
+    python benchmarks/bench_estimators.py [--repeat N] [--realistic] [--bench]
+
+For every ``control.speed_feedback`` (and the R2-adapting variants) the ``sensorless`` preset
+(3 s, Ts = 100 us: to 1000 rpm, rated load at 2 s) is run once to compile, then ``--repeat``
+times; the median kernel time (``SimulationResult.wall_time_s``) gives the real-time factor
+(simulated s per wall s). ``--realistic`` uses ``sensorless-realistic`` (switching inverter).
+``--bench`` also times ``imdrive bench-estimators`` (the full protocol) in a subprocess.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+CONFIGS = {
+    "mras": [],
+    "reactive-mras": ['control.speed_feedback="reactive-mras"'],
+    "afo": ['control.speed_feedback="afo"'],
+    "afo+R2": [
+        'control.speed_feedback="afo"',
+        'estimator.R2_adaptation="afo"',
+        "flux_injection.amplitude=0.1",
+    ],
+    "ekf": ['control.speed_feedback="ekf"'],
+    "ekf+R2": [
+        'control.speed_feedback="ekf"',
+        'estimator.R2_adaptation="ekf"',
+        "flux_injection.amplitude=0.1",
+    ],
+}
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--repeat", type=int, default=7)
+    ap.add_argument("--realistic", action="store_true")
+    ap.add_argument("--bench", action="store_true")
+    args = ap.parse_args()
+    import numba
+
+    numba.set_num_threads(1)
+    from imdrive.config.scenario import Scenario
+    from imdrive.run.simulate import simulate
+
+    preset = "sensorless-realistic" if args.realistic else "sensorless"
+    print(f"{preset}: median of {args.repeat} runs, kernel time, one core")
+    for name, ov in CONFIGS.items():
+        base = ['control.speed_feedback="mras"'] if name == "mras" else []
+        sc = Scenario.read(preset, base + ov)
+        simulate(sc)
+        walls = [simulate(sc).wall_time_s for _ in range(args.repeat)]
+        w = statistics.median(walls)
+        t_sim = sc.simulation.t_end_s
+        print(f"  {name:<14} {w * 1e3:8.1f} ms   {t_sim / w:8.0f} x real time")
+    if args.bench:
+        with tempfile.TemporaryDirectory() as d:
+            env = dict(os.environ, NUMBA_NUM_THREADS="2")
+            cmd = [sys.executable, "-m", "imdrive", "bench-estimators", "--out", d, "-q"]
+            subprocess.run(cmd, check=True, env=env)  # compile
+            t0 = time.perf_counter()
+            subprocess.run(cmd, check=True, env=env)
+            print(f"  bench-estimators (full, 2 threads): {time.perf_counter() - t0:.1f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

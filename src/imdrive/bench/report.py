@@ -1,0 +1,131 @@
+"""Run the protocol on the batch engine and write ``estimators.csv``, one figure per metric
+and ``estimators.md`` (:func:`bench_estimators`)."""
+
+from __future__ import annotations
+
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from imdrive.bench.metrics import METRICS, run_metrics
+from imdrive.bench.protocol import CASES, ESTIMATORS, protocol, scenario
+
+UNITS = {
+    "steady_speed_error_rpm": "rpm",
+    "rms_speed_error_rpm": "rpm",
+    "speed_est_error_rpm": "rpm",
+    "rms_speed_est_error_rpm": "rpm",
+    "R2_error_pct": "%",
+    "R2_time_to_2pct_s": "s",
+    "peak_current_A": "A",
+    "lost_control": "",
+}
+
+
+def run_protocol(quick: bool = False, parallel: bool = True, runs=None):
+    """Simulate every run of the protocol; returns ``(table, results, wall_s)``.
+
+    ``table`` is a DataFrame with columns ``estimator, case, drive, diverged,`` the
+    :data:`~imdrive.bench.metrics.METRICS`; ``results`` the runs' ``SimulationResult``.
+    ``runs`` (a list of :class:`~imdrive.bench.protocol.Run`) replaces the protocol.
+    """
+    import pandas as pd
+
+    from imdrive.run.batch import simulate_batch
+
+    runs = protocol(quick) if runs is None else list(runs)
+    t0 = time.perf_counter()
+    res = simulate_batch([scenario(r) for r in runs], logs=True, parallel=parallel)
+    wall = time.perf_counter() - t0
+    rows = []
+    for r, sim in zip(runs, res.results, strict=True):
+        m = run_metrics(sim.signals, CASES[r.case].t_eval_s, sim.diverged)
+        rows.append({"estimator": r.estimator, "case": r.case, "drive": r.drive,
+                     "diverged": bool(sim.diverged), **m})  # fmt: skip
+    return pd.DataFrame(rows), res.results, wall
+
+
+def _fmt(v) -> str:
+    if isinstance(v, (bool, np.bool_)):
+        return "**lost**" if v else "ok"
+    if v is None or (isinstance(v, float) and math.isnan(v)):
+        return "–"
+    return f"{v:.3g}"
+
+
+def markdown(table) -> str:
+    """One table per metric and drive: cases down, estimator configurations across."""
+    ests = [e for e in ESTIMATORS if e in set(table["estimator"])]
+    out = ["# Estimator bench", ""]
+    for drive in dict.fromkeys(table["drive"]):
+        sub = table[table["drive"] == drive]
+        for met in METRICS:
+            unit = f" ({UNITS[met]})" if UNITS[met] else ""
+            out += [f"## {met}{unit}, {drive} drive", ""]
+            out.append("| case | " + " | ".join(ests) + " |")
+            out.append("|---|" + "---|" * len(ests))
+            for case in dict.fromkeys(sub["case"]):
+                cells = []
+                for e in ests:
+                    v = sub[(sub["case"] == case) & (sub["estimator"] == e)][met]
+                    cells.append(_fmt(v.iloc[0]) if len(v) else "–")
+                out.append(f"| {case} | " + " | ".join(cells) + " |")
+            out.append("")
+    return "\n".join(out)
+
+
+def figures(table, out: Path) -> list[Path]:
+    """One grouped bar chart per metric (cases along x, a bar per estimator, a panel per
+    drive), from ``table``, the same numbers as the CSV."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    ests = [e for e in ESTIMATORS if e in set(table["estimator"])]
+    drives = list(dict.fromkeys(table["drive"]))
+    paths = []
+    for met in METRICS:
+        fig, axes = plt.subplots(len(drives), 1, figsize=(11, 3.2 * len(drives)), squeeze=False)
+        for ax, drive in zip(axes[:, 0], drives, strict=True):
+            sub = table[table["drive"] == drive]
+            cases = list(dict.fromkeys(sub["case"]))
+            x = np.arange(len(cases))
+            wd = 0.8 / len(ests)
+            for j, e in enumerate(ests):
+                vals = []
+                for c in cases:
+                    v = sub[(sub["case"] == c) & (sub["estimator"] == e)][met]
+                    vals.append(float(v.iloc[0]) if len(v) else np.nan)
+                ax.bar(x + (j - (len(ests) - 1) / 2) * wd, vals, wd, label=e)
+            ax.set_xticks(x, cases, rotation=20, fontsize=8)
+            ax.set_title(f"{drive} drive", fontsize=9)
+            ax.set_ylabel(f"{met} ({UNITS[met]})" if UNITS[met] else met, fontsize=8)
+            ax.axhline(0.0, color="k", lw=0.5)
+            if met not in ("lost_control", "peak_current_A", "R2_time_to_2pct_s"):
+                ax.set_yscale("symlog", linthresh=0.1)
+        axes[0, 0].legend(fontsize=7, ncol=len(ests))
+        fig.tight_layout()
+        p = out / f"{met}.png"
+        fig.savefig(p, dpi=90)
+        plt.close(fig)
+        paths.append(p)
+    return paths
+
+
+def bench_estimators(out_dir, quick: bool = False) -> dict:
+    """Run the protocol and write ``estimators.csv``, ``<metric>.png``, ``estimators.md``.
+
+    Returns a summary (runs, wall time, paths).
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    table, _, wall = run_protocol(quick)
+    csv = out / "estimators.csv"
+    table.to_csv(csv, index=False)
+    figs = figures(table, out)
+    md = out / "estimators.md"
+    md.write_text(markdown(table) + "\n")
+    return {"runs": len(table), "wall_s": wall, "csv": csv, "markdown": md, "figures": figs}

@@ -1,0 +1,180 @@
+"""Adaptive full-order flux observer (Kubota, Matsuse & Nakano, IEEE Trans. Ind. Appl. 29(2),
+1993), with an observer gain for stable low-speed regeneration, optional R1 adaptation (Kubota
+et al. 1993) and R2 adaptation under flux-command injection (Kubota & Matsuse, IEEE Trans. Ind.
+Appl. 30(5), 1994).
+
+Machine model, stationary frame, state ``(i, lam)`` (stator current, rotor flux)::
+
+    sigma L1 p i = v - R_sigma i + k (1/T2 - j w_r) lam,      k = M/L2,  R_sigma = R1 + k^2 R2
+    p lam        = (M/T2) i - (1/T2 - j w_r) lam,            T2 = L2/R2
+
+Observer (hats: the model's values and the estimated speed), correction by the current error
+``e = i - i_hat`` held over the period::
+
+    p i_hat   = (the model above at i_hat, lam_hat, w_r_hat) + g1 e
+    p lam_hat = (the model above at i_hat, lam_hat, w_r_hat) + g2 e
+
+Speed adaptation (Kubota et al. 1993, eq. 17)::
+
+    eps = Im(conj(e) lam_hat) = e_alpha lam_hat_beta - e_beta lam_hat_alpha
+    w_r_hat = Kp eps + Ki \\int eps dt
+
+**Observer gain.** With ``g1 = g2 = 0`` the steady-state sensitivity of ``eps`` to a speed
+error ``w_r - w_r_hat`` is proportional to ``w_e Im D``, ``D`` as in
+:func:`imdrive.design.estimators.afo_dc_sensitivity`, and with no gain::
+
+    Im D = w_s R1 + w_e (sigma L1/T2 + k^2 R2)            (w_e stator, w_s slip frequency)
+
+which changes sign in regeneration (``w_e w_s < 0``) below ``|w_e| = |w_s| R1 / (sigma L1/T2 +
+k^2 R2)``: the adaptation then drives the estimate away (the known unstable region of the
+plain observer). Following the approach of Hinkkanen & Luomi (IEEE Trans. Ind. Electron.
+51(6), 2004) -- choose the gain so that this sensitivity keeps the sign of ``w_e`` at every
+slip -- the gain here cancels (``rho = 1``) or shrinks (``rho < 1``) the slip term of
+``Im D``::
+
+    g2 = -rho (R1_hat + sigma L1 g1) / k,     g1 >= 0 free (default 0), rho = 0.9
+
+``rho = 1`` gives ``Im D = w_e (sigma L1/T2 + R_sigma)`` but leaves the flux error undamped at
+zero stator frequency (the flux equation becomes the pure voltage model); ``rho = 0.9`` keeps
+some damping and shrinks the unstable band tenfold
+(:func:`imdrive.design.estimators.afo_regeneration_gain`). The closed form is derived in this
+project, not Hinkkanen & Luomi's published expression; its linearised stability (error
+dynamics with the speed adaptation) is checked by a test. ``gain_mode = 0`` uses ``g1``,
+``g2`` as given.
+
+**R1 adaptation** (Kubota et al. 1993, eq. 19): ``p R1_hat = -k_R1 Re(conj(e) i_hat)``.
+**R2 adaptation** (after Kubota & Matsuse 1994): ``p R2_hat = k_R2 Re(conj(e) d)`` with
+``d`` the part of ``lam_hat - M i_hat`` in phase with ``lam_hat``. In steady state
+``lam - M i`` is in quadrature (``-j M i_q``, the slip), the direction a speed error also
+drives the current error, so the two laws would fight; the in-phase part is non-zero only while
+the flux changes, which the engine's flux-command injection (``[flux_injection]``) provides.
+The projection is this project's decoupling choice. Both write the controller's model
+(``MODEL_STATE``), which the observer itself and the IFOC slip use.
+
+Discretisation: one RK4 step per control period with the voltage held (known exactly) and the
+correction held; with exact parameters the true state is then a fixed point of the observer to
+the plant integrator's accuracy, so no discretisation bias appears in the speed estimate.
+"""
+
+from __future__ import annotations
+
+from numba import njit
+
+from imdrive.kernels.model import model_inductances
+from imdrive.kernels.records import c16, f8, i8, record_dtype
+
+#: Parameters (defaults from :mod:`imdrive.design.estimators`).
+AFO_PARAMS = record_dtype(
+    [
+        ("gain_mode", i8),  # 0: g1, g2 as given; 1: g2 = -rho (R1_hat + sigma L1 g1)/k
+        ("rho", f8),  # share of the regeneration gain (gain_mode 1), 0..1
+        ("g1", f8),  # current-equation gain, 1/s
+        ("g2", f8),  # flux-equation gain, ohm (gain_mode 0)
+        ("Kp", f8),  # speed adaptation, proportional, (rad/s)/(A Wb)
+        ("Ki", f8),  # speed adaptation, integral, (rad/s^2)/(A Wb)
+        ("k_R1", f8),  # R1 adaptation gain, ohm/(A^2 s); 0: off
+        ("k_R2", f8),  # R2 adaptation gain, ohm/(A Wb s); 0: off
+        ("R_min", f8),  # lower clamp of the adapted resistances, fraction of the initial one
+        ("R_max", f8),  # upper clamp, fraction of the initial one
+    ]
+)
+
+#: State.
+AFO_STATE = record_dtype(
+    [
+        ("i_hat_ab", c16),  # observed stator current, A
+        ("lam_ab", c16),  # observed rotor flux, Wb
+        ("int_e", f8),  # integral of eps, A Wb s
+        ("w_r_hat", f8),  # speed estimate, electrical rad/s
+        ("e_ab", c16),  # current error i - i_hat at the last sample, A
+        ("eps", f8),  # last speed adaptation error, A Wb
+        ("R1_0", f8),  # initial R1_hat and R2_hat (clamps), ohm; set on the first step
+        ("R2_0", f8),
+    ]
+)
+
+
+@njit(cache=True)
+def _deriv(v, i, lam, w, R1, R2, M, L2, sigma_L1, corr_i, corr_l):
+    k = M / L2
+    a = complex(R2 / L2, -w)  # 1/T2 - j w
+    R_sig = R1 + k * k * R2
+    di = (v - R_sig * i + k * a * lam) / sigma_L1 + corr_i
+    dl = (M * R2 / L2) * i - a * lam + corr_l
+    return di, dl
+
+
+@njit(cache=True)
+def afo_gain(p, m):
+    """``(g1, g2)`` in use: 1/s and ohm (see the module docstring)."""
+    M, L1, L2, sigma_L1 = model_inductances(m)
+    if p.gain_mode == 1:
+        return p.g1, -p.rho * (m.R1_hat + sigma_L1 * p.g1) * L2 / M
+    return p.g1, p.g2
+
+
+@njit(cache=True)
+def afo_step(p, m, s, v_prev_a, v_prev_b, i_a, i_b, Ts):
+    """Advance the observer over the period that just ended to this sample, and adapt.
+
+    The state holds the observer at the previous sample and its current error there; the
+    observer is integrated over the period that just ended (RK4, the voltage applied over it
+    and that correction held) to a prediction for this sample, whose current error drives the
+    adaptation laws and the next period's correction.
+
+    Parameters
+    ----------
+    p : AFO_PARAMS record
+    m : MODEL_STATE record
+        Read (``R1_hat``, ``R2_hat``, inductances) and, with adaptation on, written.
+    s : AFO_STATE record
+        Updated in place; ``w_r_hat`` electrical rad/s.
+    v_prev_a, v_prev_b : float
+        Voltage applied over the period that just ended, V.
+    i_a, i_b : float
+        Stator current at this sample, A.
+    Ts : float
+        Control period, s.
+    """
+    if s.R1_0 == 0.0:
+        s.R1_0 = m.R1_hat
+        s.R2_0 = m.R2_hat
+    M, L1, L2, sigma_L1 = model_inductances(m)
+    g1, g2 = afo_gain(p, m)
+    v = complex(v_prev_a, v_prev_b)
+    i0 = s.i_hat_ab
+    l0 = s.lam_ab
+    w = s.w_r_hat
+    R1 = m.R1_hat
+    R2 = m.R2_hat
+    ci = g1 * s.e_ab
+    cl = g2 * s.e_ab
+    k1i, k1l = _deriv(v, i0, l0, w, R1, R2, M, L2, sigma_L1, ci, cl)
+    h = 0.5 * Ts
+    k2i, k2l = _deriv(v, i0 + h * k1i, l0 + h * k1l, w, R1, R2, M, L2, sigma_L1, ci, cl)
+    k3i, k3l = _deriv(v, i0 + h * k2i, l0 + h * k2l, w, R1, R2, M, L2, sigma_L1, ci, cl)
+    k4i, k4l = _deriv(v, i0 + Ts * k3i, l0 + Ts * k3l, w, R1, R2, M, L2, sigma_L1, ci, cl)
+    i1 = i0 + (Ts / 6.0) * (k1i + 2.0 * k2i + 2.0 * k3i + k4i)
+    l1 = l0 + (Ts / 6.0) * (k1l + 2.0 * k2l + 2.0 * k3l + k4l)
+    # the current error at this sample, and the adaptation laws
+    e = complex(i_a, i_b) - i1
+    eps = e.real * l1.imag - e.imag * l1.real
+    s.int_e += Ts * eps
+    s.w_r_hat = p.Kp * eps + p.Ki * s.int_e
+    s.eps = eps
+    if p.k_R1 != 0.0:
+        r = m.R1_hat - Ts * p.k_R1 * (e.real * i1.real + e.imag * i1.imag)
+        m.R1_hat = min(max(r, p.R_min * s.R1_0), p.R_max * s.R1_0)
+    if p.k_R2 != 0.0:
+        # (lam_hat - M i_hat) projected on the flux direction: its quadrature part is the
+        # slip's, which a speed error also excites; the in-phase part moves only with the flux
+        # (the injection), so R2 and the speed are told apart
+        d = l1 - M * i1
+        l2 = l1.real * l1.real + l1.imag * l1.imag
+        if l2 > 0.0:
+            d = ((d.real * l1.real + d.imag * l1.imag) / l2) * l1
+        r = m.R2_hat + Ts * p.k_R2 * (e.real * d.real + e.imag * d.imag)
+        m.R2_hat = min(max(r, p.R_min * s.R2_0), p.R_max * s.R2_0)
+    s.i_hat_ab = i1
+    s.lam_ab = l1
+    s.e_ab = e

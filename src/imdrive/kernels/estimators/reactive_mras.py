@@ -1,0 +1,94 @@
+"""Reactive-power MRAS speed estimator (Peng & Fukao, IEEE Trans. Ind. Appl. 30(5), 1994).
+
+The model-reference quantity is the reactive power of the magnetising branch, the cross
+product of the stator current with the back-emf ``e = (M/L2) p lam``. In the reference model
+the back-emf comes from the stator voltage equation; ``i x (R1 i) = 0``, so the stator
+resistance drops out and the estimator needs no ``R1`` (its property, checked by a test)::
+
+    q     = i x (v - sigma L1 p i)                     (reference model, no R1, no integrator)
+    q_hat = i x (M/L2) p lam_hat                       (adjustable model)
+    p lam_hat = (-1/T2_hat + j w_r_hat) lam_hat + (M/T2_hat) i      (current model, eq. 2)
+
+with ``a x b = a_alpha b_beta - a_beta b_alpha``. Adaptation, a PI on the error::
+
+    eps = q - q_hat,         w_r_hat = K1 eps + K2 \\int eps dt
+
+Discretisation at the control period Ts: the voltage over the last period is known (it was
+held), the current is taken at the mean of its two samples, and the derivative terms integrate
+exactly over the period: ``i_mean x (i_k - i_{k-1}) = i_{k-1} x i_k`` and ``p lam_hat`` averages
+to ``(lam_hat_k - lam_hat_{k-1})/Ts`` (current model exact over Ts,
+:func:`imdrive.kernels.estimators.common.current_model_step`).
+
+Known limitation (Peng & Fukao's analysis; a finding of the bench, not a bug): the steady-state
+sensitivity of ``eps`` to a speed error is proportional to ``w_e w_slip`` (see
+:func:`imdrive.design.estimators.default_reactive_mras_gains`), so it vanishes at no load and
+changes sign in regeneration.
+"""
+
+from __future__ import annotations
+
+from numba import njit
+
+from imdrive.kernels.estimators.common import current_model_step
+from imdrive.kernels.model import model_inductances
+from imdrive.kernels.records import c16, f8, record_dtype
+
+#: Parameters (gains from :func:`imdrive.design.estimators.default_reactive_mras_gains`).
+REACTIVE_MRAS_PARAMS = record_dtype(
+    [
+        ("K1", f8),  # proportional adaptation gain, (rad/s)/var per (A V)
+        ("K2", f8),  # integral adaptation gain, (rad/s^2)/(A V)
+    ]
+)
+
+#: State.
+REACTIVE_MRAS_STATE = record_dtype(
+    [
+        ("lam_ab", c16),  # adjustable (current) model rotor flux, Wb
+        ("q_ref", f8),  # reference reactive quantity over the last period, A V
+        ("q_hat", f8),  # adjustable-model reactive quantity, A V
+        ("int_e", f8),  # integral of the error, A V s
+        ("w_r_hat", f8),  # speed estimate, electrical rad/s
+    ]
+)
+
+
+@njit(cache=True)
+def reactive_mras_step(p, m, s, v_prev_a, v_prev_b, i_prev_a, i_prev_b, i_a, i_b, Ts):
+    """Advance the reactive-power MRAS by one control period (updates ``s``).
+
+    Parameters
+    ----------
+    p : REACTIVE_MRAS_PARAMS record
+    m : MODEL_STATE record
+        The controller's machine model (``R2_hat``, inductances; ``R1_hat`` is not used).
+    s : REACTIVE_MRAS_STATE record
+        Updated in place; ``w_r_hat`` is the electrical speed estimate, rad/s.
+    v_prev_a, v_prev_b : float
+        Voltage applied over the period that just ended, V.
+    i_prev_a, i_prev_b, i_a, i_b : float
+        Stator current at the previous and at this sample, A.
+    Ts : float
+        Control period, s.
+    """
+    M, L1, L2, sigma_L1 = model_inductances(m)
+    R2 = m.R2_hat
+    i_m_a = 0.5 * (i_a + i_prev_a)
+    i_m_b = 0.5 * (i_b + i_prev_b)
+    # reference model: i x v - sigma L1 (i x p i); i_mean x (i1 - i0) = i0 x i1
+    q_ref = i_m_a * v_prev_b - i_m_b * v_prev_a
+    q_ref -= sigma_L1 * (i_prev_a * i_b - i_prev_b * i_a) / Ts
+    # adjustable model
+    lam_old = s.lam_ab
+    lam_new = current_model_step(
+        lam_old, s.w_r_hat, R2, L2, M, complex(i_prev_a, i_prev_b), complex(i_a, i_b), Ts
+    )
+    de = (M / L2) * (lam_new - lam_old) / Ts
+    q_hat = i_m_a * de.imag - i_m_b * de.real
+    # adaptation
+    e = q_ref - q_hat
+    s.int_e += Ts * e
+    s.w_r_hat = p.K1 * e + p.K2 * s.int_e
+    s.lam_ab = lam_new
+    s.q_ref = q_ref
+    s.q_hat = q_hat
