@@ -1,19 +1,8 @@
-"""Induction machine: parameters (T-equivalent circuit) and the continuous plant model.
+"""Induction machine parameters: the T-equivalent circuit (``MachineParams``) and the published
+parameter sets (``config/data/machines.toml``).
 
-State variables (stationary alpha-beta frame, amplitude-invariant Clarke, see :mod:`imdrive`):
-stator and rotor flux linkages ``psi_s_ab``, ``psi_r_ab`` (Wb), mechanical speed ``w_m`` (rad/s),
-mechanical angle, two winding temperatures and four energy accumulators. With flux linkages as
-states the electrical equations are::
-
-    d psi_s/dt = v_s - R1 i_s
-    d psi_r/dt = -R2 i_r + j w_r psi_r                     (rotor short-circuited)
-    [psi_s; psi_r] = [[L1, M], [M, L2]] [i_s; i_r],  L1 = Ll1 + M,  L2 = Ll2 + M
-    T_e = 1.5 n_p (psi_s x i_s)
-    J dw_m/dt = T_e - T_L(t, w_m) - B w_m
-
-Winding temperatures follow a first-order thermal model per winding::
-
-    tau dtheta/dt = R_th P_cu - (theta - theta_amb),   R = R_ref (1 + alpha (theta - theta_ref))
+The plant model these parameters feed, its state variables and equations, is documented in
+:mod:`imdrive.kernels.machine`.
 """
 
 from __future__ import annotations

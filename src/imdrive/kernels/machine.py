@@ -300,6 +300,21 @@ def _rates(p, psa, psb, pra, prb, w_m, th1, th2, v_a, v_b, R1_base, R2_base, TL0
 
 
 @njit(cache=True)
+def _store(x, y):
+    """Write a 12-tuple in ``PLANT_STATE`` field order into the record ``x``."""
+    x.psi_s_ab = complex(y[0], y[1])
+    x.psi_r_ab = complex(y[2], y[3])
+    x.w_m = y[4]
+    x.theta_m = y[5]
+    x.theta1 = y[6]
+    x.theta2 = y[7]
+    x.E_in = y[8]
+    x.E_cu = y[9]
+    x.E_em = y[10]
+    x.E_load = y[11]
+
+
+@njit(cache=True)
 def machine_derivative(p, x, v_a, v_b, R1_base, R2_base, TL0, dx):
     """Time derivative of the plant state (writes the record ``dx``).
 
@@ -331,16 +346,7 @@ def machine_derivative(p, x, v_a, v_b, R1_base, R2_base, TL0, dx):
         R2_base,
         TL0,
     )
-    dx.psi_s_ab = complex(d[0], d[1])
-    dx.psi_r_ab = complex(d[2], d[3])
-    dx.w_m = d[4]
-    dx.theta_m = d[5]
-    dx.theta1 = d[6]
-    dx.theta2 = d[7]
-    dx.E_in = d[8]
-    dx.E_cu = d[9]
-    dx.E_em = d[10]
-    dx.E_load = d[11]
+    _store(dx, d)
 
 
 @njit(cache=True)
@@ -418,16 +424,7 @@ def integrate_segment(p, x, v_a, v_b, R1b, R2b, TL0, dt, nsub, work, m0=-1.0):
             y[10] + _rk4_sum(k1[10], k2[10], k3[10], k4[10], h6),
             y[11] + _rk4_sum(k1[11], k2[11], k3[11], k4[11], h6),
         )
-    x.psi_s_ab = complex(y[0], y[1])
-    x.psi_r_ab = complex(y[2], y[3])
-    x.w_m = y[4]
-    x.theta_m = y[5]
-    x.theta1 = y[6]
-    x.theta2 = y[7]
-    x.E_in = y[8]
-    x.E_cu = y[9]
-    x.E_em = y[10]
-    x.E_load = y[11]
+    _store(x, y)
     return m
 
 

@@ -1,4 +1,4 @@
-"""Pieces the speed estimators share (not used by :mod:`.mras`, whose numerics are frozen).
+"""Pieces the speed estimators share (the MRAS's adjustable model is :func:`current_model_step`).
 
 The rotor current model in the stationary frame (Park et al., eq. 2)::
 
@@ -34,7 +34,7 @@ def current_model_step(lam, w_r, R2, L2, M, i0, i1, Ts):
     Ts : float
         Period, s.
     """
-    zT = complex(-R2 / L2 * Ts, w_r * Ts)
+    zT = complex(-R2 / L2, w_r) * Ts
     ez = math.exp(zT.real) * complex(math.cos(zT.imag), math.sin(zT.imag))
     if abs(zT) > 1e-4:
         phi1 = (ez - 1.0) / zT

@@ -32,6 +32,7 @@ import math
 
 from numba import njit
 
+from imdrive.kernels.estimators.common import current_model_step
 from imdrive.kernels.model import model_inductances
 from imdrive.kernels.records import c16, f8, record_dtype
 
@@ -115,19 +116,10 @@ def mras_step(p, m, s, v_prev_a, v_prev_b, i_prev_a, i_prev_b, i_a, i_b, theta_e
 
     # adjustable (current) model, eq. (2): exact over Ts for constant w_hat and a current
     # varying linearly between its two samples (first-order hold)
-    zT = complex(-R2 / L2, s.w_r_hat) * Ts
-    ez = math.exp(zT.real) * complex(math.cos(zT.imag), math.sin(zT.imag))
-    if abs(zT) > 1e-4:
-        phi1 = (ez - 1.0) / zT
-        phi2 = (ez - 1.0 - zT) / (zT * zT)
-    else:  # series, avoids cancellation
-        phi1 = 1.0 + zT / 2.0 + zT * zT / 6.0
-        phi2 = 0.5 + zT / 6.0 + zT * zT / 24.0
     lam_old = s.lam_i_ab
-    b = M * R2 / L2 * Ts
     i0 = complex(i_prev_a, i_prev_b)
     i1 = complex(i_a, i_b)
-    lam_new = ez * lam_old + b * (phi1 * i0 + phi2 * (i1 - i0))
+    lam_new = current_model_step(lam_old, s.w_r_hat, R2, L2, M, i0, i1, Ts)
     dlam = lam_new - lam_old
     lam_f_a = g * s.lam_f_ab.real + k_in * dlam.real
     lam_f_b = g * s.lam_f_ab.imag + k_in * dlam.imag
