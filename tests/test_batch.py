@@ -42,7 +42,7 @@ def _scenarios():
             ["compensator.enabled=true", "compensator.t_on_s=0.2", "compensator.G_CR_ohm=0.01"],
         ),
         (0.9, _ramp(1200), "0", ["simulation.t_end_s=0.45", 'compensator.table="rules"']),
-        (1.0, _ramp(600), "0", ["control.current_kp=-5", "inverter.Vdc_V=1e5"]),  # diverges
+        (1.0, _ramp(600), "0", ["control.current_kp=150", "inverter.Vdc_V=1e5"]),  # diverges
     ]
     out = []
     for ratio, speed, load, extra in specs:

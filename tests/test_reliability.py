@@ -421,6 +421,7 @@ NONSENSE = [
     ("simulation.substeps=1e300", "simulation.substeps"),
     ("simulation.log_every=1e30", "simulation.log_every"),
     ("control.speed_kp=-1", "control.speed_kp"),
+    ("control.current_kp=-5", "control.current_kp"),
     ("control.speed_ki=-1", "control.speed_ki"),
     ("control.current_ki=-1", "control.current_ki"),
     ("mras.K1=-1", "mras.K1"),
@@ -572,7 +573,7 @@ def test_diverged_summary_is_strict_json(tmp_path):
         Scenario.read(
             "sensorless",
             [
-                "control.current_kp=-5.0",
+                "control.current_kp=150.0",
                 "inverter.Vdc_V=1e5",
                 "simulation.t_end_s=1.0",
                 "output.figures=false",

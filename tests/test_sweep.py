@@ -39,7 +39,7 @@ speed_rpm = [300, 900]
 
 [axes.variant]
 stable = {}
-unstable = { control.current_kp = -5, "inverter.Vdc_V" = 1e5 }
+unstable = { control.current_kp = 150, "inverter.Vdc_V" = 1e5 }
 
 [[heatmap]]
 x = "R2_ratio"
@@ -88,7 +88,7 @@ def test_grid_runs_are_the_product_last_axis_fastest(small_file):
     assert sc.estimator.R2_ohm == pytest.approx(R2)
     assert sc.control.speed_ref_rpm.points[-1] == (0.2, 900.0)
     assert sc.control.speed_ref_rpm.points[:-1] == ((0.0, 0.0), (0.05, 0.0))
-    assert sc.control.current_kp == -5.0 and sc.inverter.Vdc_V == 1e5
+    assert sc.control.current_kp == 150.0 and sc.inverter.Vdc_V == 1e5
     assert sc.simulation.t_end_s == 0.4
 
 

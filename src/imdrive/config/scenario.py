@@ -301,9 +301,9 @@ class ControlSettings:
     current_kp: Annotated[
         Float | None,
         setting(
-            "current PI proportional gain (a negative value is positive feedback and diverges: "
-            "accepted only as a deliberate way to provoke a divergence)",
+            "current PI proportional gain (> 0: a negative one is positive feedback)",
             "V/A",
+            gt=0.0,
             default_doc="from current_bandwidth_Hz",
         ),
     ] = None
