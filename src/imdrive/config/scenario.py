@@ -655,6 +655,37 @@ class CompensatorSettings:
     gate_hold_periods: Annotated[
         Int, setting("gating: decisions still skipped after a gated one", ge=0)
     ] = 1
+    step_law: Annotated[
+        Literal["table", "adaptive"],
+        setting(
+            '"table": R̂2 changes by G_CR_ohm × the table\'s level (the paper); "adaptive": '
+            "inside the first threshold a continuous level fine_gain × (scaled E) and an "
+            "integrated drift rate, for fine and ramp-following adaptation "
+            "(kernels/compensator.py)"
+        ),
+    ] = "table"
+    fine_gain: Annotated[
+        Float,
+        setting(
+            'step_law = "adaptive": level per unit of scaled E inside the first threshold', gt=0.0
+        ),
+    ] = 2.5
+    drift_gain: Annotated[
+        Float,
+        setting(
+            'step_law = "adaptive": share of each fine step added to the drift rate (0: none)',
+            ge=0.0,
+        ),
+    ] = 0.3
+    drift_max_ohm: Annotated[
+        Float | None,
+        setting(
+            'step_law = "adaptive": bound of the drift rate, per decision period',
+            "ohm",
+            ge=0.0,
+            default_doc="3 × G_CR_ohm",
+        ),
+    ] = None
 
     @model_validator(mode="after")
     def _clamps_in_order(self):

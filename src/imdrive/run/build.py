@@ -512,15 +512,25 @@ def _build_arrays(sc: Scenario) -> DriveArrays:
 
 
 def _gating(sc) -> dict:
-    """The compensator's gating and frequency-schedule parameters (issue 10; off: zeros)."""
+    """The compensator's gating, frequency-schedule and step-law parameters (issue 10; off:
+    zeros)."""
     comp = sc.compensator
     on = comp.gating if comp.gating is not None else comp.input == "demodulated"
+    out = {}
+    if comp.step_law == "adaptive":
+        dmax = comp.drift_max_ohm if comp.drift_max_ohm is not None else 3.0 * comp.G_CR_ohm
+        out = {
+            "fine": True,
+            "fine_gain": comp.fine_gain,
+            "drift_gain": comp.drift_gain,
+            "drift_max": dmax,
+        }
     if not (on and comp.enabled):
-        return {}
+        return out
     f2 = sc.injection.frequency2_Hz
     if f2 is None:
         f2 = 2.0 * sc.injection.frequency_Hz
-    return {
+    return out | {
         "gate": True,
         "gate_dw": comp.gate_speed_rpm * RPM,
         "gate_diq": comp.gate_iq_A,
