@@ -549,6 +549,19 @@ class MrasSettings:
             default_doc="from bandwidth_Hz",
         ),
     ] = None
+    R1_rate_per_s: Annotated[
+        Float,
+        setting(
+            "online R1 estimation beside the MRAS: convergence rate (0: off; "
+            "kernels/estimators/mras.py)",
+            "1/s",
+            ge=0.0,
+        ),
+    ] = 0.0
+    R1_max_freq_Hz: Annotated[
+        Float,
+        setting("online R1 estimation runs below this stator frequency", "Hz", gt=0.0),
+    ] = 10.0
 
 
 @settings("compensator")

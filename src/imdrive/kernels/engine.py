@@ -34,7 +34,7 @@ from imdrive.kernels.compensator import (
 )
 from imdrive.kernels.estimators.afo import afo_step
 from imdrive.kernels.estimators.ekf import ekf_step
-from imdrive.kernels.estimators.mras import log_mras, mras_step
+from imdrive.kernels.estimators.mras import log_mras, mras_r1_step, mras_step
 from imdrive.kernels.estimators.reactive_mras import reactive_mras_step
 from imdrive.kernels.ifoc import dead_time_feedforward, foc_step, log_control, open_loop_voltage
 from imdrive.kernels.inverter import (
@@ -325,6 +325,7 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
     p_ekf = P.ekf[i]
     s_ekf = S.ekf[i]
     flux_inj = sim.flux_inj_amp != 0.0
+    r1_adapt = pm.k_R1 > 0.0
 
     Ts = sim.Ts
     nsub = max(sim.nsub, 1)
@@ -405,6 +406,11 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
                 sine = injection_sine(pk, cmp, t, Ts)
                 demodulate(pk, cmp, est.e_dq0.real, sine, Ts)
                 i_inj = pk.inj_amp * sine
+            if r1_adapt and est_code == EST_MRAS:  # issue 10: online R1 beside the MRAS
+                # the injected sinusoid (flux-current axis) taken out of the current
+                ia_dc = i_meas_a - i_inj * math.cos(theta_k)
+                ib_dc = i_meas_b - i_inj * math.sin(theta_k)
+                mras_r1_step(pm, mdl, est, ia_dc, ib_dc, ctl.w_e, Ts)
             if pk.enabled:
                 if pk.gate and t >= pk.t_on:  # issue 10: the compensator's gating signals
                     w_fb_g = est.w_r_hat / n_p if sensorless else w_m
@@ -498,6 +504,7 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
                 if est_code != EST_MRAS:
                     row.speed_est = w_hat / n_p
                 row.R2_est = mdl.R2_hat
+                row.R1_est = mdl.R1_hat
                 log_compensator(row, cmp)
         if k == n_steps:
             break

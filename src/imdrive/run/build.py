@@ -409,7 +409,16 @@ def _build_arrays(sc: Scenario) -> DriveArrays:
         ),
         dtc_band=inv.sign_band_A,
     )
-    mras = new_record(MRAS_PARAMS, wc=sc.mras.wc_rad_s, K1=gains["mras_K1"], K2=gains["mras_K2"])
+    mras = new_record(
+        MRAS_PARAMS,
+        wc=sc.mras.wc_rad_s,
+        K1=gains["mras_K1"],
+        K2=gains["mras_K2"],
+        k_R1=sc.mras.R1_rate_per_s,
+        R1_fmax=sc.mras.R1_max_freq_Hz,
+        R1_min=0.5 * R1h,
+        R1_max=2.0 * R1h,
+    )
 
     est_params, est_derived = _estimator_records(sc, Ts, psi0, R1h, R2h, Mh, L2h, sigma_L1)
     gains.update(est_derived)
