@@ -238,3 +238,31 @@ def test_thermal_model_at_150_rpm_speed_error_under_1_rpm():
 
     assert run(()) > 3.0  # the finding, reproduced
     assert run(_R1_ON) < 1.0
+
+
+# ------------------------------------------------------------------------------------------
+# finding 5: transients after convergence (gating, with the adaptive step law)
+
+
+def test_R2_hat_holds_through_a_speed_step_a_load_cycle_and_a_fast_ramp():
+    """Converged at 1000 rpm, then 1000 -> 500 rpm step (10 s), rated load removed (13 s) and
+    re-applied (16 s), 500 -> 1000 rpm in 0.5 s (19 s). Ungated, R2_hat left by 21-30 %."""
+    sc = Scenario.read(
+        "injection-fig5",
+        [
+            "control.speed_ref_rpm={initial=0,changes=[{at=0.5,to=1000,over=1.0},"
+            "{at=10,to=500},{at=19,to=1000,over=0.5}]}",
+            "load.torque_Nm={initial=0,changes=[{at=2,to=12},{at=13,to=0},{at=16,to=12}]}",
+            'compensator.step_law="adaptive"',
+            "simulation.t_end_s=24",
+        ],
+    )
+    res = simulate(sc)
+    assert not res.lost_control and not res.diverged
+    t = res["time_s"]
+    rel = np.abs(res["R2_est_ohm"] - res["R2_ohm"]) / res["R2_ohm"]
+    assert rel[t >= 8].max() < 0.05
+    assert rel[-1] < 0.002
+    err = (res["speed_rpm"] - res["speed_ref_rpm"])[t >= 22]
+    assert np.abs(err).max() < 1.0  # the fast ramp followed, settled 2.5 s after it
+    assert np.any(res["comp_frozen_flags"][t >= 8].astype(int) & 3)  # the gating acted
