@@ -266,3 +266,44 @@ def test_R2_hat_holds_through_a_speed_step_a_load_cycle_and_a_fast_ramp():
     err = (res["speed_rpm"] - res["speed_ref_rpm"])[t >= 22]
     assert np.abs(err).max() < 1.0  # the fast ramp followed, settled 2.5 s after it
     assert np.any(res["comp_frozen_flags"][t >= 8].astype(int) & 3)  # the gating acted
+
+
+# ------------------------------------------------------------------------------------------
+# item 4: voltage headroom of the injection, field weakening
+
+
+def test_field_weakening_holds_the_voltage_and_freezes_the_compensator():
+    """Converged at 1000 rpm, then 2000 rpm (above base speed), 6 N m. Without field
+    weakening the voltage saturates; with it the flux falls, the voltage stays at 0.9 of the
+    limit, the injection is off and R2_hat is held (frozen, flag 32)."""
+
+    def run(extra):
+        sc = Scenario.read(
+            "injection-fig5",
+            [
+                "control.speed_ref_rpm={initial=0,changes=[{at=0.5,to=1000,over=1.0},"
+                "{at=10,to=2000,over=2.0}]}",
+                "load.torque_Nm={initial=0,changes=[{at=3,to=6}]}",
+                'compensator.step_law="adaptive"',
+                "simulation.t_end_s=18",
+                *extra,
+            ],
+        )
+        res = simulate(sc)
+        t = res["time_s"]
+        v = np.hypot(res["v_ref_alpha_V"], res["v_ref_beta_V"]) / sc.inverter.v_max_V
+        return res, t, v
+
+    res, t, v = run(())
+    assert v[t >= 14].max() > 0.99  # saturated
+    res, t, v = run(("control.field_weakening=true",))
+    assert not res.lost_control
+    late = t >= 14
+    assert v[late].max() < 0.97 and v[late].mean() < 0.94
+    assert res["id_ref_A"][late].mean() < 0.85 * res["id_ref_A"][t < 9.9][-1]
+    assert np.ptp(res["id_ref_A"][late]) < 0.05  # the injection is off
+    assert np.all(res["comp_frozen_flags"][late].astype(int) & 32)
+    r2_before = res["R2_est_ohm"][t < 9.9][-1]
+    assert np.ptp(res["R2_est_ohm"][late]) == 0.0  # held
+    assert res["R2_est_ohm"][-1] == pytest.approx(r2_before, rel=5e-3)
+    assert abs(r2_before / res["R2_ohm"][-1] - 1.0) < 0.01

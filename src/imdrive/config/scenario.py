@@ -328,6 +328,25 @@ class ControlSettings:
     decoupling: Annotated[
         Bool, setting("cross-coupling and back-emf feed-forward in the current controllers")
     ] = True
+    field_weakening: Annotated[
+        Bool,
+        setting(
+            "field weakening above base speed: the flux reference is scaled down by a voltage "
+            "feedback that holds the voltage use at field_weakening_voltage "
+            "(kernels/ifoc.py, field_weakening); turns injection.headroom on"
+        ),
+    ] = False
+    field_weakening_voltage: Annotated[
+        Float,
+        setting("field weakening: voltage use it holds (fraction of Vdc/√3)", gt=0.0, le=1.0),
+    ] = 0.9
+    field_weakening_rate: Annotated[
+        Float,
+        setting("field weakening: integral gain of the flux factor", "1/s", gt=0.0),
+    ] = 20.0
+    field_weakening_min: Annotated[
+        Float, setting("field weakening: lowest flux factor", gt=0.0, le=1.0)
+    ] = 0.2
     dead_time_compensation: Annotated[
         Literal["none", "feedforward"],
         setting(
@@ -734,6 +753,21 @@ class InjectionSettings:
             default_doc="2 × frequency_Hz",
         ),
     ] = None
+    headroom: Annotated[
+        Bool | None,
+        setting(
+            "the amplitude backs off as the voltage use (peak over each injection period) "
+            "rises from headroom_from to headroom_to, and is off in field weakening; the "
+            "compensator freezes below half amplitude (kernels/compensator.py)",
+            default_doc="on with control.field_weakening, else off",
+        ),
+    ] = None
+    headroom_from: Annotated[
+        Float, setting("headroom: voltage use where the amplitude starts to fall", gt=0.0)
+    ] = 0.85
+    headroom_to: Annotated[
+        Float, setting("headroom: voltage use where it reaches zero", gt=0.0)
+    ] = 0.95
     t_on_s: Annotated[Float, setting("time the injection starts", "s", ge=0.0)] = 0.0
     lowpass_rad_s: Annotated[
         Float,

@@ -77,7 +77,10 @@ the period that ends
   step or removal;
 * ``4`` the voltage reached ``p.gate_v`` times the inverter's limit ``Vdc/sqrt 3``;
 * ``8`` the injection frequency was switched (the flux response to the new sinusoid settles);
-* ``16`` within ``p.gate_hold`` periods after any of the above (the flux and the MRAS settle).
+* ``16`` within ``p.gate_hold`` periods after any of the above (the flux and the MRAS settle);
+* ``32`` the injection's amplitude was backed off below half (voltage headroom, field
+  weakening: :func:`injection_headroom`); a smaller signal at a factor above half only slows
+  the adaptation.
 
 The blind band: in the stationary frame the injected flux oscillation appears at
 ``|f_e| +- f_inj``; when ``|f_e|`` is near ``f_inj`` the lower side band is near DC, where
@@ -131,6 +134,8 @@ COMPENSATOR_PARAMS = record_dtype(
         ("fine_gain", f8),  # fine level per unit of scaled E inside the first threshold
         ("drift_gain", f8),  # share of each fine step added to the drift rate
         ("drift_max", f8),  # bound of the drift rate, ohm per compensator period
+        ("inj_v_lo", f8),  # injection headroom: voltage use where the amplitude starts to fall
+        ("inj_v_hi", f8),  # and where it reaches zero (0: no back-off)
     ]
 )
 
@@ -158,6 +163,8 @@ COMPENSATOR_STATE = record_dtype(
         ("halves", f8),  # half periods in the sliding window since the last reset (0, 1, 2)
         ("g_iq_prev2", f8),  # mean iq* of the half period before the previous one, A
         ("g_iq_known2", b1),  # g_iq_prev2 holds a value
+        ("inj_back", f8),  # injection headroom: 1 - the amplitude factor in use
+        ("v_peak", f8),  # highest voltage use in the present injection period
     ]
 )
 
@@ -183,6 +190,31 @@ def injection_sine(p, s, t, Ts):
     nxt = ph + 2.0 * math.pi * f * Ts
     s.inj_phase = nxt - 2.0 * math.pi if nxt >= 2.0 * math.pi else nxt
     return math.sin(ph)
+
+
+@njit(cache=True)
+def injection_headroom(p, s, v_use, weakening, wrapped):
+    """Voltage headroom of the injection (``p.inj_v_hi > 0``; updates ``s.inj_back``).
+
+    Tracks the peak voltage use ``v_use`` (fraction of ``Vdc_meas/sqrt 3``) over each
+    injection period; at the period's end (``wrapped``: the phase restarted this sample) the
+    amplitude factor for the next period is
+
+        a = clip((inj_v_hi - v_peak) / (inj_v_hi - inj_v_lo), 0, 1),   0 in field weakening
+
+    held over the whole period, so the detection still sees whole periods of one sinusoid.
+    The injection's own voltage ripple counts in ``v_peak``, so it backs off before the
+    current controllers saturate. Returns the factor in use.
+    """
+    s.v_peak = max(s.v_peak, v_use)
+    if wrapped:
+        a = (p.inj_v_hi - s.v_peak) / (p.inj_v_hi - p.inj_v_lo)
+        a = min(max(a, 0.0), 1.0)
+        if weakening:
+            a = 0.0
+        s.inj_back = 1.0 - a
+        s.v_peak = 0.0
+    return 1.0 - s.inj_back
 
 
 @njit(cache=True)
@@ -280,6 +312,8 @@ def _gate_decide(p, s, w_e):
             s.inj_f = f_other
             s.inj_phase = 0.0
             flags |= 8
+    if s.inj_back > 0.5:  # the injection backed off (voltage headroom, field weakening)
+        flags |= 32
     if flags != 0:
         s.g_hold = p.gate_hold
     elif s.g_hold > 0.0:

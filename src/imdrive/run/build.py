@@ -408,6 +408,10 @@ def _build_arrays(sc: Scenario) -> DriveArrays:
             else 0.0
         ),
         dtc_band=inv.sign_band_A,
+        fw=ctl.field_weakening,
+        fw_v=ctl.field_weakening_voltage,
+        fw_rate=ctl.field_weakening_rate,
+        fw_min=ctl.field_weakening_min,
     )
     mras = new_record(
         MRAS_PARAMS,
@@ -526,9 +530,16 @@ def _gating(sc) -> dict:
     comp = sc.compensator
     on = comp.gating if comp.gating is not None else comp.input == "demodulated"
     out = {}
+    inj = sc.injection
+    headroom = inj.headroom if inj.headroom is not None else sc.control.field_weakening
+    if headroom and inj.amplitude_A > 0.0:
+        if not inj.headroom_from < inj.headroom_to:
+            raise ConfigError("injection.headroom_from", "must be < injection.headroom_to")
+        out["inj_v_lo"] = inj.headroom_from
+        out["inj_v_hi"] = inj.headroom_to
     if comp.step_law == "adaptive":
         dmax = comp.drift_max_ohm if comp.drift_max_ohm is not None else 3.0 * comp.G_CR_ohm
-        out = {
+        out |= {
             "fine": True,
             "fine_gain": comp.fine_gain,
             "drift_gain": comp.drift_gain,
