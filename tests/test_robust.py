@@ -307,3 +307,22 @@ def test_field_weakening_holds_the_voltage_and_freezes_the_compensator():
     assert np.ptp(res["R2_est_ohm"][late]) == 0.0  # held
     assert res["R2_est_ohm"][-1] == pytest.approx(r2_before, rel=5e-3)
     assert abs(r2_before / res["R2_ohm"][-1] - 1.0) < 0.01
+
+
+# ------------------------------------------------------------------------------------------
+# item 8: the envelope sweep (docs/envelope.md); the sweep itself takes ~80 s, not run here
+
+
+def test_envelope_sweep_preset():
+    from imdrive.sweep.spec import load_sweep, sweep_names
+
+    assert "envelope" in sweep_names()
+    sw = load_sweep("envelope")
+    assert [a.name for a in sw.axes] == ["speed_rpm", "load_Nm", "R2_ratio", "R1_ratio", "variant"]
+    assert min(sw.axes[1].values) < 0 < max(sw.axes[1].values)  # regenerating and motoring
+    inj = sw.scenario_for((150, -6, 1.2, 0.9, "injection"))
+    assert inj.compensator.step_law == "adaptive" and inj.mras.R1_rate_per_s > 0
+    assert inj.estimator.R1_ohm == pytest.approx(0.9 * inj.machine.R1_ohm)
+    assert inj.estimator.R2_ohm == pytest.approx(1.2 * inj.machine.R2_ohm)
+    plain = sw.scenario_for((150, -6, 1.0, 1.0, "uncompensated"))
+    assert not plain.compensator.enabled and plain.mras.R1_rate_per_s == 0

@@ -579,8 +579,12 @@ class MrasSettings:
     ] = 0.0
     R1_max_freq_Hz: Annotated[
         Float,
-        setting("online R1 estimation runs below this stator frequency", "Hz", gt=0.0),
-    ] = 10.0
+        setting(
+            "online R1 estimation runs below this stator frequency (and in motoring only)",
+            "Hz",
+            gt=0.0,
+        ),
+    ] = 30.0
 
 
 @settings("compensator")

@@ -420,11 +420,14 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
                     wrapped = cmp.inj_phase < ph0
                     a_inj = injection_headroom(pk, cmp, v_use, ctl.fw_cut > 1e-3, wrapped)
                 i_inj = a_inj * pk.inj_amp * sine
-            if r1_adapt and est_code == EST_MRAS:  # issue 10: online R1 beside the MRAS
+            # issue 10: online R1 beside the MRAS; with the compensator's gating, held from its
+            # start until it first updates and whenever it freezes (transients)
+            r1_hold = pk.enabled and pk.gate and (t < pk.t_on or cmp.frozen != 0.0)
+            if r1_adapt and est_code == EST_MRAS and not r1_hold:
                 # the injected sinusoid (flux-current axis) taken out of the current
                 ia_dc = i_meas_a - i_inj * math.cos(theta_k)
                 ib_dc = i_meas_b - i_inj * math.sin(theta_k)
-                mras_r1_step(pm, mdl, est, ia_dc, ib_dc, ctl.w_e, Ts)
+                mras_r1_step(pm, mdl, est, ia_dc, ib_dc, ctl.w_e, ctl.i_ref_dq.imag, Ts)
             if pk.enabled:
                 if pk.gate and t >= pk.t_on:  # issue 10: the compensator's gating signals
                     w_fb_g = est.w_r_hat / n_p if sensorless else w_m
