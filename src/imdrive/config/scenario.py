@@ -328,6 +328,25 @@ class ControlSettings:
     decoupling: Annotated[
         Bool, setting("cross-coupling and back-emf feed-forward in the current controllers")
     ] = True
+    field_weakening: Annotated[
+        Bool,
+        setting(
+            "field weakening above base speed: the flux reference is scaled down by a voltage "
+            "feedback that holds the voltage use at field_weakening_voltage "
+            "(kernels/ifoc.py, field_weakening); turns injection.headroom on"
+        ),
+    ] = False
+    field_weakening_voltage: Annotated[
+        Float,
+        setting("field weakening: voltage use it holds (fraction of Vdc/√3)", gt=0.0, le=1.0),
+    ] = 0.9
+    field_weakening_rate: Annotated[
+        Float,
+        setting("field weakening: integral gain of the flux factor", "1/s", gt=0.0),
+    ] = 20.0
+    field_weakening_min: Annotated[
+        Float, setting("field weakening: lowest flux factor", gt=0.0, le=1.0)
+    ] = 0.2
     dead_time_compensation: Annotated[
         Literal["none", "feedforward"],
         setting(
@@ -549,6 +568,23 @@ class MrasSettings:
             default_doc="from bandwidth_Hz",
         ),
     ] = None
+    R1_rate_per_s: Annotated[
+        Float,
+        setting(
+            "online R1 estimation beside the MRAS: convergence rate (0: off; "
+            "kernels/estimators/mras.py)",
+            "1/s",
+            ge=0.0,
+        ),
+    ] = 0.0
+    R1_max_freq_Hz: Annotated[
+        Float,
+        setting(
+            "online R1 estimation runs below this stator frequency (and in motoring only)",
+            "Hz",
+            gt=0.0,
+        ),
+    ] = 30.0
 
 
 @settings("compensator")
@@ -655,6 +691,37 @@ class CompensatorSettings:
     gate_hold_periods: Annotated[
         Int, setting("gating: decisions still skipped after a gated one", ge=0)
     ] = 1
+    step_law: Annotated[
+        Literal["table", "adaptive"],
+        setting(
+            '"table": R̂2 changes by G_CR_ohm × the table\'s level (the paper); "adaptive": '
+            "inside the first threshold a continuous level fine_gain × (scaled E) and an "
+            "integrated drift rate, for fine and ramp-following adaptation "
+            "(kernels/compensator.py)"
+        ),
+    ] = "table"
+    fine_gain: Annotated[
+        Float,
+        setting(
+            'step_law = "adaptive": level per unit of scaled E inside the first threshold', gt=0.0
+        ),
+    ] = 2.5
+    drift_gain: Annotated[
+        Float,
+        setting(
+            'step_law = "adaptive": share of each fine step added to the drift rate (0: none)',
+            ge=0.0,
+        ),
+    ] = 0.3
+    drift_max_ohm: Annotated[
+        Float | None,
+        setting(
+            'step_law = "adaptive": bound of the drift rate, per decision period',
+            "ohm",
+            ge=0.0,
+            default_doc="3 × G_CR_ohm",
+        ),
+    ] = None
 
     @model_validator(mode="after")
     def _clamps_in_order(self):
@@ -690,6 +757,21 @@ class InjectionSettings:
             default_doc="2 × frequency_Hz",
         ),
     ] = None
+    headroom: Annotated[
+        Bool | None,
+        setting(
+            "the amplitude backs off as the voltage use (peak over each injection period) "
+            "rises from headroom_from to headroom_to, and is off in field weakening; the "
+            "compensator freezes below half amplitude (kernels/compensator.py)",
+            default_doc="on with control.field_weakening, else off",
+        ),
+    ] = None
+    headroom_from: Annotated[
+        Float, setting("headroom: voltage use where the amplitude starts to fall", gt=0.0)
+    ] = 0.85
+    headroom_to: Annotated[
+        Float, setting("headroom: voltage use where it reaches zero", gt=0.0)
+    ] = 0.95
     t_on_s: Annotated[Float, setting("time the injection starts", "s", ge=0.0)] = 0.0
     lowpass_rad_s: Annotated[
         Float,

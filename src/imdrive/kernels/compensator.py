@@ -35,6 +35,34 @@ of induction motor with rotor resistance adaptation", IEEE Trans. Ind. Appl. 30(
 This project's part is feeding its demodulated flux error to the paper's fuzzy table, the
 gating below and the measurements.
 
+Adaptive step law (issue 10; ``p.fine``, this project's)
+-------------------------------------------------------
+The published law changes R2_hat by whole multiples of ``G_CR``: with the injection presets'
+20 mohm (2.5 % of R2) and the dead zone ``|G_E E| <= 0.25`` the final error is quantised to
+about +-0.7 %, and a drifting R2 is followed only once the error has grown into the levels
+that give a step as large as the drift per period (a +30 % ramp over 5 s, 24.5 mohm per 0.5 s
+period, lagged by 8 %). With ``p.fine`` the update is a second-order tracking loop:
+
+* outside the first threshold (``|x| >= 1``, ``x = G_E E``) the table's level, as published
+  (coarse steps, the paper's behaviour for large errors);
+* inside it, a continuous level ``CR = fine_gain x`` replaces the table's 0 or +-1: the step
+  is proportional to the detected error, so there is no dead zone and no quantisation. At the
+  presets' scaling ``x`` was measured at 0.14-0.2 per % of R2 error (150 and 1000 rpm, 3
+  and 12 N m), so the default ``fine_gain = 2.5`` moves R2_hat by 0.7-1 times the error per
+  whole-period window (half of that per half-period decision, the window below);
+* a drift rate ``r`` (ohm per period) integrates the fine steps,
+  ``r <- clip(r + drift_gain G_CR CR, +-drift_max)``, and is added to every update:
+  ``R2_hat <- R2_hat + G_CR CR + r``. A ramp of R2 (heating) is then followed with zero
+  steady lag (a type-2 loop, as a phase-locked loop follows a frequency ramp). It is
+  integrated only inside the fine band, so the large initial steps do not wind it up, and it
+  is not applied while the gating freezes R2_hat.
+* decisions every half compensator period, each on the mean over the last whole period
+  (a sliding window of two half-period sums, still whole injection periods): a measurement
+  window of 0.5 s alone lets R2 move 3 % (the ramp above) before its error is seen. The
+  load gating then compares each half period's mean iq* with the same half one period
+  earlier, so the injection's own iq* ripple does not trip it. The drift rate is then per
+  half period.
+
 Gating and injection-frequency scheduling (issue 10; ``p.gate``)
 ----------------------------------------------------------------
 :func:`compensator_gate_sample` is called every control period with the speed reference and
@@ -49,7 +77,10 @@ the period that ends
   step or removal;
 * ``4`` the voltage reached ``p.gate_v`` times the inverter's limit ``Vdc/sqrt 3``;
 * ``8`` the injection frequency was switched (the flux response to the new sinusoid settles);
-* ``16`` within ``p.gate_hold`` periods after any of the above (the flux and the MRAS settle).
+* ``16`` within ``p.gate_hold`` periods after any of the above (the flux and the MRAS settle);
+* ``32`` the injection's amplitude was backed off below half (voltage headroom, field
+  weakening: :func:`injection_headroom`); a smaller signal at a factor above half only slows
+  the adaptation.
 
 The blind band: in the stationary frame the injected flux oscillation appears at
 ``|f_e| +- f_inj``; when ``|f_e|`` is near ``f_inj`` the lower side band is near DC, where
@@ -71,6 +102,9 @@ from numba import njit
 
 from imdrive.kernels.fuzzy import lookup
 from imdrive.kernels.records import b1, f8, record_dtype
+
+#: The quantiser's first threshold on the scaled E (level 1 starts here; Table III's axes).
+THRESHOLD_1 = 1.0
 
 #: Parameters of the fuzzy R2 compensator and of the injected sinusoid.
 COMPENSATOR_PARAMS = record_dtype(
@@ -96,6 +130,12 @@ COMPENSATOR_PARAMS = record_dtype(
         ("gate_df", f8),  # blind band half-width around the injection frequency, Hz
         ("gate_hold", f8),  # decisions skipped after a gating event
         ("inj_freq2", f8),  # the alternative injection frequency, Hz (0: none)
+        ("fine", b1),  # adaptive step law (issue 10): fine level and drift term
+        ("fine_gain", f8),  # fine level per unit of scaled E inside the first threshold
+        ("drift_gain", f8),  # share of each fine step added to the drift rate
+        ("drift_max", f8),  # bound of the drift rate, ohm per compensator period
+        ("inj_v_lo", f8),  # injection headroom: voltage use where the amplitude starts to fall
+        ("inj_v_hi", f8),  # and where it reaches zero (0: no back-off)
     ]
 )
 
@@ -118,6 +158,13 @@ COMPENSATOR_STATE = record_dtype(
         ("g_cnt", f8),  # samples in the sums
         ("g_hold", f8),  # decisions still to skip
         ("frozen", f8),  # why the last decision was skipped (bit mask; 0: updated)
+        ("drift", f8),  # adaptive step law: R2 drift rate, ohm per compensator period
+        ("acc_prev", f8),  # adaptive step law: sum of the input over the last half period, Wb
+        ("halves", f8),  # half periods in the sliding window since the last reset (0, 1, 2)
+        ("g_iq_prev2", f8),  # mean iq* of the half period before the previous one, A
+        ("g_iq_known2", b1),  # g_iq_prev2 holds a value
+        ("inj_back", f8),  # injection headroom: 1 - the amplitude factor in use
+        ("v_peak", f8),  # highest voltage use in the present injection period
     ]
 )
 
@@ -143,6 +190,31 @@ def injection_sine(p, s, t, Ts):
     nxt = ph + 2.0 * math.pi * f * Ts
     s.inj_phase = nxt - 2.0 * math.pi if nxt >= 2.0 * math.pi else nxt
     return math.sin(ph)
+
+
+@njit(cache=True)
+def injection_headroom(p, s, v_use, weakening, wrapped):
+    """Voltage headroom of the injection (``p.inj_v_hi > 0``; updates ``s.inj_back``).
+
+    Tracks the peak voltage use ``v_use`` (fraction of ``Vdc_meas/sqrt 3``) over each
+    injection period; at the period's end (``wrapped``: the phase restarted this sample) the
+    amplitude factor for the next period is
+
+        a = clip((inj_v_hi - v_peak) / (inj_v_hi - inj_v_lo), 0, 1),   0 in field weakening
+
+    held over the whole period, so the detection still sees whole periods of one sinusoid.
+    The injection's own voltage ripple counts in ``v_peak``, so it backs off before the
+    current controllers saturate. Returns the factor in use.
+    """
+    s.v_peak = max(s.v_peak, v_use)
+    if wrapped:
+        a = (p.inj_v_hi - s.v_peak) / (p.inj_v_hi - p.inj_v_lo)
+        a = min(max(a, 0.0), 1.0)
+        if weakening:
+            a = 0.0
+        s.inj_back = 1.0 - a
+        s.v_peak = 0.0
+    return 1.0 - s.inj_back
 
 
 @njit(cache=True)
@@ -179,8 +251,17 @@ def compensator_update(p, s, m, table, E):
         s.E_prev = E  # no change is known at the first sample
     DE = E - s.E_prev
     s.E_prev = E
-    cr = lookup(table, p.G_E * E, p.G_DE * DE)
-    r2 = m.R2_hat + p.G_CR * cr
+    x = p.G_E * E
+    cr = lookup(table, x, p.G_DE * DE)
+    dr = p.G_CR * cr
+    if p.fine:
+        if abs(x) < THRESHOLD_1:  # inside the table's first threshold: a continuous level
+            cr = p.fine_gain * x
+            dr = p.G_CR * cr
+            d = s.drift + p.drift_gain * dr
+            s.drift = min(max(d, -p.drift_max), p.drift_max)
+        dr += s.drift
+    r2 = m.R2_hat + dr
     m.R2_hat = min(max(r2, p.R2_min), p.R2_max)
     s.cr = cr
     return cr
@@ -214,7 +295,12 @@ def _gate_decide(p, s, w_e):
         if abs(s.g_err / s.g_cnt) > p.gate_dw:
             flags |= 1
         iq = s.g_iq / s.g_cnt
-        if s.g_iq_known and abs(iq - s.g_iq_prev) > p.gate_diq:
+        if p.fine:  # half periods: compare with the same half of the previous period
+            if s.g_iq_known2 and abs(iq - s.g_iq_prev2) > p.gate_diq:
+                flags |= 2
+            s.g_iq_prev2 = s.g_iq_prev
+            s.g_iq_known2 = s.g_iq_known
+        elif s.g_iq_known and abs(iq - s.g_iq_prev) > p.gate_diq:
             flags |= 2
         s.g_iq_prev = iq
         s.g_iq_known = True
@@ -226,6 +312,8 @@ def _gate_decide(p, s, w_e):
             s.inj_f = f_other
             s.inj_phase = 0.0
             flags |= 8
+    if s.inj_back > 0.5:  # the injection backed off (voltage headroom, field weakening)
+        flags |= 32
     if flags != 0:
         s.g_hold = p.gate_hold
     elif s.g_hold > 0.0:
@@ -248,6 +336,9 @@ def compensator_step(p, s, m, table, e_d0, t, k, w_e=0.0):
         return
     n = max(int(p.n), 1)
     s.acc += compensator_input(p, s, e_d0)
+    if p.fine and n % 2 == 0:
+        _compensator_step_sliding(p, s, m, table, k, n, w_e)
+        return
     if k % n != 0:
         return
     if p.average and s.started:
@@ -262,6 +353,31 @@ def compensator_step(p, s, m, table, e_d0, t, k, w_e=0.0):
             s.started = False  # no change of E is known across a frozen period
             return
     compensator_update(p, s, m, table, E)
+
+
+@njit(cache=True)
+def _compensator_step_sliding(p, s, m, table, k, n, w_e):
+    """The adaptive step law's decisions: every half period, on the mean of the input over the
+    last whole period (two half-period sums), so a drift is seen half a period sooner. A
+    decision needs both halves since the start or the last freeze."""
+    h = n // 2
+    if k % h != 0:
+        return
+    acc = s.acc
+    s.acc = 0.0
+    full = s.halves >= 1.0
+    E = (s.acc_prev + acc) / n
+    s.acc_prev = acc
+    s.halves = min(s.halves + 1.0, 2.0)
+    if p.gate:
+        flags = _gate_decide(p, s, w_e)
+        s.frozen = float(flags)
+        if flags != 0:
+            s.started = False
+            s.halves = 0.0  # the window restarts after a frozen half
+            return
+    if full:
+        compensator_update(p, s, m, table, E)
 
 
 @njit(cache=True)

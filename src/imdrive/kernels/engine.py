@@ -29,14 +29,21 @@ from imdrive.kernels.compensator import (
     compensator_gate_sample,
     compensator_step,
     demodulate,
+    injection_headroom,
     injection_sine,
     log_compensator,
 )
 from imdrive.kernels.estimators.afo import afo_step
 from imdrive.kernels.estimators.ekf import ekf_step
-from imdrive.kernels.estimators.mras import log_mras, mras_step
+from imdrive.kernels.estimators.mras import log_mras, mras_r1_step, mras_step
 from imdrive.kernels.estimators.reactive_mras import reactive_mras_step
-from imdrive.kernels.ifoc import dead_time_feedforward, foc_step, log_control, open_loop_voltage
+from imdrive.kernels.ifoc import (
+    dead_time_feedforward,
+    field_weakening,
+    foc_step,
+    log_control,
+    open_loop_voltage,
+)
 from imdrive.kernels.inverter import (
     INV_SWITCHING,
     MAX_EVENTS,
@@ -325,6 +332,8 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
     p_ekf = P.ekf[i]
     s_ekf = S.ekf[i]
     flux_inj = sim.flux_inj_amp != 0.0
+    r1_adapt = pm.k_R1 > 0.0
+    headroom = pk.inj_v_hi > 0.0
 
     Ts = sim.Ts
     nsub = max(sim.nsub, 1)
@@ -401,19 +410,34 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
                 ekf_step(p_ekf, mdl, s_ekf, v_pa, v_pb, i_meas_a, i_meas_b, Ts)
                 w_hat = s_ekf.w_r_hat
             i_inj = 0.0
+            v_use = abs(smp.v_prev_ab) / (Vdc_meas / math.sqrt(3.0))
             if injecting:
+                ph0 = cmp.inj_phase
                 sine = injection_sine(pk, cmp, t, Ts)
                 demodulate(pk, cmp, est.e_dq0.real, sine, Ts)
-                i_inj = pk.inj_amp * sine
+                a_inj = 1.0
+                if headroom:  # issue 10: the injection backs off near the voltage limit
+                    wrapped = cmp.inj_phase < ph0
+                    a_inj = injection_headroom(pk, cmp, v_use, ctl.fw_cut > 1e-3, wrapped)
+                i_inj = a_inj * pk.inj_amp * sine
+            # issue 10: online R1 beside the MRAS; with the compensator's gating, held from its
+            # start until it first updates and whenever it freezes (transients)
+            r1_hold = pk.enabled and pk.gate and (t < pk.t_on or cmp.frozen != 0.0)
+            if r1_adapt and est_code == EST_MRAS and not r1_hold:
+                # the injected sinusoid (flux-current axis) taken out of the current
+                ia_dc = i_meas_a - i_inj * math.cos(theta_k)
+                ib_dc = i_meas_b - i_inj * math.sin(theta_k)
+                mras_r1_step(pm, mdl, est, ia_dc, ib_dc, ctl.w_e, ctl.i_ref_dq.imag, Ts)
             if pk.enabled:
                 if pk.gate and t >= pk.t_on:  # issue 10: the compensator's gating signals
                     w_fb_g = est.w_r_hat / n_p if sensorless else w_m
-                    v_use = abs(smp.v_prev_ab) / (Vdc_meas / math.sqrt(3.0))
                     w_ref_g = profile_at(pt, pv, pn, PR_SPEED_REF, t)
                     compensator_gate_sample(pk, cmp, w_ref_g, w_fb_g, ctl.i_ref_dq.imag, v_use)
                 compensator_step(pk, cmp, mdl, table, est.e_dq0.real, t, k0 + k, ctl.w_e)
             w_ref = profile_at(pt, pv, pn, PR_SPEED_REF, t)
             psi_ref = profile_at(pt, pv, pn, PR_FLUX_REF, t)
+            if pc.fw:  # issue 10: field weakening above base speed (voltage feedback)
+                psi_ref *= field_weakening(pc, ctl, v_use, Ts)
             if flux_inj:  # excitation for R2 adaptation (Kubota & Matsuse 1994)
                 psi_ref *= 1.0 + sim.flux_inj_amp * math.sin(2.0 * math.pi * sim.flux_inj_freq * t)
             w_fb = w_hat / n_p if sensorless else w_m
@@ -498,6 +522,7 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
                 if est_code != EST_MRAS:
                     row.speed_est = w_hat / n_p
                 row.R2_est = mdl.R2_hat
+                row.R1_est = mdl.R1_hat
                 log_compensator(row, cmp)
         if k == n_steps:
             break

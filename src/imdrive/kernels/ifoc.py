@@ -56,6 +56,10 @@ CONTROL_PARAMS = record_dtype(
         ("angle_advance", f8),  # where in the next periods the voltage acts, periods (0.5, 1.5)
         ("dtc_u", f8),  # dead-time compensation: assumed t_d f_sw Vdc_meas per phase, V (0: off)
         ("dtc_band", f8),  # its current band (smooth sign), A
+        ("fw", b1),  # field weakening by voltage feedback (issue 10)
+        ("fw_v", f8),  # voltage use it holds, fraction of v_max
+        ("fw_rate", f8),  # its integral gain, 1/s per unit of voltage use
+        ("fw_min", f8),  # lowest flux factor
     ]
 )
 
@@ -70,6 +74,7 @@ CONTROL_STATE = record_dtype(
         ("i_s_dq", c16),  # measured current in the controller's frame, A
         ("psi_hat", f8),  # the controller's rotor-flux model, Wb
         ("theta_ol", f8),  # angle of the open-loop voltage, rad
+        ("fw_cut", f8),  # field weakening: 1 - the flux factor (0: rated flux)
     ]
 )
 
@@ -225,3 +230,23 @@ def dead_time_feedforward(p, i_a, i_b):
         smooth_sign(ib, p.dtc_band) * u,
         smooth_sign(ic, p.dtc_band) * u,
     )
+
+
+@njit(cache=True)
+def field_weakening(p, s, v_use, Ts):
+    """The field-weakening flux factor for this period (``p.fw``; updates ``s.fw_cut``).
+
+    Voltage feedback: the factor ``k = 1 - s.fw_cut`` integrates the headroom,
+
+        dk/dt = fw_rate (fw_v - v_use),    fw_min <= k <= 1,
+
+    so below base speed (voltage use under ``fw_v``) it stays at 1 and above it the flux
+    reference ``k psi*`` falls roughly as ``1/w`` to hold the voltage at ``fw_v`` of the
+    inverter's limit. No base speed or machine data enter: the voltage the current
+    controllers need decides. ``v_use``: magnitude of the last commanded voltage over
+    ``Vdc_meas/sqrt 3``. Returns ``k``.
+    """
+    k = 1.0 - s.fw_cut + Ts * p.fw_rate * (p.fw_v - v_use)
+    k = min(max(k, p.fw_min), 1.0)
+    s.fw_cut = 1.0 - k
+    return k

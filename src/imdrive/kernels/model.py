@@ -23,7 +23,10 @@ MODEL_STATE = record_dtype(
 )
 
 #: Log fields of this block.
-LOG_FIELDS = ("R2_est",)  # the rotor-resistance estimate, ohm
+LOG_FIELDS = (
+    "R2_est",  # the rotor-resistance estimate, ohm
+    "R1_est",  # the stator-resistance estimate, ohm
+)
 
 
 @njit(cache=True)

@@ -408,8 +408,21 @@ def _build_arrays(sc: Scenario) -> DriveArrays:
             else 0.0
         ),
         dtc_band=inv.sign_band_A,
+        fw=ctl.field_weakening,
+        fw_v=ctl.field_weakening_voltage,
+        fw_rate=ctl.field_weakening_rate,
+        fw_min=ctl.field_weakening_min,
     )
-    mras = new_record(MRAS_PARAMS, wc=sc.mras.wc_rad_s, K1=gains["mras_K1"], K2=gains["mras_K2"])
+    mras = new_record(
+        MRAS_PARAMS,
+        wc=sc.mras.wc_rad_s,
+        K1=gains["mras_K1"],
+        K2=gains["mras_K2"],
+        k_R1=sc.mras.R1_rate_per_s,
+        R1_fmax=sc.mras.R1_max_freq_Hz,
+        R1_min=0.5 * R1h,
+        R1_max=2.0 * R1h,
+    )
 
     est_params, est_derived = _estimator_records(sc, Ts, psi0, R1h, R2h, Mh, L2h, sigma_L1)
     gains.update(est_derived)
@@ -512,15 +525,32 @@ def _build_arrays(sc: Scenario) -> DriveArrays:
 
 
 def _gating(sc) -> dict:
-    """The compensator's gating and frequency-schedule parameters (issue 10; off: zeros)."""
+    """The compensator's gating, frequency-schedule and step-law parameters (issue 10; off:
+    zeros)."""
     comp = sc.compensator
     on = comp.gating if comp.gating is not None else comp.input == "demodulated"
+    out = {}
+    inj = sc.injection
+    headroom = inj.headroom if inj.headroom is not None else sc.control.field_weakening
+    if headroom and inj.amplitude_A > 0.0:
+        if not inj.headroom_from < inj.headroom_to:
+            raise ConfigError("injection.headroom_from", "must be < injection.headroom_to")
+        out["inj_v_lo"] = inj.headroom_from
+        out["inj_v_hi"] = inj.headroom_to
+    if comp.step_law == "adaptive":
+        dmax = comp.drift_max_ohm if comp.drift_max_ohm is not None else 3.0 * comp.G_CR_ohm
+        out |= {
+            "fine": True,
+            "fine_gain": comp.fine_gain,
+            "drift_gain": comp.drift_gain,
+            "drift_max": dmax,
+        }
     if not (on and comp.enabled):
-        return {}
+        return out
     f2 = sc.injection.frequency2_Hz
     if f2 is None:
         f2 = 2.0 * sc.injection.frequency_Hz
-    return {
+    return out | {
         "gate": True,
         "gate_dw": comp.gate_speed_rpm * RPM,
         "gate_diq": comp.gate_iq_A,

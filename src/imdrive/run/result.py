@@ -73,6 +73,7 @@ LOG_UNITS = {
     "lam_i_alpha": ("Wb", 1.0),
     "lam_i_beta": ("Wb", 1.0),
     "R2_est": ("ohm", 1.0),
+    "R1_est": ("ohm", 1.0),
     "e_d0_demod": ("Wb", 1.0),
     "comp_frozen": ("flags", 1.0),
     "inj_freq": ("Hz", 1.0),
@@ -91,7 +92,7 @@ VECTOR_COLUMNS = (
     + (
         "speed_ref_rpm speed_est_rpm id_ref_A iq_ref_A i_d_A i_q_A R2_est_ohm e_d0_Wb e_q0_Wb "
         "theta_e_rad lam_v_alpha_Wb lam_v_beta_Wb lam_i_alpha_Wb lam_i_beta_Wb e_d0_demod_Wb "
-        "comp_frozen_flags inj_freq_Hz"
+        "comp_frozen_flags inj_freq_Hz R1_est_ohm"
     ).split()
 )
 

@@ -50,6 +50,7 @@ Axes
 
     * ``R2_ratio``  — R2_hat/R2: sets ``estimator.R2_ohm`` to the value times the run's
       ``machine.R2_ohm``;
+    * ``R1_ratio``  — R1_hat/R1: the same for ``estimator.R1_ohm``;
     * ``speed_rpm`` — the final speed reference: sets the value of the last breakpoint of
       ``control.speed_ref_rpm`` (the base's ramp or step then ends at this speed);
     * ``load_Nm``   — the final load: the same for ``load.torque_Nm``;
@@ -58,7 +59,7 @@ Axes
 
     For each run, a set axis's overrides are applied first, then the key-path axes (set on the
     base's TOML dictionary and validated once, as ``imdrive run --set`` does), then
-    ``R2_ratio``, ``speed_rpm``, ``load_Nm``. Two axes may not set the same key.
+    ``R2_ratio``, ``R1_ratio``, ``speed_rpm``, ``load_Nm``. Two axes may not set the same key.
 
 Bad input (an unknown key or parameter, an empty axis, ``min > max``, a value a scenario
 rejects, an unsafe ``name``, more runs than ``max_runs``) raises

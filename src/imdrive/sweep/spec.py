@@ -11,7 +11,8 @@ Notes
 A run's scenario goes through the same override mechanism as ``imdrive run --set``
 (:func:`imdrive.config.overrides.set_path` on the base's TOML dictionary, then
 :meth:`Scenario.from_dict <imdrive.config.scenario.Scenario.from_dict>`); only the convenience
-axes ``R2_ratio``, ``speed_rpm`` and ``load_Nm`` then replace fields of the validated scenario.
+axes ``R2_ratio``, ``R1_ratio``, ``speed_rpm`` and ``load_Nm`` then replace fields of the
+validated scenario.
 Pure Python on top of :mod:`imdrive.config`; only checking the metric names of ``[[heatmap]]``
 tables loads the run layer (:data:`imdrive.run.batch.COLUMNS`).
 """
@@ -38,9 +39,10 @@ from imdrive.config.scenario import Scenario
 from imdrive.config.validation import check_name, slug
 from imdrive.errors import ConfigError
 
-CONVENIENCE = ("R2_ratio", "speed_rpm", "load_Nm")
+CONVENIENCE = ("R2_ratio", "R1_ratio", "speed_rpm", "load_Nm")
 CONVENIENCE_TARGET = {
     "R2_ratio": "estimator.R2_ohm",
+    "R1_ratio": "estimator.R1_ohm",
     "speed_rpm": "control.speed_ref_rpm",
     "load_Nm": "load.torque_Nm",
 }
@@ -227,6 +229,10 @@ def _with_R2_ratio(sc: Scenario, ratio: float) -> Scenario:
     return replace(sc, estimator=replace(sc.estimator, R2_ohm=ratio * sc.machine.R2_ohm))
 
 
+def _with_R1_ratio(sc: Scenario, ratio: float) -> Scenario:
+    return replace(sc, estimator=replace(sc.estimator, R1_ohm=ratio * sc.machine.R1_ohm))
+
+
 def _with_speed(sc: Scenario, rpm: float) -> Scenario:
     profile = _with_final(sc.control.speed_ref_rpm, rpm)
     return replace(sc, control=replace(sc.control, speed_ref_rpm=profile))
@@ -237,7 +243,12 @@ def _with_load(sc: Scenario, torque: float) -> Scenario:
 
 
 # the convenience axes, applied in this order after the overrides
-CONVENIENCE_APPLY = {"R2_ratio": _with_R2_ratio, "speed_rpm": _with_speed, "load_Nm": _with_load}
+CONVENIENCE_APPLY = {
+    "R2_ratio": _with_R2_ratio,
+    "R1_ratio": _with_R1_ratio,
+    "speed_rpm": _with_speed,
+    "load_Nm": _with_load,
+}
 
 
 def _number(value, path: str) -> float:
