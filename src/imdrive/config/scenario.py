@@ -824,6 +824,13 @@ class OutputSettings:
 
     figures: Annotated[Bool, setting("write the PNG figures")] = True
     csv: Annotated[Bool, setting("write timeseries.csv")] = True
+    report: Annotated[
+        Bool,
+        setting(
+            "write report.html: interactive linked plots, the summary and the scenario in one "
+            "self-contained file that works offline"
+        ),
+    ] = True
     mat: Annotated[
         Bool, setting("write timeseries.mat (MATLAB; one vector per column, a units struct)")
     ] = False
