@@ -91,7 +91,7 @@ def test_decimation_keeps_every_peak():
 
 
 def test_report_written_by_default_and_skipped_on_request(tmp_path, short_run):
-    short_run.save(tmp_path / "a")
+    short_run.save(tmp_path / "a", figures=False, csv=False)
     html = (tmp_path / "a" / "report.html").read_text(encoding="utf-8")
     assert "http://" not in html.replace("http://www.w3.org", "")  # nothing to fetch
     assert "https://" not in html.split('id="plotly-gz"')[0]
@@ -100,12 +100,12 @@ def test_report_written_by_default_and_skipped_on_request(tmp_path, short_run):
     off = short_run.scenario.with_overrides({"output.report": False})
     short_run.scenario = off
     try:
-        short_run.save(tmp_path / "b")
+        short_run.save(tmp_path / "b", figures=False, csv=False)
     finally:
         short_run.scenario = off.with_overrides({"output.report": True})
     assert not (tmp_path / "b" / "report.html").exists()
     # an earlier result with a report is an imdrive result: replaced without --force
-    short_run.save(tmp_path / "a")
+    short_run.save(tmp_path / "a", figures=False, csv=False)
 
 
 def test_full_rate_14s_report_is_small():
@@ -121,3 +121,44 @@ def test_run_report_renders_in_a_browser(tmp_path, short_run):
     path.write_text(run_report(short_run), encoding="utf-8")
     dom = render(path)
     assert_rendered(dom, ["signals"])
+
+
+SWEEP = """
+name = "tiny"
+description = "report test: 2 x 2 short runs, one variant diverging"
+base = "sensorless"
+chunk_size = 8
+window_s = 0.1
+
+[set]
+simulation.t_end_s = 0.3
+control.speed_ref_rpm = { initial = 0, changes = [{ at = 0.05, to = 600, over = 0.15 }] }
+
+[axes]
+R2_ratio = [0.8, 1.2]
+speed_rpm = [300, 900]
+
+[axes.variant]
+stable = {}
+unstable = { control.current_kp = -5, "inverter.Vdc_V" = 1e5 }
+
+[[heatmap]]
+x = "R2_ratio"
+y = "speed_rpm"
+value = "speed_error_rpm"
+cols = "variant"
+"""
+
+
+def test_sweep_report_renders_in_a_browser(tmp_path):
+    from imdrive.sweep import load_sweep, run_sweep
+
+    f = tmp_path / "tiny.toml"
+    f.write_text(SWEEP)
+    store = tmp_path / "store"
+    run_sweep(load_sweep(str(f)), store, progress=False, figures=False)
+    page = store / "report.html"
+    html = page.read_text(encoding="utf-8")
+    assert "variant = stable" in html and "variant = unstable" in html
+    assert "speed_error_rpm = %{z:.4g}" in html  # the value on hover
+    assert_rendered(render(page), ["heatmap-0-0", "heatmap-0-1"])

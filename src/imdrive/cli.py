@@ -245,6 +245,7 @@ def _cmd_sweep(args) -> int:
         resume=args.resume,
         chunk_size=args.chunk_size,
         figures=not args.no_figures,
+        report=not args.no_report,
         progress=None if not args.quiet else False,
     )
     if not args.quiet:
@@ -421,6 +422,9 @@ def build_parser() -> argparse.ArgumentParser:
     sw.add_argument("--resume", action="store_true", help="continue an interrupted sweep")
     sw.add_argument("--chunk-size", type=int, metavar="N", help="runs per chunk (default 32)")
     sw.add_argument("--no-figures", action="store_true", help="skip the heatmap PNGs")
+    sw.add_argument(
+        "--no-report", action="store_true", help="skip report.html (the interactive heatmaps)"
+    )
     sw.add_argument("--dry-run", action="store_true", help="validate, print the size, run nothing")
     sw.add_argument(
         "--max-runs",

@@ -71,14 +71,16 @@ def run_sweep(
     figures: bool = True,
     progress: bool | None = None,
     client=None,
+    report: bool = True,
     notice=None,
 ):
     """Run ``sweep`` into the store ``out``; returns the consolidated table (pandas).
 
     ``scheduler`` is a dask.distributed scheduler address (or pass a ``client``); without
     either, chunks run here with the batch engine on all cores. ``progress`` None: a bar on
-    stderr if it is a terminal. ``notice`` receives one line per repaired chunk (default:
-    printed on stderr).
+    stderr if it is a terminal. ``figures``: the heatmap PNGs; ``report``: ``report.html``, the
+    interactive heatmaps (:mod:`imdrive.sweep.report`). ``notice`` receives one line per
+    repaired chunk (default: printed on stderr).
     """
     out = Path(out)
     if chunk_size is not None:
@@ -101,12 +103,16 @@ def run_sweep(
             client.close()
         raise
     try:
-        return _run_locked(sweep, store, cs, started, client, own_client, figures, progress, notice)
+        return _run_locked(
+            sweep, store, cs, started, client, own_client, figures, progress, notice, report
+        )
     finally:
         lock.release()
 
 
-def _run_locked(sweep, store, cs, started, client, own_client, figures, progress, notice):
+def _run_locked(
+    sweep, store, cs, started, client, own_client, figures, progress, notice, report=True
+):
     """The body of :func:`run_sweep`, with the store's lock held."""
     store.clean_partials()
     for line in store.verify_chunks(sweep, cs):
@@ -159,6 +165,10 @@ def _run_locked(sweep, store, cs, started, client, own_client, figures, progress
     df = store.consolidate(sweep, cs)
     if figures:
         save_heatmaps(sweep, df, store.root / "figures")
+    if report:
+        from imdrive.sweep.report import write_sweep_report
+
+        write_sweep_report(sweep, df, store.root / "report.html")
     store.write_manifest(sweep, cs, started, complete=True)
     return df
 
