@@ -86,7 +86,7 @@ def test_sweep_prints_a_start_line_when_not_on_a_terminal(tmp_path, capsys):
     f = tmp_path / "s.toml"
     f.write_text(
         'name = "ux"\nbase = "free-acceleration"\n[set]\nsimulation.t_end_s = 0.02\n'
-        "[axes]\n\"machine.J_kgm2\" = [0.05, 0.1]\n"
+        '[axes]\n"machine.J_kgm2" = [0.05, 0.1]\n'
     )
     assert main(["sweep", str(f), "--out", str(tmp_path / "st"), "--no-figures"]) == 0
     err = capsys.readouterr().err
