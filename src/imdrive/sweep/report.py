@@ -86,6 +86,18 @@ def _metric_rows(df) -> list[tuple[str, object]]:
     return rows
 
 
+def _axis_text(sweep: Sweep, axis) -> str:
+    """An axis's values; for a random sweep their range or distinct values (not every draw)."""
+    if not sweep.random:
+        return ", ".join(f"{v:g}" if isinstance(v, float) else str(v) for v in axis.points())
+    vals = list(axis.values)
+    distinct = sorted(set(vals), key=str)
+    if len(distinct) <= 12:
+        return "drawn from " + ", ".join(str(v) for v in distinct)
+    nums = np.asarray(vals, dtype=float)
+    return f"{len(vals)} draws in [{nums.min():.6g}, {nums.max():.6g}]"
+
+
 def sweep_report(sweep: Sweep, df) -> str:
     """The interactive report of a sweep, as HTML text.
 
@@ -127,7 +139,7 @@ def sweep_report(sweep: Sweep, df) -> str:
             header=("column", "value"),
         ),
         html_table(
-            [(a.name, list(a.values if sweep.random else a.points())) for a in sweep.axes],
+            [(a.name, _axis_text(sweep, a)) for a in sweep.axes],
             "axes",
             header=("axis", "values"),
         ),
