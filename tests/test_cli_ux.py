@@ -90,4 +90,4 @@ def test_sweep_prints_a_start_line_when_not_on_a_terminal(tmp_path, capsys):
     )
     assert main(["sweep", str(f), "--out", str(tmp_path / "st"), "--no-figures"]) == 0
     err = capsys.readouterr().err
-    assert "imdrive: sweep ux: 2 runs in 1 chunks" in err
+    assert "imdrive: sweep ux: 2 runs in 1 chunks of 32 (0 done)" in err

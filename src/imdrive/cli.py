@@ -254,12 +254,6 @@ def _cmd_sweep(args) -> int:
         )
     if args.dry_run:
         return EXIT_OK
-    if not args.quiet and not _isatty(sys.stderr):  # no progress bar: say what runs
-        print(
-            f"imdrive: sweep {sweep.name}: {sweep.n_runs} runs in {sweep.n_chunks(cs)} chunks "
-            f"of {cs} -> {out}",
-            file=sys.stderr,
-        )
     t0 = time.perf_counter()
     df = run_sweep(
         sweep,
@@ -617,13 +611,6 @@ def main(argv: list[str] | None = None) -> int:
             f"internal error ({type(exc).__name__}: {msg}); set IMDRIVE_DEBUG=1 for the traceback",
             EXIT_INTERNAL,
         )
-
-
-def _isatty(stream) -> bool:
-    try:
-        return bool(stream.isatty())
-    except (AttributeError, ValueError):
-        return False
 
 
 def _did_you_mean(exc: ConfigError, args) -> str:

@@ -19,7 +19,7 @@ import sys
 import uuid
 from pathlib import Path
 
-from imdrive._progress import Progress
+from imdrive._progress import Progress, _isatty
 from imdrive.errors import ConfigError, EnvironmentFailure
 from imdrive.sweep.figures import save_heatmaps
 from imdrive.sweep.spec import Sweep, _int
@@ -78,9 +78,10 @@ def run_sweep(
 
     ``scheduler`` is a dask.distributed scheduler address (or pass a ``client``); without
     either, chunks run here with the batch engine on all cores. ``progress`` None: a bar on
-    stderr if it is a terminal. ``figures``: the heatmap PNGs; ``report``: ``report.html``, the
-    interactive heatmaps (:mod:`imdrive.sweep.report`). ``notice`` receives one line per
-    repaired chunk (default: printed on stderr).
+    stderr if it is a terminal, else one line saying what runs (through ``notice``).
+    ``figures``: the heatmap PNGs; ``report``: ``report.html``, the interactive heatmaps
+    (:mod:`imdrive.sweep.report`). ``notice`` receives that line and one per repaired chunk
+    (default: printed on stderr).
     """
     out = Path(out)
     if chunk_size is not None:
@@ -121,6 +122,11 @@ def _run_locked(
     store.write_manifest(sweep, cs, started)
     done = store.completed()
     pending = [j for j in range(sweep.n_chunks(cs)) if j not in done]
+    if progress is None and not _isatty(sys.stderr):  # no bar will show: one line instead
+        notice(
+            f"sweep {sweep.name}: {sweep.n_runs} runs in {sweep.n_chunks(cs)} chunks of {cs} "
+            f"({len(done)} done) -> {store.root}"
+        )
     bar = Progress(sweep.n_runs, f"sweep {sweep.name}", unit="runs", enabled=progress)
     bar.start(sum(len(sweep.chunk_runs(j, cs)) for j in done if j < sweep.n_chunks(cs)))
     try:
