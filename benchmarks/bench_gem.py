@@ -26,9 +26,12 @@ open-loop supply, so the "agent" below is the supply):
   constraints are removed (``constraints=()``), the limits raised (500 A, 400 rad/s) so the
   105 A starting current does not end the episode; its random current reference and its reward
   are still computed every step (part of GEM's step cost, a few per cent).
-* Solvers: ``euler`` (GEM's default for this environment: one explicit Euler step per period),
+* Solvers: ``euler`` (GEM's ``EulerSolver``: one explicit Euler step per period),
   ``solve_ivp`` (scipy's solve_ivp, RK45, default rtol = 1e-3, atol = 1e-6, called once per
-  period as motulator does) and ``solve_ivp_tight`` (the same at rtol = atol = 1e-8).
+  period as motulator does) and ``solve_ivp_tight`` (the same at rtol = atol = 1e-8); on request
+  ``scipy_ode`` (``ScipyOdeSolver()``: scipy.integrate.ode with ``dopri5`` at its default
+  tolerances), which is GEM 3.0.3's default for ``Cont-CC-SCIM-v0`` (the environment passes
+  ``ps.ScipyOdeSolver`` as the default of ``ode_solver``), not Euler.
 
 Timing: wall time of the 15 000 ``env.step`` calls (median of ``--repeat``); ``reset`` and the
 set-up are not timed.
@@ -49,7 +52,11 @@ import numpy as np
 try:
     import gym_electric_motor as gem
     from gym_electric_motor.physical_systems import PolynomialStaticLoad
-    from gym_electric_motor.physical_systems.solvers import EulerSolver, ScipySolveIvpSolver
+    from gym_electric_motor.physical_systems.solvers import (
+        EulerSolver,
+        ScipyOdeSolver,
+        ScipySolveIvpSolver,
+    )
 except ImportError as exc:  # pragma: no cover - run in the peers venv only
     sys.exit(
         f"gym-electric-motor is not importable ({exc}); run this with "
@@ -63,6 +70,7 @@ SOLVERS = {
     "euler": lambda: EulerSolver(),
     "solve_ivp": lambda: ScipySolveIvpSolver(),
     "solve_ivp_tight": lambda: ScipySolveIvpSolver(rtol=1e-8, atol=1e-8),
+    "scipy_ode": lambda: ScipyOdeSolver(),  # GEM 3.0.3's default for this environment
 }
 
 

@@ -129,7 +129,12 @@ def test_run_in_process_with_capsys(tmp_path, capsys):
     )
     cap = capsys.readouterr()
     assert rc == 0, cap.err
-    assert sorted(p.name for p in out.iterdir()) == ["summary.json", "timeseries.csv"]
+    # report.html is on by default (output.report)
+    assert sorted(p.name for p in out.iterdir()) == [
+        "report.html",
+        "summary.json",
+        "timeseries.csv",
+    ]
     assert "final speed" in cap.err
 
 

@@ -385,7 +385,8 @@ def test_reused_out_is_replaced_as_a_whole(tmp_path, capsys):
     dead = tmp_path / ".partial-run-999999999-deadbeef"
     dead.mkdir()
     (out / ".partial-xyz").mkdir()
-    assert main([*base, "--set", "output.figures=false", "--set", "output.csv=false"]) == 0
+    only_summary = ["output.figures=false", "output.csv=false", "output.report=false"]
+    assert main([*base, *(a for o in only_summary for a in ("--set", o))]) == 0
     assert sorted(p.name for p in out.iterdir()) == ["summary.json"]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]
 
@@ -409,7 +410,11 @@ def test_out_with_foreign_files_needs_force(tmp_path, capsys):
     assert "--force" in _fail_line(capsys)
     assert (out / "notes.txt").read_text() == "keep me"
     assert main([*base, "--force"]) == 0
-    assert sorted(p.name for p in out.iterdir()) == ["summary.json", "timeseries.csv"]
+    assert sorted(p.name for p in out.iterdir()) == [
+        "report.html",
+        "summary.json",
+        "timeseries.csv",
+    ]
 
 
 # ------------------------------------------------------------------------------------------

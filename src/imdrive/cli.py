@@ -105,21 +105,38 @@ def _cmd_presets(args) -> int:
 def _cmd_show(args) -> int:
     from imdrive.config.presets import preset_text
 
-    sys.stdout.write(preset_text(args.preset))
+    if args.all:
+        from imdrive.config.scenario import Scenario
+
+        sys.stdout.write(Scenario.read(args.preset).to_toml())
+    else:
+        sys.stdout.write(preset_text(args.preset))
     return EXIT_OK
+
+
+def _run_folder_name(preset_or_file: str) -> str:
+    """The default folder name of ``imdrive run``: a preset's name, or the file's own name
+    without its suffix (``my.toml`` -> ``out/my``), not the scenario's ``name``."""
+    from imdrive.config.presets import preset_names
+
+    if preset_or_file in preset_names():
+        return preset_or_file
+    return Path(preset_or_file).stem
 
 
 def _cmd_run(args) -> int:
     from imdrive.config.scenario import Scenario
     from imdrive.run.build import build_arrays
     from imdrive.run.result import check_result_folder
-    from imdrive.run.simulate import simulate
+    from imdrive.run.simulate import kernels_cached, simulate
 
     scenario = Scenario.read(args.scenario, args.set or [])
-    out = _out_path(args.out, scenario.name)
+    out = _out_path(args.out, _run_folder_name(args.scenario))
     check_result_folder(out, args.force)
     arrays = build_arrays(scenario)  # every derived quantity checked before anything runs
     if not args.quiet:
+        if not kernels_cached():
+            print("imdrive: compiling the kernels (first run only) ...", file=sys.stderr)
         print(
             f"imdrive: running {scenario.name} ({scenario.simulation.t_end_s:g} s) ...",
             file=sys.stderr,
@@ -138,9 +155,9 @@ def _cmd_run(args) -> int:
     if not args.quiet:
         fin = s["final"]
         print(
-            f"imdrive: done in {res.wall_time_s:.3f} s wall "
-            f"({s['real_time_factor']:.0f}x real time); final speed {fin['speed_rpm']:.2f} rpm, "
-            f"torque {fin['torque_Nm']:.3f} N m -> {out}",
+            f"imdrive: done in {time.perf_counter() - args.t0:.1f} s (simulation "
+            f"{res.wall_time_s:.3f} s, {s['real_time_factor']:.0f}x real time); final speed "
+            f"{fin['speed_rpm']:.2f} rpm, torque {fin['torque_Nm']:.3f} N m -> {out}",
             file=sys.stderr,
         )
     return EXIT_OK
@@ -245,6 +262,7 @@ def _cmd_sweep(args) -> int:
         resume=args.resume,
         chunk_size=args.chunk_size,
         figures=not args.no_figures,
+        report=not args.no_report,
         progress=None if not args.quiet else False,
     )
     if not args.quiet:
@@ -362,13 +380,40 @@ def _cmd_stability(args) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = _Parser(prog="imdrive", description="Simulate sensorless induction-motor drives.")
+    p = _Parser(
+        prog="imdrive",
+        description="Simulate sensorless induction-motor drives.",
+        epilog=_examples(
+            "imdrive presets",
+            "imdrive run sensorless",
+            "imdrive show sensorless > my.toml; imdrive run my.toml",
+            "imdrive sweep detuning-map",
+            "imdrive <command> --help",
+        ),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     p.add_argument("--version", action="version", version=_version())
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
-    r = sub.add_parser("run", help="run a preset or scenario file")
+    r = sub.add_parser(
+        "run",
+        help="run a preset or scenario file",
+        description="Run one drive: a built-in preset by name, a scenario TOML file, or a "
+        "run's summary.json (to run it again). Writes timeseries.csv, summary.json, PNG figures "
+        "and report.html (interactive; open it in a browser) into out/PRESET, or out/FILE for a "
+        "file named FILE.toml, unless --out says otherwise. Exit codes: imdrive --help.",
+        epilog=_examples(
+            "imdrive run sensorless",
+            "imdrive run sensorless --set simulation.t_end_s=2 --set load.torque_Nm=6",
+            "imdrive run my.toml --out results/my-run",
+            "imdrive run out/sensorless/summary.json",
+        ),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     r.add_argument("scenario", metavar="PRESET_OR_FILE")
-    r.add_argument("--out", metavar="DIR", help="output folder (default out/NAME)")
+    r.add_argument(
+        "--out", metavar="DIR", help="output folder (default out/PRESET, or out/FILE for FILE.toml)"
+    )
     r.add_argument(
         "--set",
         action="append",
@@ -383,18 +428,54 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("-q", "--quiet", action="store_true")
     r.set_defaults(func=_cmd_run)
 
-    ps = sub.add_parser("presets", help="list the built-in presets")
+    ps = sub.add_parser(
+        "presets",
+        help="list the built-in presets",
+        description="List the built-in scenario presets and machine parameter sets.",
+        epilog=_examples("imdrive presets"),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     ps.set_defaults(func=_cmd_presets)
 
-    sh = sub.add_parser("show", help="print a preset's TOML, to copy and edit")
+    sh = sub.add_parser(
+        "show",
+        help="print a preset's TOML, to copy and edit",
+        description="Print a preset's TOML file, or with --all every key of the scenario with "
+        "its value (the defaults filled in).",
+        epilog=_examples(
+            "imdrive show sensorless > my.toml", "imdrive show sensorless --all | less"
+        ),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     sh.add_argument("preset")
+    sh.add_argument(
+        "--all", action="store_true", help="every key with its value, defaults included"
+    )
     sh.set_defaults(func=_cmd_show)
 
-    pp = sub.add_parser("paper", help="regenerate every figure and table of the reproduction")
+    pp = sub.add_parser(
+        "paper",
+        help="regenerate every figure and table of the reproduction",
+        description="Run the paper's figures and the compensation study; write the figures, "
+        "tables and results.json (docs/paper.md explains them).",
+        epilog=_examples("imdrive paper", "imdrive paper --out results/paper"),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     pp.add_argument("--out", metavar="DIR", default="out/paper")
     pp.set_defaults(func=_cmd_paper)
 
-    ft = sub.add_parser("fuzzy-table", help="print the compensator's 13x13 lookup table")
+    ft = sub.add_parser(
+        "fuzzy-table",
+        help="print the compensator's 13x13 lookup table",
+        description="Print the fuzzy compensator's 13x13 lookup table (the paper's Table III, "
+        "or the one compiled from the fitted rules), or where the two differ.",
+        epilog=_examples(
+            "imdrive fuzzy-table",
+            "imdrive fuzzy-table --source rules --format csv",
+            "imdrive fuzzy-table --diff",
+        ),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     ft.add_argument(
         "--source",
         choices=("paper", "rules"),
@@ -413,7 +494,15 @@ def build_parser() -> argparse.ArgumentParser:
         "sweep",
         help="run a parameter sweep into a Parquet store",
         description="Run a sweep (a built-in one by name, or a sweep TOML file): a Parquet "
-        "table of summary metrics, one row per run, and heatmap figures.",
+        "table of summary metrics, one row per run, heatmap figures and report.html (the "
+        "heatmaps with hover values).",
+        epilog=_examples(
+            "imdrive sweep --list",
+            "imdrive sweep detuning-map --dry-run",
+            "imdrive sweep detuning-map",
+            "imdrive sweep my-sweep.toml --out results/sweep --resume",
+        ),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     sw.add_argument("sweep", nargs="?", metavar="SWEEP_OR_FILE")
     sw.add_argument("--out", metavar="STORE", help="store folder (default out/sweep-NAME)")
@@ -421,6 +510,9 @@ def build_parser() -> argparse.ArgumentParser:
     sw.add_argument("--resume", action="store_true", help="continue an interrupted sweep")
     sw.add_argument("--chunk-size", type=int, metavar="N", help="runs per chunk (default 32)")
     sw.add_argument("--no-figures", action="store_true", help="skip the heatmap PNGs")
+    sw.add_argument(
+        "--no-report", action="store_true", help="skip report.html (the interactive heatmaps)"
+    )
     sw.add_argument("--dry-run", action="store_true", help="validate, print the size, run nothing")
     sw.add_argument(
         "--max-runs",
@@ -439,6 +531,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="small-signal stability map over speed x load torque",
         description="Solve the closed loop's steady state and its discrete small-signal model "
         "at every point of a speed x torque grid; write stability.csv and heatmap PNGs.",
+        epilog=_examples(
+            "imdrive stability sensorless --out out/stability",
+            "imdrive stability sensorless --speeds 0:300:31 --torques=-12:12:25 "
+            "--r2-ratios 0.8,1.2 --out out/stability-low",
+        ),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     st.add_argument("scenario", metavar="PRESET_OR_FILE")
     st.add_argument(
@@ -467,12 +565,19 @@ def build_parser() -> argparse.ArgumentParser:
         description="Every speed estimator and R2 adaptation method on the same scenarios "
         "(average and realistic drive) and metrics (docs/estimators.md): estimators.csv, "
         "<metric>.png and estimators.md in DIR.",
+        epilog=_examples("imdrive bench-estimators --quick --out out/bench"),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     be.add_argument("--quick", action="store_true", help="a small subset (CI)")
     be.add_argument("--out", metavar="DIR", required=True)
     be.add_argument("-q", "--quiet", action="store_true")
     be.set_defaults(func=_cmd_bench_estimators)
     return p
+
+
+def _examples(*lines: str) -> str:
+    """An ``examples:`` block for the end of a --help text."""
+    return "examples:\n" + "\n".join(f"  {line}" for line in lines)
 
 
 def _version() -> str:
@@ -484,10 +589,11 @@ def _version() -> str:
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    args.t0 = time.perf_counter()
     try:
         return args.func(args)
     except ConfigError as exc:
-        return _fail(f"{exc}", EXIT_BAD_INPUT)
+        return _fail(f"{exc}{_did_you_mean(exc, args)}", EXIT_BAD_INPUT)
     except EnvironmentFailure as exc:
         return _fail(exc.cause, EXIT_ENVIRONMENT)
     except MemoryError:
@@ -505,6 +611,39 @@ def main(argv: list[str] | None = None) -> int:
             f"internal error ({type(exc).__name__}: {msg}); set IMDRIVE_DEBUG=1 for the traceback",
             EXIT_INTERNAL,
         )
+
+
+def _did_you_mean(exc: ConfigError, args) -> str:
+    """``"; did you mean 'X'?"`` for a mistyped key, preset or sweep name (difflib), else ``""``.
+
+    Appended by the command line only: the library's messages stay as they are.
+    """
+    import difflib
+
+    rule = exc.rule
+    given, names, cutoff = None, [], 0.6
+    if rule.startswith(("unknown key", "no such setting")):
+        from imdrive.config.schema import setting_paths
+
+        paths = setting_paths()
+        given = exc.field
+        names = sorted({".".join(p) for p in paths} | {p[0] for p in paths})
+        cutoff = 0.75
+    elif exc.field in ("preset", "scenario") and (
+        "unknown preset" in rule or "neither a preset" in rule
+    ):
+        from imdrive.config.presets import preset_names
+
+        given = getattr(args, "scenario", None) or getattr(args, "preset", None)
+        names = preset_names()
+    elif exc.field == "sweep" and "neither a built-in sweep" in rule:
+        from imdrive.sweep import sweep_names
+
+        given, names = getattr(args, "sweep", None), sweep_names()
+    if not given or not names:
+        return ""
+    match = difflib.get_close_matches(str(given), names, n=1, cutoff=cutoff)
+    return f"; did you mean {match[0]!r}?" if match and match[0] != given else ""
 
 
 def _fail(message: str, code: int) -> int:

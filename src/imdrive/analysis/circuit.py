@@ -236,7 +236,8 @@ def _check_supply(V_ll_rms, f_Hz) -> tuple[float, float]:
 
 
 def breakdown(machine: MachineParams, V_ll_rms: float, f_Hz: float) -> tuple[float, float]:
-    """Breakdown (maximum motoring) torque and its slip, found numerically on the exact circuit.
+    """Breakdown slip and (maximum motoring) torque, in that order, found numerically on the
+    exact circuit.
 
     Parameters
     ----------

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import tomllib
 from dataclasses import fields, is_dataclass, replace
+from pathlib import Path
 from typing import Annotated, Literal
 
 from pydantic import model_validator
@@ -906,6 +907,13 @@ class OutputSettings:
 
     figures: Annotated[Bool, setting("write the PNG figures")] = True
     csv: Annotated[Bool, setting("write timeseries.csv")] = True
+    report: Annotated[
+        Bool,
+        setting(
+            "write report.html: interactive linked plots, the summary and the scenario in one "
+            "self-contained file that works offline"
+        ),
+    ] = True
     mat: Annotated[
         Bool, setting("write timeseries.mat (MATLAB; one vector per column, a units struct)")
     ] = False
@@ -1111,10 +1119,33 @@ class Scenario:
 
     @classmethod
     def read(cls, preset_or_path: str, overrides: list[str] | tuple[str, ...] = ()) -> Scenario:
-        """A built-in preset by name, or a scenario file by path."""
-        from imdrive.config.presets import scenario_text
+        """A built-in preset by name, or a scenario file by path: a TOML file, or a run's
+        ``summary.json`` (its ``"scenario"``, to run it again)."""
+        from imdrive.config.presets import preset_names, scenario_text
 
+        if str(preset_or_path).endswith(".json") and preset_or_path not in preset_names():
+            return cls._from_summary(preset_or_path, overrides)
         return cls.from_toml(scenario_text(preset_or_path), overrides)
+
+    @classmethod
+    def _from_summary(cls, path, overrides) -> Scenario:
+        """The scenario a ``summary.json`` records (with overrides applied)."""
+        import json
+
+        from imdrive.config.overrides import apply_override
+
+        try:
+            data = json.loads(Path(path).read_text(encoding="utf-8"))
+        except OSError as exc:
+            raise ConfigError("scenario", f"cannot read {path}: {exc}") from None
+        except ValueError as exc:
+            raise ConfigError("scenario", f"{path} is not valid JSON: {exc}") from None
+        if not isinstance(data, dict) or not isinstance(data.get("scenario"), dict):
+            raise ConfigError("scenario", f'{path} holds no "scenario" table (a summary.json)')
+        data = data["scenario"]
+        for ov in overrides:
+            apply_override(data, ov)
+        return cls.from_dict(data)
 
     def with_(self, **changes) -> Scenario:
         """A copy with whole sections replaced (``sc.with_(simulation=...)``), validated again."""
@@ -1159,6 +1190,13 @@ class Scenario:
         return Scenario.from_dict(data)
 
     # -- export ----------------------------------------------------------------------------
+    def to_toml(self) -> str:
+        """The scenario as TOML text, every default filled in (``imdrive show PRESET --all``);
+        :meth:`from_toml` reads it back to an equal scenario."""
+        from imdrive.config.toml_writer import dumps
+
+        return dumps(self.to_dict())
+
     def to_dict(self) -> dict:
         """The scenario as run, every default filled in, in TOML-shaped form."""
         out: dict = {"name": self.name, "description": self.description}

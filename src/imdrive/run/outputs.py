@@ -99,7 +99,9 @@ def markdown() -> str:
         "",
         "What `imdrive run` writes into its folder: `timeseries.csv` (and, with `[output] mat` /"
         " `parquet`, `timeseries.mat` / `timeseries.parquet` with the same columns and their"
-        " units), `summary.json`, PNG figures. Space vectors use the amplitude-invariant Clarke"
+        " units), `summary.json`, PNG figures, and `report.html` (interactive plots of these"
+        " columns, min/max-decimated, with the summary and the scenario; `[output] report`)."
+        " Space vectors use the amplitude-invariant Clarke"
         " transform; the unit is the column name's suffix.",
         "",
         "## Time-series columns",

@@ -387,8 +387,11 @@ class SimulationResult:
         figures: bool | None = None,
         csv: bool | None = None,
         force: bool = False,
+        report: bool | None = None,
     ) -> list[Path]:
-        """Write ``timeseries.csv``, ``summary.json`` and PNG figures as the folder ``out_dir``.
+        """Write ``timeseries.csv``, ``summary.json``, PNG figures and ``report.html`` (the
+        interactive report, :mod:`imdrive.run.report`) as the folder ``out_dir``; ``figures``,
+        ``csv``, ``report`` None: as the scenario's ``[output]`` says.
 
         The folder is replaced as a whole (:func:`imdrive._io.replace_folder`): the files are
         written into a staging folder beside it, fsynced, and the staging folder takes its
@@ -408,6 +411,7 @@ class SimulationResult:
         check_result_folder(out_dir, force)
         figures = self.scenario.output.figures if figures is None else figures
         csv = self.scenario.output.csv if csv is None else csv
+        report = self.scenario.output.report if report is None else report
         with replace_folder(out_dir) as staging:
             if csv:
                 self.to_csv(staging / "timeseries.csv")
@@ -416,10 +420,23 @@ class SimulationResult:
                 from imdrive.run.plots import save_figures
 
                 save_figures(self, staging)
+            if report:
+                from imdrive.run.report import write_run_report
+
+                write_run_report(self, staging / "report.html")
             (staging / "summary.json").write_text(summary_json(self.summary()))
             names = sorted(p.name for p in staging.iterdir())
         return [out_dir / n for n in names if n != "summary.json"] + [out_dir / "summary.json"]
 
+
+#: The files :meth:`SimulationResult.save` may write besides PNG figures
+RESULT_FILES = (
+    "summary.json",
+    "timeseries.csv",
+    "report.html",
+    "timeseries.mat",
+    "timeseries.parquet",
+)
 
 NULL_NOTE = (
     "null stands for a value that is not a finite number (NaN or infinite: a diverged run's "
@@ -454,7 +471,8 @@ def summary_json(summary: dict) -> str:
 
 def is_result_folder(folder) -> bool:
     """Whether ``folder`` is missing, empty, or holds only what :meth:`SimulationResult.save`
-    writes (``summary.json``, ``timeseries.csv``, PNG figures, staging leftovers)."""
+    writes (``summary.json``, ``timeseries.csv``, ``report.html``, the exports, PNG figures,
+    staging leftovers)."""
     from imdrive._io import LOCK_NAME, is_partial
 
     folder = Path(folder)
@@ -466,7 +484,7 @@ def is_result_folder(folder) -> bool:
         n = p.name
         if is_partial(n) or n == LOCK_NAME:
             continue
-        if p.is_file() and (n in ("summary.json", "timeseries.csv") or n.endswith(".png")):
+        if p.is_file() and (n in RESULT_FILES or n.endswith(".png")):
             continue
         return False
     return True

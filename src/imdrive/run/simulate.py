@@ -27,6 +27,19 @@ def new_log(n_rows: int) -> np.ndarray:
     return np.full(n_rows, np.nan, dtype=LOG)
 
 
+def kernels_cached() -> bool:
+    """Whether the drive kernel is compiled in this process or cached on disk (so the next run
+    starts without compiling); True when that cannot be told."""
+    try:
+        if run_drive.signatures:
+            return True
+        import os
+
+        return os.path.exists(run_drive._cache._cache_file._index_path)
+    except Exception:  # numba internals changed: say nothing rather than something wrong
+        return True
+
+
 def simulate(scenario: Scenario, arrays: DriveArrays | None = None) -> SimulationResult:
     """Run one drive and return its :class:`~imdrive.run.result.SimulationResult`.
 

@@ -32,7 +32,7 @@ def heatmap_figure(sweep: Sweep, df, h: Heatmap):
     fig = Figure(figsize=(3.6 * len(cols) + 1.2, 3.0 * len(rows) + 0.8), layout="constrained")
     axs = fig.subplots(len(rows), len(cols), squeeze=False)
     signed = h.value in SIGNED_METRICS
-    vmin, vmax = _colour_range(df[h.value], signed)
+    vmin, vmax = colour_range(df[h.value], signed)
     style = {"cmap": "RdBu_r" if signed else "viridis", "vmin": vmin, "vmax": vmax}
     mappable = None
     for r, rv in enumerate(rows):
@@ -65,7 +65,7 @@ def _levels(sweep: Sweep, name: str) -> list:
     return next(a for a in sweep.axes if a.name == name).points()
 
 
-def _colour_range(values, signed: bool) -> tuple[float, float]:
+def colour_range(values, signed: bool) -> tuple[float, float]:
     """``(vmin, vmax)`` over the finite values; symmetric about 0 for a signed metric."""
     vals = values.to_numpy(dtype=float)
     finite = vals[np.isfinite(vals)]
@@ -84,13 +84,39 @@ def _scatter_panel(ax, sweep: Sweep, sel, h: Heatmap, style: dict):
     return ax.scatter(sel[h.x], sel[h.y], c=sel[h.value], s=18, **style)
 
 
-def _image_panel(ax, sweep: Sweep, sel, h: Heatmap, style: dict):
-    """A grid sweep's panel: the metric aggregated over the other axes, one cell per point."""
+def panel_selections(sweep: Sweep, df, h: Heatmap) -> list[tuple[str, object]]:
+    """``[(title, rows of df)]``: one panel per (``rows``, ``cols``) pair of axis values."""
+    rows = _levels(sweep, h.rows) if h.rows else [None]
+    cols = _levels(sweep, h.cols) if h.cols else [None]
+    out = []
+    for rv in rows:
+        for cv in cols:
+            sel = df
+            if h.rows:
+                sel = sel[sel[h.rows] == rv]
+            if h.cols:
+                sel = sel[sel[h.cols] == cv]
+            title = ", ".join(
+                f"{n} = {_fmt(v)}" for n, v in ((h.rows, rv), (h.cols, cv)) if n is not None
+            )
+            out.append((title, sel))
+    return out
+
+
+def heat_grid(sweep: Sweep, sel, h: Heatmap) -> tuple[list, list, np.ndarray]:
+    """``(xs, ys, Z)``: the metric ``h.value`` of the runs ``sel`` aggregated (``h.agg``) over
+    the other axes, ``Z[iy, ix]`` at axis values ``ys[iy]``, ``xs[ix]`` (NaN: none finite)."""
     xs, ys = _levels(sweep, h.x), _levels(sweep, h.y)
     g = sel.groupby([h.y, h.x], sort=False)[h.value].agg(lambda s, how=h.agg: _aggregate(s, how))
     Z = np.full((len(ys), len(xs)), np.nan)
     for (yv, xv), v in g.items():
         Z[ys.index(yv), xs.index(xv)] = v
+    return xs, ys, Z
+
+
+def _image_panel(ax, sweep: Sweep, sel, h: Heatmap, style: dict):
+    """A grid sweep's panel: the metric aggregated over the other axes, one cell per point."""
+    xs, ys, Z = heat_grid(sweep, sel, h)
     image = ax.imshow(
         np.ma.masked_invalid(Z), origin="lower", aspect="auto", interpolation="nearest", **style
     )

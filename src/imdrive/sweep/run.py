@@ -19,7 +19,7 @@ import sys
 import uuid
 from pathlib import Path
 
-from imdrive._progress import Progress
+from imdrive._progress import Progress, _isatty
 from imdrive.errors import ConfigError, EnvironmentFailure
 from imdrive.sweep.figures import save_heatmaps
 from imdrive.sweep.spec import Sweep, _int
@@ -71,14 +71,17 @@ def run_sweep(
     figures: bool = True,
     progress: bool | None = None,
     client=None,
+    report: bool = True,
     notice=None,
 ):
     """Run ``sweep`` into the store ``out``; returns the consolidated table (pandas).
 
     ``scheduler`` is a dask.distributed scheduler address (or pass a ``client``); without
     either, chunks run here with the batch engine on all cores. ``progress`` None: a bar on
-    stderr if it is a terminal. ``notice`` receives one line per repaired chunk (default:
-    printed on stderr).
+    stderr if it is a terminal, else one line saying what runs (through ``notice``).
+    ``figures``: the heatmap PNGs; ``report``: ``report.html``, the interactive heatmaps
+    (:mod:`imdrive.sweep.report`). ``notice`` receives that line and one per repaired chunk
+    (default: printed on stderr).
     """
     out = Path(out)
     if chunk_size is not None:
@@ -101,12 +104,16 @@ def run_sweep(
             client.close()
         raise
     try:
-        return _run_locked(sweep, store, cs, started, client, own_client, figures, progress, notice)
+        return _run_locked(
+            sweep, store, cs, started, client, own_client, figures, progress, notice, report
+        )
     finally:
         lock.release()
 
 
-def _run_locked(sweep, store, cs, started, client, own_client, figures, progress, notice):
+def _run_locked(
+    sweep, store, cs, started, client, own_client, figures, progress, notice, report=True
+):
     """The body of :func:`run_sweep`, with the store's lock held."""
     store.clean_partials()
     for line in store.verify_chunks(sweep, cs):
@@ -115,6 +122,11 @@ def _run_locked(sweep, store, cs, started, client, own_client, figures, progress
     store.write_manifest(sweep, cs, started)
     done = store.completed()
     pending = [j for j in range(sweep.n_chunks(cs)) if j not in done]
+    if progress is None and not _isatty(sys.stderr):  # no bar will show: one line instead
+        notice(
+            f"sweep {sweep.name}: {sweep.n_runs} runs in {sweep.n_chunks(cs)} chunks of {cs} "
+            f"({len(done)} done) -> {store.root}"
+        )
     bar = Progress(sweep.n_runs, f"sweep {sweep.name}", unit="runs", enabled=progress)
     bar.start(sum(len(sweep.chunk_runs(j, cs)) for j in done if j < sweep.n_chunks(cs)))
     try:
@@ -159,6 +171,10 @@ def _run_locked(sweep, store, cs, started, client, own_client, figures, progress
     df = store.consolidate(sweep, cs)
     if figures:
         save_heatmaps(sweep, df, store.root / "figures")
+    if report:
+        from imdrive.sweep.report import write_sweep_report
+
+        write_sweep_report(sweep, df, store.root / "report.html")
     store.write_manifest(sweep, cs, started, complete=True)
     return df
 

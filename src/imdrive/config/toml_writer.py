@@ -1,0 +1,88 @@
+"""A small TOML writer for scenario dictionaries (the standard library only reads TOML).
+
+Writes what :meth:`imdrive.config.scenario.Scenario.to_dict` holds: strings, booleans,
+integers, floats (``inf``, ``nan`` included), lists, and tables. Top-level tables become
+``[section]`` headers; a table inside a section becomes an inline table when it holds only
+values (a profile ``{ points = [...] }``), a ``[section.sub]`` header otherwise. ``None`` (an
+unset optional setting) is written as a comment line, which reads back as unset.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+_BARE = re.compile(r"^[A-Za-z0-9_-]+$")
+
+
+def _key(k: str) -> str:
+    return k if _BARE.match(k) else _string(k)
+
+
+def _string(s: str) -> str:
+    out = s.replace("\\", "\\\\").replace('"', '\\"')
+    out = "".join(c if c.isprintable() else f"\\u{ord(c):04x}" for c in out)
+    return f'"{out}"'
+
+
+def value(v) -> str:
+    """One TOML value (no tables of tables)."""
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, float):
+        if math.isnan(v):
+            return "nan"
+        if math.isinf(v):
+            return "inf" if v > 0 else "-inf"
+        return repr(v)
+    if isinstance(v, str):
+        return _string(v)
+    if isinstance(v, list | tuple):
+        return "[" + ", ".join(value(x) for x in v if x is not None) + "]"
+    if isinstance(v, dict):
+        items = [f"{_key(k)} = {value(x)}" for k, x in v.items() if x is not None]
+        return "{ " + ", ".join(items) + " }" if items else "{}"
+    raise TypeError(f"cannot write {type(v).__name__} as TOML")
+
+
+def _table(lines: list[str], path: list[str], d: dict) -> None:
+    subs = []
+    body = []
+    for k, v in d.items():
+        if v is None:
+            body.append(f"# {_key(k)} is unset (its documented default applies)")
+            continue
+        if isinstance(v, dict) and any(isinstance(x, dict) for x in v.values()):
+            subs.append((k, v))
+        else:
+            body.append(f"{_key(k)} = {value(v)}")
+    if path and (body or not subs):
+        lines.append("")
+        lines.append("[" + ".".join(_key(p) for p in path) + "]")
+    lines.extend(body)
+    for k, v in subs:
+        _table(lines, [*path, k], v)
+
+
+def dumps(data: dict) -> str:
+    """``data`` (a dictionary of values and tables) as TOML text.
+
+    Parameters
+    ----------
+    data : dict
+        Top-level values first, then tables; nested tables of values become inline tables.
+
+    Returns
+    -------
+    str
+        TOML that :func:`tomllib.loads` reads back to ``data`` (without its ``None`` values).
+    """
+    lines: list[str] = []
+    top = {k: v for k, v in data.items() if not isinstance(v, dict)}
+    tables = {k: v for k, v in data.items() if isinstance(v, dict)}
+    _table(lines, [], top)
+    for k, v in tables.items():
+        _table(lines, [k], v)
+    return "\n".join(lines).lstrip("\n") + "\n"

@@ -1,0 +1,164 @@
+"""The interactive HTML reports (``report.html``): decimation, contents, size, and rendering in a
+real headless browser (Chromium; skipped with a message where none is installed)."""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+import imdrive as im
+from imdrive.run.report import minmax_decimate, run_report
+
+BROWSERS = ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable", "chrome")
+
+
+def find_chromium() -> str | None:
+    """A Chromium-family browser: ``$IMDRIVE_CHROMIUM``, else the first on PATH."""
+    given = os.environ.get("IMDRIVE_CHROMIUM")
+    if given:
+        return shutil.which(given)
+    for name in BROWSERS:
+        path = shutil.which(name)
+        if path:
+            return path
+    return None
+
+
+def render(path) -> str:
+    """The DOM of ``path`` after its scripts ran, from headless Chromium (no network)."""
+    browser = find_chromium()
+    if browser is None:
+        pytest.skip(
+            "no Chromium found (tried $IMDRIVE_CHROMIUM and " + ", ".join(BROWSERS) + "): "
+            "install Debian's chromium package to run the browser tests"
+        )
+    cmd = [
+        browser,
+        "--headless",
+        "--no-sandbox",  # root in containers
+        "--disable-gpu",
+        "--no-first-run",
+        "--proxy-server=127.0.0.1:9",  # any network fetch would fail (and show as an error)
+        "--virtual-time-budget=30000",
+        "--dump-dom",
+        path.resolve().as_uri(),
+    ]
+    out = subprocess.run(cmd, capture_output=True, text=True, timeout=120, check=False)
+    assert out.returncode == 0, out.stderr[-2000:]
+    return out.stdout
+
+
+def assert_rendered(dom: str, divs: list[str]) -> None:
+    """Every plot div holds plotly's SVG, the page says ``rendered``, no script error."""
+    errors = re.search(r'<pre id="report-errors"[^>]*>(.*?)</pre>', dom, re.S)
+    assert errors is not None
+    assert errors.group(1).strip() == "", errors.group(1)
+    assert 'data-status="rendered"' in dom, dom[:500]
+    starts = sorted(dom.index(f'id="{div}"') for div in divs)
+    for div in divs:
+        start = dom.index(f'id="{div}"')
+        later = [s for s in starts if s > start] + [dom.index('id="report-errors"')]
+        chunk = dom[start : later[0]]
+        assert "main-svg" in chunk and "<path" in chunk, f"{div}: no rendered SVG"
+
+
+@pytest.fixture(scope="module")
+def short_run():
+    sc = im.Scenario.read("injection-fig5").with_overrides({"simulation.t_end_s": 0.6})
+    return im.simulate(sc)
+
+
+def test_decimation_keeps_every_peak():
+    rng = np.random.default_rng(1)
+    n = 100_003
+    t = np.arange(n) * 1e-4
+    y = rng.standard_normal(n)
+    y[54_321] = 50.0
+    y[777] = -40.0
+    td, out, b = minmax_decimate(t, {"y": y}, max_points=1000)
+    assert b > 1 and len(td) <= 1000 + 2 and len(out["y"]) == len(td)
+    assert out["y"].max() == 50.0 and out["y"].min() == -40.0
+    assert np.all(np.diff(td) >= 0) and td[0] == t[0] and td[-1] == t[-1]
+    # the peak sits within one bucket of its true time
+    assert abs(td[np.argmax(out["y"])] - t[54_321]) <= b * 1e-4
+    short, out2, b2 = minmax_decimate(t[:500], {"y": y[:500]}, max_points=1000)
+    assert b2 == 1 and np.array_equal(out2["y"], y[:500])
+
+
+def test_report_written_by_default_and_skipped_on_request(tmp_path, short_run):
+    short_run.save(tmp_path / "a", figures=False, csv=False)
+    html = (tmp_path / "a" / "report.html").read_text(encoding="utf-8")
+    assert "http://" not in html.replace("http://www.w3.org", "")  # nothing to fetch
+    assert "https://" not in html.split('id="plotly-gz"')[0]
+    for text in ("speed", "R2 estimate", "e_d0 demodulated", "scenario as run", "summary"):
+        assert text in html
+    off = short_run.scenario.with_overrides({"output.report": False})
+    short_run.scenario = off
+    try:
+        short_run.save(tmp_path / "b", figures=False, csv=False)
+    finally:
+        short_run.scenario = off.with_overrides({"output.report": True})
+    assert not (tmp_path / "b" / "report.html").exists()
+    # an earlier result with a report is an imdrive result: replaced without --force
+    short_run.save(tmp_path / "a", figures=False, csv=False)
+
+
+def test_full_rate_14s_report_is_small():
+    sc = im.Scenario.read("injection-fig5").with_overrides({"simulation.log_every": 1})
+    res = im.simulate(sc)
+    assert len(res.time_s) > 100_000
+    size = len(run_report(res).encode("utf-8"))
+    assert size < 5e6, f"{size / 1e6:.2f} MB"
+
+
+def test_run_report_renders_in_a_browser(tmp_path, short_run):
+    path = tmp_path / "report.html"
+    path.write_text(run_report(short_run), encoding="utf-8")
+    dom = render(path)
+    assert_rendered(dom, ["signals"])
+
+
+SWEEP = """
+name = "tiny"
+description = "report test: 2 x 2 short runs, one variant diverging"
+base = "sensorless"
+chunk_size = 8
+window_s = 0.1
+
+[set]
+simulation.t_end_s = 0.3
+control.speed_ref_rpm = { initial = 0, changes = [{ at = 0.05, to = 600, over = 0.15 }] }
+
+[axes]
+R2_ratio = [0.8, 1.2]
+speed_rpm = [300, 900]
+
+[axes.variant]
+stable = {}
+unstable = { control.current_kp = 150, "inverter.Vdc_V" = 1e5 }
+
+[[heatmap]]
+x = "R2_ratio"
+y = "speed_rpm"
+value = "speed_error_rpm"
+cols = "variant"
+"""
+
+
+def test_sweep_report_renders_in_a_browser(tmp_path):
+    from imdrive.sweep import load_sweep, run_sweep
+
+    f = tmp_path / "tiny.toml"
+    f.write_text(SWEEP)
+    store = tmp_path / "store"
+    run_sweep(load_sweep(str(f)), store, progress=False, figures=False)
+    page = store / "report.html"
+    html = page.read_text(encoding="utf-8")
+    assert "variant = stable" in html and "variant = unstable" in html
+    assert "speed_error_rpm = %{z:.4g}" in html  # the value on hover
+    assert_rendered(render(page), ["heatmap-0-0", "heatmap-0-1"])
