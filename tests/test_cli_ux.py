@@ -77,6 +77,8 @@ def test_run_file_defaults_to_the_file_name_and_reruns_summary(tmp_path, monkeyp
     assert main(["run", str(summary), "--out", "again", "--set", "simulation.t_end_s=0.01"]) == 0
     again = json.loads((tmp_path / "again" / "summary.json").read_text())
     assert again["simulated_time_s"] == pytest.approx(0.01)
+    assert main(["run", str(summary), "--set", "simulation.t_end_s=0.01"]) == 0
+    assert (tmp_path / "out" / "my-file-rerun" / "summary.json").exists()  # not over the first
     first = json.loads(summary.read_text())
     first["scenario"]["simulation"]["t_end_s"] = 0.01
     assert again["scenario"] == first["scenario"]

@@ -116,12 +116,17 @@ def _cmd_show(args) -> int:
 
 def _run_folder_name(preset_or_file: str) -> str:
     """The default folder name of ``imdrive run``: a preset's name, or the file's own name
-    without its suffix (``my.toml`` -> ``out/my``), not the scenario's ``name``."""
+    without its suffix (``my.toml`` -> ``out/my``), not the scenario's ``name``; for a run's
+    ``summary.json``, its folder's name + ``-rerun`` (``out/my/summary.json`` -> ``out/my-rerun``).
+    """
     from imdrive.config.presets import preset_names
 
     if preset_or_file in preset_names():
         return preset_or_file
-    return Path(preset_or_file).stem
+    path = Path(preset_or_file)
+    if path.suffix == ".json":  # a run's summary.json: beside that run, never over it
+        return f"{path.resolve().parent.name}-rerun"
+    return path.stem
 
 
 def _cmd_run(args) -> int:
