@@ -12,99 +12,33 @@ machine field is optional (it defaults to the preset's value).
 
 from __future__ import annotations
 
-import dataclasses
-import functools
-import typing
-from dataclasses import dataclass
-from typing import Any
-
 from pydantic import TypeAdapter
-from pydantic.fields import FieldInfo
 from pydantic.json_schema import GenerateJsonSchema
 
 from imdrive.config.machine import machine_presets
 from imdrive.config.profiles import Profile
-from imdrive.config.scenario import DEFAULT_MACHINE_PRESET, SECTIONS, Scenario
 
-#: Where a field of the Scenario object lives in the file.
-FILE_PATHS = {"machine_preset": ("machine", "preset")}
+# the walk lives beside the classes it walks (imdrive.config.scenario), re-exported here
+from imdrive.config.scenario import (
+    DEFAULT_MACHINE_PRESET,
+    FILE_PATHS,
+    Key,
+    Scenario,
+    is_table_class,
+    scenario_keys,
+    setting_paths,
+    table_paths,
+)
 
-
-@dataclass(frozen=True)
-class Key:
-    """One key of a scenario file.
-
-    ``path`` is its dotted path (``("plant", "thermal", "tau1_s")``); ``owner`` the settings
-    class that holds the field and ``name`` the field's name there; ``info`` its pydantic
-    field (description, unit, constraints); ``hint`` its type without metadata (``float``,
-    ``Literal[...]``, ``Profile | None``, a settings class); ``default`` its default
-    (``dataclasses.MISSING`` for a machine field, which comes from the preset); ``table`` the
-    settings class when the key is a table (a section or ``plant.thermal``).
-    """
-
-    path: tuple[str, ...]
-    owner: type
-    name: str
-    info: FieldInfo
-    hint: Any
-    default: Any
-    table: type | None
-
-    @property
-    def dotted(self) -> str:
-        return ".".join(self.path)
-
-
-def is_table_class(tp) -> bool:
-    """Whether ``tp`` is a settings class (a pydantic dataclass), i.e. a table in the file."""
-    return isinstance(tp, type) and hasattr(tp, "__pydantic_fields__")
-
-
-def _fields(cls, prefix: tuple[str, ...]):
-    hints = typing.get_type_hints(cls)
-    for f in dataclasses.fields(cls):
-        path = FILE_PATHS.get(f.name, (*prefix, f.name)) if cls is Scenario else (*prefix, f.name)
-        hint = hints[f.name]
-        table = hint if is_table_class(hint) else None
-        yield Key(path, cls, f.name, cls.__pydantic_fields__[f.name], hint, f.default, table)
-
-
-@functools.cache
-def scenario_keys() -> tuple[Key, ...]:
-    """Every key of a scenario file, tables included, in file order (sections as in
-    :data:`~imdrive.config.scenario.SECTIONS`, ``[machine]`` first with ``preset``)."""
-    top = {k.name: k for k in _fields(Scenario, ())}
-    out = [top["name"], top["description"]]
-    machine = top["machine"]
-    out.append(machine)
-    out.append(top["machine_preset"])
-    for k in _fields(machine.table, ("machine",)):
-        out.append(dataclasses.replace(k, default=dataclasses.MISSING))
-
-    def walk(key: Key):
-        out.append(key)
-        for sub in _fields(key.table, key.path):
-            if sub.table is not None:
-                walk(sub)
-            else:
-                out.append(sub)
-
-    for name in SECTIONS:
-        walk(top[name])
-    return tuple(out)
-
-
-@functools.cache
-def setting_paths() -> frozenset[tuple[str, ...]]:
-    """Paths a single value may be set at: every key except the top-level tables."""
-    return frozenset(k.path for k in scenario_keys() if not (k.table and len(k.path) == 1))
-
-
-@functools.cache
-def table_paths() -> frozenset[tuple[str, ...]]:
-    """Paths of the tables of the file (``("machine",)``, ``("plant", "thermal")``, ...)."""
-    return frozenset(k.path for k in scenario_keys() if k.table is not None)
-
+__all__ = [
+    "FILE_PATHS",
+    "Key",
+    "is_table_class",
+    "json_schema",
+    "scenario_keys",
+    "setting_paths",
+    "table_paths",
+]
 
 # ------------------------------------------------------------------------------------------
 # JSON Schema
