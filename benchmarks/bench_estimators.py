@@ -21,23 +21,6 @@ import sys
 import tempfile
 import time
 
-CONFIGS = {
-    "mras": [],
-    "reactive-mras": ['control.speed_feedback="reactive-mras"'],
-    "afo": ['control.speed_feedback="afo"'],
-    "afo+R2": [
-        'control.speed_feedback="afo"',
-        'estimator.R2_adaptation="afo"',
-        "flux_injection.amplitude=0.1",
-    ],
-    "ekf": ['control.speed_feedback="ekf"'],
-    "ekf+R2": [
-        'control.speed_feedback="ekf"',
-        'estimator.R2_adaptation="ekf"',
-        "flux_injection.amplitude=0.1",
-    ],
-}
-
 
 def main() -> int:
     ap = argparse.ArgumentParser()
@@ -48,14 +31,14 @@ def main() -> int:
     import numba
 
     numba.set_num_threads(1)
+    from imdrive.bench.protocol import ESTIMATORS  # the configurations the bench compares
     from imdrive.config.scenario import Scenario
     from imdrive.run.simulate import simulate
 
     preset = "sensorless-realistic" if args.realistic else "sensorless"
     print(f"{preset}: median of {args.repeat} runs, kernel time, one core")
-    for name, ov in CONFIGS.items():
-        base = ['control.speed_feedback="mras"'] if name == "mras" else []
-        sc = Scenario.read(preset, base + ov)
+    for name, ov in ESTIMATORS.items():
+        sc = Scenario.read(preset, ov)
         simulate(sc)
         walls = [simulate(sc).wall_time_s for _ in range(args.repeat)]
         w = statistics.median(walls)
