@@ -103,6 +103,11 @@ class Progress:
 
         Draws the bar at once; without a call, the first :meth:`advance` starts it from 0
         (in line mode without a line for 0 items).
+
+        Parameters
+        ----------
+        done : int
+            Items already complete.
         """
         self._start(done, draw=True)
 
@@ -130,7 +135,15 @@ class Progress:
             )
 
     def advance(self, n: int = 1, note: str | None = None) -> None:
-        """``n`` more items done; ``note`` (if given) replaces the label from now on."""
+        """Count more items done.
+
+        Parameters
+        ----------
+        n : int
+            Items just completed.
+        note : str, optional
+            Replaces the label from now on.
+        """
         if not self._started:
             self._start(0, draw=False)
         self.done += n

@@ -27,7 +27,17 @@ def _one_line(text: str) -> str:
 
 
 class SimulationDiverged(RuntimeError):
-    """A run whose states left physical bounds (NaN, inf, or beyond the set limits)."""
+    """A run whose states left physical bounds (NaN, inf, or beyond the set limits).
+
+    Parameters
+    ----------
+    time_s : float
+        Simulated time at which the run diverged, s.
+    signal : str
+        What diverged, e.g. ``stator current``.
+    result : SimulationResult, optional
+        The partial result up to the divergence.
+    """
 
     def __init__(self, time_s: float, signal: str, result=None):
         self.time_s = time_s

@@ -90,7 +90,7 @@ class SteadyState:
     torque_Nm : float or ndarray
         Electromagnetic torque, N m.
     power_factor : float or ndarray
-        ``cos(arg V1 - arg I1) = P_in / (1.5 |V1| |I1|)``.
+        ``cos(arg V1 - arg I1) = P_in / (1.5 |V1| |I1|)``, dimensionless.
     """
 
     slip: np.ndarray
@@ -124,17 +124,20 @@ def equivalent_circuit(machine: MachineParams, V_ll_rms, f_Hz, slip) -> SteadySt
     Parameters
     ----------
     machine : MachineParams
+        The machine's T-equivalent parameters.
     V_ll_rms : float or array_like
         Line-to-line rms supply voltage, V (>= 0).
     f_Hz : float or array_like
         Supply frequency, Hz (> 0).
     slip : float or array_like
-        Slip ``s = (w_e - w_r)/w_e``; any real value (``s = 0`` synchronous, ``s = 1`` standstill,
-        ``s < 0`` generating). The three inputs broadcast against each other.
+        Slip ``s = (w_e - w_r)/w_e``, dimensionless; any real value (``s = 0`` synchronous,
+        ``s = 1`` standstill, ``s < 0`` generating). The three inputs broadcast against each
+        other.
 
     Returns
     -------
     SteadyState
+        Currents, fluxes, powers and torque at every broadcast point.
 
     Notes
     -----
@@ -242,6 +245,7 @@ def breakdown(machine: MachineParams, V_ll_rms: float, f_Hz: float) -> tuple[flo
     Parameters
     ----------
     machine : MachineParams
+        The machine's T-equivalent parameters.
     V_ll_rms : float
         Line-to-line rms voltage, V.
     f_Hz : float
@@ -250,7 +254,8 @@ def breakdown(machine: MachineParams, V_ll_rms: float, f_Hz: float) -> tuple[flo
     Returns
     -------
     slip_bd : float
-        Slip at which ``T_e(s)`` of :func:`equivalent_circuit` is maximal (``s > 0``).
+        Slip at which ``T_e(s)`` of :func:`equivalent_circuit` is maximal (``s > 0``),
+        dimensionless.
     torque_bd : float
         The maximal torque, N m.
 
@@ -286,6 +291,7 @@ def breakdown_thevenin(machine: MachineParams, V_ll_rms: float, f_Hz: float) -> 
     Parameters
     ----------
     machine : MachineParams
+        The machine's T-equivalent parameters.
     V_ll_rms : float
         Line-to-line rms voltage, V.
     f_Hz : float
@@ -294,8 +300,9 @@ def breakdown_thevenin(machine: MachineParams, V_ll_rms: float, f_Hz: float) -> 
     Returns
     -------
     slip_bd : float
+        Breakdown slip (``s > 0``), dimensionless.
     torque_bd : float
-        N m.
+        Breakdown (maximum motoring) torque, N m.
 
     Notes
     -----

@@ -94,7 +94,7 @@ class FOCOperatingPoint:
     w_e, f_Hz : float
         Synchronous (stator) frequency, electrical rad/s and Hz.
     slip : float
-        ``w_sl / w_e`` (nan when ``w_e = 0``).
+        ``w_sl / w_e``, dimensionless (nan when ``w_e = 0``).
     slip_mech_rpm : float
         True slip in mechanical rpm, ``w_sl / n_p * 30/pi``.
     psi_r_Wb : float
@@ -108,8 +108,9 @@ class FOCOperatingPoint:
     V_s_peak_V, V_ll_rms_V : float
         Stator-voltage magnitude (peak phase) and the equivalent line-to-line rms value, V.
     R2_ratio : float
-        ``R2_hat / R2``.
+        ``R2_hat / R2``, dimensionless.
     sensorless : bool
+        Speed feedback from the MRAS (True) or measured (False).
     """
 
     speed_ref_rpm: float
@@ -189,7 +190,7 @@ def foc_operating_point(
         Load torque, N m (positive opposes forward rotation). Viscous friction ``machine.B_Nms``
         is added: the machine delivers ``T_e = load_Nm + B w_m``.
     R2_ratio : float
-        ``R2_hat / R2`` (> 0).
+        ``R2_hat / R2``, dimensionless (> 0).
     flux_ref_Wb : float, optional
         Rotor-flux reference, Wb; the controller imposes ``id* = flux_ref / M``. Default
         ``machine.rated_flux_Wb``.
@@ -199,6 +200,7 @@ def foc_operating_point(
     Returns
     -------
     FOCOperatingPoint
+        Speeds, frequencies, fluxes, torque and voltage of the steady state.
 
     Notes
     -----
@@ -307,12 +309,13 @@ def detuning_speed_error_rpm(
     Parameters
     ----------
     machine : MachineParams
+        The true machine (the controller knows all but R2).
     speed_rpm : float
         Speed reference (= the MRAS estimate in steady state), mechanical rpm.
     load_Nm : float
         Load torque, N m (friction ``B w_m`` added).
     R2_ratio : float or array_like
-        ``R2_hat / R2``.
+        ``R2_hat / R2``, dimensionless.
     flux_ref_Wb : float, optional
         Rotor-flux reference, Wb (default ``machine.rated_flux_Wb``).
 

@@ -44,7 +44,18 @@ METRICS = (
 
 
 def lost_bound_rpm(speed_ref_rpm):
-    """Speed-error bound beyond which control is counted as lost, rpm."""
+    """Speed-error bound beyond which control is counted as lost.
+
+    Parameters
+    ----------
+    speed_ref_rpm : float or ndarray
+        Speed reference, rpm.
+
+    Returns
+    -------
+    float or ndarray
+        The bound on the speed error, rpm: a fixed part plus a fraction of the reference.
+    """
     return LOST_ABS_RPM + LOST_REL * np.abs(speed_ref_rpm)
 
 
@@ -60,8 +71,21 @@ def _longest_run(mask: np.ndarray, dt: float) -> float:
 def run_metrics(sig, t_eval_s: float, diverged: bool) -> dict:
     """The metrics of one run from its signals (mapping of column -> array).
 
-    ``sig`` needs ``time_s``, ``speed_rpm``, ``speed_ref_rpm``, ``speed_est_rpm``,
-    ``R2_est_ohm``, ``R2_ohm``, ``i_alpha_A``, ``i_beta_A``.
+    Parameters
+    ----------
+    sig : Mapping[str, array_like]
+        The run's columns, each in the unit its name ends with: it needs ``time_s``,
+        ``speed_rpm``, ``speed_ref_rpm``, ``speed_est_rpm``, ``R2_est_ohm``, ``R2_ohm``,
+        ``i_alpha_A``, ``i_beta_A``.
+    t_eval_s : float
+        Start of the window of the RMS and lost-control metrics, s.
+    diverged : bool
+        The run diverged: every metric but ``lost_control`` is NaN.
+
+    Returns
+    -------
+    dict
+        Metric name (:data:`METRICS`, unit in the name) -> value.
     """
     t = np.asarray(sig["time_s"])
     w = np.asarray(sig["speed_rpm"])

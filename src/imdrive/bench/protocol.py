@@ -71,7 +71,10 @@ class Case:
     Attributes
     ----------
     overrides : tuple[str, ...]
+        Scenario overrides (``key=value``, as ``imdrive run --set``) on top of the drive's
+        and the estimator's.
     t_end_s : float
+        Length of the run, s.
     t_eval_s : float
         Start of the window of the RMS and lost-control metrics, s (the event under test).
     """
@@ -119,20 +122,54 @@ QUICK_CASES = ("steady-1000", "steady-150", "R1-error")
 
 @dataclass(frozen=True)
 class Run:
+    """One run of the protocol: an estimator configuration on a case and a drive.
+
+    Attributes
+    ----------
+    estimator : str
+        A key of :data:`ESTIMATORS`.
+    case : str
+        A key of :data:`CASES`.
+    drive : str
+        A key of :data:`DRIVES` (``average`` or ``realistic``).
+    """
+
     estimator: str
     case: str
     drive: str
 
 
 def protocol(quick: bool = False) -> list[Run]:
-    """Every run of the protocol (``quick``: a small subset on the average drive, for CI)."""
+    """Every run of the protocol.
+
+    Parameters
+    ----------
+    quick : bool
+        Only a small subset on the average drive (for CI).
+
+    Returns
+    -------
+    list of Run
+        Drives, then cases, then estimators (the last varying fastest).
+    """
     if quick:
         return [Run(e, c, "average") for c in QUICK_CASES for e in QUICK_ESTIMATORS]
     return [Run(e, c, d) for d in DRIVES for c in CASES for e in ESTIMATORS]
 
 
 def scenario(run: Run):
-    """The :class:`~imdrive.config.scenario.Scenario` of one run."""
+    """The scenario of one run.
+
+    Parameters
+    ----------
+    run : Run
+        Estimator, case and drive.
+
+    Returns
+    -------
+    Scenario
+        The validated :class:`~imdrive.config.scenario.Scenario`.
+    """
     from imdrive.config.scenario import Scenario
 
     case = CASES[run.case]

@@ -25,11 +25,26 @@ UNITS = {
 
 
 def run_protocol(quick: bool = False, parallel: bool = True, runs=None):
-    """Simulate every run of the protocol; returns ``(table, results, wall_s)``.
+    """Simulate every run of the protocol.
 
-    ``table`` is a DataFrame with columns ``estimator, case, drive, diverged,`` the
-    :data:`~imdrive.bench.metrics.METRICS`; ``results`` the runs' ``SimulationResult``.
-    ``runs`` (a list of :class:`~imdrive.bench.protocol.Run`) replaces the protocol.
+    Parameters
+    ----------
+    quick : bool
+        The quick subset of the protocol (:func:`~imdrive.bench.protocol.protocol`).
+    parallel : bool
+        Run the batch on all cores.
+    runs : list of Run, optional
+        Runs (:class:`~imdrive.bench.protocol.Run`) in place of the protocol.
+
+    Returns
+    -------
+    table : pandas.DataFrame
+        Columns ``estimator, case, drive, diverged`` and the
+        :data:`~imdrive.bench.metrics.METRICS`, one row per run.
+    results : list of SimulationResult
+        The runs' results, in the order of the rows.
+    wall_s : float
+        Wall time of the batch, s.
     """
     import pandas as pd
 
@@ -56,7 +71,18 @@ def _fmt(v) -> str:
 
 
 def markdown(table) -> str:
-    """One table per metric and drive: cases down, estimator configurations across."""
+    """One Markdown table per metric and drive: cases down, estimator configurations across.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        The table of :func:`run_protocol`.
+
+    Returns
+    -------
+    str
+        The Markdown text.
+    """
     ests = [e for e in ESTIMATORS if e in set(table["estimator"])]
     out = ["# Estimator bench", ""]
     for drive in dict.fromkeys(table["drive"]):
@@ -77,8 +103,20 @@ def markdown(table) -> str:
 
 
 def figures(table, out: Path) -> list[Path]:
-    """One grouped bar chart per metric (cases along x, a bar per estimator, a panel per
-    drive), from ``table``, the same numbers as the CSV."""
+    """One grouped bar chart per metric (cases along x, a bar per estimator, a panel per drive).
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        The table of :func:`run_protocol` (the same numbers as the CSV).
+    out : pathlib.Path
+        Folder to write ``<metric>.png`` into.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The PNG files written.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -118,7 +156,17 @@ def figures(table, out: Path) -> list[Path]:
 def bench_estimators(out_dir, quick: bool = False) -> dict:
     """Run the protocol and write ``estimators.csv``, ``<metric>.png``, ``estimators.md``.
 
-    Returns a summary (runs, wall time, paths).
+    Parameters
+    ----------
+    out_dir : str or pathlib.Path
+        Folder to write into (created).
+    quick : bool
+        The quick subset of the protocol.
+
+    Returns
+    -------
+    dict
+        ``runs`` (count), ``wall_s`` (s), ``csv``, ``markdown`` and ``figures`` (paths).
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

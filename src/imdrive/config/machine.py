@@ -38,6 +38,8 @@ class MachineParams:
         Viscous friction coefficient, N m s/rad.
     rated_power_W, rated_voltage_V, rated_frequency_Hz : float
         Nameplate (shaft power, line-to-line rms voltage, frequency).
+    description : str
+        Free text.
     """
 
     R1_ohm: Annotated[
@@ -114,10 +116,28 @@ class MachineParams:
         return math.sqrt(2.0) * self.rated_power_W / (math.sqrt(3.0) * self.rated_voltage_V)
 
     def with_(self, **changes) -> MachineParams:
-        """Return a copy with some fields changed (validated again)."""
+        """Return a copy with some fields changed (validated again).
+
+        Parameters
+        ----------
+        **changes
+            Field name -> new value, in the fields' units.
+
+        Returns
+        -------
+        MachineParams
+            The new, validated parameter set.
+        """
         return replace(self, **changes)
 
     def to_dict(self) -> dict:
+        """The fields as a plain dictionary.
+
+        Returns
+        -------
+        dict
+            Field name -> value, in the fields' units.
+        """
         return asdict(self)
 
 
@@ -141,7 +161,13 @@ def preset_table(name: str) -> dict:
 
 
 def machine_presets() -> dict[str, str]:
-    """Names and descriptions of the published machine parameter sets."""
+    """Names and descriptions of the published machine parameter sets.
+
+    Returns
+    -------
+    dict of str to str
+        Preset name -> its description.
+    """
     return {k: v.get("description", "") for k, v in _load_presets().items()}
 
 
@@ -150,6 +176,18 @@ def machine_preset(name: str = "paper-table-iv", **overrides) -> MachineParams:
 
     ``paper-table-iv`` (the paper's Table IV, J = 0.069 kg m^2) and ``krause-3hp`` (the textbook
     machine it comes from, J = 0.089 kg m^2).
+
+    Parameters
+    ----------
+    name : str
+        A name of :func:`machine_presets`.
+    **overrides
+        Field name -> value replacing the preset's (e.g. ``J_kgm2=0.1``), in the fields' units.
+
+    Returns
+    -------
+    MachineParams
+        The validated parameter set.
     """
     data = preset_table(name)
     known = {f.name for f in fields(MachineParams)}

@@ -76,16 +76,48 @@ PROFILE_JSON_SCHEMA = {
 
 @dataclass(frozen=True)
 class Profile:
-    """A piecewise-linear function of time, ``points = ((t0, v0), (t1, v1), ...)``."""
+    """A piecewise-linear function of time, ``points = ((t0, v0), (t1, v1), ...)``.
+
+    Constant before the first point and after the last one.
+
+    Parameters
+    ----------
+    points : tuple of (float, float)
+        Breakpoints ``(time in s, value)``, times ascending; the value is in the unit of the
+        quantity the profile drives (SI inside: rad/s, N m, or a dimensionless scale).
+    """
 
     points: tuple[tuple[float, float], ...]
 
     @staticmethod
     def constant(value: float) -> Profile:
+        """A profile that is ``value`` at all times.
+
+        Parameters
+        ----------
+        value : float
+            The value, in the unit of the quantity the profile drives.
+
+        Returns
+        -------
+        Profile
+            One breakpoint at t = 0 s.
+        """
         return Profile(((0.0, float(value)),))
 
     def scaled(self, k: float) -> Profile:
-        """The same profile with every value multiplied by ``k`` (unit conversion)."""
+        """The same profile with every value multiplied by ``k`` (unit conversion).
+
+        Parameters
+        ----------
+        k : float
+            Factor, in (new unit)/(old unit), e.g. pi/30 for rpm -> rad/s.
+
+        Returns
+        -------
+        Profile
+            The scaled profile, same times.
+        """
         return Profile(tuple((t, v * k) for t, v in self.points))
 
     def __call__(self, t):
@@ -99,17 +131,34 @@ class Profile:
         return out if out.ndim else float(out)
 
     def arrays(self) -> tuple[np.ndarray, np.ndarray]:
+        """The breakpoints as two arrays.
+
+        Returns
+        -------
+        t : ndarray
+            Breakpoint times, s.
+        v : ndarray
+            Values at those times, in the unit of the quantity the profile drives.
+        """
         t = np.array([p[0] for p in self.points], dtype=float)
         v = np.array([p[1] for p in self.points], dtype=float)
         return t, v
 
     def to_toml_value(self):
+        """The profile as a scenario file writes it.
+
+        Returns
+        -------
+        float or dict
+            A number for a constant profile, else ``{"points": [[t, v], ...]}``.
+        """
         if len(self.points) == 1:
             return self.points[0][1]
         return {"points": [list(p) for p in self.points]}
 
     @property
     def final(self) -> float:
+        """The value after the last breakpoint, in the profile's unit."""
         return self.points[-1][1]
 
     # as a pydantic field type: validated by parse_profile, written back in file form

@@ -955,6 +955,26 @@ class Scenario:
 
     Built from a TOML-shaped dictionary by :meth:`from_dict` (the ``[machine]`` table holds
     ``preset`` and the fields that override it), or directly from the section objects.
+    Every key, its unit and its default: ``docs/scenarios.md``.
+
+    Attributes
+    ----------
+    name, description : str
+        Name of the run (the default output folder is ``out/NAME``) and free text.
+    machine : MachineParams
+        The plant's machine.
+    machine_preset : str
+        The published parameter set the machine starts from (``machine.preset`` in a file).
+    plant, load, inverter, drive, open_loop, control : settings section
+        Time-varying plant, load torque, DC-link inverter, which controller drives it,
+        open-loop voltage, field-oriented speed control.
+    estimator, mras, reactive_mras, afo, ekf : settings section
+        The controller's machine model and the speed estimators' settings.
+    flux_injection, compensator, injection : settings section
+        Sinusoid on the flux command, the fuzzy R2 compensator, persistent excitation.
+    sensor, simulation, output : settings section
+        Current-sensor imperfections, integration and logging, the files ``imdrive run``
+        writes.
     """
 
     name: Annotated[
@@ -1103,14 +1123,38 @@ class Scenario:
     # -- construction ----------------------------------------------------------------------
     @classmethod
     def from_dict(cls, data: dict) -> Scenario:
-        """Build and validate a scenario from its TOML-shaped dictionary."""
+        """Build and validate a scenario from its TOML-shaped dictionary.
+
+        Parameters
+        ----------
+        data : dict
+            The scenario file's tables, as ``tomllib`` reads them.
+
+        Returns
+        -------
+        Scenario
+            The validated scenario.
+        """
         if not isinstance(data, dict):
             raise ConfigError("scenario", "must be a table")
         return validate(cls, data)
 
     @classmethod
     def from_toml(cls, text: str, overrides: list[str] | tuple[str, ...] = ()) -> Scenario:
-        """Parse TOML text, apply ``key.path=value`` overrides, validate."""
+        """Parse TOML text, apply ``key.path=value`` overrides, validate.
+
+        Parameters
+        ----------
+        text : str
+            A scenario file's text.
+        overrides : list of str
+            ``key.path=value`` strings (values parsed as TOML), applied in order.
+
+        Returns
+        -------
+        Scenario
+            The validated scenario.
+        """
         try:
             data = tomllib.loads(text.removeprefix("\ufeff"))  # a UTF-8 byte-order mark
         except tomllib.TOMLDecodeError as exc:
@@ -1121,8 +1165,21 @@ class Scenario:
 
     @classmethod
     def read(cls, preset_or_path: str, overrides: list[str] | tuple[str, ...] = ()) -> Scenario:
-        """A built-in preset by name, or a scenario file by path: a TOML file, or a run's
-        ``summary.json`` (its ``"scenario"``, to run it again)."""
+        """A built-in preset by name, or a scenario file by path.
+
+        Parameters
+        ----------
+        preset_or_path : str or pathlib.Path
+            A preset name (``imdrive presets``), a TOML scenario file, or a run's
+            ``summary.json`` (its ``"scenario"``, to run it again).
+        overrides : list of str
+            ``key.path=value`` strings (values parsed as TOML), as ``imdrive run --set``.
+
+        Returns
+        -------
+        Scenario
+            The validated scenario.
+        """
         from imdrive.config.presets import preset_names, scenario_text
 
         if str(preset_or_path).endswith(".json") and preset_or_path not in preset_names():
@@ -1148,7 +1205,18 @@ class Scenario:
         return cls.from_dict(data)
 
     def with_(self, **changes) -> Scenario:
-        """A copy with whole sections replaced (``sc.with_(simulation=...)``), validated again."""
+        """A copy with whole sections replaced (``sc.with_(simulation=...)``), validated again.
+
+        Parameters
+        ----------
+        **changes
+            Field name -> new section object (or value for ``name``, ``description``).
+
+        Returns
+        -------
+        Scenario
+            The new, validated scenario.
+        """
         return replace(self, **changes)
 
     def with_overrides(self, overrides) -> Scenario:
@@ -1163,6 +1231,7 @@ class Scenario:
         Returns
         -------
         Scenario
+            The new scenario; ``self`` is unchanged.
 
         Raises
         ------
@@ -1189,14 +1258,25 @@ class Scenario:
 
     # -- export ----------------------------------------------------------------------------
     def to_toml(self) -> str:
-        """The scenario as TOML text, every default filled in (``imdrive show PRESET --all``);
-        :meth:`from_toml` reads it back to an equal scenario."""
+        """The scenario as TOML text, every default filled in (``imdrive show PRESET --all``).
+
+        Returns
+        -------
+        str
+            TOML text that :meth:`from_toml` reads back to an equal scenario.
+        """
         from imdrive.config.toml_writer import dumps
 
         return dumps(self.to_dict())
 
     def to_dict(self) -> dict:
-        """The scenario as run, every default filled in, in TOML-shaped form."""
+        """The scenario as run, every default filled in, in TOML-shaped form.
+
+        Returns
+        -------
+        dict
+            Section name -> table, in the units of the scenario file.
+        """
         out: dict = {"name": self.name, "description": self.description}
         m = {"preset": self.machine_preset}
         m.update({k: v for k, v in self.machine.to_dict().items() if k != "description"})

@@ -120,6 +120,7 @@ class BatchResult:
 
     @property
     def n_drives(self) -> int:
+        """Number of drives simulated (rows of ``metrics``)."""
         return len(self.metrics)
 
     @property
@@ -235,6 +236,7 @@ def simulate_batch(
     Returns
     -------
     BatchResult
+        The metrics table (one row per drive, input order), optional logs and timings.
     """
     import pandas as pd
 

@@ -133,9 +133,27 @@ class SimulationResult:
     Attributes
     ----------
     signals : dict[str, numpy.ndarray]
-        Columns named with their unit (``speed_rpm``, ``torque_Nm``, ``e_d0_Wb``, ...).
+        Columns, each in the unit its name ends with (``time_s`` in s, ``speed_rpm`` in rpm,
+        ``torque_Nm`` in N m, ``e_d0_Wb`` in Wb, ...; ``docs/outputs.md``).
     scenario : Scenario
         The scenario as run.
+    state_initial, state_final : DriveState
+        The kernels' state records at the start and at the end of the run.
+    params : DriveParams
+        The kernels' parameter records.
+    status : int
+        0 for a completed run, else the code of what diverged (``STATUS_TEXT``).
+    k_end : int
+        Control periods simulated.
+    wall_time_s : float
+        Wall time of the kernel call, s.
+    derived : dict
+        Derived quantities (gains, rated values) recorded in ``summary.json``, SI units.
+    startup_s : float
+        Kernel load from the on-disk cache, or compilation, s.
+    end_values : dict or None
+        The signals at t_end when the last logged row is earlier; None: the last logged row
+        is the final state.
     diverged : bool
         Whether the run stopped early because a state left its physical bounds.
     """
@@ -156,6 +174,32 @@ class SimulationResult:
 
     @classmethod
     def from_log(cls, scenario, log, state0, state, params, status, k_end, wall, derived):
+        """Build a result from the kernel's outputs.
+
+        Parameters
+        ----------
+        scenario : Scenario
+            The scenario as run.
+        log : numpy.ndarray
+            The log records (dtype ``LOG``), SI units.
+        state0, state : DriveState
+            The state records at the start and at the end.
+        params : DriveParams
+            The parameter records.
+        status : int
+            The kernel's status code (0: completed).
+        k_end : int
+            Control periods simulated.
+        wall : float
+            Wall time of the kernel call, s.
+        derived : dict
+            Derived quantities for the summary, SI units.
+
+        Returns
+        -------
+        SimulationResult
+            Signals converted to the exported units.
+        """
         vector = scenario.drive.mode == "vector"
         return cls(
             scenario=scenario,
@@ -197,14 +241,17 @@ class SimulationResult:
 
     @property
     def columns(self) -> list[str]:
+        """The signal names, each ending with its unit (``speed_rpm``)."""
         return list(self.signals)
 
     @property
     def time_s(self) -> np.ndarray:
+        """Times of the logged rows, s."""
         return self.signals["time_s"]
 
     @property
     def diverged(self) -> bool:
+        """Whether the run stopped early because a state left its physical bounds."""
         return self.status != S_OK
 
     @property
@@ -232,6 +279,7 @@ class SimulationResult:
 
     @property
     def lost_control_message(self) -> str | None:
+        """One line saying when and how control was lost, or None."""
         if not self.lost_control:
             return None
         sim = self.scenario.simulation
@@ -243,18 +291,29 @@ class SimulationResult:
 
     @property
     def end_time_s(self) -> float:
+        """Simulated time at the end of the run (or at the divergence), s."""
         return self.k_end * self.scenario.simulation.Ts_s
 
     @property
     def divergence_message(self) -> str | None:
+        """One line saying when and what diverged, or None."""
         if not self.diverged:
             return None
         return f"diverged at t = {self.end_time_s:.6g} s: {STATUS_TEXT[self.status]}"
 
     def raise_if_diverged(self) -> SimulationResult:
-        """Raise :class:`~imdrive.errors.SimulationDiverged` (carrying this result) if the run
-        diverged; return the result otherwise, so scripts can write
-        ``res = simulate(sc).raise_if_diverged()``."""
+        """Raise :class:`~imdrive.errors.SimulationDiverged` if the run diverged.
+
+        Returns
+        -------
+        SimulationResult
+            This result, so scripts can write ``res = simulate(sc).raise_if_diverged()``.
+
+        Raises
+        ------
+        SimulationDiverged
+            The run diverged (the exception carries this result).
+        """
         if self.diverged:
             from imdrive.errors import SimulationDiverged
 
@@ -272,7 +331,13 @@ class SimulationResult:
             export.to_parquet(self, folder / "timeseries.parquet")
 
     def to_xarray(self):
-        """The signals as an ``xarray.Dataset`` (units as attributes; needs xarray)."""
+        """The signals as an ``xarray.Dataset`` (needs xarray).
+
+        Returns
+        -------
+        xarray.Dataset
+            One variable per signal over ``time_s``, its unit as an attribute.
+        """
         from imdrive.run.export import to_xarray
 
         return to_xarray(self)
@@ -291,30 +356,72 @@ class SimulationResult:
         Returns
         -------
         matplotlib.figure.Figure
+            The figure (not shown; ``fig.savefig`` or ``plt.show()``).
         """
         from imdrive.run.plots import result_figure
 
         return result_figure(self, signals, t0, t1)
 
     def to_pandas(self):
-        """The signals as a pandas DataFrame (one column per signal, unit in the name)."""
+        """The signals as a pandas DataFrame.
+
+        Returns
+        -------
+        pandas.DataFrame
+            One column per signal, its unit in the name.
+        """
         import pandas as pd
 
         return pd.DataFrame(self.signals)
 
     def window(self, t0: float, t1: float | None = None) -> dict[str, np.ndarray]:
-        """Signals restricted to ``t0 <= t <= t1``."""
+        """Signals restricted to ``t0 <= t <= t1``.
+
+        Parameters
+        ----------
+        t0 : float
+            Start of the window, s.
+        t1 : float, optional
+            End of the window, s (default: the last row).
+
+        Returns
+        -------
+        dict of str to ndarray
+            Column name -> the values in the window, in the column's unit.
+        """
         t = self.time_s
         sel = (t >= t0) & (t <= (t1 if t1 is not None else t[-1]))
         return {k: v[sel] for k, v in self.signals.items()}
 
     def mean(self, name: str, t0: float, t1: float | None = None) -> float:
-        """Mean of a signal over a time window."""
+        """Mean of a signal over a time window.
+
+        Parameters
+        ----------
+        name : str
+            Column name (``res.columns``).
+        t0 : float
+            Start of the window, s.
+        t1 : float, optional
+            End of the window, s (default: the last row).
+
+        Returns
+        -------
+        float
+            The mean, in the column's unit.
+        """
         return float(np.mean(self.window(t0, t1)[name]))
 
     # -- energy ------------------------------------------------------------------------------
     def energy_balance(self) -> dict[str, float]:
-        """Energies over the run, J (from the integrated accumulators of the plant)."""
+        """Energies over the run (from the integrated accumulators of the plant).
+
+        Returns
+        -------
+        dict of str to float
+            ``input_J``, ``copper_loss_J``, ``airgap_work_J``, ``load_and_friction_work_J``,
+            ``magnetic_energy_change_J``, ``kinetic_energy_change_J``, J.
+        """
         x = self.x_final
         x0 = self.x_initial
         J = self.scenario.machine.J_kgm2
@@ -333,28 +440,65 @@ class SimulationResult:
     def compensation_metrics(
         self, tol: float = CONVERGENCE_BAND, window_s: float = DEFAULT_WINDOW_S
     ) -> dict | None:
-        """How the R2 compensator did (None when it is off); see
-        :func:`imdrive.run.metrics.compensation_metrics`."""
+        """How the R2 compensator did; see :func:`imdrive.run.metrics.compensation_metrics`.
+
+        Parameters
+        ----------
+        tol : float
+            Convergence band of R2_hat around R2, a fraction of R2 (dimensionless).
+        window_s : float
+            Length of the steady-state window at the end of the run, s.
+
+        Returns
+        -------
+        dict or None
+            The metrics (units in the keys), None when the compensator is off.
+        """
         return compensation_metrics(self, tol, window_s)
 
     def metrics(self, window_s: float = DEFAULT_WINDOW_S) -> dict:
-        """This run's row of the batch table; see :func:`imdrive.run.metrics.drive_metrics`."""
+        """This run's row of the batch table; see :func:`imdrive.run.metrics.drive_metrics`.
+
+        Parameters
+        ----------
+        window_s : float
+            Length of the steady-state window at the end of the run, s.
+
+        Returns
+        -------
+        dict
+            Metric name (unit in the name) -> value.
+        """
         return drive_metrics(self, window_s)
 
     # -- summary and export ------------------------------------------------------------------
     @property
     def vector(self) -> bool:
+        """Whether the drive is field-oriented (``drive.mode = "vector"``)."""
         return self.scenario.drive.mode == "vector"
 
     def final_values(self) -> dict[str, float]:
-        """Every signal at the end of the run: at t_end (or at the divergence), not at the
-        last logged row when ``log_every`` does not divide the number of periods."""
+        """Every signal at the end of the run.
+
+        Returns
+        -------
+        dict of str to float
+            Column name -> value at t_end (or at the divergence), in the column's unit; not
+            the last logged row when ``log_every`` does not divide the number of periods.
+        """
         if self.end_values is not None:
             return dict(self.end_values)
         return {k: float(v[-1]) for k, v in self.signals.items() if len(v)}
 
     def summary(self) -> dict:
-        """What ``summary.json`` holds: scenario as run, versions, final values, wall time."""
+        """What ``summary.json`` holds.
+
+        Returns
+        -------
+        dict
+            Scenario as run, derived quantities, versions, status, final values, energies,
+            wall time (keys listed in ``docs/outputs.md``; units in the key names).
+        """
         return {
             "scenario": self.scenario.to_dict(),
             "derived": {k: float(v) for k, v in self.derived.items()},
@@ -376,7 +520,13 @@ class SimulationResult:
         }
 
     def to_csv(self, path) -> None:
-        """Write the signals as CSV (header = column names with units)."""
+        """Write the signals as CSV (header = column names with units).
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            The file to write.
+        """
         names = self.columns
         data = np.column_stack([self.signals[n] for n in names])
         np.savetxt(path, data, delimiter=",", header=",".join(names), comments="", fmt="%.9g")
@@ -399,6 +549,21 @@ class SimulationResult:
         write leaves the earlier folder as it was (staging leftovers are removed by the next
         save). An existing ``out_dir`` must be empty or an imdrive result
         (:func:`is_result_folder`) unless ``force``: other files would be deleted.
+
+        Parameters
+        ----------
+        out_dir : str or pathlib.Path
+            The result folder.
+        figures, csv, report : bool, optional
+            Write the PNG figures, ``timeseries.csv``, ``report.html``; None: as the
+            scenario's ``[output]`` says.
+        force : bool
+            Replace a folder that holds other files.
+
+        Returns
+        -------
+        list of pathlib.Path
+            The files written, at their final place.
 
         Raises
         ------

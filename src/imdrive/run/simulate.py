@@ -41,10 +41,22 @@ def kernels_cached() -> bool:
 
 
 def simulate(scenario: Scenario, arrays: DriveArrays | None = None) -> SimulationResult:
-    """Run one drive and return its :class:`~imdrive.run.result.SimulationResult`.
+    """Run one drive.
 
     A run whose states diverge is not an exception: the result has ``diverged = True``, the
     time and the signal, and the logged rows up to that point.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The validated scenario.
+    arrays : DriveArrays, optional
+        Its kernel records, when already built (:func:`~imdrive.run.build.build_arrays`).
+
+    Returns
+    -------
+    SimulationResult
+        Signals (units in the column names), final states, status and timings.
     """
     a = arrays if arrays is not None else build_arrays(scenario)
     n_rows = a.n_steps // a.log_every + 1

@@ -93,6 +93,19 @@ def map_scenario(
     temperature times the final value of ``plant.R1_scale``); likewise ``R2_ratio`` and
     ``M_ratio`` (``M_hat``). Gains that default from the model (current PIs, MRAS K2) follow
     the estimates, as they would in a drive commissioned with them.
+
+    Parameters
+    ----------
+    sc : Scenario
+        The drive.
+    R1_ratio, R2_ratio, M_ratio : float, optional
+        ``R1_hat/R1``, ``R2_hat/R2``, ``M_hat/M``, dimensionless; None keeps the scenario's
+        estimate.
+
+    Returns
+    -------
+    Scenario
+        The scenario with compensator and injection off and the estimates set.
     """
     est = sc.estimator
     m = sc.machine
@@ -517,10 +530,12 @@ class OperatingPoint:
     Attributes
     ----------
     speed_ref_rpm, torque_Nm : float
+        Speed reference and load torque of the point.
     status : str
         ``ok`` or why there is no usable steady state (see :data:`STATUS_OK` ...).
     z : ndarray
-        Fixed point of the rotated one-period map, :data:`STATE_NAMES` (SI).
+        Fixed point of the rotated one-period map, :data:`STATE_NAMES` (SI units: Wb, rad/s,
+        A, V).
     A, B, C : ndarray
         ``z[k+1] = z* + A dz[k] + B du[k]``, ``dy = C dz``; ``u`` in rpm and N m (B is scaled
         from rad/s), ``y`` = :data:`OUTPUT_NAMES`.
@@ -555,11 +570,23 @@ class OperatingPoint:
         return complex(y[2], y[3])
 
     def eigenvalues(self) -> np.ndarray:
-        """Eigenvalues of ``A`` (z-plane)."""
+        """Eigenvalues of ``A``.
+
+        Returns
+        -------
+        ndarray
+            Complex eigenvalues in the z-plane, dimensionless (stable inside the unit circle).
+        """
         return np.linalg.eigvals(self.A)
 
     def modes(self) -> list[Mode]:
-        """Modes from the least stable; see :func:`modes_from_eigenvalues`."""
+        """Modes from the least stable; see :func:`modes_from_eigenvalues`.
+
+        Returns
+        -------
+        list of Mode
+            Eigenvalue, s-plane equivalent (1/s), damping ratio and frequency (Hz) of each.
+        """
         return modes_from_eigenvalues(self.eigenvalues(), self.Ts)
 
     @property
@@ -576,6 +603,11 @@ class OperatingPoint:
         ``control.step_response``) when python-control is installed (``pip install
         imdrive[control]``), else a ``scipy.signal.StateSpace`` with the names in its attributes
         ``input_names``, ``output_names``, ``state_names``.
+
+        Returns
+        -------
+        control.StateSpace or scipy.signal.StateSpace
+            The discrete-time system ``(A, B, C, 0)`` with sampling period ``Ts``.
         """
         D = np.zeros((len(OUTPUT_NAMES), len(INPUT_NAMES)))
         try:
@@ -603,8 +635,23 @@ class OperatingPoint:
     def propagate(self, dz, n_steps: int, du=(0.0, 0.0)) -> np.ndarray:
         """The nonlinear loop's state deviation after ``n_steps`` periods from ``z* + dz``.
 
-        ``du`` = (speed reference step in rpm, load step in N m), held. Runs the engine itself
-        (:func:`imdrive.kernels.linearise.propagate`); for checking the linear model.
+        Runs the engine itself (:func:`imdrive.kernels.linearise.propagate`); for checking
+        the linear model.
+
+        Parameters
+        ----------
+        dz : array_like
+            Initial deviation from ``z``, :data:`STATE_NAMES` (SI units: Wb, rad/s, A, V).
+        n_steps : int
+            Control periods to run.
+        du : tuple of float
+            Speed reference step in rpm and load step in N m, held.
+
+        Returns
+        -------
+        ndarray
+            The state deviation after ``n_steps`` periods, SI units as ``dz`` (NaN if the
+            loop diverged).
         """
         d = self._ops.drive
         P = d.P
@@ -629,6 +676,20 @@ def operating_point(sc: Scenario, speed_rpm: float, torque_Nm: float) -> Operati
     The compensator and injection are switched off (R2_hat frozen at the scenario's initial
     estimate). Estimation errors come from ``[estimator]`` (``R1_ohm``, ``R2_ohm``, ``M_H``) or
     :func:`map_scenario`. A point without steady state is returned with its ``status`` and NaNs.
+
+    Parameters
+    ----------
+    sc : Scenario
+        The sensorless drive.
+    speed_rpm : float
+        Speed reference, rpm.
+    torque_Nm : float
+        Load torque, N m.
+
+    Returns
+    -------
+    OperatingPoint
+        Fixed point, ``A``, ``B``, ``C`` and status.
     """
     ops = solve_operating_points(map_scenario(sc), [speed_rpm], [torque_Nm])
     C = output_matrix(ops.coeffs)

@@ -230,6 +230,21 @@ def validate_map(
 ):
     """Compare the map's verdicts with simulation on a speed x torque x R1_hat/R1 grid.
 
+    Parameters
+    ----------
+    scenario : Scenario
+        The sensorless drive.
+    speeds_rpm : array_like
+        Speed references of the grid, rpm.
+    torques_Nm : array_like
+        Load torques of the grid, N m.
+    R1_ratios : sequence of float
+        ``R1_hat/R1`` values, dimensionless: one map each.
+    step_rpm : float
+        Speed-reference step applied at each fixed point, rpm.
+    horizon_s : float
+        Simulated time after the step, s.
+
     Returns
     -------
     table : pandas.DataFrame

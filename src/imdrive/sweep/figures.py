@@ -24,7 +24,22 @@ def _aggregate(series, how: str):
 
 
 def heatmap_figure(sweep: Sweep, df, h: Heatmap):
-    """One heatmap (or a grid of them: ``rows`` x ``cols`` panels) of a metric over two axes."""
+    """One heatmap (or a grid of them: ``rows`` x ``cols`` panels) of a metric over two axes.
+
+    Parameters
+    ----------
+    sweep : Sweep
+        The sweep (its axes give the levels).
+    df : pandas.DataFrame
+        The sweep's table, one row per run.
+    h : Heatmap
+        Which axes, metric, panels and aggregation.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (not attached to pyplot).
+    """
     from matplotlib.figure import Figure
 
     rows = _levels(sweep, h.rows) if h.rows else [None]
@@ -139,6 +154,22 @@ def _fmt(v) -> str:
 
 
 def save_heatmaps(sweep: Sweep, df, folder: Path) -> list[Path]:
+    """Write every heatmap of ``sweep`` as a PNG.
+
+    Parameters
+    ----------
+    sweep : Sweep
+        The sweep (its ``heatmaps``).
+    df : pandas.DataFrame
+        The sweep's table, one row per run.
+    folder : str or pathlib.Path
+        Folder to write into (created).
+
+    Returns
+    -------
+    list of pathlib.Path
+        The PNG files written.
+    """
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     written = []

@@ -42,6 +42,22 @@ def run_chunk(sweep: Sweep, j: int, chunk_size: int | None = None, parallel: boo
 
     A run that cannot be built or whose derived parameters overflow is recorded as failed
     (``status`` -1, ``error``), the others go on.
+
+    Parameters
+    ----------
+    sweep : Sweep
+        The sweep.
+    j : int
+        Chunk index (runs ``j * chunk_size`` up to the next chunk).
+    chunk_size : int, optional
+        Runs per chunk; default the sweep's.
+    parallel : bool
+        Run the batch on all cores.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per run: run index, axis values, metrics (units in the column names).
     """
     import pandas as pd
 
@@ -74,14 +90,37 @@ def run_sweep(
     report: bool = True,
     notice=None,
 ):
-    """Run ``sweep`` into the store ``out``; returns the consolidated table (pandas).
+    """Run ``sweep`` into the store ``out``.
 
-    ``scheduler`` is a dask.distributed scheduler address (or pass a ``client``); without
-    either, chunks run here with the batch engine on all cores. ``progress`` None: a bar on
-    stderr if it is a terminal, else one line saying what runs (through ``notice``).
-    ``figures``: the heatmap PNGs; ``report``: ``report.html``, the interactive heatmaps
-    (:mod:`imdrive.sweep.report`). ``notice`` receives that line and one per repaired chunk
-    (default: printed on stderr).
+    Parameters
+    ----------
+    sweep : Sweep
+        The sweep.
+    out : str or pathlib.Path
+        The store folder.
+    scheduler : str, optional
+        A dask.distributed scheduler address; without it (and without ``client``) chunks run
+        here with the batch engine on all cores.
+    resume : bool
+        Continue an interrupted sweep in ``out``.
+    chunk_size : int, optional
+        Runs per chunk; default the sweep's.
+    figures : bool
+        Write the heatmap PNGs.
+    progress : bool, optional
+        None: a bar on stderr if it is a terminal, else one line saying what runs (through
+        ``notice``).
+    client : dask.distributed.Client, optional
+        A connected client, in place of ``scheduler``.
+    report : bool
+        Write ``report.html``, the interactive heatmaps (:mod:`imdrive.sweep.report`).
+    notice : callable, optional
+        Receives that line and one per repaired chunk (default: printed on stderr).
+
+    Returns
+    -------
+    pandas.DataFrame
+        The consolidated table, one row per run, sorted by run.
     """
     out = Path(out)
     if chunk_size is not None:

@@ -80,6 +80,23 @@ class Axis:
     ``kind`` is ``"path"`` (a scenario key), one of :data:`CONVENIENCE`, or ``"sets"``. For a
     grid sweep ``values`` are the axis points; for a random sweep the drawn value of every run.
     For a set axis ``values`` are the set names and ``sets`` maps a name to its overrides.
+
+    Attributes
+    ----------
+    name : str
+        The axis name (a key path, a convenience axis or a set axis).
+    kind : str
+        ``"path"``, a name of :data:`CONVENIENCE`, or ``"sets"``.
+    values : tuple
+        The axis points (grid) or each run's drawn value (random), in the unit of the key or
+        convenience axis (``speed_rpm`` in rpm, ``R2_ratio`` dimensionless); set names for a
+        set axis.
+    sets : dict
+        Set name -> its overrides (set axes only).
+    path : tuple of str
+        The scenario key path (``kind == "path"``).
+    choice : bool
+        Random sweep: the value is drawn from listed values or sets.
     """
 
     name: str
@@ -91,19 +108,37 @@ class Axis:
 
     @property
     def numeric(self) -> bool:
+        """Whether every value is a number (the table column is then float)."""
         return self.kind != "sets" and all(
             isinstance(v, int | float) and not isinstance(v, bool) for v in self.values
         )
 
     def points(self) -> list:
-        """Distinct values in order of first appearance."""
+        """Distinct values in order of first appearance.
+
+        Returns
+        -------
+        list
+            The distinct values, in the axis's unit.
+        """
         return list(dict.fromkeys(self.values))
 
 
 @dataclass(frozen=True)
 class Heatmap:
-    """One ``[[heatmap]]``: metric ``value`` over axes ``x`` and ``y``, panels by ``rows`` and
-    ``cols``, the other axes aggregated by ``agg``."""
+    """One ``[[heatmap]]`` of a sweep file.
+
+    Attributes
+    ----------
+    x, y : str
+        The axes along x and y.
+    value : str
+        The metric column shown.
+    rows, cols : str or None
+        Axes giving one panel per value, down and across.
+    agg : str
+        How the other axes are aggregated: ``mean``, ``min``, ``max`` or ``absmax``.
+    """
 
     x: str
     y: str
@@ -119,6 +154,33 @@ class Sweep:
 
     Runs that share the values of the set and key-path axes share one validated scenario
     (kept, up to a bound, in ``_scenarios``); the convenience axes are applied to it per run.
+
+    Attributes
+    ----------
+    name, description : str
+        The sweep's name (default store ``out/sweep-NAME``) and free text.
+    base : Scenario
+        The base scenario, after ``[set]``.
+    base_data : dict
+        The same in TOML-shaped form: every run's overrides are set on a copy.
+    axes : tuple of Axis
+        The axes, in file order.
+    random : bool
+        A random sweep (``samples``) rather than a grid.
+    n_runs : int
+        Number of runs.
+    seed : int
+        Seed of a random sweep's generator.
+    window_s : float
+        Steady-state window of the metrics, s.
+    chunk_size : int
+        Runs per chunk of the store.
+    heatmaps : tuple of Heatmap
+        The figures.
+    source : str
+        The sweep file's text.
+    validation : dict
+        What reading the sweep checked, and the runs known to fail.
     """
 
     name: str
@@ -141,10 +203,22 @@ class Sweep:
     # -- runs ------------------------------------------------------------------------------
     @property
     def shape(self) -> tuple[int, ...]:
+        """Number of values of each axis."""
         return tuple(len(a.values) for a in self.axes)
 
     def run_values(self, i: int) -> tuple:
-        """The value of every axis (set name for a set axis) of run ``i``."""
+        """The value of every axis of run ``i``.
+
+        Parameters
+        ----------
+        i : int
+            Run index.
+
+        Returns
+        -------
+        tuple
+            One value per axis, in the axis's unit (the set name for a set axis).
+        """
         if not 0 <= i < self.n_runs:
             raise IndexError(i)
         if self.random:
@@ -153,22 +227,77 @@ class Sweep:
         return tuple(a.values[int(j)] for a, j in zip(self.axes, idx, strict=True))
 
     def scenario(self, i: int) -> Scenario:
-        """The scenario of run ``i``."""
+        """The scenario of run ``i``.
+
+        Parameters
+        ----------
+        i : int
+            Run index.
+
+        Returns
+        -------
+        Scenario
+            The validated scenario.
+        """
         return self.scenario_for(self.run_values(i))
 
     def scenario_for(self, values: tuple) -> Scenario:
+        """The scenario for given axis values.
+
+        Parameters
+        ----------
+        values : tuple
+            One value per axis, as :meth:`run_values` gives them.
+
+        Returns
+        -------
+        Scenario
+            The validated scenario.
+        """
         return _build(self, dict(zip((a.name for a in self.axes), values, strict=True)))
 
     def n_chunks(self, chunk_size: int | None = None) -> int:
+        """Number of chunks of the store.
+
+        Parameters
+        ----------
+        chunk_size : int, optional
+            Runs per chunk; default the sweep's.
+
+        Returns
+        -------
+        int
+            The number of chunks (the last may be short).
+        """
         cs = chunk_size or self.chunk_size
         return (self.n_runs + cs - 1) // cs
 
     def chunk_runs(self, j: int, chunk_size: int | None = None) -> range:
+        """The runs of chunk ``j``.
+
+        Parameters
+        ----------
+        j : int
+            Chunk index.
+        chunk_size : int, optional
+            Runs per chunk; default the sweep's.
+
+        Returns
+        -------
+        range
+            Run indices.
+        """
         cs = chunk_size or self.chunk_size
         return range(j * cs, min((j + 1) * cs, self.n_runs))
 
     def fingerprint(self) -> str:
-        """Hash of everything that determines the runs (not the chunking or the figures)."""
+        """Hash of everything that determines the runs (not the chunking or the figures).
+
+        Returns
+        -------
+        str
+            20 hexadecimal digits.
+        """
         spec = {
             "base": self.base.to_dict(),
             "axes": [
@@ -183,7 +312,18 @@ class Sweep:
         return hashlib.sha256(text.encode()).hexdigest()[:20]
 
     def inputs(self, runs: range):
-        """Table of run index and axis values for ``runs``."""
+        """Table of run index and axis values.
+
+        Parameters
+        ----------
+        runs : range
+            Run indices.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Column ``run`` and one column per axis.
+        """
         import pandas as pd
 
         cols: dict = {"run": np.arange(runs.start, runs.stop, dtype=np.int64)}
@@ -293,13 +433,32 @@ def _overridden(sweep: Sweep, point: dict) -> Scenario:
 
 
 def sweep_names() -> list[str]:
-    """Names of the built-in sweeps."""
+    """Names of the built-in sweeps.
+
+    Returns
+    -------
+    list of str
+        Sorted names.
+    """
     root = resources.files("imdrive.sweep").joinpath("presets")
     return sorted(p.name[:-5] for p in root.iterdir() if p.name.endswith(".toml"))
 
 
 def sweep_text(ref: str) -> tuple[str, Path | None]:
-    """Text of a built-in sweep by name, or of the file at that path (and its folder)."""
+    """Text of a built-in sweep by name, or of the file at that path.
+
+    Parameters
+    ----------
+    ref : str
+        A name of :func:`sweep_names` or a path.
+
+    Returns
+    -------
+    text : str
+        The TOML text.
+    folder : pathlib.Path or None
+        The file's folder (where relative paths start); None for a built-in sweep.
+    """
     if ref in sweep_names():
         return resources.files("imdrive.sweep").joinpath(f"presets/{ref}.toml").read_text(), None
     p = Path(ref)
@@ -573,12 +732,28 @@ def parse_sweep(
     default_name: str = "sweep",
     max_runs: int = DEFAULT_MAX_RUNS,
 ) -> Sweep:
-    """Read and validate a sweep from its TOML text (``folder``: where relative paths start).
+    """Read and validate a sweep from its TOML text.
 
     The size is computed from the axes before any value is built and refused above
     ``max_runs``. Every run's scenario is validated here, derived quantities included
     (:func:`_validate`), so a sweep that parses runs; a run whose derived parameters cannot be
     computed is listed in :attr:`Sweep.validation` and recorded as failed when it runs.
+
+    Parameters
+    ----------
+    text : str
+        The sweep file's text.
+    folder : pathlib.Path, optional
+        Where relative paths in it start.
+    default_name : str
+        Name when the file gives none.
+    max_runs : int
+        Refuse a sweep of more runs.
+
+    Returns
+    -------
+    Sweep
+        The resolved, validated sweep.
     """
     max_runs = _int(max_runs, "--max-runs")
     data = _read_toml(text)
@@ -790,8 +965,20 @@ def _build_one_axis(sweep: Sweep, axis: Axis, value) -> Scenario:
 
 
 def load_sweep(ref: str, max_runs: int | None = None) -> Sweep:
-    """A built-in sweep by name, or a sweep file by path (``max_runs``: see
-    :func:`parse_sweep`; default :data:`DEFAULT_MAX_RUNS`)."""
+    """A built-in sweep by name, or a sweep file by path.
+
+    Parameters
+    ----------
+    ref : str
+        A name of :func:`sweep_names` or a path.
+    max_runs : int, optional
+        Refuse a sweep of more runs (default :data:`DEFAULT_MAX_RUNS`).
+
+    Returns
+    -------
+    Sweep
+        The resolved, validated sweep.
+    """
     text, folder = sweep_text(ref)
     default = ref if folder is None else slug(Path(ref).stem)
     return parse_sweep(text, folder, default, DEFAULT_MAX_RUNS if max_runs is None else max_runs)

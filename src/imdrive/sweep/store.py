@@ -32,7 +32,13 @@ from imdrive.sweep.spec import Sweep
 
 
 class Store:
-    """The sweep's folder: chunk files, manifest, consolidated table, figures."""
+    """The sweep's folder: chunk files, manifest, consolidated table, figures.
+
+    Parameters
+    ----------
+    root : str or pathlib.Path
+        The store folder.
+    """
 
     MANIFEST = "manifest.json"
 
@@ -41,9 +47,28 @@ class Store:
         self.chunks = self.root / "chunks"
 
     def chunk_path(self, j: int) -> Path:
+        """The file of chunk ``j``.
+
+        Parameters
+        ----------
+        j : int
+            Chunk index.
+
+        Returns
+        -------
+        pathlib.Path
+            ``chunks/chunk-NNNNNN.parquet`` under the store.
+        """
         return self.chunks / f"chunk-{j:06d}.parquet"
 
     def completed(self) -> set[int]:
+        """The chunks whose file exists.
+
+        Returns
+        -------
+        set of int
+            Chunk indices.
+        """
         if not self.chunks.is_dir():
             return set()
         out = set()
@@ -54,6 +79,13 @@ class Store:
         return out
 
     def read_manifest(self) -> dict | None:
+        """The manifest, if there is one.
+
+        Returns
+        -------
+        dict or None
+            The manifest's content; None when the store has none.
+        """
         p = self.root / self.MANIFEST
         if not p.is_file():
             return None
@@ -65,7 +97,19 @@ class Store:
     def write_manifest(
         self, sweep: Sweep, chunk_size: int, started: float, complete: bool = False
     ) -> None:
-        """Rewrite the manifest; ``complete`` only once the table and figures are written."""
+        """Rewrite the manifest.
+
+        Parameters
+        ----------
+        sweep : Sweep
+            The sweep stored here.
+        chunk_size : int
+            Runs per chunk.
+        started : float
+            When the sweep started, seconds since the epoch.
+        complete : bool
+            Mark the sweep complete: only once the table and figures are written.
+        """
         done = sorted(self.completed())
         info = {
             "format": 1,
@@ -83,11 +127,26 @@ class Store:
         atomic_write_text(self.root / self.MANIFEST, json.dumps(info, indent=2) + "\n")
 
     def write_source(self, sweep: Sweep) -> None:
-        """Keep the sweep file's text beside the results (once: a resume does not rewrite it)."""
+        """Keep the sweep file's text beside the results (once: a resume does not rewrite it).
+
+        Parameters
+        ----------
+        sweep : Sweep
+            The sweep stored here.
+        """
         if sweep.source and not (self.root / "sweep.toml").exists():
             atomic_write_text(self.root / "sweep.toml", sweep.source)
 
     def write_chunk(self, j: int, df) -> None:
+        """Write chunk ``j`` atomically.
+
+        Parameters
+        ----------
+        j : int
+            Chunk index.
+        df : pandas.DataFrame
+            The chunk's table (:func:`~imdrive.sweep.run.run_chunk`).
+        """
         with atomic_path(self.chunk_path(j)) as tmp:
             df.to_parquet(tmp, index=False)
 
@@ -95,7 +154,19 @@ class Store:
         """Check every chunk file; remove the damaged ones so they are recomputed.
 
         A chunk is good when it can be read, has the table's columns and holds exactly the runs
-        of its index, each once. Returns one line per removed file, saying why.
+        of its index, each once.
+
+        Parameters
+        ----------
+        sweep : Sweep
+            The sweep stored here.
+        chunk_size : int
+            Runs per chunk.
+
+        Returns
+        -------
+        list of str
+            One line per removed file, saying why.
         """
         import pyarrow.parquet as pq
 
@@ -131,6 +202,25 @@ class Store:
             remove_partials(folder)
 
     def consolidate(self, sweep: Sweep, chunk_size: int):
+        """Read every chunk back and write ``runs.parquet``, sorted by run.
+
+        Parameters
+        ----------
+        sweep : Sweep
+            The sweep stored here.
+        chunk_size : int
+            Runs per chunk.
+
+        Returns
+        -------
+        pandas.DataFrame
+            The whole table, one row per run.
+
+        Raises
+        ------
+        EnvironmentFailure
+            The chunks do not hold every run exactly once.
+        """
         import pandas as pd
 
         parts = [pd.read_parquet(self.chunk_path(j)) for j in range(sweep.n_chunks(chunk_size))]
