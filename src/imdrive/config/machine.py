@@ -22,7 +22,7 @@ from imdrive.errors import ConfigError
 class MachineParams:
     """T-equivalent-circuit parameters of a three-phase induction machine (per phase, SI).
 
-    Parameters
+    Attributes
     ----------
     R1_ohm, R2_ohm : float
         Stator and (stator-referred) rotor resistance at the reference temperature, ohm.

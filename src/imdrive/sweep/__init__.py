@@ -94,17 +94,17 @@ workers return the chunk's table and this process writes the store.
 
 Modules
 -------
-:mod:`~imdrive.sweep.spec`
+imdrive.sweep.spec
     The sweep file: :class:`Sweep`, :class:`Axis`, :class:`Heatmap`, :func:`parse_sweep`,
     :func:`load_sweep`, each run's scenario.
-:mod:`~imdrive.sweep.store`
+imdrive.sweep.store
     The Parquet store and resuming.
-:mod:`~imdrive.sweep.run`
+imdrive.sweep.run
     :func:`run_sweep`: local or dask execution, with a progress bar.
-:mod:`~imdrive.sweep.figures`
+imdrive.sweep.figures
     The heatmaps.
-
-The ``imdrive sweep`` command itself is in :mod:`imdrive.cli`.
+imdrive.cli
+    The ``imdrive sweep`` command itself.
 """
 
 from imdrive.sweep.figures import heatmap_figure, save_heatmaps

@@ -1,0 +1,158 @@
+"""The docs site: ``mkdocs build --strict`` of ``mkdocs.yml`` succeeds, and fails on a warning.
+
+The tools (mkdocs, mkdocs-material, mkdocstrings[python]) are in the ``test`` extra, so a
+missing one is an error here, not a skip. The build runs offline: nothing in the configuration
+fetches anything (the theme's web fonts are off).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import yaml
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _build(config: Path, site: Path) -> subprocess.CompletedProcess:
+    env = {**os.environ, "NO_MKDOCS_2_WARNING": "1"}
+    cmd = [sys.executable, "-m", "mkdocs", "build", "--strict", "-f", str(config), "-d", str(site)]
+    return subprocess.run(
+        cmd, cwd=config.parent, env=env, capture_output=True, text=True, timeout=600
+    )
+
+
+def _config() -> dict:
+    return yaml.load((ROOT / "mkdocs.yml").read_text(), Loader=yaml.SafeLoader)
+
+
+def test_site_builds_strict_with_every_page_and_the_api_reference(tmp_path):
+    site = tmp_path / "site"
+    proc = _build(ROOT / "mkdocs.yml", site)
+    log = proc.stdout + proc.stderr
+    assert proc.returncode == 0, log
+    assert "WARNING" not in log, log
+    # every page of docs/ is in the nav and built
+    for md in (ROOT / "docs").rglob("*.md"):
+        rel = md.relative_to(ROOT / "docs").with_suffix("")
+        page = site / ("index.html" if rel.name == "index" else rel / "index.html")
+        assert page.is_file(), f"{md} was not built"
+    nav = yaml.dump(_config()["nav"])
+    for md in (ROOT / "docs").rglob("*.md"):
+        assert md.relative_to(ROOT / "docs").as_posix() in nav, f"{md.name} is not in the nav"
+    # the notebooks are published beside the page that links them
+    for nb in (ROOT / "docs" / "examples").glob("*.ipynb"):
+        assert (site / "examples" / nb.name).is_file()
+    # the API reference is generated from the docstrings, with the numpydoc sections
+    api = (site / "api" / "simulate" / "index.html").read_text()
+    assert 'id="imdrive.run.simulate.simulate"' in api
+    assert "Signals (units in the column names)" in api  # simulate's Returns description
+    # SimulationResult.window's Parameters table
+    assert re.search(r"<td>\s*<code>t0</code>\s*</td>.*Start of the window, s\.", api, re.S)
+    # no Sphinx role is left as text, and the site fetches no web font
+    for page in site.rglob("*.html"):
+        html = page.read_text()
+        assert not re.search(r":(func|class|meth|mod|attr|data|exc):<code>", html), page
+        assert "fonts.googleapis.com" not in html, page
+
+
+def _mini_project(tmp_path: Path, page: str, module: str = "") -> Path:
+    """A project with the repository's settings (strict, link validation, the hook, the
+    docstring handler), one page and optionally one Python module to document."""
+    cfg = _config()
+    docs = tmp_path / "docs"
+    docs.mkdir()
+    (docs / "index.md").write_text(textwrap.dedent(page))
+    src = tmp_path / "src"
+    src.mkdir()
+    if module:
+        (src / "dummy.py").write_text(textwrap.dedent(module))
+    cfg["docs_dir"] = str(docs)
+    cfg["nav"] = [{"Home": "index.md"}]
+    cfg["hooks"] = [str(ROOT / "mkdocs_hooks.py")]
+    for plugin in cfg["plugins"]:
+        if isinstance(plugin, dict) and "mkdocstrings" in plugin:
+            plugin["mkdocstrings"]["handlers"]["python"]["paths"] = [str(src)]
+    config = tmp_path / "mkdocs.yml"
+    config.write_text(yaml.dump(cfg))
+    return config
+
+
+def test_a_link_to_a_repository_file_becomes_its_path_and_a_missing_one_fails(tmp_path):
+    page = "# Home\n\nThe layer rules: [the layer test](../tests/test_layers.py).\n"
+    config = _mini_project(tmp_path, page)
+    proc = _build(config, tmp_path / "site")
+    assert proc.returncode != 0  # tests/test_layers.py is not in the mini project
+    assert "test_layers.py" in proc.stdout + proc.stderr
+    (tmp_path / "tests").mkdir()
+    (tmp_path / "tests" / "test_layers.py").write_text("")
+    proc = _build(config, tmp_path / "site")
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    html = (tmp_path / "site" / "index.html").read_text()
+    assert "the layer test (<code>tests/test_layers.py</code>)" in html
+
+
+def test_strict_build_fails_on_a_broken_link(tmp_path):
+    config = _mini_project(tmp_path, "# Home\n\nSee [the missing page](missing.md).\n")
+    proc = _build(config, tmp_path / "site")
+    assert proc.returncode != 0
+    assert "missing.md" in proc.stdout + proc.stderr
+
+
+def test_strict_build_fails_on_a_broken_anchor(tmp_path):
+    config = _mini_project(tmp_path, "# Home\n\nSee [below](#no-such-heading).\n")
+    proc = _build(config, tmp_path / "site")
+    assert proc.returncode != 0
+    assert "no-such-heading" in proc.stdout + proc.stderr
+
+
+def test_strict_build_fails_on_a_docstring_that_does_not_match_its_signature(tmp_path):
+    module = '''\
+        def scale(x_s: float) -> float:
+            """Scale a time.
+
+            Parameters
+            ----------
+            y_s : float
+                A parameter the function does not have, s.
+
+            Returns
+            -------
+            float
+                Twice ``x_s``, s.
+            """
+            return 2 * x_s
+        '''
+    config = _mini_project(tmp_path, "# Home\n\n::: dummy.scale\n", module)
+    proc = _build(config, tmp_path / "site")
+    assert proc.returncode != 0
+    assert "y_s" in proc.stdout + proc.stderr
+
+
+def test_strict_build_of_the_same_mini_site_passes_when_it_is_right(tmp_path):
+    module = '''\
+        def scale(x_s: float) -> float:
+            """Scale a time.
+
+            Parameters
+            ----------
+            x_s : float
+                A time, s.
+
+            Returns
+            -------
+            float
+                Twice ``x_s``, s.
+            """
+            return 2 * x_s
+        '''
+    page = "# Home\n\nSee [below](#dummy.scale).\n\n::: dummy.scale\n"
+    config = _mini_project(tmp_path, page, module)
+    proc = _build(config, tmp_path / "site")
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert 'id="dummy.scale"' in (tmp_path / "site" / "index.html").read_text()
