@@ -42,6 +42,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _measured import factor_span, machine_line, span
 
 HERE = Path(__file__).resolve().parent
 PEERS_PYTHON = HERE / ".venv-peers" / "bin" / "python"
@@ -83,6 +84,7 @@ def bench_presets(repeat: int) -> dict:
         walls = [simulate(sc).wall_time_s for _ in range(repeat)]
         w = statistics.median(walls)
         out[name] = {
+            "kernel_walls_s": walls,
             "simulated_s": sc.simulation.t_end_s,
             "control_periods": sc.simulation.n_steps,
             "kernel_wall_s": w,
@@ -92,7 +94,7 @@ def bench_presets(repeat: int) -> dict:
     return out
 
 
-def bench_scaling(sizes: list[int]) -> dict:
+def bench_scaling(sizes: list[int], repeat: int = 1) -> dict:
     import numba
 
     from imdrive.run.batch import simulate_batch
@@ -104,11 +106,15 @@ def bench_scaling(sizes: list[int]) -> dict:
     threads = numba.get_num_threads()
     for n in sizes:
         sw = drives(n)
-        t0 = time.perf_counter()
-        res = simulate_batch(sw.scenario(i) for i in range(n))
-        total = time.perf_counter() - t0
+        totals = []
+        for _ in range(repeat):
+            t0 = time.perf_counter()
+            res = simulate_batch(sw.scenario(i) for i in range(n))
+            totals.append(time.perf_counter() - t0)
+        total = statistics.median(totals)
         m = res.metrics
         rows[n] = {
+            "total_walls_s": totals,
             "threads": threads,
             "total_wall_s": total,
             "kernel_wall_s": res.wall_time_s,
@@ -224,6 +230,9 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--repeat", type=int, default=3, help="timed runs per preset / peer run")
     ap.add_argument("--sizes", default="1,10,100,1000,10000", help="batch sizes N")
+    ap.add_argument(
+        "--repeat-batch", type=int, default=1, help="timed batches per size N (range printed)"
+    )
     ap.add_argument("--json", metavar="PATH", help="also write the figures as JSON")
     ap.add_argument("--peers", action="store_true", help="also run gym-electric-motor, motulator")
     ap.add_argument("--quick", action="store_true", help="sizes 1,10,100; small memory runs")
@@ -248,20 +257,22 @@ def main(argv=None) -> int:
     }
     results: dict = {"info": info}
     print(
-        f"imdrive {info['imdrive']}, Python {info['python']}, numba {info['numba']}, "
-        f"{info['cpus']} CPUs, {info['numba_threads']} numba threads"
+        f"imdrive {info['imdrive']}, numpy {info['numpy']}, numba {info['numba']}, "
+        f"{info['numba_threads']} numba threads"
     )
+    print(machine_line())
     if "presets" not in skip:
         pr = results["presets"] = bench_presets(args.repeat)
-        print("\nsingle drive per preset (kernel, median, one core)")
-        print(f"  {'preset':<24}{'simulated':>10}{'wall':>11}{'us/period':>11}{'x real time':>13}")
+        print(f"\nsingle drive per preset (kernel wall time, one core, {args.repeat} runs each)")
         for name, r in pr.items():
+            w = r["kernel_walls_s"]
+            rtf = factor_span(r["simulated_s"], w)
             print(
-                f"  {name:<24}{r['simulated_s']:>9g}s{r['kernel_wall_s'] * 1e3:>9.1f}ms"
-                f"{r['us_per_period']:>11.3f}{r['real_time_factor']:>12.0f}x"
+                f"  {name:<24}{r['simulated_s']:>5g} s {span(w, 'ms', 1e3, 1):>34}"
+                f"{rtf:>11} real time"
             )
     if "scaling" not in skip:
-        sc = results["scaling"] = bench_scaling(sizes)
+        sc = results["scaling"] = bench_scaling(sizes, args.repeat_batch)
         try:
             info["threading_layer"] = numba.threading_layer()
         except ValueError:
@@ -277,6 +288,8 @@ def main(argv=None) -> int:
                 f"{r['periods_per_s_total'] / 1e6:>12.2f}{r['periods_per_s_kernel'] / 1e6:>10.2f}"
                 f"{r['diverged']:>10}"
             )
+            if len(r["total_walls_s"]) > 1:
+                print(f"  {'':>7}total over the runs: {span(r['total_walls_s'])}")
         o = sc["one_thread_N100"]
         print(
             f"  N = 100 on one thread: {o['total_wall_s']:.2f} s, "

@@ -23,6 +23,8 @@ import argparse
 import json
 import statistics
 
+from _measured import factor_span, machine_line, span
+
 from imdrive.config.scenario import Scenario
 from imdrive.run.simulate import simulate
 
@@ -50,6 +52,8 @@ def measure(repeat: int) -> dict:
         times = [simulate(sc).wall_time_s for _ in range(repeat)]
         med = statistics.median(times)
         out[name] = {
+            "times_s": times,
+            "simulated_s": sc.simulation.t_end_s,
             "median_s": med,
             "min_s": min(times),
             "real_time_factor": sc.simulation.t_end_s / med,
@@ -66,16 +70,13 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=15)
     ap.add_argument("--json", metavar="PATH")
     args = ap.parse_args()
+    print(machine_line())
     res = measure(args.repeat)
-    print(
-        f"{'variant':<10} {'median (ms)':>12} {'min (ms)':>9} {'x real time':>12} {'overhead':>9}"
-    )
+    print("sensorless preset, 3 s, kernel wall time; overhead from the fastest runs")
     for name, r in res.items():
-        ov = f"{r['overhead_pct']:+.1f} %" if "overhead_pct" in r else ""
-        print(
-            f"{name:<10} {1e3 * r['median_s']:>12.2f} {1e3 * r['min_s']:>9.2f} "
-            f"{r['real_time_factor']:>12.0f} {ov:>9}"
-        )
+        ov = f"overhead {r['overhead_pct']:+.1f} %" if "overhead_pct" in r else ""
+        rtf = factor_span(r["simulated_s"], r["times_s"])
+        print(f"  {name:<10} {span(r['times_s'], 'ms', 1e3):>38}  {rtf:>10} real time  {ov}")
     if args.json:
         with open(args.json, "w") as f:
             json.dump(res, f, indent=2)

@@ -34,13 +34,14 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _measured import factor_span, machine_line, span
 
 HERE = Path(__file__).resolve().parent
 PEERS_PYTHON = HERE / ".venv-peers" / "bin" / "python"
 
 
-def _cpu_kernel_time(sc, repeat: int) -> float:
-    """Median process CPU time of the kernel alone (robust on a shared, loaded machine)."""
+def _cpu_kernel_times(sc, repeat: int) -> list[float]:
+    """Process CPU times of the kernel alone, s (robust on a shared, loaded machine)."""
     from imdrive.kernels.engine import run_drive
     from imdrive.run.build import build_arrays, copy_state
     from imdrive.run.simulate import new_log
@@ -54,7 +55,7 @@ def _cpu_kernel_time(sc, repeat: int) -> float:
         t0 = time.process_time()
         run_drive(a.params, S, 0, a.n_steps, log, a.log_every)
         times.append(time.process_time() - t0)
-    return statistics.median(times)
+    return times
 
 
 def bench_kernel(repeat: int, preset: str = "free-acceleration", cpu: bool = False) -> dict:
@@ -71,9 +72,9 @@ def bench_kernel(repeat: int, preset: str = "free-acceleration", cpu: bool = Fal
         res = simulate(sc)
         whole.append(time.perf_counter() - t0)
         kernel.append(res.wall_time_s)
-    k, w = statistics.median(kernel), statistics.median(whole)
     if cpu:
-        k = _cpu_kernel_time(sc, repeat)
+        kernel = _cpu_kernel_times(sc, repeat)
+    k, w = statistics.median(kernel), statistics.median(whole)
     s = res.signals
     rpm = s["speed_rpm"]
     t1700 = math.nan
@@ -89,6 +90,7 @@ def bench_kernel(repeat: int, preset: str = "free-acceleration", cpu: bool = Fal
         "kernel_us_per_period": 1e6 * k / sc.simulation.n_steps,
         "simulate_wall_s": w,
         "simulate_real_time_factor": t_sim / w,
+        "kernel_clock": "process CPU time" if cpu else "wall time",
         "kernel_walls_s": kernel,
         "simulate_walls_s": whole,
         "peak_torque_Nm": float(s["torque_Nm"].max()),
@@ -192,28 +194,30 @@ def main(argv=None) -> int:
             results["motulator"] = bench_motulator(str(Path(tmp) / "timeseries.csv"))
 
     k = results["kernel"]
-    rows = [
-        (f"{k['preset']}, {k['simulated_s']:g} s", f"{k['control_periods']} periods", ""),
-        (
-            "kernel only (median)",
-            f"{k['kernel_wall_s'] * 1e3:.2f} ms",
-            f"{k['kernel_real_time_factor']:.0f}x",
-        ),
-        ("  per control period", f"{k['kernel_us_per_period']:.3f} us", ""),
-        (
-            "whole simulate() (median)",
-            f"{k['simulate_wall_s'] * 1e3:.2f} ms",
-            f"{k['simulate_real_time_factor']:.0f}x",
-        ),
-    ]
-    for o in results["other_presets"]:
-        rows.append(
+    clock = "CPU" if args.cpu else "wall"
+
+    def kernel_rows(r: dict, label: str) -> list[tuple[str, str, str]]:
+        us = [1e6 * t / r["control_periods"] for t in r["kernel_walls_s"]]
+        return [
             (
-                f"{o['preset']} kernel only (median)",
-                f"{o['kernel_wall_s'] * 1e3:.2f} ms",
-                f"{o['kernel_real_time_factor']:.0f}x, {o['kernel_us_per_period']:.3f} us/period",
-            )
+                f"{label} kernel only, {clock} time",
+                span(r["kernel_walls_s"], "ms", 1e3),
+                f"{factor_span(r['simulated_s'], r['kernel_walls_s'])} real time",
+            ),
+            ("  per control period", span(us, "us", digits=3), ""),
+        ]
+
+    rows = [(f"{k['preset']}, {k['simulated_s']:g} s", f"{k['control_periods']} periods", "")]
+    rows += kernel_rows(k, k["preset"])
+    rows.append(
+        (
+            "whole simulate(), wall time",
+            span(k["simulate_walls_s"], "ms", 1e3),
+            f"{factor_span(k['simulated_s'], k['simulate_walls_s'])} real time",
         )
+    )
+    for o in results["other_presets"]:
+        rows += kernel_rows(o, f"{o['preset']} ({o['simulated_s']:g} s)")
     if "cli" in results:
         c = results["cli"]
         rows += [
@@ -246,12 +250,11 @@ def main(argv=None) -> int:
             ),
         ]
     w = max(len(r[0]) for r in rows)
-    print(
-        f"imdrive {info['imdrive']}, Python {info['python']}, numba {info['numba']}, "
-        f"{info['cpus']} CPUs"
-    )
+    wb = max(len(r[1]) for r in rows)
+    print(f"imdrive {info['imdrive']}, numpy {info['numpy']}, numba {info['numba']}")
+    print(machine_line())
     for a, b, c in rows:
-        print(f"  {a:<{w}}  {b:>14}  {c}")
+        print(f"  {a:<{w}}  {b:>{wb}}  {c}")
     sanity = [
         ("peak torque, N m", "peak_torque_Nm"),
         ("peak |i_s|, A", "peak_current_A"),

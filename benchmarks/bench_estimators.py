@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import statistics
 import subprocess
 import sys
 import tempfile
@@ -35,15 +34,19 @@ def main() -> int:
     from imdrive.config.scenario import Scenario
     from imdrive.run.simulate import simulate
 
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    from _measured import factor_span, machine_line, span
+
     preset = "sensorless-realistic" if args.realistic else "sensorless"
-    print(f"{preset}: median of {args.repeat} runs, kernel time, one core")
+    print(machine_line())
+    print(f"{preset}: {args.repeat} runs each, kernel wall time, one core")
     for name, ov in ESTIMATORS.items():
         sc = Scenario.read(preset, ov)
         simulate(sc)
         walls = [simulate(sc).wall_time_s for _ in range(args.repeat)]
-        w = statistics.median(walls)
         t_sim = sc.simulation.t_end_s
-        print(f"  {name:<14} {w * 1e3:8.1f} ms   {t_sim / w:8.0f} x real time")
+        rtf = factor_span(t_sim, walls)
+        print(f"  {name:<14} {span(walls, 'ms', 1e3, 1):>34}  {rtf:>10} real time")
     if args.bench:
         with tempfile.TemporaryDirectory() as d:
             env = dict(os.environ, NUMBA_NUM_THREADS="2")
@@ -51,7 +54,8 @@ def main() -> int:
             subprocess.run(cmd, check=True, env=env)  # compile
             t0 = time.perf_counter()
             subprocess.run(cmd, check=True, env=env)
-            print(f"  bench-estimators (full, 2 threads): {time.perf_counter() - t0:.1f} s")
+            wall = time.perf_counter() - t0
+            print(f"  bench-estimators (full, 2 threads): {span([wall], digits=1)}")
     return 0
 
 

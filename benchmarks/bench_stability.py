@@ -8,10 +8,10 @@ loads or compiles the kernels (reported apart); then ``--repeat`` timed maps ove
 from __future__ import annotations
 
 import argparse
-import statistics
 import time
 
 import numpy as np
+from _measured import machine_line, span
 
 from imdrive.config.scenario import Scenario
 from imdrive.stability.maps import stability_map
@@ -22,6 +22,7 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--preset", default="sensorless")
     args = ap.parse_args()
+    print(machine_line())
     sc = Scenario.read(args.preset)
     speeds = np.linspace(0.0, 1500.0, 50)
     torques = np.linspace(-24.0, 24.0, 40)
@@ -36,8 +37,7 @@ def main() -> None:
     n_ok = int((df.status == "ok").sum())
     print(
         f"50 x 40 map ({len(df)} points, {n_ok} with a steady state, {int(df.stable.sum())} "
-        f"stable): median {statistics.median(times):.3f} s, best {min(times):.3f} s "
-        f"over {args.repeat} runs"
+        f"stable): {span(times, digits=3)}"
     )
 
 
