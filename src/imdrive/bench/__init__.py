@@ -1,4 +1,4 @@
-"""The estimator bench (issue 12): every speed estimator and R2 adaptation method on the same
+"""The estimator bench: every speed estimator and R2 adaptation method on the same
 plant, the same test protocol and the same metrics (``imdrive bench-estimators``).
 
 :mod:`.protocol` says what is run, :mod:`.metrics` what is measured (from each run's log),

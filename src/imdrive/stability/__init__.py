@@ -1,4 +1,4 @@
-"""Stability maps of the sensorless drive: steady state, small-signal model, maps (issue 11).
+"""Stability maps of the sensorless drive: steady state, small-signal model, maps.
 
 * :func:`operating_point`: the steady state of the whole closed loop at one (speed, load)
   point and its discrete small-signal model (:class:`~imdrive.stability.linear.OperatingPoint`,
