@@ -195,7 +195,8 @@ def _unit(key: Key) -> str:
 
 
 def _intro(cls) -> str:
-    doc = _md(typing.cast(str, cls.__doc__ or "")).split("Parameters\n")[0]
+    # the prose before the numpydoc field list (Parameters, or Attributes for the fields)
+    doc = re.split(r"(?:Parameters|Attributes)\n", _md(typing.cast(str, cls.__doc__ or "")))[0]
     paras = [" ".join(ln.strip() for ln in p.splitlines() if ln.strip()) for p in doc.split("\n\n")]
     return "\n\n".join(p for p in paras if p)
 
