@@ -39,8 +39,7 @@ def test_site_builds_strict_with_every_page_and_the_api_reference(tmp_path):
     assert "WARNING" not in log, log
     # every page of docs/ is in the nav and built
     for md in (ROOT / "docs").rglob("*.md"):
-        rel = md.relative_to(ROOT / "docs").with_suffix("")
-        page = site / ("index.html" if rel.name == "index" else rel / "index.html")
+        page = site / md.relative_to(ROOT / "docs").with_suffix(".html")
         assert page.is_file(), f"{md} was not built"
     nav = yaml.dump(_config()["nav"])
     for md in (ROOT / "docs").rglob("*.md"):
@@ -49,7 +48,7 @@ def test_site_builds_strict_with_every_page_and_the_api_reference(tmp_path):
     for nb in (ROOT / "docs" / "examples").glob("*.ipynb"):
         assert (site / "examples" / nb.name).is_file()
     # the API reference is generated from the docstrings, with the numpydoc sections
-    api = (site / "api" / "simulate" / "index.html").read_text()
+    api = (site / "api" / "simulate.html").read_text()
     assert 'id="imdrive.run.simulate.simulate"' in api
     assert "Signals (units in the column names)" in api  # simulate's Returns description
     # SimulationResult.window's Parameters table
