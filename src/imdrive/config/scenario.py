@@ -582,6 +582,14 @@ class MrasSettings:
             ge=0.0,
         ),
     ] = 0.0
+    R1_standstill: Annotated[
+        Bool,
+        setting(
+            "standstill R1 identification: while the speed reference is zero and the flux "
+            "current flows, R̂1 = Σ v·i / Σ |i|² over the part after four rotor time constants, "
+            "applied when the reference leaves zero (kernels/estimators/mras.py)"
+        ),
+    ] = False
     R1_max_freq_Hz: Annotated[
         Float,
         setting(
@@ -718,6 +726,16 @@ class CompensatorSettings:
             ge=0.0,
         ),
     ] = 0.3
+    drift_min_freq_Hz: Annotated[
+        Float | None,
+        setting(
+            'step_law = "adaptive" with gating: the drift term is integrated only where the '
+            "mean stator frequency is above this, and reset below it (kernels/compensator.py)",
+            "Hz",
+            ge=0.0,
+            default_doc="the higher injection frequency (0 without injection)",
+        ),
+    ] = None
     drift_max_ohm: Annotated[
         Float | None,
         setting(
@@ -778,6 +796,14 @@ class InjectionSettings:
         Float, setting("headroom: voltage use where it reaches zero", gt=0.0)
     ] = 0.95
     t_on_s: Annotated[Float, setting("time the injection starts", "s", ge=0.0)] = 0.0
+    compensate_filter: Annotated[
+        Bool,
+        setting(
+            "filter-compensated detection: undo the MRAS's s/(s + ωc) comparison filter at the "
+            "injection's two side bands (kernels/compensator.py), which rotates the detected "
+            "signal at low stator frequency; false: plain 2 e_d0 sin detection"
+        ),
+    ] = False
     lowpass_rad_s: Annotated[
         Float,
         setting(
