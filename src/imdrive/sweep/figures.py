@@ -157,10 +157,11 @@ MAX_FONTSIZE = 10.0
 
 
 def _tiny(values) -> float:
-    """Magnitudes below this print as 0: a thousandth of the largest finite magnitude."""
+    """Magnitudes below this print as 0: a thousandth of the 90th percentile of the finite
+    magnitudes (not of the largest, so a few diverging runs do not zero out the rest)."""
     v = np.abs(np.asarray(values, dtype=float))
     v = v[np.isfinite(v)]
-    return 1e-3 * float(v.max()) if v.size else 0.0
+    return 1e-3 * float(np.percentile(v, 90)) if v.size else 0.0
 
 
 def cell_text(v: float, tiny: float = 0.0) -> str:
