@@ -786,6 +786,17 @@ class InjectionSettings:
             default_doc="2 × frequency_Hz",
         ),
     ] = None
+    frequency3_Hz: Annotated[
+        Float | None,
+        setting(
+            "a third frequency for the gating's schedule: the lowest of the three at least "
+            "compensator.gate_band_Hz from the stator frequency is used (kernels/compensator.py); "
+            "the compensator period must hold whole periods of it",
+            "Hz",
+            gt=0.0,
+            default_doc="none: the two-frequency schedule",
+        ),
+    ] = None
     headroom: Annotated[
         Bool | None,
         setting(

@@ -439,6 +439,15 @@ def _build_arrays(sc: Scenario) -> DriveArrays:
     else:
         comp_period = 0.01
     n_comp = max(int(round(comp_period / Ts)), 1)
+    f3 = inj.frequency3_Hz
+    if f3 is not None and comp.enabled and inj.amplitude_A > 0.0:
+        cycles = n_comp * Ts * f3
+        if abs(cycles - round(cycles)) > 1e-6 * max(cycles, 1.0):
+            raise ConfigError(
+                "injection.frequency3_Hz",
+                f"the compensator period ({n_comp * Ts:g} s) must hold a whole number of its "
+                f"periods (got {cycles:g})",
+            )
     R2_min = comp.R2_min_ohm if comp.R2_min_ohm is not None else 0.5 * R2h
     R2_max = comp.R2_max_ohm if comp.R2_max_ohm is not None else 2.0 * R2h
     compensator = new_record(
@@ -563,6 +572,13 @@ def _gating(sc) -> dict:
         "gate_df": comp.gate_band_Hz if sc.injection.amplitude_A > 0.0 else 0.0,
         "gate_hold": float(comp.gate_hold_periods),
         "inj_freq2": f2 if sc.injection.amplitude_A > 0.0 and comp.gate_band_Hz > 0 else 0.0,
+        "inj_freq3": (
+            sc.injection.frequency3_Hz
+            if sc.injection.frequency3_Hz is not None
+            and sc.injection.amplitude_A > 0.0
+            and comp.gate_band_Hz > 0
+            else 0.0
+        ),
     }
 
 
@@ -581,4 +597,5 @@ def _compensator_state(sc) -> np.ndarray:
     """Initial COMPENSATOR_STATE: zeros (no previous iq* yet), the injection frequency in use."""
     st = np.zeros(1, dtype=COMPENSATOR_STATE)
     st[0]["inj_f"] = sc.injection.frequency_Hz
+    st[0]["inj_f_prev"] = sc.injection.frequency_Hz
     return st

@@ -242,9 +242,11 @@ def mras_r1_standstill(p, m, s, v_a, v_b, i_prev_a, i_prev_b, i_a, i_b, w_ref, w
     has the true T2, the model's T2_hat): after four rotor time constants it is still about
     5 % of ``R1 i``. Measured on ``sensorless`` (0.5 s magnetisation): R1_hat exact with R2_hat
     = R2; with R2_hat = 0.8 or 1.2 R2, -0.2 / +0.4 % (ignoring the build-up: 1.5 %;
-    subtracting the model's build-up with k = 1: +-1.1 %). A standstill run is a stretch of periods with ``w_ref = 0``,
-    ``|i| > 1 A`` and ``|w_e| < 2 pi 0.5 Hz``; its first ``p.R1_dc_settle`` seconds (the
-    flux build-up, a few rotor time constants) are skipped, the rest is the window. When the
+    subtracting the model's build-up with k = 1: +-1.1 %).
+
+    A standstill run is a stretch of periods with ``w_ref = 0``, ``|i| > 1 A`` and
+    ``|w_e| < 2 pi 0.5 Hz``; its first ``p.R1_dc_settle`` seconds (the flux build-up, a few
+    rotor time constants) are skipped, the rest is the window. When the
     run ends (the speed reference leaves zero) and its window lasted at least
     :data:`R1_DC_MIN_WINDOW`, R1_hat is the least-squares solution over the window of::
 
