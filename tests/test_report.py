@@ -95,7 +95,14 @@ def test_report_written_by_default_and_skipped_on_request(tmp_path, short_run):
     html = (tmp_path / "a" / "report.html").read_text(encoding="utf-8")
     assert "http://" not in html.replace("http://www.w3.org", "")  # nothing to fetch
     assert "https://" not in html.split('id="plotly-gz"')[0]
-    for text in ("speed", "R2 estimate", "e_d0 demodulated", "scenario as run", "summary"):
+    for text in (
+        "speed",
+        "rotor-resistance estimate",
+        "e_d0 detected synchronously",
+        '"mWb"',  # flux in mWb, as in every figure
+        "scenario as run",
+        "summary",
+    ):
         assert text in html
     off = short_run.scenario.with_overrides({"output.report": False})
     short_run.scenario = off

@@ -322,6 +322,8 @@ def test_envelope_sweep_preset():
     assert min(sw.axes[1].values) < 0 < max(sw.axes[1].values)  # regenerating and motoring
     inj = sw.scenario_for((150, -6, 1.2, 0.9, "injection"))
     assert inj.compensator.step_law == "adaptive" and inj.mras.R1_rate_per_s > 0
+    assert inj.mras.R1_standstill and inj.compensator.fine_gain == 1.0
+    assert inj.injection.frequency3_Hz == 6.0 and inj.compensator.gate_band_Hz == 1.5
     assert inj.estimator.R1_ohm == pytest.approx(0.9 * inj.machine.R1_ohm)
     assert inj.estimator.R2_ohm == pytest.approx(1.2 * inj.machine.R2_ohm)
     plain = sw.scenario_for((150, -6, 1.0, 1.0, "uncompensated"))

@@ -47,7 +47,7 @@ def plot_speed_error_vs_R2(machine: MachineParams, speed_rpm: float, loads_Nm, r
     ax.axhline(0.0, color="0.5", lw=0.8)
     ax.axvline(1.0, color="0.5", lw=0.8, ls=":")
     ax.set_xlabel(r"$\hat R_2 / R_2$")
-    ax.set_ylabel("speed error $n - n^*$ (rpm)")
+    ax.set_ylabel("speed error, actual − reference (rpm)")
     ax.set_title(f"MRAS-sensorless IFOC, $n^*$ = {speed_rpm:g} rpm")
     ax.grid(True, alpha=0.3)
     ax.legend(title="load")

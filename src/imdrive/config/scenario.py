@@ -219,7 +219,13 @@ class DriveSettings:
 
     mode: Annotated[
         Literal["open-loop", "vector"],
-        setting('"open-loop": sinusoidal voltage ([open_loop]); "vector": field-oriented control'),
+        setting(
+            '"open-loop" (the default, so a file without [drive] runs the machine on the '
+            "sinusoidal voltage of [open_loop] and ignores [control], [estimator], "
+            '[compensator] and [injection]); "vector": field-oriented speed control ([control]) '
+            "with its speed feedback, estimator and compensator. Every vector preset sets "
+            '"vector"'
+        ),
     ] = "open-loop"
 
 
@@ -582,6 +588,14 @@ class MrasSettings:
             ge=0.0,
         ),
     ] = 0.0
+    R1_standstill: Annotated[
+        Bool,
+        setting(
+            "standstill R1 identification: while the speed reference is zero and the flux "
+            "current flows, R̂1 = Σ v·i / Σ |i|² over the part after four rotor time constants, "
+            "applied when the reference leaves zero (kernels/estimators/mras.py)"
+        ),
+    ] = False
     R1_max_freq_Hz: Annotated[
         Float,
         setting(
@@ -718,6 +732,16 @@ class CompensatorSettings:
             ge=0.0,
         ),
     ] = 0.3
+    drift_min_freq_Hz: Annotated[
+        Float | None,
+        setting(
+            'step_law = "adaptive" with gating: the drift term is integrated only where the '
+            "mean stator frequency is above this, and reset below it (kernels/compensator.py)",
+            "Hz",
+            ge=0.0,
+            default_doc="the higher injection frequency (0 without injection)",
+        ),
+    ] = None
     drift_max_ohm: Annotated[
         Float | None,
         setting(
@@ -762,6 +786,17 @@ class InjectionSettings:
             default_doc="2 × frequency_Hz",
         ),
     ] = None
+    frequency3_Hz: Annotated[
+        Float | None,
+        setting(
+            "a third frequency for the gating's schedule: the lowest of the three at least "
+            "compensator.gate_band_Hz from the stator frequency is used (kernels/compensator.py); "
+            "the compensator period must hold whole periods of it",
+            "Hz",
+            gt=0.0,
+            default_doc="none: the two-frequency schedule",
+        ),
+    ] = None
     headroom: Annotated[
         Bool | None,
         setting(
@@ -778,6 +813,14 @@ class InjectionSettings:
         Float, setting("headroom: voltage use where it reaches zero", gt=0.0)
     ] = 0.95
     t_on_s: Annotated[Float, setting("time the injection starts", "s", ge=0.0)] = 0.0
+    compensate_filter: Annotated[
+        Bool,
+        setting(
+            "filter-compensated detection: undo the MRAS's s/(s + ωc) comparison filter at the "
+            "injection's two side bands (kernels/compensator.py), which rotates the detected "
+            "signal at low stator frequency; false: plain 2 e_d0 sin detection"
+        ),
+    ] = False
     lowpass_rad_s: Annotated[
         Float,
         setting(
@@ -841,6 +884,29 @@ class SensorSettings:
         )
 
 
+#: slowest default logging rate, Hz (see :func:`default_log_every`)
+DEFAULT_LOG_RATE_HZ = 1000.0
+
+
+def default_log_every(Ts_s: float) -> int:
+    """The default logging decimation: the most control periods per logged row that keep the
+    log at >= :data:`DEFAULT_LOG_RATE_HZ` (10 at Ts = 100 µs; 1 for Ts >= 1 ms).
+
+    Parameters
+    ----------
+    Ts_s : float
+        Control period, s.
+
+    Returns
+    -------
+    int
+        ``max(1, floor(1 / (DEFAULT_LOG_RATE_HZ Ts_s)))``, at most 2e9.
+    """
+    # the small tolerance keeps 1e-3 / 1e-4 (= 9.999999999999998) at 10
+    n = int((1.0 / (DEFAULT_LOG_RATE_HZ * Ts_s)) * (1.0 + 1e-9))
+    return min(max(n, 1), 2_000_000_000)
+
+
 @settings("simulation")
 class SimulationSettings:
     """Integration and logging (``[simulation]``)."""
@@ -859,13 +925,19 @@ class SimulationSettings:
         ),
     ] = 1
     log_every: Annotated[
-        Int,
+        Int | None,
         setting(
-            "logging decimation, in control periods (<= 2e9, the most periods a run may have)",
+            "logging decimation: one row of timeseries every this many control periods "
+            "(<= 2e9, the most periods a run may have; 1: every period). The default keeps "
+            "logging at >= 1 kHz, which resolves everything up to the current loop (its "
+            "bandwidth is a few hundred Hz) and the stator frequency; report.html is "
+            "min/max-decimated anyway. It is fixed when the scenario is read (summary.json "
+            "records the number)",
             ge=1,
             le=2_000_000_000,
+            default_doc="max(1, floor(1 ms / Ts_s)): 10 at the default Ts_s = 100 µs",
         ),
-    ] = 1
+    ] = None
     divergence_current_A: Annotated[
         Float | None,
         setting(
@@ -898,6 +970,9 @@ class SimulationSettings:
             raise ConfigError("Ts_s", "must be <= simulation.t_end_s")
         if self.t_end_s / self.Ts_s > 2e9:
             raise ConfigError("Ts_s", "gives more than 2e9 periods")
+        if self.log_every is None:
+            # frozen dataclass: set once here, so every consumer sees an int
+            object.__setattr__(self, "log_every", default_log_every(self.Ts_s))
         return self
 
     @property
@@ -910,7 +985,14 @@ class OutputSettings:
     """What ``imdrive run`` writes besides summary.json (``[output]``)."""
 
     figures: Annotated[Bool, setting("write the PNG figures")] = True
-    csv: Annotated[Bool, setting("write timeseries.csv")] = True
+    csv: Annotated[
+        Bool,
+        setting(
+            "write timeseries.csv (text, 9 significant digits; about 0.4 MB per simulated "
+            "second of a vector drive at the default 1 kHz logging, 4 MB at log_every = 1: for "
+            "long or full-rate runs prefer parquet = true, csv = false)"
+        ),
+    ] = True
     report: Annotated[
         Bool,
         setting(
@@ -921,9 +1003,14 @@ class OutputSettings:
     mat: Annotated[
         Bool, setting("write timeseries.mat (MATLAB; one vector per column, a units struct)")
     ] = False
-    parquet: Annotated[Bool, setting("write timeseries.parquet (units in the schema metadata)")] = (
-        False
-    )
+    parquet: Annotated[
+        Bool,
+        setting(
+            "write timeseries.parquet, the format for big runs: exact float64 (the CSV rounds "
+            "to 9 digits), zstd-compressed, read about 2-3 times faster than the CSV and a third "
+            "smaller (pandas.read_parquet; units in the schema metadata)"
+        ),
+    ] = False
 
 
 SECTIONS: dict[str, type] = {

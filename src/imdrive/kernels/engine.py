@@ -35,7 +35,12 @@ from imdrive.kernels.compensator import (
 )
 from imdrive.kernels.estimators.afo import afo_step
 from imdrive.kernels.estimators.ekf import ekf_step
-from imdrive.kernels.estimators.mras import log_mras, mras_r1_step, mras_step
+from imdrive.kernels.estimators.mras import (
+    log_mras,
+    mras_r1_standstill,
+    mras_r1_step,
+    mras_step,
+)
 from imdrive.kernels.estimators.reactive_mras import reactive_mras_step
 from imdrive.kernels.ifoc import (
     dead_time_feedforward,
@@ -414,7 +419,8 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
             if injecting:
                 ph0 = cmp.inj_phase
                 sine = injection_sine(pk, cmp, t, Ts)
-                demodulate(pk, cmp, est.e_dq0.real, sine, Ts)
+                cosine = math.cos(ph0) if t >= pk.inj_t_on else 0.0
+                demodulate(pk, cmp, est.e_dq0, sine, cosine, ctl.w_e, Ts)
                 a_inj = 1.0
                 if headroom:  # issue 10: the injection backs off near the voltage limit
                     wrapped = cmp.inj_phase < ph0
@@ -422,6 +428,21 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
                 i_inj = a_inj * pk.inj_amp * sine
             # issue 10: online R1 beside the MRAS; with the compensator's gating, held from its
             # start until it first updates and whenever it freezes (transients)
+            if pm.R1_dc and est_code == EST_MRAS:  # issue 10: the DC test at every start
+                mras_r1_standstill(
+                    pm,
+                    mdl,
+                    est,
+                    v_pa,
+                    v_pb,
+                    smp.i_prev_ab.real,
+                    smp.i_prev_ab.imag,
+                    i_meas_a,
+                    i_meas_b,
+                    profile_at(pt, pv, pn, PR_SPEED_REF, t),
+                    ctl.w_e,
+                    Ts,
+                )
             r1_hold = pk.enabled and pk.gate and (t < pk.t_on or cmp.frozen != 0.0)
             if r1_adapt and est_code == EST_MRAS and not r1_hold:
                 # the injected sinusoid (flux-current axis) taken out of the current
@@ -432,7 +453,9 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
                 if pk.gate and t >= pk.t_on:  # issue 10: the compensator's gating signals
                     w_fb_g = est.w_r_hat / n_p if sensorless else w_m
                     w_ref_g = profile_at(pt, pv, pn, PR_SPEED_REF, t)
-                    compensator_gate_sample(pk, cmp, w_ref_g, w_fb_g, ctl.i_ref_dq.imag, v_use)
+                    compensator_gate_sample(
+                        pk, cmp, w_ref_g, w_fb_g, ctl.i_ref_dq.imag, v_use, ctl.w_e
+                    )
                 compensator_step(pk, cmp, mdl, table, est.e_dq0.real, t, k0 + k, ctl.w_e)
             w_ref = profile_at(pt, pv, pn, PR_SPEED_REF, t)
             psi_ref = profile_at(pt, pv, pn, PR_FLUX_REF, t)

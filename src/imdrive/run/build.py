@@ -422,6 +422,9 @@ def _build_arrays(sc: Scenario) -> DriveArrays:
         R1_fmax=sc.mras.R1_max_freq_Hz,
         R1_min=0.5 * R1h,
         R1_max=2.0 * R1h,
+        R1_dc=sc.mras.R1_standstill,
+        # the flux build-up: four rotor time constants of the controller's model
+        R1_dc_settle=4.0 * L2h / R2h,
     )
 
     est_params, est_derived = _estimator_records(sc, Ts, psi0, R1h, R2h, Mh, L2h, sigma_L1)
@@ -436,6 +439,15 @@ def _build_arrays(sc: Scenario) -> DriveArrays:
     else:
         comp_period = 0.01
     n_comp = max(int(round(comp_period / Ts)), 1)
+    f3 = inj.frequency3_Hz
+    if f3 is not None and comp.enabled and inj.amplitude_A > 0.0:
+        cycles = n_comp * Ts * f3
+        if abs(cycles - round(cycles)) > 1e-6 * max(cycles, 1.0):
+            raise ConfigError(
+                "injection.frequency3_Hz",
+                f"the compensator period ({n_comp * Ts:g} s) must hold a whole number of its "
+                f"periods (got {cycles:g})",
+            )
     R2_min = comp.R2_min_ohm if comp.R2_min_ohm is not None else 0.5 * R2h
     R2_max = comp.R2_max_ohm if comp.R2_max_ohm is not None else 2.0 * R2h
     compensator = new_record(
@@ -454,6 +466,7 @@ def _build_arrays(sc: Scenario) -> DriveArrays:
         inj_freq=inj.frequency_Hz,
         inj_lpf=inj.lowpass_rad_s,
         inj_t_on=inj.t_on_s,
+        inj_hp_wc=sc.mras.wc_rad_s if inj.compensate_filter else 0.0,
         **_gating(sc),
     )
     table = fuzzy_table(comp.table).astype(np.float64)
@@ -544,6 +557,7 @@ def _gating(sc) -> dict:
             "fine_gain": comp.fine_gain,
             "drift_gain": comp.drift_gain,
             "drift_max": dmax,
+            "drift_fmin": _drift_fmin(sc),
         }
     if not (on and comp.enabled):
         return out
@@ -558,11 +572,30 @@ def _gating(sc) -> dict:
         "gate_df": comp.gate_band_Hz if sc.injection.amplitude_A > 0.0 else 0.0,
         "gate_hold": float(comp.gate_hold_periods),
         "inj_freq2": f2 if sc.injection.amplitude_A > 0.0 and comp.gate_band_Hz > 0 else 0.0,
+        "inj_freq3": (
+            sc.injection.frequency3_Hz
+            if sc.injection.frequency3_Hz is not None
+            and sc.injection.amplitude_A > 0.0
+            and comp.gate_band_Hz > 0
+            else 0.0
+        ),
     }
+
+
+def _drift_fmin(sc) -> float:
+    """Stator frequency below which the adaptive law has no drift term, Hz (0: never)."""
+    comp = sc.compensator
+    if comp.drift_min_freq_Hz is not None:
+        return comp.drift_min_freq_Hz
+    if sc.injection.amplitude_A <= 0.0:
+        return 0.0
+    f2 = sc.injection.frequency2_Hz
+    return max(sc.injection.frequency_Hz, f2 if f2 is not None else 2 * sc.injection.frequency_Hz)
 
 
 def _compensator_state(sc) -> np.ndarray:
     """Initial COMPENSATOR_STATE: zeros (no previous iq* yet), the injection frequency in use."""
     st = np.zeros(1, dtype=COMPENSATOR_STATE)
     st[0]["inj_f"] = sc.injection.frequency_Hz
+    st[0]["inj_f_prev"] = sc.injection.frequency_Hz
     return st

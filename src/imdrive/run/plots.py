@@ -1,15 +1,181 @@
-"""Figures of a run, drawn with matplotlib's object API (no global pyplot state, Agg-safe)."""
+"""Figures of a run, drawn with matplotlib's object API (no global pyplot state, Agg-safe).
+
+Conventions shared by every figure of the package (run figures, the paper's reproduction,
+sweep heatmaps, report.html):
+
+* one display unit per quantity (:data:`DISPLAY_UNITS`): flux linkages in mWb (SI Wb inside,
+  scaled only here), speeds in rpm, torques in N m, currents in A, resistances in Ω; axis
+  labels read ``quantity (unit)`` and flux axes never carry a hidden offset or multiplier;
+* legends say what a signal is (:data:`SIGNALS`: "estimated speed (MRAS)",
+  "rotor-resistance estimate R̂2"), not its column name;
+* a flux error whose start-up transient is a hundred times its steady value (e_d0) gets a
+  second, zoomed panel whose y-range comes from the steady-state samples
+  (:func:`zoom_limits`, :func:`steady_start`), and the compensator's switch-on is marked.
+"""
 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from matplotlib.figure import Figure
+import numpy as np
+
+from imdrive.run.export import unit_of
+
+if TYPE_CHECKING:  # matplotlib is loaded by the first figure, not by the tables below
+    from matplotlib.figure import Figure
+
+#: flux linkages are drawn in mWb: the start-up transient (tens of mWb), the rotor flux
+#: (hundreds) and the steady e_d0 bias (a few µWb to a few mWb) all read without a multiplier
+FLUX_UNIT = "mWb"
+FLUX_SCALE = 1e3
+
+#: the unit each quantity is drawn in, keyed by the column's SI unit suffix:
+#: ``column unit -> (display unit, factor from the column's unit)``
+DISPLAY_UNITS = {
+    "Wb": (FLUX_UNIT, FLUX_SCALE),
+    "rpm": ("rpm", 1.0),
+    "Nm": ("N m", 1.0),
+    "A": ("A", 1.0),
+    "ohm": ("Ω", 1.0),
+    "V": ("V", 1.0),
+    "C": ("°C", 1.0),
+    "rad/s": ("rad/s", 1.0),
+    "rad": ("rad", 1.0),
+    "s": ("s", 1.0),
+}
+
+#: the quantity of each column unit, for axis labels ``quantity (display unit)``
+QUANTITIES = {
+    "Wb": "flux linkage",
+    "rpm": "speed",
+    "Nm": "torque",
+    "A": "current",
+    "ohm": "resistance",
+    "V": "voltage",
+    "C": "temperature",
+    "rad/s": "speed",
+    "rad": "angle",
+    "s": "time",
+}
+
+#: what each column is, for legends: ``column -> label``
+SIGNALS = {
+    "speed_rpm": "actual speed",
+    "speed_ref_rpm": "speed reference",
+    "speed_est_rpm": "estimated speed",
+    "w_m_rad_s": "actual speed",
+    "torque_Nm": "electromagnetic torque",
+    "load_torque_Nm": "load torque",
+    "i_a_A": "phase a current",
+    "i_b_A": "phase b current",
+    "i_c_A": "phase c current",
+    "i_alpha_A": "stator current, α axis",
+    "i_beta_A": "stator current, β axis",
+    "i_alpha_meas_A": "measured stator current, α axis",
+    "i_beta_meas_A": "measured stator current, β axis",
+    "i_d_A": "flux current i_d",
+    "id_ref_A": "flux-current reference i_d*",
+    "i_q_A": "torque current i_q",
+    "iq_ref_A": "torque-current reference i_q*",
+    "flux_Wb": "rotor flux magnitude |ψr| (plant)",
+    "psi_r_alpha_Wb": "rotor flux, α axis (plant)",
+    "psi_r_beta_Wb": "rotor flux, β axis (plant)",
+    "e_d0_Wb": "MRAS flux error, d axis (e_d0)",
+    "e_q0_Wb": "MRAS flux error, q axis (e_q0)",
+    "e_d0_demod_Wb": "e_d0 detected synchronously with the injection",
+    "lam_v_alpha_Wb": "voltage-model rotor flux, α axis",
+    "lam_v_beta_Wb": "voltage-model rotor flux, β axis",
+    "lam_i_alpha_Wb": "current-model rotor flux, α axis",
+    "lam_i_beta_Wb": "current-model rotor flux, β axis",
+    "R2_ohm": "actual R2 (plant)",
+    "R2_est_ohm": "rotor-resistance estimate R̂2",
+    "R1_ohm": "actual R1 (plant)",
+    "R1_est_ohm": "stator-resistance estimate R̂1",
+    "v_alpha_V": "applied voltage, α axis",
+    "v_beta_V": "applied voltage, β axis",
+    "v_ref_alpha_V": "voltage reference, α axis",
+    "v_ref_beta_V": "voltage reference, β axis",
+    "theta1_C": "stator winding temperature",
+    "theta2_C": "rotor winding temperature",
+    "theta_e_rad": "field angle of the controller",
+}
+
+#: the speed estimators' names in legends, by ``control.speed_feedback``
+ESTIMATOR_NAMES = {
+    "mras": "MRAS",
+    "reactive-mras": "reactive-power MRAS",
+    "afo": "full-order observer",
+    "ekf": "EKF",
+}
 
 
-def _fig(nrows: int, title: str) -> tuple[Figure, list]:
+def display_unit(column: str) -> tuple[str, float]:
+    """``(unit, factor)``: the unit column ``column`` is drawn in and the factor from its SI
+    (column) unit; flux linkages in mWb (:data:`DISPLAY_UNITS`)."""
+    return DISPLAY_UNITS.get(unit_of(column), (unit_of(column), 1.0))
+
+
+def signal_label(column: str, res=None) -> str:
+    """What column ``column`` is, for a legend (its name when unknown); the speed estimate is
+    named after the run's estimator when ``res`` is given."""
+    label = SIGNALS.get(column, column)
+    if column == "speed_est_rpm" and res is not None:
+        fb = res.scenario.control.speed_feedback
+        label = f"{label} ({ESTIMATOR_NAMES.get(fb, fb)})"
+    return label
+
+
+def zoom_limits(values, q: float = 0.5, pad: float = 0.15) -> tuple[float, float]:
+    """y-limits showing ``values`` without their outliers, zero included.
+
+    Parameters
+    ----------
+    values : array_like
+        The samples to show (in the unit they are drawn in), e.g. a steady-state window.
+    q : float
+        Percentile, %, cut at each end (robust to a few spikes).
+    pad : float
+        Margin on each side, as a fraction of the span.
+
+    Returns
+    -------
+    (float, float)
+        ``(lo, hi)`` spanning the ``q`` .. ``100 - q`` percentiles and 0 (a steady bias is
+        read against zero), widened by ``pad``; ``(-1, 1)`` without a finite sample.
+    """
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    if v.size == 0:
+        return -1.0, 1.0
+    lo, hi = np.percentile(v, [q, 100.0 - q])
+    lo, hi = min(float(lo), 0.0), max(float(hi), 0.0)
+    span = hi - lo
+    if span == 0.0:  # all zero
+        return -1.0, 1.0
+    return lo - pad * span, hi + pad * span
+
+
+def steady_start(res) -> float:
+    """Start of the steady-state window of a run, s: where the compensator switches on when it
+    is enabled (the presets switch it on once the start-up has settled); otherwise 1 s after
+    the last change of the speed reference or the load, at least half-way through and at most
+    90 % of the run."""
+    sc = res.scenario
+    t_end = float(res.time_s[-1])
+    if "R2_est_ohm" in res.signals and sc.compensator.enabled and sc.compensator.t_on_s < t_end:
+        return float(sc.compensator.t_on_s)
+    last = max(sc.control.speed_ref_rpm.points[-1][0], sc.load.torque_Nm.points[-1][0])
+    return min(max(last + 1.0, 0.5 * t_end), 0.9 * t_end)
+
+
+def _fig(nrows: int, title: str, heights=None) -> tuple[Figure, list]:
+    from matplotlib.figure import Figure
+
     fig = Figure(figsize=(8, 2.4 * nrows + 0.6), layout="constrained")
-    axes = fig.subplots(nrows, 1, sharex=True, squeeze=False)[:, 0]
+    axes = fig.subplots(
+        nrows, 1, sharex=True, squeeze=False, gridspec_kw={"height_ratios": heights}
+    )[:, 0]
     fig.suptitle(title)
     for ax in axes:
         ax.grid(True, alpha=0.3)
@@ -17,93 +183,156 @@ def _fig(nrows: int, title: str) -> tuple[Figure, list]:
     return fig, list(axes)
 
 
+def _plot(ax, res, column: str, *args, **kwargs):
+    """Plot one column against time in its display unit, labelled with what it is."""
+    s = res.signals
+    _, k = display_unit(column)
+    kwargs.setdefault("label", signal_label(column, res))
+    return ax.plot(s["time_s"], np.asarray(s[column]) * k, *args, **kwargs)
+
+
+def _ylabel(ax, quantity: str, column: str) -> None:
+    unit, _ = display_unit(column)
+    ax.set_ylabel(f"{quantity} ({unit})")
+    if unit == FLUX_UNIT:  # the label is the whole truth: no offset, no 1e-3 multiplier
+        ax.ticklabel_format(axis="y", style="plain", useOffset=False)
+
+
+def _mark_switch_on(axes, res) -> None:
+    """A vertical line on every panel at the compensator's switch-on, labelled on the first."""
+    comp = res.scenario.compensator
+    if not comp.enabled or comp.t_on_s >= res.time_s[-1]:
+        return
+    for ax in axes:
+        ax.axvline(comp.t_on_s, color="0.35", lw=0.9, ls="-.")
+    axes[0].text(
+        comp.t_on_s,
+        0.97,
+        f" compensator on ({comp.t_on_s:g} s)",
+        transform=axes[0].get_xaxis_transform(),
+        ha="left",
+        va="top",
+        fontsize=8,
+        color="0.25",
+    )
+
+
+def _zoom_panel(ax, res, columns, t0: float) -> None:
+    """``columns`` again, y-range from the samples at ``t >= t0`` (:func:`zoom_limits`), drawn
+    from where they settle into that range for good (the transient before it is left out
+    rather than clipped), with the steady window shaded and a zero line."""
+    s = res.signals
+    t = np.asarray(s["time_s"])
+    win = t >= t0
+    scaled = {col: np.asarray(s[col]) * display_unit(col)[1] for col, _ in columns}
+    lo, hi = zoom_limits(np.concatenate([v[win] for v in scaled.values()]))
+    outside = np.zeros(t.shape, dtype=bool)
+    for v in scaled.values():
+        outside |= ~((v >= lo) & (v <= hi))
+    outside &= ~win
+    first = int(np.flatnonzero(outside)[-1]) + 1 if outside.any() else 0
+    for col, style in columns:
+        kw = {"label": signal_label(col, res), **style}
+        ax.plot(t[first:], scaled[col][first:], **kw)
+    ax.set_ylim(lo, hi)
+    ax.axhline(0.0, color="k", lw=0.6)
+    ax.axvspan(t0, float(t[-1]), color="tab:green", alpha=0.06, lw=0)
+    ax.set_title(
+        f"zoom on the steady state: y-range from the samples after {t0:g} s (shaded)",
+        fontsize=8,
+        loc="left",
+    )
+
+
 def speed_figure(res) -> Figure:
     s = res.signals
-    t = s["time_s"]
     fig, (ax,) = _fig(1, f"{res.scenario.name}: speed")
-    ax.plot(t, s["speed_rpm"], label="actual")
+    _plot(ax, res, "speed_rpm")
     if "speed_ref_rpm" in s:
-        ax.plot(t, s["speed_ref_rpm"], "--", label="reference")
-        if res.scenario.control.speed_feedback == "mras":
-            ax.plot(t, s["speed_est_rpm"], ":", label="estimated (MRAS)")
-    ax.set_ylabel("speed (rpm)")
+        _plot(ax, res, "speed_ref_rpm", "--")
+        if res.scenario.control.speed_feedback != "measured":
+            _plot(ax, res, "speed_est_rpm", ":")
+    _ylabel(ax, "speed", "speed_rpm")
     ax.legend(loc="best")
     return fig
 
 
 def torque_figure(res) -> Figure:
-    s = res.signals
     fig, (ax,) = _fig(1, f"{res.scenario.name}: torque")
-    ax.plot(s["time_s"], s["torque_Nm"], label="electromagnetic")
-    ax.plot(s["time_s"], s["load_torque_Nm"], "--", label="load")
-    ax.set_ylabel("torque (N m)")
+    _plot(ax, res, "torque_Nm")
+    _plot(ax, res, "load_torque_Nm", "--")
+    _ylabel(ax, "torque", "torque_Nm")
     ax.legend(loc="best")
     return fig
 
 
 def currents_figure(res) -> Figure:
-    s = res.signals
-    t = s["time_s"]
-    vector = "i_d_A" in s
+    vector = "i_d_A" in res.signals
     fig, axes = _fig(2 if vector else 1, f"{res.scenario.name}: stator currents")
     for ph in "abc":
-        axes[0].plot(t, s[f"i_{ph}_A"], lw=0.8, label=f"i_{ph}")
-    axes[0].set_ylabel("phase current (A)")
+        _plot(axes[0], res, f"i_{ph}_A", lw=0.8)
+    _ylabel(axes[0], "phase current", "i_a_A")
     axes[0].legend(loc="best")
     if vector:
-        axes[1].plot(t, s["i_d_A"], label="i_d")
-        axes[1].plot(t, s["id_ref_A"], "--", label="i_d*")
-        axes[1].plot(t, s["i_q_A"], label="i_q")
-        axes[1].plot(t, s["iq_ref_A"], "--", label="i_q*")
-        axes[1].set_ylabel("synchronous frame (A)")
+        for col, style in (("i_d_A", "-"), ("id_ref_A", "--"), ("i_q_A", "-"), ("iq_ref_A", "--")):
+            _plot(axes[1], res, col, style)
+        _ylabel(axes[1], "synchronous-frame current", "i_d_A")
         axes[1].legend(loc="best")
     return fig
 
 
 def estimator_figure(res) -> Figure:
-    s = res.signals
-    t = s["time_s"]
-    fig, axes = _fig(3, f"{res.scenario.name}: flux and MRAS")
-    axes[0].plot(t, s["flux_Wb"], label="|psi_r| (plant)")
-    axes[0].set_ylabel("rotor flux (Wb)")
+    """Rotor flux, the MRAS flux errors (whole run and a steady-state zoom), R̂2 against R2."""
+    fig, axes = _fig(4, f"{res.scenario.name}: flux and MRAS", heights=[1, 1, 1.3, 1])
+    _plot(axes[0], res, "flux_Wb")
+    _ylabel(axes[0], "rotor flux", "flux_Wb")
     axes[0].legend(loc="best")
-    axes[1].plot(t, s["e_d0_Wb"], label="e_d0")
-    axes[1].plot(t, s["e_q0_Wb"], label="e_q0")
-    axes[1].set_ylabel("flux error (Wb)")
-    axes[1].legend(loc="best")
-    axes[2].plot(t, s["R2_ohm"], label="R2 (plant)")
-    axes[2].plot(t, s["R2_est_ohm"], "--", label="R2 estimate")
-    axes[2].set_ylabel("rotor resistance (ohm)")
-    axes[2].legend(loc="best")
+    errors = [("e_d0_Wb", {}), ("e_q0_Wb", {})]
+    for col, style in errors:
+        _plot(axes[1], res, col, **style)
+    _ylabel(axes[1], "flux error", "e_d0_Wb")
+    axes[1].legend(loc="best", fontsize=8)
+    _zoom_panel(axes[2], res, errors, steady_start(res))
+    _ylabel(axes[2], "flux error, zoom", "e_d0_Wb")
+    _plot(axes[3], res, "R2_ohm")
+    _plot(axes[3], res, "R2_est_ohm", "--")
+    _ylabel(axes[3], "rotor resistance", "R2_ohm")
+    axes[3].legend(loc="best")
+    _mark_switch_on(axes, res)
     return fig
 
 
 def compensation_figure(res) -> Figure:
-    """The paper's Figs. 5/6 layout: e_d0, the R2 estimate, and the motor speed over time."""
+    """The paper's Figs. 5/6 layout: e_d0 (whole run, then zoomed on the steady state after
+    the compensator switches on), the R2 estimate against the plant's R2, and the speeds."""
     s = res.signals
-    t = s["time_s"]
     comp = res.scenario.compensator
-    fig, axes = _fig(3, f"{res.scenario.name}: rotor-resistance compensation")
+    fig, axes = _fig(
+        4, f"{res.scenario.name}: rotor-resistance compensation", heights=[0.8, 1.3, 1, 1]
+    )
     if comp.input == "demodulated":
-        axes[0].plot(t, s["e_d0_Wb"], lw=0.6, alpha=0.6, label="e_d0")
-        axes[0].plot(t, s["e_d0_demod_Wb"], lw=0.6, label="2 e_d0 sin(injection)")
+        shown = [("e_d0_Wb", {"lw": 0.6, "alpha": 0.6}), ("e_d0_demod_Wb", {"lw": 0.6})]
     else:
-        axes[0].plot(t, s["e_d0_Wb"], label="e_d0")
-    axes[0].set_ylabel("flux error (Wb)")
-    axes[0].legend(loc="best")
-    axes[1].plot(t, s["R2_ohm"], label="R2 (plant)")
-    axes[1].plot(t, s["R2_est_ohm"], "--", label="R2 estimate")
-    axes[1].set_ylabel("rotor resistance (ohm)")
-    axes[1].legend(loc="best")
-    axes[2].plot(t, s["speed_rpm"], label="actual")
-    axes[2].plot(t, s["speed_ref_rpm"], "--", label="reference")
-    axes[2].plot(t, s["speed_est_rpm"], ":", label="estimated (MRAS)")
-    ref = s["speed_ref_rpm"][-1]
-    axes[2].set_ylim(ref - 30 - 0.05 * abs(ref), ref + 30 + 0.05 * abs(ref))
-    axes[2].set_ylabel("speed (rpm)")
+        shown = [("e_d0_Wb", {})]
+    for col, style in shown:
+        _plot(axes[0], res, col, **style)
+    _ylabel(axes[0], "flux error", "e_d0_Wb")
+    axes[0].set_title("whole run: the start-up transient sets the scale", fontsize=8, loc="left")
+    _zoom_panel(axes[1], res, shown, steady_start(res))
+    _ylabel(axes[1], "flux error, zoom", "e_d0_Wb")
+    axes[1].legend(loc="upper right", fontsize=8)
+    _plot(axes[2], res, "R2_ohm")
+    _plot(axes[2], res, "R2_est_ohm", "--")
+    _ylabel(axes[2], "rotor resistance", "R2_ohm")
     axes[2].legend(loc="best")
-    for ax in axes:
-        ax.axvline(comp.t_on_s, color="0.5", lw=0.8, ls="-.")
+    _plot(axes[3], res, "speed_rpm")
+    _plot(axes[3], res, "speed_ref_rpm", "--")
+    _plot(axes[3], res, "speed_est_rpm", ":")
+    ref = s["speed_ref_rpm"][-1]
+    axes[3].set_ylim(ref - 30 - 0.05 * abs(ref), ref + 30 + 0.05 * abs(ref))
+    _ylabel(axes[3], "speed", "speed_rpm")
+    axes[3].legend(loc="best")
+    _mark_switch_on(axes, res)
     return fig
 
 
@@ -139,7 +368,8 @@ def _default_groups(res) -> list[list[str]]:
 
 def result_figure(res, signals=None, t0: float = 0.0, t1=None) -> Figure:
     """Figure of a result: given columns one panel each, or the default groups (see
-    :meth:`imdrive.run.result.SimulationResult.plot`)."""
+    :meth:`imdrive.run.result.SimulationResult.plot`); each column in its display unit
+    (:func:`display_unit`: flux in mWb) and labelled with what it is."""
     unknown = [s for s in (signals or []) if s not in res.signals]
     if unknown:
         raise KeyError(f"no such column(s) {unknown}; see res.columns")
@@ -148,8 +378,10 @@ def result_figure(res, signals=None, t0: float = 0.0, t1=None) -> Figure:
     fig, axes = _fig(len(groups), res.scenario.name)
     for ax, group in zip(axes, groups, strict=True):
         for name in group:
-            ax.plot(w["time_s"], w[name], lw=0.9, label=name)
+            k = display_unit(name)[1]
+            ax.plot(w["time_s"], np.asarray(w[name]) * k, lw=0.9, label=signal_label(name, res))
+        _ylabel(ax, QUANTITIES.get(unit_of(group[0]), "value"), group[0])
         ax.legend(loc="best", fontsize=8)
         ax.grid(alpha=0.3)
-    axes[-1].set_xlabel("time, s")
+    axes[-1].set_xlabel("time (s)")
     return fig

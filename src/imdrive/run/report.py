@@ -39,58 +39,31 @@ import numpy as np
 #: Points per trace in the browser at most (two per bucket: its min and its max)
 MAX_POINTS = 8000
 
-#: The plot panels of a run: (title, y-axis label, [(column, legend label, dash)]); a panel is
-#: drawn when at least one of its columns exists
+#: The plot panels of a run: (title, column unit, [(column, dash)]); a panel is drawn when at
+#: least one of its columns exists. Each column is drawn in its display unit and labelled with
+#: what it is (:func:`imdrive.run.plots.display_unit`, :data:`imdrive.run.plots.SIGNALS`:
+#: flux in mWb, as in every figure of the package)
 PANELS = [
-    (
-        "speed",
-        "rpm",
-        [
-            ("speed_rpm", "actual", "solid"),
-            ("speed_ref_rpm", "reference", "dash"),
-            ("speed_est_rpm", "estimated", "dot"),
-        ],
-    ),
-    (
-        "torque",
-        "N m",
-        [("torque_Nm", "electromagnetic", "solid"), ("load_torque_Nm", "load", "dash")],
-    ),
-    (
-        "phase currents",
-        "A",
-        [("i_a_A", "i_a", "solid"), ("i_b_A", "i_b", "solid"), ("i_c_A", "i_c", "solid")],
-    ),
+    ("speed", "rpm", [("speed_rpm", "solid"), ("speed_ref_rpm", "dash"), ("speed_est_rpm", "dot")]),
+    ("torque", "Nm", [("torque_Nm", "solid"), ("load_torque_Nm", "dash")]),
+    ("phase currents", "A", [("i_a_A", "solid"), ("i_b_A", "solid"), ("i_c_A", "solid")]),
     (
         "synchronous-frame currents",
         "A",
-        [
-            ("i_d_A", "i_d", "solid"),
-            ("id_ref_A", "i_d*", "dash"),
-            ("i_q_A", "i_q", "solid"),
-            ("iq_ref_A", "i_q*", "dash"),
-        ],
+        [("i_d_A", "solid"), ("id_ref_A", "dash"), ("i_q_A", "solid"), ("iq_ref_A", "dash")],
     ),
     (
-        "flux error e_d0 and its demodulation",
+        "MRAS flux error e_d0 and its synchronous detection",
         "Wb",
-        [
-            ("e_d0_Wb", "e_d0", "solid"),
-            ("e_d0_demod_Wb", "e_d0 demodulated", "solid"),
-            ("e_q0_Wb", "e_q0", "dot"),
-        ],
+        [("e_d0_Wb", "solid"), ("e_d0_demod_Wb", "solid"), ("e_q0_Wb", "dot")],
     ),
     (
         "rotor resistance: estimate against the plant",
         "ohm",
-        [("R2_ohm", "R2 (plant)", "solid"), ("R2_est_ohm", "R2 estimate", "dash")],
+        [("R2_ohm", "solid"), ("R2_est_ohm", "dash")],
     ),
-    (
-        "terminal voltages",
-        "V",
-        [("v_alpha_V", "v_alpha", "solid"), ("v_beta_V", "v_beta", "solid")],
-    ),
-    ("rotor flux", "Wb", [("flux_Wb", "|psi_r| (plant)", "solid")]),
+    ("terminal voltages", "V", [("v_alpha_V", "solid"), ("v_beta_V", "solid")]),
+    ("rotor flux", "Wb", [("flux_Wb", "solid")]),
 ]
 
 
@@ -350,11 +323,18 @@ def html_page(
 
 def _run_figure(res, max_points: int) -> tuple[dict, dict, int]:
     """The stacked time plots of a run: one x axis shared by every panel (linked zoom)."""
+    from imdrive.run.plots import display_unit, signal_label
+
     s = res.signals
-    panels = [(t, u, [c for c in cols if c[0] in s]) for t, u, cols in PANELS]
+    panels = [
+        (t, display_unit(cols[0][0])[0], [(c, signal_label(c, res), d) for c, d in cols if c in s])
+        for t, _, cols in PANELS
+    ]
     panels = [p for p in panels if p[2]]
     t_dec, dec, b = minmax_decimate(
-        s["time_s"], {c[0]: s[c[0]] for p in panels for c in p[2]}, max_points
+        s["time_s"],
+        {c[0]: np.asarray(s[c[0]]) * display_unit(c[0])[1] for p in panels for c in p[2]},
+        max_points,
     )
     arrays = {"t": t_dec, **dec}
     n = len(panels)

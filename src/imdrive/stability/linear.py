@@ -140,6 +140,13 @@ def _stationary_drive(sc: Scenario, speeds_rad_s, torques_Nm) -> _Drive:
     """Records of ``sc`` with every profile at its final value, references set per row."""
     if sc.drive.mode != "vector":
         raise ConfigError("drive.mode", "stability maps need the vector (IFOC) drive")
+    if sc.control.speed_feedback not in ("mras", "measured"):
+        # the reduced state (imdrive.kernels.linearise) carries the MRAS's states only; the
+        # other estimators' states would be missing from the map (a NaN Jacobian, not a result)
+        raise ConfigError(
+            "control.speed_feedback",
+            f'stability maps cover "mras" and "measured" (got "{sc.control.speed_feedback}")',
+        )
     if sc.plant.speed_mode == "imposed":
         raise ConfigError("plant.speed_mode", "stability maps need the mechanical model")
     if sc.sensor.i_offset_alpha_A != 0.0 or sc.sensor.i_offset_beta_A != 0.0:

@@ -30,6 +30,7 @@ from imdrive._progress import Progress
 from imdrive.config.machine import machine_preset
 from imdrive.config.scenario import Scenario
 from imdrive.run.metrics import steady_means
+from imdrive.run.plots import FLUX_SCALE, FLUX_UNIT, SIGNALS
 from imdrive.run.simulate import simulate
 
 MACHINE = machine_preset("paper-table-iv")
@@ -146,6 +147,10 @@ def e_d0_versus_R1(R1_ratios=R1_RATIOS, R2_ratios=(0.8, 1.0, 1.2), speed=150.0) 
     return pd.DataFrame(rows)
 
 
+#: the signals :func:`e_d0_transients` keeps (besides ``R2_ratio``)
+TRANSIENT_COLUMNS = ("time_s", "e_d0_Wb", "e_q0_Wb", "speed_rpm", "speed_ref_rpm")
+
+
 def e_d0_transients(ratios=(0.8, 1.0, 1.2), speed=1000.0) -> pd.DataFrame:
     """e_d0 through a load step (3 s: 0 -> 12 N m) and a speed step (5 s: -> 60 %)."""
     frames = []
@@ -161,18 +166,7 @@ def e_d0_transients(ratios=(0.8, 1.0, 1.2), speed=1000.0) -> pd.DataFrame:
             ),
         )
         w = res.window(2.5)
-        frames.append(
-            pd.DataFrame(
-                {
-                    "R2_ratio": r,
-                    "time_s": w["time_s"],
-                    "e_d0_Wb": w["e_d0_Wb"],
-                    "e_q0_Wb": w["e_q0_Wb"],
-                    "speed_rpm": w["speed_rpm"],
-                    "speed_ref_rpm": w["speed_ref_rpm"],
-                }
-            )
-        )
+        frames.append(pd.DataFrame({"R2_ratio": r, **{k: w[k] for k in TRANSIENT_COLUMNS}}))
     return pd.concat(frames, ignore_index=True)
 
 
@@ -227,23 +221,35 @@ def _figure(nrows=1, ncols=1, w=8.0, h=3.2):
     return fig, axes
 
 
+def _flux_axis(ax, label: str) -> None:
+    """y axis of a flux linkage: ``label (mWb)``, the one flux unit of every figure, with no
+    offset or multiplier hiding the scale (:mod:`imdrive.run.plots`)."""
+    ax.set_ylabel(f"{label} ({FLUX_UNIT})")
+    if ax.get_yscale() == "linear":
+        ax.ticklabel_format(axis="y", style="plain", useOffset=False)
+
+
 def figure_e_d0_vs_ratio(df: pd.DataFrame) -> Figure:
     fig, axes = _figure(2, 1)
     ax, ax2 = axes[:, 0]
     for (speed, ts), g in df.groupby(["speed_rpm", "Ts_s"]):
         ax.plot(
-            g["R2_ratio"], g["e_d0_Wb"] * 1e6, "o-", label=f"{speed:.0f} rpm, Ts = {ts * 1e6:g} us"
+            g["R2_ratio"],
+            g["e_d0_Wb"] * FLUX_SCALE,
+            "o-",
+            label=f"{speed:.0f} rpm, Ts = {ts * 1e6:g} µs",
         )
         if ts == df["Ts_s"].max():
             ax2.plot(g["R2_ratio"], g["speed_error_rpm"], "o", label=f"simulated, {speed:.0f} rpm")
     law = df.drop_duplicates("R2_ratio")
-    ax2.plot(law["R2_ratio"], law["law_speed_error_rpm"], "k-", label="detuning law")
+    ax2.plot(law["R2_ratio"], law["law_speed_error_rpm"], "k-", label="detuning law (theory)")
     ax.axhline(0, color="k", lw=0.8)
-    ax.set_ylabel("steady-state e_d0 (uWb)")
+    ax.axvline(1, color="k", lw=0.8, ls=":")
+    _flux_axis(ax, "steady-state e_d0")
     ax.set_title("Steady-state e_d0 of the MRAS vs R2 error (rated load): no sign change at R2")
     ax.legend(fontsize=8)
-    ax2.set_xlabel("R2_hat / R2")
-    ax2.set_ylabel("speed error (rpm)")
+    ax2.set_xlabel("R̂2 / R2")
+    ax2.set_ylabel("speed error, actual − reference (rpm)")
     ax2.legend(fontsize=8)
     return fig
 
@@ -253,14 +259,19 @@ def figure_e_d0_vs_Ts(df: pd.DataFrame) -> Figure:
     ax = axes[0, 0]
     for (speed, r), g in df.groupby(["speed_rpm", "R2_ratio"]):
         ax.loglog(
-            g["Ts_s"] * 1e6, np.abs(g["e_d0_Wb"]), "o-", label=f"{speed:.0f} rpm, R2_hat/R2 = {r}"
+            g["Ts_s"] * 1e6,
+            np.abs(g["e_d0_Wb"]) * FLUX_SCALE,
+            "o-",
+            label=f"{speed:.0f} rpm, R̂2/R2 = {r}",
         )
     ts = np.array(sorted(df["Ts_s"].unique()))
-    ref = np.abs(df[df["Ts_s"] == ts[-1]]["e_d0_Wb"]).max()
-    ax.loglog(ts * 1e6, ref * (ts / ts[-1]) ** 2, "k--", label="slope Ts^2")
-    ax.set_xlabel("control period Ts (us)")
-    ax.set_ylabel("|steady-state e_d0| (Wb)")
-    ax.set_title("Steady-state e_d0 shrinks as Ts^2: a sampling error, the same for every R2_hat")
+    ref = np.abs(df[df["Ts_s"] == ts[-1]]["e_d0_Wb"]).max() * FLUX_SCALE
+    ax.loglog(ts * 1e6, ref * (ts / ts[-1]) ** 2, "k--", label="proportional to Ts²")
+    ax.set_xticks(ts * 1e6, [f"{t * 1e6:g}" for t in ts])  # the periods run, not 2x10^1
+    ax.xaxis.set_minor_formatter("")
+    ax.set_xlabel("control period Ts (µs)")
+    _flux_axis(ax, "|steady-state e_d0|")
+    ax.set_title("Steady-state e_d0 shrinks as Ts²: a sampling error, the same for every R̂2")
     ax.legend(fontsize=7)
     return fig
 
@@ -269,10 +280,10 @@ def figure_e_d0_vs_R1(df: pd.DataFrame) -> Figure:
     fig, axes = _figure()
     ax = axes[0, 0]
     for r2, g in df.groupby("R2_ratio"):
-        ax.plot(g["R1_ratio"], g["e_d0_Wb"] * 1e6, "o-", label=f"R2_hat/R2 = {r2}")
+        ax.plot(g["R1_ratio"], g["e_d0_Wb"] * FLUX_SCALE, "o-", label=f"R̂2/R2 = {r2}")
     ax.axhline(0, color="k", lw=0.8)
-    ax.set_xlabel("R1_hat / R1")
-    ax.set_ylabel("steady-state e_d0 (uWb)")
+    ax.set_xlabel("R̂1 / R1")
+    _flux_axis(ax, "steady-state e_d0")
     ax.set_title(
         f"An R1 error moves the steady-state e_d0 ({df['speed_rpm'].iloc[0]:.0f} rpm, rated load)"
     )
@@ -284,11 +295,11 @@ def figure_transients(df: pd.DataFrame) -> Figure:
     fig, axes = _figure(2, 1)
     ax, ax2 = axes[:, 0]
     for r, g in df.groupby("R2_ratio"):
-        ax.plot(g["time_s"], g["e_d0_Wb"] * 1e3, lw=0.9, label=f"R2_hat/R2 = {r}")
-        ax2.plot(g["time_s"], g["speed_rpm"], lw=0.9, label=f"R2_hat/R2 = {r}")
+        ax.plot(g["time_s"], g["e_d0_Wb"] * FLUX_SCALE, lw=0.9, label=f"R̂2/R2 = {r}")
+        ax2.plot(g["time_s"], g["speed_rpm"], lw=0.9, label=f"actual speed, R̂2/R2 = {r}")
     g = df[df["R2_ratio"] == df["R2_ratio"].iloc[0]]
-    ax2.plot(g["time_s"], g["speed_ref_rpm"], "k--", lw=0.8, label="reference")
-    ax.set_ylabel("e_d0 (mWb)")
+    ax2.plot(g["time_s"], g["speed_ref_rpm"], "k--", lw=0.8, label=SIGNALS["speed_ref_rpm"])
+    _flux_axis(ax, "MRAS flux error e_d0")
     ax.set_title("e_d0 during a load step (3 s) and a speed step (5 s)")
     ax.legend(fontsize=8)
     ax2.set_ylabel("speed (rpm)")
@@ -307,14 +318,14 @@ def figure_injection_signal(df: pd.DataFrame) -> Figure:
     fig, axes = _figure(2, 1)
     ax, ax2 = axes[:, 0]
     for speed, g in df.groupby("speed_rpm"):
-        ax.plot(g["R2_ratio"], g["demodulated_Wb"] * 1e3, "o-", label=f"{speed:.0f} rpm")
+        ax.plot(g["R2_ratio"], g["demodulated_Wb"] * FLUX_SCALE, "o-", label=f"{speed:.0f} rpm")
         ax2.plot(g["R2_ratio"], g["speed_ripple_rpm"], "o-", label=f"{speed:.0f} rpm")
     ax.axhline(0, color="k", lw=0.8)
     ax.axvline(1, color="k", lw=0.8)
-    ax.set_ylabel("mean 2 e_d0 sin (mWb)")
-    ax.set_title("Injection (0.5 A, 2 Hz on id*): the detected e_d0 changes sign at R2_hat = R2")
+    _flux_axis(ax, "synchronously detected e_d0")
+    ax.set_title("Injection (0.5 A, 2 Hz on id*): the detected e_d0 changes sign at R̂2 = R2")
     ax.legend(fontsize=8)
-    ax2.set_xlabel("R2_hat / R2")
+    ax2.set_xlabel("R̂2 / R2")
     ax2.set_ylabel("speed ripple p-p (rpm)")
     ax2.legend(fontsize=8)
     return fig
@@ -324,15 +335,15 @@ def figure_thermal(res) -> Figure:
     s = res.signals
     fig, axes = _figure(2, 1)
     ax, ax2 = axes[:, 0]
-    ax.plot(s["time_s"], s["R2_ohm"], label="R2 (plant, heating)")
-    ax.plot(s["time_s"], s["R2_est_ohm"], "--", label="R2 estimate (injection compensator)")
-    ax.set_ylabel("rotor resistance (ohm)")
+    ax.plot(s["time_s"], s["R2_ohm"], label="actual R2 (plant, heating)")
+    ax.plot(s["time_s"], s["R2_est_ohm"], "--", label=f"{SIGNALS['R2_est_ohm']} (injection)")
+    ax.set_ylabel("rotor resistance (Ω)")
     ax.legend(fontsize=8)
     ax.set_title("Tracking a 30 % rise of R2 over 20 s, 1000 rpm, rated load")
-    ax2.plot(s["time_s"], s["speed_rpm"] - s["speed_ref_rpm"], label="actual - reference")
+    ax2.plot(s["time_s"], s["speed_rpm"] - s["speed_ref_rpm"], label="speed error")
     ax2.set_xlim(3.0, s["time_s"][-1])
     ax2.set_ylim(-5.0, 5.0)
-    ax2.set_ylabel("speed error (rpm)")
+    ax2.set_ylabel("speed error, actual − reference (rpm)")
     ax2.set_xlabel("time (s)")
     ax2.legend(fontsize=8)
     return fig

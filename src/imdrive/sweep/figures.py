@@ -3,6 +3,10 @@
 A grid sweep aggregates the other axes (``mean``, ``min``, ``max`` or ``absmax``) into an image
 per panel; a random sweep scatters its runs. Signed errors use a diverging colour map centred
 on zero.
+
+Cell annotations are sized to the cells (:func:`annotation_fontsize`; none when the cells are
+too small to hold a readable number), written in black or white, whichever contrasts more with
+the cell's colour (:func:`text_colour`), with two significant digits (:func:`cell_text`).
 """
 
 from __future__ import annotations
@@ -44,12 +48,18 @@ def heatmap_figure(sweep: Sweep, df, h: Heatmap):
 
     rows = _levels(sweep, h.rows) if h.rows else [None]
     cols = _levels(sweep, h.cols) if h.cols else [None]
-    fig = Figure(figsize=(3.6 * len(cols) + 1.2, 3.0 * len(rows) + 0.8), layout="constrained")
+    # panels grow with their grid (up to a bound) so the cells can hold a readable number
+    nx = 1 if sweep.random else len(_levels(sweep, h.x))
+    ny = 1 if sweep.random else len(_levels(sweep, h.y))
+    w = float(np.clip(0.5 * nx + 1.0, 3.6, 6.5))
+    ht = float(np.clip(0.32 * ny + 1.0, 3.0, 5.0))
+    fig = Figure(figsize=(w * len(cols) + 1.2, ht * len(rows) + 0.8), layout="constrained")
     axs = fig.subplots(len(rows), len(cols), squeeze=False)
     signed = h.value in SIGNED_METRICS
     vmin, vmax = colour_range(df[h.value], signed)
     style = {"cmap": "RdBu_r" if signed else "viridis", "vmin": vmin, "vmax": vmax}
     mappable = None
+    annotate = []
     for r, rv in enumerate(rows):
         for c, cv in enumerate(cols):
             ax = axs[r, c]
@@ -59,8 +69,11 @@ def heatmap_figure(sweep: Sweep, df, h: Heatmap):
             if h.cols:
                 sel = sel[sel[h.cols] == cv]
             ax.set_facecolor("0.85")
-            draw = _scatter_panel if sweep.random else _image_panel
-            mappable = draw(ax, sweep, sel, h, style)
+            if sweep.random:
+                mappable = _scatter_panel(ax, sweep, sel, h, style)
+            else:
+                mappable, Z = _image_panel(ax, sweep, sel, h, style)
+                annotate.append((ax, Z))
             ax.set_xlabel(h.x)
             ax.set_ylabel(h.y)
             title = ", ".join(
@@ -72,6 +85,18 @@ def heatmap_figure(sweep: Sweep, df, h: Heatmap):
         fig.colorbar(mappable, ax=axs, label=h.value, shrink=0.9)
     agg = "" if sweep.random else f" ({h.agg} over the other axes; grey: none finite)"
     fig.suptitle(f"{sweep.name}: {h.value}{agg}", fontsize=10)
+    if annotate:
+        fig.draw_without_rendering()  # the final layout gives the cells' size
+        tiny = _tiny(np.concatenate([z.ravel() for _, z in annotate]))
+        # one font size for the figure: the smallest cell and the longest number decide
+        chars = max(
+            (len(cell_text(v, tiny)) for _, Z in annotate for v in Z.ravel() if np.isfinite(v)),
+            default=1,
+        )
+        sizes = [annotation_fontsize(*_cell_size_pt(ax, Z), chars) for ax, Z in annotate]
+        if all(size is not None for size in sizes):
+            for ax, Z in annotate:
+                annotate_cells(ax, Z, mappable, tiny, min(sizes))
     return fig
 
 
@@ -130,23 +155,101 @@ def heat_grid(sweep: Sweep, sel, h: Heatmap) -> tuple[list, list, np.ndarray]:
 
 
 def _image_panel(ax, sweep: Sweep, sel, h: Heatmap, style: dict):
-    """A grid sweep's panel: the metric aggregated over the other axes, one cell per point."""
+    """A grid sweep's panel: the metric aggregated over the other axes, one cell per point;
+    returns the image and its values (annotated once the layout is final)."""
     xs, ys, Z = heat_grid(sweep, sel, h)
     image = ax.imshow(
         np.ma.masked_invalid(Z), origin="lower", aspect="auto", interpolation="nearest", **style
     )
     ax.set_xticks(range(len(xs)), [_fmt(v) for v in xs], rotation=45)
     ax.set_yticks(range(len(ys)), [_fmt(v) for v in ys])
-    if Z.size <= 100:
-        for (iy, ix), v in np.ndenumerate(Z):
-            if np.isfinite(v):
-                ax.text(ix, iy, _cell(v), ha="center", va="center", fontsize=6)
-    return image
+    return image, Z
 
 
-def _cell(v: float) -> str:
+#: smallest and largest annotation font, pt; below the smallest, cells are left blank
+MIN_FONTSIZE = 5.0
+MAX_FONTSIZE = 10.0
+
+
+def _tiny(values) -> float:
+    """Magnitudes below this print as 0: a thousandth of the 90th percentile of the finite
+    magnitudes (not of the largest, so a few diverging runs do not zero out the rest)."""
+    v = np.abs(np.asarray(values, dtype=float))
+    v = v[np.isfinite(v)]
+    return 1e-3 * float(np.percentile(v, 90)) if v.size else 0.0
+
+
+def cell_text(v: float, tiny: float = 0.0) -> str:
+    """A cell's number with two significant digits (integers from 10 up, ``19k`` from 10 000);
+    ``"0"`` below ``tiny`` in magnitude (never ``-0.00``); ``""`` when not finite."""
+    if not np.isfinite(v):
+        return ""
     a = abs(v)
-    return f"{v:.0f}" if a >= 100 else f"{v:.1f}" if a >= 1 else f"{v:.2f}"
+    if a < tiny or a == 0.0:
+        return "0"
+    if a >= 1e4:
+        text = f"{v / 1e3:.0f}k"
+    elif a >= 10:
+        text = f"{v:.0f}"
+    else:
+        text = f"{v:.2g}"  # 7.4, 0.43, 0.061; 1e-07 only when every value is that small
+    return text
+
+
+def _luminance(rgba) -> float:
+    """Relative luminance of an sRGB colour (WCAG 2)."""
+    c = np.asarray(rgba[:3], dtype=float)
+    lin = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+    return float(lin @ [0.2126, 0.7152, 0.0722])
+
+
+def contrast_ratio(rgba1, rgba2) -> float:
+    """WCAG contrast ratio of two colours, 1 (none) to 21 (black on white)."""
+    l1, l2 = sorted((_luminance(rgba1), _luminance(rgba2)), reverse=True)
+    return (l1 + 0.05) / (l2 + 0.05)
+
+
+def text_colour(rgba) -> str:
+    """``"black"`` or ``"white"``, whichever contrasts more with the cell colour ``rgba``
+    (at least 4.5:1 for any colour, WCAG's threshold for small text)."""
+    on_black = contrast_ratio(rgba, (0.0, 0.0, 0.0))
+    on_white = contrast_ratio(rgba, (1.0, 1.0, 1.0))
+    return "black" if on_black >= on_white else "white"
+
+
+def annotation_fontsize(cell_w_pt: float, cell_h_pt: float, chars: int) -> float | None:
+    """Font size, pt, that fits ``chars`` characters into a cell of the given size (points),
+    at most :data:`MAX_FONTSIZE`; None when it would be below :data:`MIN_FONTSIZE`."""
+    # a digit is about 0.6 em wide; keep a margin of half an em across and 45 % of the height
+    size = min(0.45 * cell_h_pt, 0.9 * cell_w_pt / (0.6 * max(chars, 1) + 0.5), MAX_FONTSIZE)
+    return size if size >= MIN_FONTSIZE else None
+
+
+def _cell_size_pt(ax, Z) -> tuple[float, float]:
+    """Width and height, pt, of one cell of the image of ``Z`` on ``ax`` (layout as drawn)."""
+    box = ax.get_window_extent()
+    pt = 72.0 / ax.figure.dpi
+    ny, nx = Z.shape
+    return box.width * pt / nx, box.height * pt / ny
+
+
+def annotate_cells(ax, Z, mappable, tiny: float = 0.0, fontsize: float | None = None) -> list:
+    """Write each finite value of ``Z`` into its cell of the image on ``ax``: font sized to the
+    cell (``fontsize`` if given; nothing when too small), colour contrasting with the cell.
+    Returns the texts."""
+    texts = {(iy, ix): cell_text(v, tiny) for (iy, ix), v in np.ndenumerate(Z) if np.isfinite(v)}
+    if not texts:
+        return []
+    size = fontsize or annotation_fontsize(
+        *_cell_size_pt(ax, Z), max(len(t) for t in texts.values())
+    )
+    if size is None:
+        return []
+    out = []
+    for (iy, ix), text in texts.items():
+        colour = text_colour(mappable.cmap(mappable.norm(Z[iy, ix])))
+        out.append(ax.text(ix, iy, text, ha="center", va="center", fontsize=size, color=colour))
+    return out
 
 
 def _fmt(v) -> str:

@@ -1,0 +1,184 @@
+"""Issue 10, third part: standstill R1 identification, the frequency schedule's hysteresis,
+the adaptive law's drift at low stator frequency and against a large error, and the
+filter-compensated detection. Operating points chosen here, not the envelope's grid."""
+
+from __future__ import annotations
+
+import cmath
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from imdrive.config.scenario import Scenario
+from imdrive.errors import ConfigError
+from imdrive.kernels.compensator import compensated_product
+from imdrive.run.metrics import drive_metrics
+from imdrive.run.simulate import simulate
+
+R1 = Scenario.read("sensorless").machine.R1_ohm
+R2 = Scenario.read("sensorless").machine.R2_ohm
+
+
+def _standstill(r1_ratio, r2_ratio, magnetise_s=0.5, extra=()):
+    sc = Scenario.read(
+        "sensorless",
+        [
+            "mras.R1_standstill=true",
+            f"estimator.R1_ohm={r1_ratio * R1}",
+            f"estimator.R2_ohm={r2_ratio * R2}",
+            f"control.speed_ref_rpm={{initial=0,changes=[{{at={magnetise_s},to=300,over=1}}]}}",
+            f"simulation.t_end_s={magnetise_s + 0.2}",
+            *extra,
+        ],
+    )
+    res = simulate(sc)
+    return res["R1_est_ohm"][-1] / R1
+
+
+@pytest.mark.parametrize("r1_ratio", [0.8, 1.15])
+def test_standstill_R1_identification_is_exact_with_the_right_R2(r1_ratio):
+    assert _standstill(r1_ratio, 1.0) == pytest.approx(1.0, abs=1e-6)
+
+
+@pytest.mark.parametrize("r2_ratio", [0.75, 1.25])
+def test_standstill_R1_identification_with_an_R2_error(r2_ratio):
+    # the flux build-up left in the window is fitted, not just subtracted (measured
+    # -0.2 / +0.4 % at 0.8 / 1.2; subtracting the model's build-up alone gave +-1.1 %)
+    assert _standstill(0.9, r2_ratio, magnetise_s=0.6) == pytest.approx(1.0, abs=0.006)
+
+
+def test_standstill_R1_identification_needs_its_window():
+    # magnetising for 0.3 s (< four rotor time constants + 50 ms): R1_hat is left alone
+    assert _standstill(1.1, 1.0, magnetise_s=0.3) == pytest.approx(1.1, abs=1e-12)
+
+
+def test_standstill_R1_identification_is_off_by_default():
+    sc = Scenario.read("sensorless", [f"estimator.R1_ohm={1.1 * R1}", "simulation.t_end_s=0.7"])
+    assert simulate(sc)["R1_est_ohm"][-1] == pytest.approx(1.1 * R1, abs=1e-12)
+
+
+def test_bad_R1_standstill_value_is_refused():
+    with pytest.raises(ConfigError, match="mras.R1_standstill"):
+        Scenario.read("sensorless", ["mras.R1_standstill=3"])
+
+
+# ------------------------------------------------------------------------------------------
+# the compensator at low stator frequency (the envelope's 50 rpm row failed here)
+
+
+def _injection(speed, torque, r2_ratio, extra=()):
+    """The envelope sweep's injection variant (adaptive law, R1 estimation, the sensorless
+    preset's MRAS tuning) at a point of its class that is not on the sweep's grid."""
+    from imdrive.sweep.spec import load_sweep
+
+    sc = load_sweep("envelope").scenario_for((speed, torque, r2_ratio, 1.0, "injection"))
+    return sc.with_overrides(["simulation.t_end_s=14", *extra])
+
+
+def test_no_frequency_chatter_midway_between_the_injection_frequencies():
+    """65 rpm, 4 N m: the stator frequency (about 2.9 Hz) lies between 2 and 4 Hz. The
+    schedule decides once and keeps its choice (a switch at every decision kept the
+    compensator frozen before the hysteresis), and the compensator keeps updating. (R2_hat
+    ends 3.4 % off here: the low-speed bias docs/envelope.md reports.)"""
+    res = simulate(_injection(65, 4.0, 0.85))
+    flags = res["comp_frozen_flags"].astype(int)
+    t = res["time_s"]
+    late = t > 7.0
+    assert not np.any(flags[late] & 8)  # no switch after the first seconds
+    assert np.mean(flags[late] != 0) < 0.1  # updating, not frozen
+
+
+def test_adaptive_law_converges_at_low_stator_frequency():
+    """45 rpm, 7 N m (f_e about 2.2 Hz), the envelope's adaptive law (fine_gain 1, drift held
+    below 4 Hz): R2_hat settles. With the default fine_gain of 2.5 the loop limit-cycles
+    there (measured: R2_hat swinging 13.6 % peak to peak)."""
+    res = simulate(_injection(45, 7.0, 0.85))
+    r2 = res["R2_est_ohm"] / res["R2_ohm"] - 1.0
+    t = res["time_s"]
+    assert np.ptp(r2[t > 11.0]) < 0.01  # no limit cycle in the last 3 s
+    assert abs(drive_metrics(res)["R2_error_pct"]) < 1.0
+    cycling = simulate(_injection(45, 7.0, 0.85, ("compensator.fine_gain=2.5",)))
+    r2c = cycling["R2_est_ohm"] / cycling["R2_ohm"] - 1.0
+    assert np.ptp(r2c[t > 11.0]) > 0.05  # the finding, reproduced
+
+
+def test_drift_does_not_walk_R2_hat_away_against_a_large_error():
+    """650 rpm, 11 N m, R2_hat(0) = 1.25 R2: a drift wound up during the first large steps
+    kept walking R2_hat down while the table's level was 0 (measured -9.5 % at 600 rpm)."""
+    res = simulate(_injection(650, 11.0, 1.25))
+    assert abs(drive_metrics(res)["R2_error_pct"]) < 1.0
+
+
+# ------------------------------------------------------------------------------------------
+# filter-compensated detection (injection.compensate_filter)
+
+
+@pytest.mark.parametrize(
+    "f_e, f_i", [(2.2, 4.0), (-1.1, 4.0), (30.0, 2.0), (5.0, 2.0), (-8.0, 4.0)]
+)
+def test_compensated_product_recovers_the_unfiltered_in_phase_part(f_e, f_i):
+    wc = 15.0
+    w_e, w_i = 2 * math.pi * f_e, 2 * math.pi * f_i
+    Ts = 1e-4
+    t = np.arange(0.0, 1.0, Ts)  # whole periods of 2 and 4 Hz
+    c = 1e-3  # the in-phase coefficient sought
+    d_err = c * np.sin(w_i * t) + 0.8e-3 * np.cos(w_i * t)
+    q_err = 0.4e-3 * np.sin(w_i * t + 0.3)
+    err = d_err + 1j * q_err
+    A = np.mean(err * np.exp(-1j * w_i * t))
+    B = np.mean(err * np.exp(1j * w_i * t))
+
+    def H(w):
+        return 1j * w / (1j * w + wc)
+
+    e = H(w_e + w_i) * A * np.exp(1j * w_i * t) + H(w_e - w_i) * B * np.exp(-1j * w_i * t)
+    y = [
+        compensated_product(complex(ek), math.sin(p), math.cos(p), w_e, w_i, wc)
+        for ek, p in zip(e, w_i * t, strict=True)
+    ]
+    assert np.mean(y) == pytest.approx(c, rel=1e-6)
+    # without the filter the product is the plain detection 2 e_d0 sin
+    plain = compensated_product(complex(0.3, -0.2), 0.6, 0.8, w_e, w_i, 0.0)
+    assert plain == pytest.approx(2 * 0.3 * 0.6)
+    assert cmath.isfinite(complex(np.mean(y)))
+
+
+# ------------------------------------------------------------------------------------------
+# three-frequency schedule (injection.frequency3_Hz) and the adaptive law's sensitivity scale
+
+
+def test_in_phase_sensitivity_matches_a_finite_difference():
+    from imdrive.kernels.compensator import in_phase_sensitivity
+
+    T2 = 0.0868
+    for f in (2.0, 4.0, 6.0):
+        w = 2 * math.pi * f
+        r = 1e-6  # R2_hat = R2 (1 + r): T2_hat = T2 / (1 + r)
+
+        def in_phase(T, w=w):
+            return 1.0 / (1.0 + (w * T) ** 2)
+
+        fd = -(in_phase(T2 / (1 + r)) - in_phase(T2)) / r  # model minus plant, per r
+        assert in_phase_sensitivity(w, T2) == pytest.approx(-fd, rel=1e-4)
+
+
+def test_three_frequency_schedule_leaves_both_side_bands_away_from_DC():
+    """160 rpm, -11 N m: the stator frequency (about 3 Hz) is 1 Hz from both 2 and 4 Hz; the
+    schedule takes 6 Hz and R2_hat converges (on 2 or 4 Hz, with a side band at 1 Hz, it
+    ended 4 % off)."""
+    res = simulate(_injection(160, -11.0, 1.15))
+    f = res["inj_freq_Hz"]
+    t = res["time_s"]
+    assert np.all(f[t > 8.0] == 6.0)
+    assert abs(drive_metrics(res)["R2_error_pct"]) < 1.0
+    sc = _injection(160, -11.0, 1.15, ("compensator.gate_band_Hz=1.0",))
+    two = simulate(sc.with_(injection=dataclasses.replace(sc.injection, frequency3_Hz=None)))
+    assert abs(drive_metrics(two)["R2_error_pct"]) > 2.0
+
+
+def test_third_frequency_must_fit_the_compensator_period():
+    sc = _injection(300, 6.0, 1.0, ("injection.frequency3_Hz=5.0",))  # 2.5 periods in 0.5 s
+    with pytest.raises(ConfigError, match="injection.frequency3_Hz"):
+        simulate(sc)
