@@ -70,7 +70,7 @@ _NAME_SUFFIX = re.compile(
 _BRACKET = re.compile(r"\[[^\]\s]{1,12}\]")
 _WORDS = (
     r"dimensionless|per unit|p\.u\.|percent|%|rpm|Hz|kHz|rad/s|rad|ohms?|Ω|mH|µH|Wb|mWb|"
-    r"N ?m|N·m|Nm|kg ?m²|kg ?m\^2|kgm2|°C|ms|µs|us|ns|kW|mA|mV|seconds?|volts?|amperes?|"
+    r"N ?m|N·m|Nm|kg ?m²|kg ?m\^2|kgm2|°C|ms|µs|ns|kW|mA|mV|seconds?|volts?|amperes?|"
     r"henr(?:y|ies)|webers?|watts?|joules?|kelvin|radians?|SI units?|"
     # a unit stated by reference, for values of several quantities: "in the column's unit",
     # "each in the unit its name ends with", "in the unit of the quantity it drives"
@@ -78,10 +78,12 @@ _WORDS = (
 )
 _WORD = re.compile(rf"(?<![\w/])({_WORDS})(?![\w/])")
 # one-letter units (s, A, V, H, W, J, K) count only where they cannot be a word of the
-# sentence: after a number, a comma or "in", or before a closing punctuation mark
+# sentence: after a number, a comma or "in", or before a closing punctuation mark; "us"
+# (microseconds, ASCII) only after a number
 _LETTER = re.compile(
     r"(?:(?<=\d )|(?<=\d)|(?<=, )|(?<=\bin )|(?<=\())[sAVHWJK](?![\w/])"
     r"|(?<![\w/])[sAVHWJK](?=[,.;:)]|$)"
+    r"|(?:(?<=\d )|(?<=\d))us(?![\w/])"
 )
 
 
@@ -325,6 +327,8 @@ def test_a_missing_docstring_fails():
         ("Ts", "A sample period.", False),
         ("x", "A value as a fraction.", False),
         ("speeds", "Speeds of the sweep.", False),
+        ("Ts", "Sample period, 100 us by default.", True),
+        ("Ts", "Sample period; lets us check it.", False),
         ("values", "The values, in the column's unit.", True),
         ("values", "The values, which have a unit.", False),
     ],
