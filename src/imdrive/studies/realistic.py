@@ -1,4 +1,4 @@
-"""The paper's verdicts re-measured on a realistic drive (issue 9).
+"""The paper's verdicts re-measured on a realistic drive.
 
 The reproduction (:mod:`imdrive.studies.paper`) ran on an ideal drive. Here every verdict is
 measured again with the non-idealities of the ``*-realistic`` presets, first all together and
@@ -9,8 +9,8 @@ then one at a time, at 1000, 150 and 50 rpm with rated load:
 * the detuning law of the uncompensated sensorless drive (speed error = slip × (R̂2/R2 − 1)):
   simulated against predicted at R̂2 = 1.2 R2.
 
-Every run goes through the batch engine (:func:`imdrive.run.batch.simulate_batch`), so the
-study takes about a minute on two cores. :func:`verdict_table` returns the table;
+Every run goes through the batch engine (:func:`imdrive.run.batch.simulate_batch`): the
+study took 13.5–13.7 s in 2 runs on a shared 2-core VM (2026-11-22). :func:`verdict_table` returns the table;
 ``imdrive paper`` does not run it (it is long); ``python -m imdrive.studies.realistic OUT``
 writes ``realistic_verdicts.csv`` and the Markdown table used in docs/paper-reproduction.md.
 """
