@@ -588,6 +588,14 @@ class MrasSettings:
             ge=0.0,
         ),
     ] = 0.0
+    normalise: Annotated[
+        Bool | None,
+        setting(
+            "scale the adaptation error by (design flux / estimated flux)², so the loop keeps "
+            "its bandwidth in field weakening (kernels/estimators/mras.py)",
+            default_doc="on with control.field_weakening, else off",
+        ),
+    ] = None
     R1_standstill: Annotated[
         Bool,
         setting(
