@@ -225,3 +225,24 @@ def test_mras_normalisation_changes_nothing_at_rated_flux():
     t = a["time_s"]
     late = t > 2.5
     assert np.abs(a["speed_rpm"][late] - b["speed_rpm"][late]).max() < 0.5
+
+
+def test_standstill_R1_identification_sees_the_dead_time_error():
+    """The documented limit: on the realistic drive (2 us dead time compensated for 1.6 us)
+    the residual dead-time voltage dominates R1 |i| at standstill."""
+    sc = Scenario.read(
+        "sensorless-realistic", ["mras.R1_standstill=true", "simulation.t_end_s=0.75"]
+    )
+    res = simulate(sc)
+    assert res["R1_est_ohm"][-1] / res["R1_ohm"][-1] > 1.5
+    exact = Scenario.read(
+        "sensorless-realistic",
+        [
+            "mras.R1_standstill=true",
+            "simulation.t_end_s=0.75",
+            "inverter.dead_time_s=0",
+            'control.dead_time_compensation="none"',
+        ],
+    )
+    res = simulate(exact)
+    assert res["R1_est_ohm"][-1] / res["R1_ohm"][-1] == pytest.approx(1.0, abs=2e-3)

@@ -601,7 +601,9 @@ class MrasSettings:
         setting(
             "standstill R1 identification: while the speed reference is zero and the flux "
             "current flows, R̂1 = Σ v·i / Σ |i|² over the part after four rotor time constants, "
-            "applied when the reference leaves zero (kernels/estimators/mras.py)"
+            "applied when the reference leaves zero (kernels/estimators/mras.py); exact on "
+            "the average inverter, biased by an uncompensated dead-time voltage (1.9 R1 on "
+            "sensorless-realistic): leave it off there"
         ),
     ] = False
     R1_max_freq_Hz: Annotated[
