@@ -1208,6 +1208,7 @@ class Scenario:
     @classmethod
     def from_toml(cls, text: str, overrides: list[str] | tuple[str, ...] = ()) -> Scenario:
         """Parse TOML text, apply ``key.path=value`` overrides, validate."""
+        _check_override_list(overrides)
         try:
             data = tomllib.loads(text.removeprefix("\ufeff"))  # a UTF-8 byte-order mark
         except tomllib.TOMLDecodeError as exc:
@@ -1267,7 +1268,7 @@ class Scenario:
             Naming the key for an unknown setting or a value that breaks a rule.
         """
         if isinstance(overrides, str):
-            raise ConfigError("overrides", "must be a list of 'key=value' strings, not a string")
+            _check_override_list(overrides)
         data = self.to_dict()
         if isinstance(overrides, dict):
             items = []
@@ -1301,6 +1302,16 @@ class Scenario:
         for key in SECTIONS:
             out[key] = _to_plain(getattr(self, key))
         return out
+
+
+def _check_override_list(overrides) -> None:
+    """A single string in place of the list of overrides is refused (it would be read one
+    character at a time)."""
+    if isinstance(overrides, str):
+        raise ConfigError(
+            "overrides",
+            f"must be a list of 'key=value' strings, not a string (write [{overrides!r}])",
+        )
 
 
 def _to_plain(obj):

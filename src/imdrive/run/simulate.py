@@ -7,6 +7,7 @@ import time
 import numpy as np
 
 from imdrive.config.scenario import Scenario
+from imdrive.errors import ConfigError
 from imdrive.kernels.engine import LOG, S_OK, run_drive
 from imdrive.run.build import DriveArrays, build_arrays, copy_state
 from imdrive.run.result import SimulationResult, columns_from_log
@@ -45,7 +46,26 @@ def simulate(scenario: Scenario, arrays: DriveArrays | None = None) -> Simulatio
 
     A run whose states diverge is not an exception: the result has ``diverged = True``, the
     time and the signal, and the logged rows up to that point.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The validated scenario (``Scenario.read(...)``, ``Scenario.from_dict(...)``). Anything
+        else is refused at once with a :class:`~imdrive.errors.ConfigError` naming what to
+        use, rather than failing later inside the run.
+    arrays : DriveArrays, optional
+        The scenario's compiled records, if already built (``build_arrays(scenario)``).
+
+    Returns
+    -------
+    SimulationResult
     """
+    if not isinstance(scenario, Scenario):
+        raise ConfigError(
+            "scenario",
+            f"simulate() needs a Scenario, got {type(scenario).__name__} (use "
+            "Scenario.read('preset or file.toml') or Scenario.from_dict(table))",
+        )
     a = arrays if arrays is not None else build_arrays(scenario)
     n_rows = a.n_steps // a.log_every + 1
     log = new_log(n_rows)
