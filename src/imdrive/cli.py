@@ -103,8 +103,22 @@ def _cmd_presets(args) -> int:
 
 
 def _cmd_show(args) -> int:
-    from imdrive.config.presets import preset_text
+    from imdrive.config.machine import machine_preset, machine_presets
+    from imdrive.config.presets import preset_names, preset_text
 
+    if args.preset not in preset_names() and args.preset in machine_presets():
+        # a machine parameter set (listed by 'imdrive presets' beside the scenarios)
+        from imdrive.config.toml_writer import dumps
+
+        m = machine_preset(args.preset)
+        values = {k: v for k, v in m.to_dict().items() if k != "description"}
+        sys.stdout.write(
+            f"# machine parameter set {args.preset!r}: {m.description}\n"
+            f"# a scenario uses it with [machine] preset = {args.preset!r} (any key below may be\n"
+            "# overridden in that section); these are its values\n"
+            + dumps({"machine": {"preset": args.preset, **values}})
+        )
+        return EXIT_OK
     if args.all:
         from imdrive.config.scenario import Scenario
 

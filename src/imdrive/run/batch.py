@@ -240,6 +240,7 @@ def simulate_batch(
     """
     import pandas as pd
 
+    from imdrive.config.scenario import Scenario
     from imdrive.errors import ConfigError
     from imdrive.run.build import build_arrays
     from imdrive.run.result import SimulationResult
@@ -257,6 +258,10 @@ def simulate_batch(
     chunks_m, chunks_s, chunks_k, chunks_ts, chunks_e = [], [], [], [], []
     results: list = []
     kernel_wall = 0.0
+    if isinstance(scenarios, Scenario | str | dict):
+        raise ConfigError(
+            "scenarios", "must be an iterable of Scenario objects (a list, a generator)"
+        )
     it = iter(scenarios)
     offset = 0
     while True:
@@ -279,6 +284,12 @@ def simulate_batch(
             try:
                 if isinstance(sc, FailedRun):
                     raise ConfigError("scenario", sc.message)
+                if not isinstance(sc, Scenario):
+                    raise ConfigError(
+                        f"scenarios[{offset + i}]",
+                        f"must be a Scenario, got {type(sc).__name__} (Scenario.read or "
+                        "Scenario.from_dict make one)",
+                    )
                 a = build_arrays(sc)
             except ConfigError as exc:
                 if errors == "raise":

@@ -422,6 +422,7 @@ def _build_arrays(sc: Scenario) -> DriveArrays:
         R1_fmax=sc.mras.R1_max_freq_Hz,
         R1_min=0.5 * R1h,
         R1_max=2.0 * R1h,
+        psi2_norm=psi0 * psi0 if _mras_normalise(sc) else 0.0,
         R1_dc=sc.mras.R1_standstill,
         # the flux build-up: four rotor time constants of the controller's model
         R1_dc_settle=4.0 * L2h / R2h,
@@ -580,6 +581,13 @@ def _gating(sc) -> dict:
             else 0.0
         ),
     }
+
+
+def _mras_normalise(sc) -> bool:
+    """Whether the MRAS error is normalised by the flux magnitude (mras.normalise)."""
+    if sc.mras.normalise is not None:
+        return sc.mras.normalise
+    return sc.control.field_weakening
 
 
 def _drift_fmin(sc) -> float:

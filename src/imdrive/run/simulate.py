@@ -7,6 +7,7 @@ import time
 import numpy as np
 
 from imdrive.config.scenario import Scenario
+from imdrive.errors import ConfigError
 from imdrive.kernels.engine import LOG, S_OK, run_drive
 from imdrive.run.build import DriveArrays, build_arrays, copy_state
 from imdrive.run.result import SimulationResult, columns_from_log
@@ -49,15 +50,23 @@ def simulate(scenario: Scenario, arrays: DriveArrays | None = None) -> Simulatio
     Parameters
     ----------
     scenario : Scenario
-        The validated scenario.
+        The validated scenario (``Scenario.read(...)``, ``Scenario.from_dict(...)``). Anything
+        else is refused at once with a :class:`~imdrive.errors.ConfigError` naming what to
+        use, rather than failing later inside the run.
     arrays : DriveArrays, optional
-        Its kernel records, when already built (:func:`~imdrive.run.build.build_arrays`).
+        The scenario's compiled records, if already built (``build_arrays(scenario)``).
 
     Returns
     -------
     SimulationResult
         Signals (units in the column names), final states, status and timings.
     """
+    if not isinstance(scenario, Scenario):
+        raise ConfigError(
+            "scenario",
+            f"simulate() needs a Scenario, got {type(scenario).__name__} (use "
+            "Scenario.read('preset or file.toml') or Scenario.from_dict(table))",
+        )
     a = arrays if arrays is not None else build_arrays(scenario)
     n_rows = a.n_steps // a.log_every + 1
     log = new_log(n_rows)

@@ -10,8 +10,8 @@ then one at a time, at 1000, 150 and 50 rpm with rated load:
   simulated against predicted at R̂2 = 1.2 R2.
 
 Every run goes through the batch engine (:func:`imdrive.run.batch.simulate_batch`): the
-study took 13.5–13.7 s in 2 runs on a shared 2-core VM (2026-11-22). :func:`verdict_table` returns the table;
-``imdrive paper`` does not run it (it is long); ``python -m imdrive.studies.realistic OUT``
+study took 13.5–13.7 s in 2 runs on a shared 2-core VM (2026-11-22). :func:`verdict_table`
+returns the table; ``imdrive paper`` does not run it; ``python -m imdrive.studies.realistic OUT``
 writes ``realistic_verdicts.csv`` and the Markdown table used in docs/paper-reproduction.md.
 """
 
