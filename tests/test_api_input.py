@@ -41,3 +41,13 @@ def test_simulate_batch_names_the_item_that_is_not_a_scenario():
         im.simulate_batch([good, {"name": "x"}])
     with pytest.raises(ConfigError, match="must be an iterable of Scenario"):
         im.simulate_batch(good)
+
+
+def test_default_log_every_follows_a_new_Ts_in_with_overrides():
+    sc = im.Scenario.from_dict({"name": "x", "drive": {"mode": "vector"}})
+    assert sc.simulation.log_every == 10  # 1 kHz at 100 us
+    assert sc.with_overrides(["simulation.Ts_s=1e-3"]).simulation.log_every == 1
+    assert sc.with_overrides(["simulation.Ts_s=5e-5"]).simulation.log_every == 20
+    # a value the user set stays
+    mine = im.Scenario.from_dict({"name": "x", "simulation": {"log_every": 3}})
+    assert mine.with_overrides(["simulation.Ts_s=1e-3"]).simulation.log_every == 3

@@ -942,7 +942,8 @@ class SimulationSettings:
             "logging at >= 1 kHz, which resolves everything up to the current loop (its "
             "bandwidth is a few hundred Hz) and the stator frequency; report.html is "
             "min/max-decimated anyway. It is fixed when the scenario is read (summary.json "
-            "records the number)",
+            "records the number); Scenario.with_overrides derives the default again for a new "
+            "Ts_s",
             ge=1,
             le=2_000_000_000,
             default_doc="max(1, floor(1 ms / Ts_s)): 10 at the default Ts_s = 100 µs",
@@ -981,8 +982,10 @@ class SimulationSettings:
         if self.t_end_s / self.Ts_s > 2e9:
             raise ConfigError("Ts_s", "gives more than 2e9 periods")
         if self.log_every is None:
-            # frozen dataclass: set once here, so every consumer sees an int
+            # frozen dataclass: set once here, so every consumer sees an int; the mark lets
+            # Scenario.with_overrides derive it again when Ts_s changes
             object.__setattr__(self, "log_every", default_log_every(self.Ts_s))
+            object.__setattr__(self, "_log_every_auto", True)
         return self
 
     @property
@@ -1348,6 +1351,9 @@ class Scenario:
                 items.append((parts, value))
         else:
             items = [parse_override(o) for o in overrides]
+        if getattr(self.simulation, "_log_every_auto", False):
+            # the default decimation follows Ts_s: let it be derived again from the new one
+            data["simulation"].pop("log_every", None)
         for parts, value in items:
             if parts[0] == "machine" and parts[-1] != "preset":
                 data.setdefault("machine", {})
