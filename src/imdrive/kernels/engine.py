@@ -419,7 +419,8 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
             if injecting:
                 ph0 = cmp.inj_phase
                 sine = injection_sine(pk, cmp, t, Ts)
-                cosine = math.cos(ph0) if t >= pk.inj_t_on else 0.0
+                # the cosine only for the filter-compensated detection (one cos per period)
+                cosine = math.cos(ph0) if pk.inj_hp_wc > 0.0 and t >= pk.inj_t_on else 0.0
                 demodulate(pk, cmp, est.e_dq0, sine, cosine, ctl.w_e, Ts)
                 a_inj = 1.0
                 if headroom:  # issue 10: the injection backs off near the voltage limit
