@@ -220,22 +220,28 @@ def _worker(P, S, n_steps, log, log_every, out, first, stride, scratch):
         out.k_end[n] = ke
 
 
+def new_scratch(n_slots: int, dtype=LOG) -> np.ndarray:
+    """Scratch logs for ``n_slots`` workers, ``CHUNK + 1`` rows each, of the drives' log dtype."""
+    return np.empty((n_slots, CHUNK + 1), dtype=dtype)
+
+
 @njit(cache=True, parallel=True)
-def batch_kernel(P, S, n_steps, log, log_every, out, n_slots):
+def batch_kernel(P, S, n_steps, log, log_every, out, scratch):
     """``N`` drives over the cores (first axis of every array of ``P``, ``S``, ``out``).
 
-    ``log`` is LOG[N, n_rows] (``n_rows`` may be 0), pre-filled with NaN; ``out`` receives
-    the metrics, status and periods of each drive; ``S`` holds the final states on return.
-    The drives are dealt to ``n_slots`` parallel workers (``n, n + n_slots, ...``), each with
-    one scratch log for all its drives.
+    ``log`` is a ``[N, n_rows]`` log of the drives' log dtype (``n_rows`` may be 0),
+    pre-filled with NaN; ``out`` receives the metrics, status and periods of each drive;
+    ``S`` holds the final states on return. The drives are dealt to ``n_slots =
+    scratch.shape[0]`` parallel workers (``n, n + n_slots, ...``), each with its row of
+    ``scratch`` (:func:`new_scratch`) as the scratch log for all its drives.
     """
+    n_slots = scratch.shape[0]
     for slot in prange(n_slots):
-        scratch = np.empty(CHUNK + 1, dtype=LOG)
-        _worker(P, S, n_steps, log, log_every, out, slot, n_slots, scratch)
+        _worker(P, S, n_steps, log, log_every, out, slot, n_slots, scratch[slot])
 
 
 @njit(cache=True, nogil=True)
-def batch_kernel_serial(P, S, n_steps, log, log_every, out):
-    """:func:`batch_kernel` on the calling thread only, releasing the GIL (for dask workers)."""
-    scratch = np.empty(CHUNK + 1, dtype=LOG)
+def batch_kernel_serial(P, S, n_steps, log, log_every, out, scratch):
+    """:func:`batch_kernel` on the calling thread only, releasing the GIL (for dask workers);
+    ``scratch`` is one row of :func:`new_scratch`."""
     _worker(P, S, n_steps, log, log_every, out, 0, 1, scratch)

@@ -80,7 +80,7 @@ def pack_state(S, i, z):
     x = S.plant[i]
     smp = S.sample[i]
     ctl = S.control[i]
-    est = S.mras[i]
+    est = S.est[i]  # an MRAS drive: the only estimator the reduced state carries
     th = ctl.theta_e
     c = (math.cos(th), math.sin(th))
     z[0], z[1] = _rot(c, x.psi_s_ab.real, x.psi_s_ab.imag)
@@ -105,7 +105,7 @@ def unpack_state(z, S, i):
     x = S.plant[i]
     smp = S.sample[i]
     ctl = S.control[i]
-    est = S.mras[i]
+    est = S.est[i]  # an MRAS drive: the only estimator the reduced state carries
     x.psi_s_ab = complex(z[0], z[1])
     x.psi_r_ab = complex(z[2], z[3])
     x.w_m = z[4]

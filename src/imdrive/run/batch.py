@@ -29,15 +29,16 @@ the kernel time (the dynamics dominate).
 The Python side feeds the kernel blocks of ``block_size`` drives (default 512): per block it
 builds and stacks the drives' records (:func:`imdrive.run.build.build_arrays`,
 :func:`stack_drives`), grouped by number of
-periods (one ``n_steps`` per kernel call) and, with logs, by ``log_every``; profiles with
+periods (one ``n_steps`` per kernel call), by estimator (each has its own records, and the
+kernel is compiled once per estimator) and, with logs, by ``log_every``; profiles with
 different numbers of breakpoints are padded (the kernel reads ``prof_n`` of them); fuzzy tables
 are shared (a small stack of the distinct tables plus an index per drive). Without logs, what is
 kept per drive is its metrics record and status: 13 float64 + 2 int64 = 120 bytes (plus pandas'
 per-row cost of the final table, about the same again), so memory is linear in N at well under
 1 kB per drive; the per-block arrays and the per-thread scratch logs are a fixed cost. With
 ``logs=True`` every drive's decimated log is kept,
-``(n_steps // log_every + 1) * LOG.itemsize`` bytes
-per drive (240 today).
+``(n_steps // log_every + 1) * log_dtype(...).itemsize`` bytes
+per drive (304 for an MRAS drive).
 
 Metrics (columns of :attr:`BatchResult.metrics`): defined in :mod:`imdrive.run.metrics`; the
 batch kernel computes them while the rows stream, and a test checks it against
@@ -59,9 +60,11 @@ from imdrive.kernels.batch import (
     BatchOut,
     batch_kernel,
     batch_kernel_serial,
+    new_scratch,
     num_threads,
 )
-from imdrive.kernels.engine import LOG, S_OK, DriveParams, DriveState
+from imdrive.kernels.engine import S_OK, DriveParams, DriveState, log_dtype
+from imdrive.kernels.estimators.registry import kernel_of_state
 from imdrive.kernels.profiles import N_PROF
 from imdrive.run.metrics import lost_control_check
 
@@ -182,7 +185,8 @@ def _stack(items, log_every: int, n_rows: int, window_s: float, parallel: bool):
     lc_n = np.array(
         [int(round(d / a.Ts)) for (_, d), a in zip(lc, arrays, strict=True)], dtype=np.int64
     )
-    log = np.full((G, n_rows), np.nan, dtype=LOG)
+    dtype = log_dtype(kernel_of_state(params.est.dtype))
+    log = np.full((G, n_rows), np.nan, dtype=dtype)
     out = BatchOut(
         metrics=np.empty(G, dtype=BATCH_METRICS),
         status=np.empty(G, dtype=np.int64),
@@ -193,9 +197,10 @@ def _stack(items, log_every: int, n_rows: int, window_s: float, parallel: bool):
     )
     t0 = time.perf_counter()
     if parallel:
-        batch_kernel(params, state, n_steps, log, log_every, out, max(min(G, num_threads()), 1))
+        scratch = new_scratch(max(min(G, num_threads()), 1), dtype)
+        batch_kernel(params, state, n_steps, log, log_every, out, scratch)
     else:
-        batch_kernel_serial(params, state, n_steps, log, log_every, out)
+        batch_kernel_serial(params, state, n_steps, log, log_every, out, new_scratch(1, dtype)[0])
     wall = time.perf_counter() - t0
     return params, state, log, out, wall
 
@@ -279,7 +284,7 @@ def simulate_batch(
         ts_blk = np.empty(B)
         res_blk: list = [None] * B
         e_blk = np.full(B, "", dtype=object)
-        groups: dict[tuple[int, int], list] = {}
+        groups: dict[tuple, list] = {}
         for i, sc in enumerate(block):
             try:
                 if isinstance(sc, FailedRun):
@@ -300,8 +305,10 @@ def simulate_batch(
                 e_blk[i] = sc.message if isinstance(sc, FailedRun) else str(exc)
                 continue
             le = (log_every or a.log_every) if logs else 1
-            groups.setdefault((a.n_steps, int(le)), []).append((i, sc, a))
-        for (n_steps, le), items in groups.items():
+            # one kernel call per number of periods, decimation and estimator (its records)
+            key = (a.n_steps, int(le), a.params.est.dtype)
+            groups.setdefault(key, []).append((i, sc, a))
+        for (n_steps, le, _), items in groups.items():
             n_rows = n_steps // le + 1 if logs else 0
             params, state, log, out, wall = _stack(items, le, n_rows, window_s, parallel)
             kernel_wall += wall

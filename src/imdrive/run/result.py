@@ -97,19 +97,54 @@ VECTOR_COLUMNS = (
 )
 
 
-def columns_from_log(log: np.ndarray, vector: bool) -> dict[str, np.ndarray]:
-    """Named, unit-carrying columns from a kernel log (a LOG record array)."""
+def columns_from_log(
+    log: np.ndarray, vector: bool, extra_units: dict | None = None
+) -> dict[str, np.ndarray]:
+    """Named, unit-carrying columns from a kernel log (a record array of the drive's log dtype).
+
+    Parameters
+    ----------
+    log : numpy.ndarray
+        The log records, SI units.
+    vector : bool
+        Field-oriented drive (the controller's columns too) or open loop.
+    extra_units : dict, optional
+        ``{field: (unit, scale)}`` of the estimator's own log fields
+        (:class:`imdrive.run.estimators.Estimator` ``log_units``); a standard column whose field
+        the log lacks (another estimator's) is left out.
+
+    Returns
+    -------
+    dict
+        ``{column: values}``, the standard columns in their order, then the estimator's own.
+    """
     out = {}
-    names = VECTOR_COLUMNS if vector else OPEN_LOOP_COLUMNS
+    fields = set(log.dtype.names)
+    names = list(VECTOR_COLUMNS if vector else OPEN_LOOP_COLUMNS)
+    if vector:
+        for field, (unit, scale) in (extra_units or {}).items():
+            name = f"{field}_{unit}"
+            if name not in names:
+                names.insert(names.index("e_d0_demod_Wb"), name)
+            if field in fields:
+                out[name] = log[field] * scale
     for name in names:
-        if name in _DIRECT:
+        if name in _DIRECT and name not in out:
             field, scale = _DIRECT[name]
-            out[name] = log[field] * scale
+            if field in fields:
+                out[name] = log[field] * scale
     ia, ib = log["i_alpha"], log["i_beta"]
     out["i_a_A"] = ia.copy()
     out["i_b_A"] = -0.5 * ia + SQ3_2 * ib
     out["i_c_A"] = -0.5 * ia - SQ3_2 * ib
-    return {n: out[n] for n in names}
+    return {n: out[n] for n in names if n in out}
+
+
+def _estimator_units(scenario) -> dict:
+    """Units of the scenario's estimator's own log fields."""
+    from imdrive.run.estimators import estimator
+
+    return dict(estimator(scenario.control.speed_feedback).log_units)
 
 
 def package_versions() -> dict[str, str]:
@@ -203,7 +238,7 @@ class SimulationResult:
         vector = scenario.drive.mode == "vector"
         return cls(
             scenario=scenario,
-            signals=columns_from_log(log, vector),
+            signals=columns_from_log(log, vector, _estimator_units(scenario)),
             state_initial=state0,
             state_final=state,
             params=params,
@@ -476,6 +511,11 @@ class SimulationResult:
     def vector(self) -> bool:
         """Whether the drive is field-oriented (``drive.mode = "vector"``)."""
         return self.scenario.drive.mode == "vector"
+
+    @property
+    def extra_units(self) -> dict:
+        """``{log field: (unit, scale)}`` of the estimator's own log fields."""
+        return _estimator_units(self.scenario)
 
     def final_values(self) -> dict[str, float]:
         """Every signal at the end of the run.

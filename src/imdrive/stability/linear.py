@@ -52,6 +52,7 @@ from imdrive.kernels import linearise as kl
 from imdrive.kernels import profiles as kp
 from imdrive.kernels.engine import DriveParams, DriveState
 from imdrive.run.build import build_arrays
+from imdrive.run.estimators import estimator
 
 RPM = 2.0 * math.pi / 60.0  # rad/s per rpm
 
@@ -140,12 +141,13 @@ def _stationary_drive(sc: Scenario, speeds_rad_s, torques_Nm) -> _Drive:
     """Records of ``sc`` with every profile at its final value, references set per row."""
     if sc.drive.mode != "vector":
         raise ConfigError("drive.mode", "stability maps need the vector (IFOC) drive")
-    if sc.control.speed_feedback not in ("mras", "measured"):
+    if not estimator(sc.control.speed_feedback).kernel.reduced_state:
         # the reduced state (imdrive.kernels.linearise) carries the MRAS's states only; the
         # other estimators' states would be missing from the map (a NaN Jacobian, not a result)
         raise ConfigError(
             "control.speed_feedback",
-            f'stability maps cover "mras" and "measured" (got "{sc.control.speed_feedback}")',
+            f'stability maps cover "mras" and "measured": the reduced state of the map does '
+            f'not carry the states of "{sc.control.speed_feedback}"',
         )
     if sc.plant.speed_mode == "imposed":
         raise ConfigError("plant.speed_mode", "stability maps need the mechanical model")
@@ -181,17 +183,9 @@ def _stationary_drive(sc: Scenario, speeds_rad_s, torques_Nm) -> _Drive:
     prof_v = np.repeat(final[None, :, None], n, axis=0)
     prof_v[:, kp.PR_SPEED_REF, 0] = speeds_rad_s
     prof_v[:, kp.PR_LOAD, 0] = torques_Nm
-    P = a.params._replace(
-        sim=rep(a.params.sim),
-        plant=rep(a.params.plant),
-        inverter=rep(a.params.inverter),
-        sensor=rep(a.params.sensor),
-        control=rep(a.params.control),
-        mras=rep(a.params.mras),
-        comp=rep(a.params.comp),
-        rmras=rep(a.params.rmras),
-        afo=rep(a.params.afo),
-        ekf=rep(a.params.ekf),
+    # every block's record replicated (whatever the blocks are), then the profiles replaced
+    P = DriveParams(*(f if name == "tables" else rep(f) for name, f in a.params._asdict().items()))
+    P = P._replace(
         prof_t=prof_t,
         prof_v=prof_v,
         prof_n=np.ones((n, kp.N_PROF), dtype=np.int64),
@@ -231,8 +225,8 @@ def _coefficients(P: DriveParams, S: DriveState) -> dict:
     c["sL1_hat"] = c["L1_hat"] - c["M_hat"] ** 2 / c["L2_hat"]
     c["psi_ref"] = float(pv[kp.PR_FLUX_REF, 0])
     c["sensorless"] = bool(P.sim[0]["sensorless"])
-    c["wc"] = float(P.mras[0]["wc"])
-    c["K2"] = float(P.mras[0]["K2"])
+    c["wc"] = float(P.est[0]["wc"])  # an MRAS drive (_stationary_drive refuses the others)
+    c["K2"] = float(P.est[0]["K2"])
     c["decouple"] = bool(P.control[0]["decouple"])
     return c
 

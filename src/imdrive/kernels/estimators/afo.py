@@ -60,6 +60,7 @@ from __future__ import annotations
 
 from numba import njit
 
+from imdrive.kernels.estimators.registry import register_kernel
 from imdrive.kernels.model import model_inductances
 from imdrive.kernels.records import c16, f8, i8, record_dtype
 
@@ -178,3 +179,13 @@ def afo_step(p, m, s, v_prev_a, v_prev_b, i_a, i_b, Ts):
     s.i_hat_ab = i1
     s.lam_ab = l1
     s.e_ab = e
+
+
+@njit(cache=True)
+def afo_estimate(p, m, s, inp):
+    """The full-order observer in the estimator contract; it has no flux error (``0j``)."""
+    afo_step(p, m, s, inp.v_ab.real, inp.v_ab.imag, inp.i_ab.real, inp.i_ab.imag, inp.Ts)
+    return s.w_r_hat, 0j
+
+
+KERNEL = register_kernel("afo", AFO_PARAMS, AFO_STATE, afo_estimate)

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 from numba import njit
 
+from imdrive.kernels.estimators.registry import register_kernel
 from imdrive.kernels.model import model_inductances
 from imdrive.kernels.records import b1, f8, record_dtype
 
@@ -211,3 +212,13 @@ def ekf_step(p, m, s, v_prev_a, v_prev_b, i_a, i_b, Ts):
         if p.write_R2:
             m.R2_hat = x[5]
     s.w_r_hat = x[4]
+
+
+@njit(cache=True)
+def ekf_estimate(p, m, s, inp):
+    """The extended Kalman filter in the estimator contract; it has no flux error (``0j``)."""
+    ekf_step(p, m, s, inp.v_ab.real, inp.v_ab.imag, inp.i_ab.real, inp.i_ab.imag, inp.Ts)
+    return s.w_r_hat, 0j
+
+
+KERNEL = register_kernel("ekf", EKF_PARAMS, EKF_STATE, ekf_estimate)

@@ -71,11 +71,13 @@ the controller's model (MODEL_STATE), which the reference model reads from the n
 
 from __future__ import annotations
 
+import cmath
 import math
 
 from numba import njit
 
 from imdrive.kernels.estimators.common import current_model_step
+from imdrive.kernels.estimators.registry import register_kernel
 from imdrive.kernels.model import model_inductances
 from imdrive.kernels.records import b1, c16, f8, record_dtype
 
@@ -115,7 +117,8 @@ MRAS_STATE = record_dtype(
     ]
 )
 
-#: Log fields of this block.
+#: Log fields of this block (the engine logs every estimator's ``speed_est``, ``e_d0`` and
+#: ``e_q0``; :data:`OWN_LOG_FIELDS` are the MRAS's own).
 LOG_FIELDS = (
     "speed_est",  # mechanical rad/s
     "e_d0",  # Wb
@@ -315,3 +318,62 @@ def mras_r1_standstill(p, m, s, v_a, v_b, i_prev_a, i_prev_b, i_a, i_b, w_ref, w
     s.dc_gg = 0.0
     s.dc_gy = 0.0
     s.dc_n = 0.0
+
+
+OWN_LOG_FIELDS = LOG_FIELDS[3:]
+
+
+@njit(cache=True)
+def mras_estimate(p, m, s, inp):
+    """The MRAS in the estimator contract (:mod:`imdrive.kernels.estimators.registry`).
+
+    :func:`mras_step`, then the standstill R1 identification (``p.R1_dc``) and the online R1
+    law (``p.k_R1 > 0``, held while ``inp.hold_R1``, on the measured current less the
+    compensator's injected sinusoid). Returns the speed estimate of :func:`mras_step` (before
+    the R1 laws, which do not change it) and the flux error ``e_dq0``.
+    """
+    v = inp.v_ab
+    i0 = inp.i_prev_ab
+    i1 = inp.i_ab
+    Ts = inp.Ts
+    mras_step(p, m, s, v.real, v.imag, i0.real, i0.imag, i1.real, i1.imag, inp.theta_e, Ts)
+    w_hat = s.w_r_hat
+    if p.R1_dc:  # the DC test at every start
+        mras_r1_standstill(
+            p, m, s, v.real, v.imag, i0.real, i0.imag, i1.real, i1.imag, inp.w_ref, inp.w_e, Ts
+        )
+    if p.k_R1 > 0.0 and not inp.hold_R1:
+        # the injected sinusoid (flux-current axis) taken out of the current
+        i_dc_alpha = i1.real - inp.i_inj * math.cos(inp.theta_e)
+        i_dc_beta = i1.imag - inp.i_inj * math.sin(inp.theta_e)
+        mras_r1_step(p, m, s, i_dc_alpha, i_dc_beta, inp.w_e, inp.i_ref_dq.imag, Ts)
+    return w_hat, s.e_dq0
+
+
+@njit(cache=True)
+def log_mras_own(row, p, s, n_p):
+    """Write the MRAS's own log fields (the two models' fluxes) into ``row``."""
+    row.lam_v_alpha = s.lam_v_ab.real
+    row.lam_v_beta = s.lam_v_ab.imag
+    row.lam_i_alpha = s.lam_f_ab.real
+    row.lam_i_beta = s.lam_f_ab.imag
+
+
+@njit(cache=True)
+def mras_finite(s):
+    """Whether every state of the MRAS is finite."""
+    c = cmath.isfinite
+    ok = c(s.lam_v_ab) and c(s.lam_i_ab) and c(s.lam_f_ab) and math.isfinite(s.int_e)
+    return ok and math.isfinite(s.w_r_hat) and c(s.e_dq0)
+
+
+KERNEL = register_kernel(
+    "mras",
+    MRAS_PARAMS,
+    MRAS_STATE,
+    mras_estimate,
+    log_fields=OWN_LOG_FIELDS,
+    log=log_mras_own,
+    finite=mras_finite,
+    reduced_state=True,
+)

@@ -30,6 +30,7 @@ from __future__ import annotations
 from numba import njit
 
 from imdrive.kernels.estimators.common import current_model_step
+from imdrive.kernels.estimators.registry import register_kernel
 from imdrive.kernels.model import model_inductances
 from imdrive.kernels.records import c16, f8, record_dtype
 
@@ -92,3 +93,18 @@ def reactive_mras_step(p, m, s, v_prev_a, v_prev_b, i_prev_a, i_prev_b, i_a, i_b
     s.lam_ab = lam_new
     s.q_ref = q_ref
     s.q_hat = q_hat
+
+
+@njit(cache=True)
+def reactive_mras_estimate(p, m, s, inp):
+    """The reactive-power MRAS in the estimator contract; it has no flux error (``0j``)."""
+    v = inp.v_ab
+    i0 = inp.i_prev_ab
+    i1 = inp.i_ab
+    reactive_mras_step(p, m, s, v.real, v.imag, i0.real, i0.imag, i1.real, i1.imag, inp.Ts)
+    return s.w_r_hat, 0j
+
+
+KERNEL = register_kernel(
+    "reactive-mras", REACTIVE_MRAS_PARAMS, REACTIVE_MRAS_STATE, reactive_mras_estimate
+)

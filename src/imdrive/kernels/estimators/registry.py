@@ -1,0 +1,266 @@
+"""Speed estimators as plug-ins: one step contract, one registry, dispatch by record type.
+
+An estimator is a numba-compiled block with its own parameter and state record dtypes. It is
+registered once (:func:`register_kernel`), and the engine calls it through three generic
+functions, :func:`estimator_step`, :func:`estimator_log` and :func:`estimator_finite`. Numba
+resolves each call at compile time from the *type* of the state record it receives: the drive
+of an estimator carries that estimator's records (``DriveParams.est``, ``DriveState.est``), so
+the loop is compiled once per estimator and holds no branch per estimator. The registry maps
+the state dtype to the functions, which is why every registered state and parameter dtype is made
+unique (a tag field, below).
+
+The contract
+------------
+``step(p, model, s, inp) -> (w_r_hat, e_dq0)``
+    ``p``: the estimator's parameter record; ``model``: the controller's machine model
+    (:data:`imdrive.kernels.model.MODEL_STATE`; an estimator may adapt ``R1_hat``/``R2_hat``
+    in it); ``s``: its state record (updated in place); ``inp``: an :data:`ESTIMATOR_INPUT`
+    record (the last period's voltage, the last two current samples, the controller's angle,
+    frequency and references, the R2 compensator's injected current). Returns the electrical
+    speed estimate, rad/s, and the rotor-flux error in the controller's frame, Wb (complex;
+    ``0j`` if the estimator has none: the R2 compensator then sees no signal).
+``log(row, p, s, n_p)`` (optional)
+    Writes the estimator's own ``log_fields`` into the log record ``row``.
+``finite(s) -> bool`` (optional)
+    Whether the estimator's internal state is finite (a NaN there is a divergence); without it
+    only the returned values are checked.
+
+Caching
+-------
+The engine inlines the estimator, so its cached machine code must change whenever the
+estimator's source does. The package's own cache folder is named after a hash of the package
+(:mod:`imdrive._cache`); an estimator defined outside the package gets a tag field whose
+name carries a hash of its module's source file, so an edited user estimator is a new record
+type and is compiled afresh, never taken stale from the cache.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import inspect
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from numba import types
+from numba.extending import overload
+from numba.np.numpy_support import as_dtype
+
+from imdrive.kernels.records import b1, c16, f8, record_dtype
+
+#: What the engine hands an estimator each period (SI units; space vectors complex, in the
+#: stationary frame ``_ab`` or the controller's frame ``_dq``).
+ESTIMATOR_INPUT = record_dtype(
+    [
+        ("v_ab", c16),  # voltage the controller commanded over the last period, V
+        ("i_prev_ab", c16),  # current sample at the start of the last period, A
+        ("i_ab", c16),  # current sample now, A
+        ("theta_e", f8),  # the controller's d-axis angle at this sample, rad
+        ("w_e", f8),  # the controller's stator (field) frequency, electrical rad/s
+        ("i_ref_dq", c16),  # the current references of the last period, A
+        ("w_ref", f8),  # speed reference, mechanical rad/s
+        ("i_inj", f8),  # the R2 compensator's injected d-axis current this period, A
+        ("hold_R1", b1),  # R1 adaptation held (the compensator's gating asks for it)
+        ("Ts", f8),  # control period, s
+        ("t", f8),  # time of this sample, s
+    ]
+)
+
+
+@dataclass(frozen=True)
+class EstimatorKernel:
+    """The compiled half of an estimator: its records and its numba functions.
+
+    Attributes
+    ----------
+    name : str
+        The value of ``control.speed_feedback`` that selects it.
+    params, state : numpy.dtype
+        Its parameter and state record dtypes, as registered: each with the tag field.
+    step : numba dispatcher
+        ``step(p, model, s, inp) -> (w_r_hat, e_dq0)`` (module docstring).
+    log_fields : tuple of str
+        Its own log fields (float64), written by ``log``; their units are declared with the
+        settings half (:class:`imdrive.estimators.Estimator`).
+    log, finite : numba dispatcher or None
+        Optional (module docstring).
+    reduced_state : bool
+        Whether the stability maps' reduced drive state carries it (only the MRAS today).
+    """
+
+    name: str
+    params: np.dtype
+    state: np.dtype
+    step: object
+    log_fields: tuple[str, ...] = ()
+    log: object = None
+    finite: object = None
+    reduced_state: bool = False
+    source: str = field(default="", compare=False)
+
+
+_BY_NAME: dict[str, EstimatorKernel] = {}
+_BY_STATE: dict[np.dtype, EstimatorKernel] = {}
+
+
+def _source_tag(func) -> str:
+    """A short hash of the file defining ``func`` ('' for the package's own files)."""
+    py = getattr(func, "py_func", func)
+    try:
+        path = Path(inspect.getsourcefile(py) or "")
+        text = path.read_bytes()
+    except (TypeError, OSError):
+        return "nosource"
+    if Path(__file__).resolve().parents[2] in path.resolve().parents:
+        return ""  # the package's cache folder already follows its sources
+    return hashlib.sha256(text).hexdigest()[:12]
+
+
+def _tagged(state: np.dtype, name: str, tag: str) -> np.dtype:
+    ident = re.sub(r"\W", "_", name)
+    fields = [(n, state.fields[n][0]) for n in state.names]
+    fields.append((f"est_{ident}_{tag}" if tag else f"est_{ident}", np.uint8))
+    return np.dtype(fields)
+
+
+def register_kernel(
+    name: str,
+    params: np.dtype,
+    state: np.dtype,
+    step,
+    log_fields=(),
+    log=None,
+    finite=None,
+    reduced_state: bool = False,
+) -> EstimatorKernel:
+    """Register an estimator's compiled half under ``name`` and return it.
+
+    Parameters
+    ----------
+    name : str
+        The ``control.speed_feedback`` value that selects it.
+    params, state : numpy.dtype
+        Record dtypes (fields by name; see :mod:`imdrive.kernels.records`).
+    step : numba dispatcher
+        ``step(p, model, s, inp) -> (w_r_hat, e_dq0)``.
+    log_fields : sequence of str
+        Log fields it writes (float64).
+    log, finite : numba dispatcher, optional
+        See the module docstring.
+    reduced_state : bool
+        Whether the stability maps' reduced state carries it.
+
+    Returns
+    -------
+    EstimatorKernel
+        With ``params`` and ``state`` extended by a tag field that makes them unique (module
+        docstring).
+        Registering the same name again replaces the entry (a re-imported user module).
+    """
+    tag = _source_tag(step)
+    tagged = _tagged(np.dtype(state), name, tag)
+    kernel = EstimatorKernel(
+        name=name,
+        params=_tagged(np.dtype(params), name, tag),
+        state=tagged,
+        step=step,
+        log_fields=tuple(log_fields),
+        log=log,
+        finite=finite,
+        reduced_state=reduced_state,
+        source=tag,
+    )
+    old = _BY_NAME.pop(name, None)
+    if old is not None:
+        _BY_STATE.pop(old.state, None)
+        _BY_STATE.pop(old.params, None)
+    _BY_NAME[name] = kernel
+    _BY_STATE[kernel.state] = kernel
+    _BY_STATE[kernel.params] = kernel
+    return kernel
+
+
+def kernel(name: str) -> EstimatorKernel:
+    """The registered estimator ``name`` (``KeyError`` naming the registered ones)."""
+    try:
+        return _BY_NAME[name]
+    except KeyError:
+        raise KeyError(f"no estimator {name!r} is registered (known: {sorted(_BY_NAME)})") from None
+
+
+def kernel_names() -> tuple[str, ...]:
+    """Names of every registered estimator, in registration order."""
+    return tuple(_BY_NAME)
+
+
+def kernel_of_state(dtype: np.dtype) -> EstimatorKernel:
+    """The estimator whose (tagged) state or parameter dtype is ``dtype``."""
+    return _BY_STATE[np.dtype(dtype)]
+
+
+def _lookup(s) -> EstimatorKernel | None:
+    if not isinstance(s, types.Record):
+        return None
+    return _BY_STATE.get(as_dtype(s))
+
+
+# --- generic entry points, resolved by numba from the state record's type -------------------
+
+
+def estimator_step(p, model, s, inp):
+    """Advance the estimator whose state is ``s`` by one period (compiled code only)."""
+    raise NotImplementedError("estimator_step is called from compiled code only")
+
+
+def estimator_log(row, p, s, n_p):
+    """Write the estimator's own log fields (compiled code only)."""
+    raise NotImplementedError("estimator_log is called from compiled code only")
+
+
+def estimator_finite(s):
+    """Whether the estimator's state is finite (compiled code only)."""
+    raise NotImplementedError("estimator_finite is called from compiled code only")
+
+
+@overload(estimator_step, jit_options={"cache": True})
+def _estimator_step(p, model, s, inp):
+    k = _lookup(s)
+    if k is None:
+        return None
+    step = k.step
+
+    def impl(p, model, s, inp):
+        return step(p, model, s, inp)
+
+    return impl
+
+
+@overload(estimator_log, jit_options={"cache": True})
+def _estimator_log(row, p, s, n_p):
+    k = _lookup(s)
+    if k is None:
+        return None
+    if k.log is None:
+
+        def nothing(row, p, s, n_p):
+            pass
+
+        return nothing
+    log = k.log
+
+    def impl(row, p, s, n_p):
+        log(row, p, s, n_p)
+
+    return impl
+
+
+@overload(estimator_finite, jit_options={"cache": True})
+def _estimator_finite(s):
+    k = _lookup(s)
+    if k is None:
+        return None
+    if k.finite is None:
+        return lambda s: True
+    finite = k.finite
+    return lambda s: finite(s)
