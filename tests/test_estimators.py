@@ -163,8 +163,8 @@ def test_ekf_R2_converges_under_excitation_and_covariance_shrinks():
     S = copy_state(a.state0)
     status, _ = run_drive(a.params, S, 0, a.n_steps, new_log(0), 1)
     assert status == 0
-    R2_hat = S.ekf["x"][0][5]
+    R2_hat = S.est["x"][0][5]
     assert abs(R2_hat - 0.816) / 0.816 < 0.02
     assert S.model["R2_hat"][0] == R2_hat  # written into the controller's model
-    p0 = a.params.ekf["p0"][0][5]
-    assert S.ekf["P"][0][5, 5] < 0.01 * p0
+    p0 = a.params.est["p0"][0][5]
+    assert S.est["P"][0][5, 5] < 0.01 * p0

@@ -138,6 +138,31 @@ class DriveState(NamedTuple):
     inverter: np.ndarray  # inverter.INVERTER_STATE
 
 
+_OLD_ESTIMATOR_FIELDS = {"mras": "mras", "rmras": "reactive-mras", "afo": "afo", "ekf": "ekf"}
+
+
+def _old_estimator_field(self, name):
+    """The 0.2 per-estimator fields (``P.mras``, ``S.ekf``, ...), deprecated for ``.est``."""
+    est = _OLD_ESTIMATOR_FIELDS.get(name)
+    if est is None:
+        raise AttributeError(name)
+    import warnings
+
+    warnings.warn(
+        f"DriveParams/DriveState.{name} is deprecated: a drive carries only its own "
+        "estimator's records, in .est",
+        DeprecationWarning,
+        stacklevel=2,
+    )
+    if registry.kernel_of_state(self.est.dtype).name != est:
+        raise AttributeError(f"this drive's estimator is not {est!r}: its records are in .est")
+    return self.est
+
+
+DriveParams.__getattr__ = _old_estimator_field
+DriveState.__getattr__ = _old_estimator_field
+
+
 @njit(cache=True)
 def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
     """Simulate drive ``i`` of ``P``/``S`` for ``n_steps`` control periods (``S`` in place).

@@ -24,11 +24,15 @@ from imdrive.run.estimators import EstimatorContext, estimator
 MAX_LOG_BYTES = 2 * 2**30  # a log larger than this is refused before anything runs
 
 
-def check_log_size(sc: Scenario) -> None:
-    """Refuse a scenario whose log would not fit in :data:`MAX_LOG_BYTES`."""
+def check_log_size(sc: Scenario, log: np.dtype | None = None) -> None:
+    """Refuse a scenario whose log would not fit in :data:`MAX_LOG_BYTES`.
+
+    ``log`` is the drive's log dtype (default: that of the scenario's estimator).
+    """
     sim = sc.simulation
-    item = log_dtype(estimator(sc.control.speed_feedback).kernel).itemsize
-    log_bytes = (sim.n_steps // sim.log_every + 1) * item
+    if log is None:
+        log = log_dtype(estimator(sc.control.speed_feedback).kernel)
+    log_bytes = (sim.n_steps // sim.log_every + 1) * log.itemsize
     if log_bytes > MAX_LOG_BYTES:
         raise ConfigError(
             "simulation.log_every",
@@ -53,6 +57,8 @@ class DriveArrays:
     sources : dict
         For a derived quantity or record field, the setting it comes from (to name it when
         its value is not finite).
+    log : numpy.dtype
+        The drive's log record: every block's fields and its estimator's own.
     """
 
     params: DriveParams
@@ -61,6 +67,7 @@ class DriveArrays:
     log_every: int
     derived: dict
     sources: dict = field(default_factory=dict)
+    log: np.dtype = field(default_factory=lambda: log_dtype("mras"))
 
     @property
     def Ts(self) -> float:
@@ -164,14 +171,15 @@ def build_arrays(sc: Scenario) -> DriveArrays:
 
 def _build_arrays(sc: Scenario) -> DriveArrays:
     """Every block's records from its own builder (:mod:`imdrive.run.blocks`)."""
-    check_log_size(sc)
+    est = estimator(sc.control.speed_feedback)
+    log = log_dtype(est.kernel)
+    check_log_size(sc, log)
     m = sc.machine
     Ts = sc.simulation.Ts_s
     model, mh = blocks.model_record(sc)
     psi0 = blocks.flux_reference(sc).points[0][1]
     control, gains = blocks.control_record(sc, mh, psi0)
 
-    est = estimator(sc.control.speed_feedback)
     ctx = EstimatorContext(
         scenario=sc,
         settings=getattr(sc, est.section, None) if est.section else None,
@@ -214,4 +222,5 @@ def _build_arrays(sc: Scenario) -> DriveArrays:
         log_every=sc.simulation.log_every,
         derived=derived,
         sources={**DERIVED_SOURCE, **er.sources},
+        log=log,
     )

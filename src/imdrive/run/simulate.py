@@ -8,8 +8,7 @@ import numpy as np
 
 from imdrive.config.scenario import Scenario
 from imdrive.errors import ConfigError
-from imdrive.kernels.engine import LOG, S_OK, log_dtype, run_drive
-from imdrive.kernels.estimators.registry import kernel_of_state
+from imdrive.kernels.engine import LOG, S_OK, run_drive
 from imdrive.run.build import DriveArrays, build_arrays, copy_state
 from imdrive.run.result import SimulationResult, columns_from_log
 
@@ -24,24 +23,22 @@ def logged_rows(log: np.ndarray, status: int, k_end: int, log_every: int) -> np.
     return log[~np.isnan(log["time"])]
 
 
-def new_log(n_rows: int, params=None) -> np.ndarray:
+def new_log(n_rows: int, dtype: np.dtype | None = None) -> np.ndarray:
     """A kernel log of ``n_rows`` rows, NaN-filled (unwritten rows stay recognisable).
 
     Parameters
     ----------
     n_rows : int
         Rows.
-    params : DriveParams, optional
-        The drive it is for: its estimator's own fields are added (default: an MRAS drive's
-        log, ``LOG``).
+    dtype : numpy.dtype, optional
+        The drive's log record (``DriveArrays.log``; default: an MRAS drive's, ``LOG``).
 
     Returns
     -------
     numpy.ndarray
         The log records, every value NaN.
     """
-    dtype = LOG if params is None else log_dtype(kernel_of_state(params.est.dtype))
-    return np.full(n_rows, np.nan, dtype=dtype)
+    return np.full(n_rows, np.nan, dtype=LOG if dtype is None else dtype)
 
 
 def kernels_cached() -> bool:
@@ -85,7 +82,7 @@ def simulate(scenario: Scenario, arrays: DriveArrays | None = None) -> Simulatio
         )
     a = arrays if arrays is not None else build_arrays(scenario)
     n_rows = a.n_steps // a.log_every + 1
-    log = new_log(n_rows, a.params)
+    log = new_log(n_rows, a.log)
     state = copy_state(a.state0)
     # a zero-length call loads (or compiles) the kernel, so wall_time_s measures the run alone
     t0 = time.perf_counter()
@@ -102,7 +99,7 @@ def simulate(scenario: Scenario, arrays: DriveArrays | None = None) -> Simulatio
         # call, without its closing sample, left out) and the state at t_end
         status, k_end = run_drive(a.params, state, 0, n_main, log, a.log_every, 0, False)
         if status == S_OK:
-            tail = new_log(2, a.params)
+            tail = new_log(2, a.log)
             rest = a.n_steps - n_main
             status, k_rest = run_drive(a.params, state, 0, rest, tail, rest, n_main, True)
             log[-1] = tail[0]

@@ -1,0 +1,119 @@
+"""Kernel speed of two source trees of imdrive, alternated in one run, per preset.
+
+Run from the repository root with the imdrive venv::
+
+    python benchmarks/bench_trees.py OLD_REV [--repeat N] [--rounds R] [--presets a,b,...]
+
+``OLD_REV`` is a git revision (e.g. ``HEAD~3``, a tag); it is checked out into a temporary
+worktree. Each round runs, for each preset, one subprocess per tree (old, new, then new, old
+in the next round, so drift of the machine's load falls on both): the subprocess imports
+imdrive from that tree's ``src`` (``PYTHONPATH``), compiles or loads the kernel, then times
+``--repeat`` runs of ``run_drive`` over the whole preset in process CPU time (robust on a
+shared machine). Prints, per preset, each tree's range (lowest-highest, median, runs) and the
+ratio of the medians new/old (below 1: the new tree is faster).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+from _measured import machine_line, span
+
+ROOT = Path(__file__).resolve().parents[1]
+PRESETS = (
+    "free-acceleration",
+    "sensorless",
+    "paper-fig5",
+    "injection-fig5",
+    "vector-sensored",
+    "sensorless-realistic",
+)
+
+_CHILD = r"""
+import json, sys, time
+from imdrive.config.scenario import Scenario
+from imdrive.kernels.engine import run_drive
+from imdrive.run.build import build_arrays, copy_state
+from imdrive.run import simulate as _s
+
+preset, repeat = sys.argv[1], int(sys.argv[2])
+sc = Scenario.read(preset)
+a = build_arrays(sc)
+try:
+    log = _s.new_log(a.n_steps // a.log_every + 1, a.params)
+except TypeError:  # a tree whose new_log takes the row count only
+    log = _s.new_log(a.n_steps // a.log_every + 1)
+run_drive(a.params, copy_state(a.state0), 0, 1, log, a.log_every)  # compile or load
+times = []
+for _ in range(repeat):
+    S = copy_state(a.state0)
+    t0 = time.process_time()
+    run_drive(a.params, S, 0, a.n_steps, log, a.log_every)
+    times.append(time.process_time() - t0)
+print(json.dumps({"periods": int(a.n_steps), "times": times}))
+"""
+
+
+def _run(src: Path, preset: str, repeat: int) -> dict:
+    env = dict(os.environ, PYTHONPATH=str(src), NUMBA_NUM_THREADS="1")
+    out = subprocess.run(
+        [sys.executable, "-c", _CHILD, preset, str(repeat)],
+        env=env,
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("old_rev")
+    ap.add_argument("--repeat", type=int, default=5, help="timed runs per subprocess")
+    ap.add_argument("--rounds", type=int, default=2, help="alternations old/new")
+    ap.add_argument("--presets", default=",".join(PRESETS))
+    ap.add_argument("--json", help="write the raw times here")
+    args = ap.parse_args(argv)
+    print(machine_line())
+    presets = [p for p in args.presets.split(",") if p]
+    with tempfile.TemporaryDirectory() as tmp:
+        old = Path(tmp) / "old"
+        subprocess.run(
+            ["git", "-C", str(ROOT), "worktree", "add", "--detach", "-q", str(old), args.old_rev],
+            check=True,
+        )
+        try:
+            trees = {"old": old / "src", "new": ROOT / "src"}
+            times: dict[str, dict[str, list[float]]] = {p: {"old": [], "new": []} for p in presets}
+            periods = {}
+            for r in range(args.rounds):
+                order = ("old", "new") if r % 2 == 0 else ("new", "old")
+                for p in presets:
+                    for tree in order:
+                        res = _run(trees[tree], p, args.repeat)
+                        periods[p] = res["periods"]
+                        times[p][tree] += [t / res["periods"] * 1e6 for t in res["times"]]
+        finally:
+            subprocess.run(
+                ["git", "-C", str(ROOT), "worktree", "remove", "--force", str(old)], check=False
+            )
+    print(f"\nkernel CPU time per control period, us (old = {args.old_rev}, new = working tree)")
+    print(f"{'preset':24s} {'old':32s} {'new':32s} new/old")
+    for p in presets:
+        o, n = times[p]["old"], times[p]["new"]
+        ratio = statistics.median(n) / statistics.median(o)
+        print(f"{p:24s} {span(o, 'us', digits=3):32s} {span(n, 'us', digits=3):32s} {ratio:.3f}")
+    if args.json:
+        Path(args.json).write_text(json.dumps({"periods": periods, "times_us": times}, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
