@@ -1,17 +1,237 @@
 """Dotted-key overrides (``control.speed_ref_rpm=1500``): one mechanism for ``--set``, sweeps
-and :meth:`~imdrive.config.scenario.Scenario.with_overrides`.
+and :meth:`~imdrive.config.scenario.Scenario.with_overrides`, and the walk over the scenario
+file's keys they check paths against.
 
-The functions live in :mod:`imdrive.config.scenario`, beside the settings classes whose keys
-they check (so ``Scenario`` applies overrides without an import cycle); this module is their
-public home.
+The keys are read off the settings classes, starting at the root class of the file,
+:class:`~imdrive.config.scenario.Scenario`, which registers itself here with
+:func:`scenario_root` when it is defined (so this module does not import it and ``Scenario``
+applies overrides without an import cycle). :mod:`imdrive.config.schema` re-exports the walk.
 """
 
-from imdrive.config.scenario import (
-    _schema_allows,
-    apply_override,
-    is_setting,
-    parse_override,
-    set_path,
-)
+from __future__ import annotations
 
-__all__ = ["_schema_allows", "apply_override", "is_setting", "parse_override", "set_path"]
+import dataclasses
+import functools
+import tomllib
+import typing
+from dataclasses import dataclass, fields, is_dataclass
+from typing import Any
+
+from pydantic.fields import FieldInfo
+
+from imdrive.config.profiles import Profile
+from imdrive.errors import ConfigError
+
+__all__ = [
+    "FILE_PATHS",
+    "Key",
+    "_schema_allows",
+    "apply_override",
+    "is_setting",
+    "is_table_class",
+    "parse_override",
+    "scenario_keys",
+    "scenario_root",
+    "set_path",
+    "setting_paths",
+    "table_paths",
+]
+
+_ROOT: list[type] = []
+
+
+def scenario_root(cls: type) -> type:
+    """Class decorator: ``cls`` is the root table of a scenario file (its fields are the
+    top-level keys and sections), the class :func:`scenario_keys` walks from.
+
+    Parameters
+    ----------
+    cls : type
+        The settings class of a whole scenario (:class:`~imdrive.config.scenario.Scenario`).
+
+    Returns
+    -------
+    type
+        ``cls`` itself.
+    """
+    _ROOT[:] = [cls]
+    for f in (scenario_keys, setting_paths, table_paths):
+        f.cache_clear()
+    return cls
+
+
+def _root() -> type:
+    if not _ROOT:  # imdrive.config imports config.scenario, which registers the root
+        raise RuntimeError("imdrive.config.scenario has not registered the scenario class")
+    return _ROOT[0]
+
+
+def _check_override_list(overrides) -> None:
+    """A single string in place of the list of overrides is refused (it would be read one
+    character at a time)."""
+    if isinstance(overrides, str):
+        raise ConfigError(
+            "overrides",
+            f"must be a list of 'key=value' strings, not a string (write [{overrides!r}])",
+        )
+
+
+def _to_plain(obj):
+    if isinstance(obj, Profile):
+        return obj.to_toml_value()
+    if is_dataclass(obj):
+        return {f.name: _to_plain(getattr(obj, f.name)) for f in fields(obj)}
+    return obj
+
+
+def _convert(tp, val, path: str):
+    """Kept for :mod:`imdrive.sweep` (which passes the value to ``dataclasses.replace``).
+
+    The settings classes validate their fields themselves now: the value is returned as is and
+    the constructor that receives it checks and converts it, naming the same ``path``.
+    """
+    return val
+
+
+# ------------------------------------------------------------------------------------------
+# The file's keys, read off the settings classes (one walk for --set, sweeps, docs, schema),
+# and the one override mechanism.
+
+#: Where a field of the Scenario object lives in the file.
+FILE_PATHS = {"machine_preset": ("machine", "preset")}
+
+
+@dataclass(frozen=True)
+class Key:
+    """One key of a scenario file.
+
+    ``path`` is its dotted path (``("plant", "thermal", "tau1_s")``); ``owner`` the settings
+    class that holds the field and ``name`` the field's name there; ``info`` its pydantic
+    field (description, unit, constraints); ``hint`` its type without metadata (``float``,
+    ``Literal[...]``, ``Profile | None``, a settings class); ``default`` its default
+    (``dataclasses.MISSING`` for a machine field, which comes from the preset); ``table`` the
+    settings class when the key is a table (a section or ``plant.thermal``).
+    """
+
+    path: tuple[str, ...]
+    owner: type
+    name: str
+    info: FieldInfo
+    hint: Any
+    default: Any
+    table: type | None
+
+    @property
+    def dotted(self) -> str:
+        return ".".join(self.path)
+
+
+def is_table_class(tp) -> bool:
+    """Whether ``tp`` is a settings class (a pydantic dataclass), i.e. a table in the file."""
+    return isinstance(tp, type) and hasattr(tp, "__pydantic_fields__")
+
+
+def _fields(cls, prefix: tuple[str, ...]):
+    hints = typing.get_type_hints(cls)
+    for f in dataclasses.fields(cls):
+        path = FILE_PATHS.get(f.name, (*prefix, f.name)) if cls is _root() else (*prefix, f.name)
+        hint = hints[f.name]
+        table = hint if is_table_class(hint) else None
+        yield Key(path, cls, f.name, cls.__pydantic_fields__[f.name], hint, f.default, table)
+
+
+@functools.cache
+def scenario_keys() -> tuple[Key, ...]:
+    """Every key of a scenario file, tables included, in file order (sections as in
+    :data:`~imdrive.config.scenario.SECTIONS`, ``[machine]`` first with ``preset``)."""
+    top = {k.name: k for k in _fields(_root(), ())}
+    out = [top["name"], top["description"]]
+    machine = top["machine"]
+    out.append(machine)
+    out.append(top["machine_preset"])
+    for k in _fields(machine.table, ("machine",)):
+        out.append(dataclasses.replace(k, default=dataclasses.MISSING))
+
+    def walk(key: Key):
+        out.append(key)
+        for sub in _fields(key.table, key.path):
+            if sub.table is not None:
+                walk(sub)
+            else:
+                out.append(sub)
+
+    for key in top.values():  # the sections, in the order Scenario declares them
+        if key.table is not None and key.name != "machine":
+            walk(key)
+    return tuple(out)
+
+
+@functools.cache
+def setting_paths() -> frozenset[tuple[str, ...]]:
+    """Paths a single value may be set at: every key except the top-level tables."""
+    return frozenset(k.path for k in scenario_keys() if not (k.table and len(k.path) == 1))
+
+
+@functools.cache
+def table_paths() -> frozenset[tuple[str, ...]]:
+    """Paths of the tables of the file (``("machine",)``, ``("plant", "thermal")``, ...)."""
+    return frozenset(k.path for k in scenario_keys() if k.table is not None)
+
+
+def _schema_allows(path: list[str]) -> bool:
+    """Whether a dotted override path names a field of the scenario schema.
+
+    A field is a value (``simulation.Ts_s``, ``machine.preset``) or a table inside a section
+    (``plant.thermal``); a whole section (``simulation``) is not one. The paths are read off
+    the settings classes (:func:`scenario_keys`).
+    """
+    return tuple(path) in setting_paths()
+
+
+def is_setting(parts) -> bool:
+    """Whether the dotted path ``parts`` names a field of the scenario schema."""
+    return bool(parts) and all(parts) and _schema_allows(list(parts))
+
+
+def parse_override(spec: str) -> tuple[tuple[str, ...], object]:
+    """Split ``key.path=value`` into the path and the value (parsed as a TOML value).
+
+    A value that is not valid TOML is taken as a string, so ``control.speed_feedback=mras``
+    needs no quotes.
+    """
+    if "=" not in spec:
+        raise ConfigError(spec, "override must look like key.path=value")
+    key, raw = spec.split("=", 1)
+    key = key.strip()
+    if not key:
+        raise ConfigError("--set", f"{spec!r}: the key before '=' is empty")
+    parts = tuple(key.split("."))
+    if not is_setting(parts):
+        raise ConfigError(key, "no such setting (see 'imdrive show PRESET' for the keys)")
+    try:
+        value = tomllib.loads(f"v = {raw.strip()}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = raw.strip()
+    return parts, value
+
+
+def set_path(data: dict, parts, value) -> None:
+    """Set the value at the dotted path ``parts`` of a TOML-shaped scenario dictionary.
+
+    The one override mechanism: ``--set`` and every sweep axis go through it, and the
+    scenario is validated once afterwards (:meth:`Scenario.from_dict`).
+    """
+    key = ".".join(parts)
+    node = data
+    for p in parts[:-1]:
+        nxt = node.setdefault(p, {})
+        if not isinstance(nxt, dict):
+            raise ConfigError(key, f"{p} is not a table")
+        node = nxt
+    node[parts[-1]] = value
+
+
+def apply_override(data: dict, spec: str) -> None:
+    """Apply ``key.path=value`` to a scenario dictionary (see :func:`parse_override`)."""
+    parts, value = parse_override(spec)
+    set_path(data, parts, value)

@@ -16,19 +16,18 @@ from pydantic import TypeAdapter
 from pydantic.json_schema import GenerateJsonSchema
 
 from imdrive.config.machine import machine_presets
-from imdrive.config.profiles import Profile
 
-# the walk lives beside the classes it walks (imdrive.config.scenario), re-exported here
-from imdrive.config.scenario import (
-    DEFAULT_MACHINE_PRESET,
+# the walk lives in imdrive.config.overrides, re-exported here
+from imdrive.config.overrides import (
     FILE_PATHS,
     Key,
-    Scenario,
     is_table_class,
     scenario_keys,
     setting_paths,
     table_paths,
 )
+from imdrive.config.profiles import Profile
+from imdrive.config.scenario import DEFAULT_MACHINE_PRESET, Scenario
 
 __all__ = [
     "FILE_PATHS",

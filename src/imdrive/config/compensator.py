@@ -1,0 +1,235 @@
+"""Settings of the fuzzy rotor-resistance compensator and of its persistent excitation
+(sections ``[compensator]``, ``[injection]``).
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import model_validator
+
+from imdrive.config.validation import Bool, Float, Int, setting, settings
+from imdrive.errors import ConfigError
+
+
+@settings("compensator")
+class CompensatorSettings:
+    """The fuzzy rotor-resistance compensator (``[compensator]``, paper §4).
+
+    ``gain_E_per_Wb`` and ``gain_DE_per_Wb`` scale e_d0 and its change per period before the
+    quantiser (thresholds 0.25 ... 5): 1e6 reproduces the paper's micro-weber thresholds.
+    ``G_CR_ohm`` is the change of R2_hat per output level and period. The clamps default to
+    0.5 and 2 times the initial estimate. ``period_s`` defaults to 10 ms, or to one injection
+    period with ``input = "demodulated"``.
+    """
+
+    enabled: Annotated[Bool, setting("run the fuzzy R2 compensator")] = False
+    t_on_s: Annotated[Float, setting("time the compensator starts", "s", ge=0.0)] = 0.0
+    period_s: Annotated[
+        Float | None,
+        setting(
+            "decision period",
+            "s",
+            gt=0.0,
+            default_doc='0.01; one injection period with input = "demodulated"',
+        ),
+    ] = None
+    gain_E_per_Wb: Annotated[
+        Float,
+        setting(
+            "scaling of e_d0 before the 13-level quantiser (1e6: the paper's µWb thresholds)",
+            "1/Wb",
+            gt=0.0,
+        ),
+    ] = 1e6
+    gain_DE_per_Wb: Annotated[
+        Float,
+        setting("scaling of the change of e_d0 per period before the quantiser", "1/Wb", gt=0.0),
+    ] = 1e6
+    G_CR_ohm: Annotated[
+        Float, setting("change of R̂2 per output level and period", "ohm", ge=0.0)
+    ] = 0.001
+    R2_min_ohm: Annotated[
+        Float | None,
+        setting("lower clamp of R̂2", "ohm", gt=0.0, default_doc="0.5 × the initial R̂2"),
+    ] = None
+    R2_max_ohm: Annotated[
+        Float | None,
+        setting("upper clamp of R̂2", "ohm", gt=0.0, default_doc="2 × the initial R̂2"),
+    ] = None
+    table: Annotated[
+        Literal["paper", "rules"],
+        setting('"paper": the printed Table III; "rules": compiled from the fitted rule base'),
+    ] = "paper"
+    input: Annotated[
+        Literal["e_d0", "demodulated"],
+        setting(
+            '"e_d0": the paper\'s input; "demodulated": e_d0 detected synchronously with the '
+            "injection ([injection])"
+        ),
+    ] = "e_d0"
+    average: Annotated[
+        Bool, setting("the input is its mean over the period, not a sample at its end")
+    ] = True
+    gating: Annotated[
+        Bool | None,
+        setting(
+            "freeze R̂2 during speed and load transients and in voltage saturation, and move "
+            "the injection frequency away from the stator frequency (kernels/compensator.py)",
+            default_doc='on with input = "demodulated", off with "e_d0"',
+        ),
+    ] = None
+    gate_speed_rpm: Annotated[
+        Float,
+        setting(
+            "gating: speed-reference change within a period, or mean speed error over it, "
+            "above which the period is a transient",
+            "rpm",
+            gt=0.0,
+        ),
+    ] = 1.0
+    gate_iq_A: Annotated[
+        Float,
+        setting(
+            "gating: change of the period-mean iq* from one period to the next above which the "
+            "period is a load transient",
+            "A",
+            gt=0.0,
+        ),
+    ] = 0.3
+    gate_voltage: Annotated[
+        Float,
+        setting(
+            "gating: voltage use (fraction of Vdc/√3) from which the period counts as saturated",
+            gt=0.0,
+        ),
+    ] = 0.97
+    gate_band_Hz: Annotated[
+        Float,
+        setting(
+            "gating: the injection frequency is switched when |stator frequency| is within this "
+            "of it (0: never)",
+            "Hz",
+            ge=0.0,
+        ),
+    ] = 1.0
+    gate_hold_periods: Annotated[
+        Int, setting("gating: decisions still skipped after a gated one", ge=0)
+    ] = 1
+    step_law: Annotated[
+        Literal["table", "adaptive"],
+        setting(
+            '"table": R̂2 changes by G_CR_ohm × the table\'s level (the paper); "adaptive": '
+            "inside the first threshold a continuous level fine_gain × (scaled E) and an "
+            "integrated drift rate, for fine and ramp-following adaptation "
+            "(kernels/compensator.py)"
+        ),
+    ] = "table"
+    fine_gain: Annotated[
+        Float,
+        setting(
+            'step_law = "adaptive": level per unit of scaled E inside the first threshold', gt=0.0
+        ),
+    ] = 2.5
+    drift_gain: Annotated[
+        Float,
+        setting(
+            'step_law = "adaptive": share of each fine step added to the drift rate (0: none)',
+            ge=0.0,
+        ),
+    ] = 0.3
+    drift_min_freq_Hz: Annotated[
+        Float | None,
+        setting(
+            'step_law = "adaptive" with gating: the drift term is integrated only where the '
+            "mean stator frequency is above this, and reset below it (kernels/compensator.py)",
+            "Hz",
+            ge=0.0,
+            default_doc="the higher injection frequency (0 without injection)",
+        ),
+    ] = None
+    drift_max_ohm: Annotated[
+        Float | None,
+        setting(
+            'step_law = "adaptive": bound of the drift rate, per decision period',
+            "ohm",
+            ge=0.0,
+            default_doc="3 × G_CR_ohm",
+        ),
+    ] = None
+
+    @model_validator(mode="after")
+    def _clamps_in_order(self):
+        lo, hi = self.R2_min_ohm, self.R2_max_ohm
+        if lo is not None and hi is not None and not lo < hi:
+            raise ConfigError("R2_min_ohm", "must be < compensator.R2_max_ohm")
+        return self
+
+
+@settings("injection")
+class InjectionSettings:
+    """Persistent excitation (``[injection]``): a sinusoid added to the flux-current reference.
+
+    R2 identification from a low-frequency AC flux component is Kubota & Matsuse (IEEE Trans.
+    Ind. Appl. 30(5), 1994); feeding its demodulated flux error to the paper's table is ours.
+
+    ``amplitude_A`` = 0 switches it off. The compensator's ``input = "demodulated"`` feeds on
+    e_d0 detected synchronously with this sinusoid; its period should be a whole number of
+    injection periods (the default compensator period for that input is one).
+    """
+
+    amplitude_A: Annotated[
+        Float, setting("amplitude of the sinusoid added to id* (0: off)", "A", ge=0.0)
+    ] = 0.0
+    frequency_Hz: Annotated[Float, setting("frequency of the sinusoid", "Hz", gt=0.0)] = 2.0
+    frequency2_Hz: Annotated[
+        Float | None,
+        setting(
+            "the alternative frequency the gating switches to near the stator frequency; "
+            "the compensator period must hold whole periods of both",
+            "Hz",
+            gt=0.0,
+            default_doc="2 × frequency_Hz",
+        ),
+    ] = None
+    frequency3_Hz: Annotated[
+        Float | None,
+        setting(
+            "a third frequency for the gating's schedule: the lowest of the three at least "
+            "compensator.gate_band_Hz from the stator frequency is used (kernels/compensator.py); "
+            "the compensator period must hold whole periods of it",
+            "Hz",
+            gt=0.0,
+            default_doc="none: the two-frequency schedule",
+        ),
+    ] = None
+    headroom: Annotated[
+        Bool | None,
+        setting(
+            "the amplitude backs off as the voltage use (peak over each injection period) "
+            "rises from headroom_from to headroom_to, and is off in field weakening; the "
+            "compensator freezes below half amplitude (kernels/compensator.py)",
+            default_doc="on with control.field_weakening, else off",
+        ),
+    ] = None
+    headroom_from: Annotated[
+        Float, setting("headroom: voltage use where the amplitude starts to fall", gt=0.0)
+    ] = 0.85
+    headroom_to: Annotated[
+        Float, setting("headroom: voltage use where it reaches zero", gt=0.0)
+    ] = 0.95
+    t_on_s: Annotated[Float, setting("time the injection starts", "s", ge=0.0)] = 0.0
+    compensate_filter: Annotated[
+        Bool,
+        setting(
+            "filter-compensated detection: undo the MRAS's s/(s + ωc) comparison filter at the "
+            "injection's two side bands (kernels/compensator.py), which rotates the detected "
+            "signal at low stator frequency; false: plain 2 e_d0 sin detection"
+        ),
+    ] = False
+    lowpass_rad_s: Annotated[
+        Float,
+        setting(
+            "optional low-pass of the detected product, for display (0: none)", "rad/s", ge=0.0
+        ),
+    ] = 0.0

@@ -1,0 +1,196 @@
+"""Settings of the controller: which controller drives the inverter, the open-loop voltage and
+field-oriented speed control (sections ``[drive]``, ``[open_loop]``, ``[control]``).
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import model_validator
+
+from imdrive.config.profiles import Profile
+from imdrive.config.validation import Bool, Float, Int, ProfileValues, setting, settings
+from imdrive.errors import ConfigError
+
+C = Profile.constant
+PositiveProfile = Annotated[Profile, ProfileValues(gt=0.0)]
+NonNegativeProfile = Annotated[Profile, ProfileValues(ge=0.0)]
+
+
+@settings("drive")
+class DriveSettings:
+    """Which controller drives the inverter (``[drive]``)."""
+
+    mode: Annotated[
+        Literal["open-loop", "vector"],
+        setting(
+            '"open-loop" (the default, so a file without [drive] runs the machine on the '
+            "sinusoidal voltage of [open_loop] and ignores [control], [estimator], "
+            '[compensator] and [injection]); "vector": field-oriented speed control ([control]) '
+            "with its speed feedback, estimator and compensator. Every vector preset sets "
+            '"vector"'
+        ),
+    ] = "open-loop"
+
+
+@settings("open_loop")
+class OpenLoopSettings:
+    """Balanced sinusoidal voltage (``[open_loop]``); voltage is line-to-line rms."""
+
+    voltage_V: Annotated[NonNegativeProfile, setting("line-to-line rms voltage (>= 0)", "V")] = C(
+        220.0
+    )
+    frequency_Hz: Annotated[Profile, setting("supply frequency", "Hz")] = C(60.0)
+    vf_ramp_s: Annotated[
+        Float,
+        setting(
+            "V/f ramp from standstill to the (constant) voltage and frequency lasting this long; "
+            "0: direct on line",
+            "s",
+            ge=0.0,
+        ),
+    ] = 0.0
+
+    @model_validator(mode="after")
+    def _ramp_needs_constant_targets(self):
+        if self.vf_ramp_s > 0 and (
+            len(self.voltage_V.points) != 1 or len(self.frequency_Hz.points) != 1
+        ):
+            raise ConfigError(
+                "vf_ramp_s", "needs constant voltage_V and frequency_Hz (the ramp ends at them)"
+            )
+        return self
+
+
+@settings("control")
+class ControlSettings:
+    """Indirect field-oriented speed control (``[control]``).
+
+    PI gains not given are derived from the bandwidths (formulas in
+    :mod:`imdrive.design.gains`).
+    """
+
+    speed_feedback: Annotated[
+        Literal["measured", "mras", "reactive-mras", "afo", "ekf"],
+        setting(
+            '"measured": encoder speed; sensorless, the estimate of: "mras" Schauder\'s MRAS, '
+            '"reactive-mras" the reactive-power MRAS, "afo" the adaptive full-order observer, '
+            '"ekf" the extended Kalman filter (docs/estimators.md)'
+        ),
+    ] = "measured"
+    speed_ref_rpm: Annotated[Profile, setting("speed reference", "rpm")] = C(0.0)
+    flux_ref_Wb: Annotated[
+        PositiveProfile | None,
+        setting(
+            "rotor-flux reference (> 0)",
+            "Wb",
+            default_doc="the machine's rated flux ({rated_flux_Wb} Wb for {preset})",
+        ),
+    ] = None
+    speed_bandwidth_Hz: Annotated[
+        Float, setting("speed-loop bandwidth the speed PI gains are derived from", "Hz", gt=0.0)
+    ] = 5.0
+    current_bandwidth_Hz: Annotated[
+        Float,
+        setting("current-loop bandwidth the current PI gains are derived from", "Hz", gt=0.0),
+    ] = 200.0
+    speed_kp: Annotated[
+        Float | None,
+        setting(
+            "speed PI proportional gain (> 0: a negative gain is positive feedback, never a "
+            "controller)",
+            "A/(rad/s)",
+            gt=0.0,
+            default_doc="from speed_bandwidth_Hz",
+        ),
+    ] = None
+    speed_ki: Annotated[
+        Float | None,
+        setting(
+            "speed PI integral gain (>= 0: a negative one integrates the error the wrong way)",
+            "A/rad",
+            ge=0.0,
+            default_doc="from speed_bandwidth_Hz",
+        ),
+    ] = None
+    current_kp: Annotated[
+        Float | None,
+        setting(
+            "current PI proportional gain (> 0: a negative one is positive feedback)",
+            "V/A",
+            gt=0.0,
+            default_doc="from current_bandwidth_Hz",
+        ),
+    ] = None
+    current_ki: Annotated[
+        Float | None,
+        setting(
+            "current PI integral gain (>= 0: a negative one integrates the error the wrong way)",
+            "V/(A s)",
+            ge=0.0,
+            default_doc="from current_bandwidth_Hz",
+        ),
+    ] = None
+    current_limit_A: Annotated[
+        Float | None,
+        setting(
+            "stator current limit (peak)",
+            "A",
+            gt=0.0,
+            default_doc="2 × the rated peak current ({current_limit_A} A for {preset})",
+        ),
+    ] = None
+    decoupling: Annotated[
+        Bool, setting("cross-coupling and back-emf feed-forward in the current controllers")
+    ] = True
+    field_weakening: Annotated[
+        Bool,
+        setting(
+            "field weakening above base speed: the flux reference is scaled down by a voltage "
+            "feedback that holds the voltage use at field_weakening_voltage "
+            "(kernels/ifoc.py, field_weakening); turns injection.headroom on"
+        ),
+    ] = False
+    field_weakening_voltage: Annotated[
+        Float,
+        setting("field weakening: voltage use it holds (fraction of Vdc/√3)", gt=0.0, le=1.0),
+    ] = 0.9
+    field_weakening_rate: Annotated[
+        Float,
+        setting("field weakening: integral gain of the flux factor", "1/s", gt=0.0),
+    ] = 20.0
+    field_weakening_min: Annotated[
+        Float, setting("field weakening: lowest flux factor", gt=0.0, le=1.0)
+    ] = 0.2
+    dead_time_compensation: Annotated[
+        Literal["none", "feedforward"],
+        setting(
+            '"feedforward": add sgn(i) t_d f_sw Vdc_meas to each phase voltage reference '
+            "(measured current, smooth over inverter.sign_band_A)"
+        ),
+    ] = "none"
+    dead_time_compensation_s: Annotated[
+        Float | None,
+        setting(
+            "the dead time the compensation assumes",
+            "s",
+            ge=0.0,
+            default_doc="inverter.dead_time_s (perfect knowledge)",
+        ),
+    ] = None
+    delay_periods: Annotated[
+        Int,
+        setting(
+            "computation delay: 0, or 1 (the reference computed at sample k acts over the next "
+            "period, as on a DSP)",
+            ge=0,
+            le=1,
+        ),
+    ] = 0
+    delay_compensation: Annotated[
+        Bool,
+        setting(
+            "advance the dq-to-alpha-beta angle by the delay (1.5 Ts instead of 0.5 Ts with "
+            "delay_periods = 1)"
+        ),
+    ] = True
