@@ -309,7 +309,9 @@ def test_config_imports_no_numba_kernels_or_runner(path):
     for name in _imports(path):
         assert not name.startswith(("numba", "imdrive.kernels", "imdrive.run")), (path, name)
         if name.startswith("imdrive."):
-            assert name.startswith(("imdrive.config", "imdrive.errors")), (path, name)
+            # the gain formulas (design, numba-free) serve the estimators' settings classes
+            allowed = ("imdrive.config", "imdrive.errors", "imdrive.design")
+            assert name.startswith(allowed), (path, name)
 
 
 def test_config_import_loads_no_numba():

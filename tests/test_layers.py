@@ -15,14 +15,14 @@ rank layer                                        why it sits there
 ==== ============================================ ===============================================
 0    ``errors``, ``_cache``, ``_io``,             leaf utilities every layer may use; they import
      ``_progress``, ``_deprecated``               nothing of imdrive above rank 0
-1    ``config``                                   what a run *is* (machine, inverter, profiles,
-                                                  scenario, presets): pure Python, never numba,
-                                                  so reading a scenario costs no compilation
+1    ``config``, ``design``                       what a run *is* (machine, inverter, profiles,
+                                                  scenario, presets) and the gain formulas an
+                                                  estimator's settings design its gains with:
+                                                  pure Python, never numba, so reading a
+                                                  scenario costs no compilation
 2    ``kernels``                                  compiled blocks on named records; they import
                                                   only rank 0 and ``kernels`` (they never see a
                                                   Python object, so never ``config`` either)
-3    ``design``                                   gain formulas turning bandwidths into numbers
-                                                  the kernels receive
 4    ``fuzzy``, ``analysis``                      offline theory: Table III from rules (with the
                                                   compiled loops of ``kernels.fuzzy``) and the
                                                   steady state (numba-free, over
@@ -84,7 +84,7 @@ RANK = {
     "_deprecated": 0,
     "config": 1,
     "kernels": 2,
-    "design": 3,
+    "design": 1,
     "fuzzy": 4,
     "analysis": 4,
     "run": 5,
@@ -101,7 +101,7 @@ BASE = {layer for layer, rank in RANK.items() if rank == 0}
 ONLY = {"kernels": BASE | {"kernels"}}
 
 #: layers that must not load numba, directly or through anything they import
-NUMBA_FREE = ("config", "analysis")
+NUMBA_FREE = ("config", "design", "analysis")
 
 #: where ``import numba`` may appear: the kernels and the cache folder they compile into
 NUMBA_ALLOWED = ("kernels", "_cache")

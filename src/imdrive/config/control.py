@@ -6,15 +6,26 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import model_validator
+from pydantic import AfterValidator, model_validator
 
+from imdrive.config.estimators import ESTIMATOR_SETTINGS
 from imdrive.config.profiles import Profile
-from imdrive.config.validation import Bool, Float, Int, ProfileValues, setting, settings
+from imdrive.config.validation import Bool, Float, Int, ProfileValues, Str, setting, settings
 from imdrive.errors import ConfigError
 
 C = Profile.constant
 PositiveProfile = Annotated[Profile, ProfileValues(gt=0.0)]
 NonNegativeProfile = Annotated[Profile, ProfileValues(ge=0.0)]
+
+
+def _known_estimator(name: str) -> str:
+    """``"measured"`` or a registered estimator (the package's, or a plug-in's)."""
+    if name != "measured" and name not in ESTIMATOR_SETTINGS:
+        first = ("measured", "mras", "reactive-mras", "afo", "ekf")  # the package's, in order
+        known = [n for n in first if n == "measured" or n in ESTIMATOR_SETTINGS]
+        known += [n for n in ESTIMATOR_SETTINGS if n not in first]
+        raise ConfigError("", "must be one of " + ", ".join(repr(n) for n in known))
+    return name
 
 
 @settings("drive")
@@ -71,11 +82,13 @@ class ControlSettings:
     """
 
     speed_feedback: Annotated[
-        Literal["measured", "mras", "reactive-mras", "afo", "ekf"],
+        Str,
+        AfterValidator(_known_estimator),
         setting(
             '"measured": encoder speed; sensorless, the estimate of: "mras" Schauder\'s MRAS, '
             '"reactive-mras" the reactive-power MRAS, "afo" the adaptive full-order observer, '
-            '"ekf" the extended Kalman filter (docs/estimators.md)'
+            '"ekf" the extended Kalman filter (docs/estimators.md), or an estimator registered '
+            "by a module of [plugins] modules"
         ),
     ] = "measured"
     speed_ref_rpm: Annotated[Profile, setting("speed reference", "rpm")] = C(0.0)

@@ -165,6 +165,15 @@ def _type(key: Key) -> str:
     name = {float: "number", int: "integer", bool: "true/false", str: "string"}.get(hint)
     if hint is Profile:
         name = "*profile*"
+    elif typing.get_origin(hint) is tuple:
+        name = "list of strings"
+    elif typing.get_origin(hint) is dict:
+        name = "tables by estimator name"
+    if key.path == ("control", "speed_feedback"):
+        return (
+            '`"measured"` or `"mras"` or `"reactive-mras"` or `"afo"` or `"ekf"` or a plug-in '
+            "estimator's name"
+        )
     if name is None:  # pragma: no cover - a new kind of field needs a name here
         raise TypeError(f"no docs name for {hint!r} ({key.dotted})")
     return " ".join([name, *rules])
@@ -185,6 +194,8 @@ def _default(key: Key, machine) -> str:
     if "default_doc" in extra:
         text = extra["default_doc"].format(**_derived_values())
         return f"*derived*: {text}" if key.default is None else text
+    if key.default is dataclasses.MISSING and key.path[0] != "machine":
+        return "none"  # a table filled from a factory (plugins.settings)
     if key.default is dataclasses.MISSING:  # a machine field: the preset's value
         return _value(getattr(machine, key.name))
     return _value(key.default)

@@ -1,12 +1,147 @@
 """Settings of the controller's machine model and of the speed estimators (sections
 ``[estimator]``, ``[mras]``, ``[reactive_mras]``, ``[afo]``, ``[ekf]``, ``[flux_injection]``).
+
+A speed estimator's settings class is its Python half: besides its validated settings it says
+how they and the controller's machine model become the estimator's parameter and initial-state
+records (its gain design, :meth:`records`), and the unit of each log field the estimator adds.
+:func:`estimator_settings` registers such a class under the name ``control.speed_feedback``
+selects; the compiled half (records, step function) is registered under the same name in
+:mod:`imdrive.kernels.estimators.registry`, and :mod:`imdrive.run.estimators` joins the two.
+The package's four estimators are declared this way; an estimator outside the package too
+(its settings then live in the scenario's ``[plugins.settings.NAME]`` table).
 """
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass, field
 from typing import Annotated, Literal
 
 from imdrive.config.validation import Bool, Float, setting, settings
+from imdrive.design.estimators import (
+    afo_regeneration_gain,
+    default_afo_gains,
+    default_ekf_noise,
+    default_reactive_mras_gains,
+)
+from imdrive.design.gains import default_mras_gains
+
+
+@dataclass(frozen=True)
+class EstimatorContext:
+    """What an estimator's record builder may use besides its own settings.
+
+    Attributes
+    ----------
+    scenario : Scenario
+        The whole scenario (for settings of other sections, e.g. ``flux_injection``).
+    Ts : float
+        Control period, s.
+    psi0 : float
+        Rotor-flux reference at the start, Wb.
+    R1_hat, R2_hat, M_hat, L1_hat, L2_hat, sigma_L1_hat : float
+        The controller's machine model, ohm and H.
+    n_p : int
+        Pole pairs.
+    J : float
+        The plant's inertia as configured, kg m².
+    """
+
+    scenario: object
+    Ts: float
+    psi0: float
+    R1_hat: float
+    R2_hat: float
+    M_hat: float
+    L1_hat: float
+    L2_hat: float
+    sigma_L1_hat: float
+    n_p: int
+    J: float
+
+
+@dataclass(frozen=True)
+class EstimatorRecords:
+    """An estimator's records as field values, and what to report.
+
+    Attributes
+    ----------
+    params : dict
+        Parameter record fields by name (a name the record lacks is refused).
+    state : dict
+        Initial-state fields by name (unset fields are zero).
+    derived : dict
+        Derived quantities for ``summary.json`` (``name -> float``).
+    sources : dict
+        For each derived quantity, the setting it comes from (to name it in an error).
+    """
+
+    params: dict
+    state: dict = field(default_factory=dict)
+    derived: dict = field(default_factory=dict)
+    sources: dict = field(default_factory=dict)
+
+
+#: ``control.speed_feedback`` value -> the estimator's settings class
+ESTIMATOR_SETTINGS: dict[str, type] = {}
+
+
+def estimator_settings(
+    name: str,
+    section: str | None = None,
+    *,
+    log_units: dict | None = None,
+    flux_error: bool = False,
+    description: str = "",
+):
+    """Class decorator: the settings class of speed estimator ``name`` (its Python half).
+
+    The class is made a validated settings table (as every section) and registered, with the
+    class attributes ``estimator_name``, ``estimator_section``, ``estimator_log_units``,
+    ``estimator_flux_error`` and ``estimator_description``. It must define
+    ``records(self, ctx: EstimatorContext) -> EstimatorRecords``, its gain design.
+
+    Parameters
+    ----------
+    name : str
+        The ``control.speed_feedback`` value that selects the estimator.
+    section : str, optional
+        The scenario section of a package estimator (``"mras"``); ``None`` for an estimator
+        outside the package, whose table is ``[plugins.settings.NAME]``.
+    log_units : dict, optional
+        ``{log field: (unit, scale)}`` for each log field the estimator's kernel adds (the
+        exported column is ``f"{field}_{unit}"``, the value times ``scale``).
+    flux_error : bool
+        Whether its step returns the rotor-flux error the R2 compensator and the injection
+        need.
+    description : str
+        One line, for lists.
+
+    Returns
+    -------
+    callable
+        The decorator.
+    """
+
+    def wrap(cls):
+        if not callable(getattr(cls, "records", None)):
+            raise TypeError(f"estimator settings class {cls.__name__} must define records(ctx)")
+        cls = settings(section or f"plugins.settings.{name}")(cls)
+        cls.estimator_name = name
+        cls.estimator_section = section
+        cls.estimator_log_units = dict(log_units or {})
+        cls.estimator_flux_error = flux_error
+        doc = description or (cls.__doc__ or name).strip().splitlines()[0]
+        cls.estimator_description = doc
+        ESTIMATOR_SETTINGS[name] = cls
+        return cls
+
+    return wrap
+
+
+def estimator_names() -> tuple[str, ...]:
+    """Every value ``control.speed_feedback`` accepts: ``"measured"`` and each estimator."""
+    return ("measured", *ESTIMATOR_SETTINGS)
 
 
 @settings("estimator")
@@ -43,7 +178,7 @@ class EstimatorSettings:
     ] = "compensator"
 
 
-@settings("reactive_mras")
+@estimator_settings("reactive-mras", "reactive_mras")
 class ReactiveMrasSettings:
     """Reactive-power MRAS speed estimator (``[reactive_mras]``, Peng & Fukao 1994).
 
@@ -65,8 +200,26 @@ class ReactiveMrasSettings:
         setting("adaptation PI integral gain", "(rad/s²)/(A V)", default_doc="from bandwidth_Hz"),
     ] = None
 
+    def records(self, ctx: EstimatorContext) -> EstimatorRecords:
+        """K1, K2 from the bandwidth (:func:`default_reactive_mras_gains`), each overridable.
 
-@settings("afo")
+        Parameters
+        ----------
+        ctx : EstimatorContext
+            The controller's model and the drive.
+
+        Returns
+        -------
+        EstimatorRecords
+        """
+        K1, K2 = default_reactive_mras_gains(ctx.psi0, ctx.L2_hat, 2 * math.pi * self.bandwidth_Hz)
+        K1 = self.K1 if self.K1 is not None else K1
+        K2 = self.K2 if self.K2 is not None else K2
+        derived = {"reactive_mras_K1": K1, "reactive_mras_K2": K2}
+        return EstimatorRecords(dict(K1=K1, K2=K2), derived=derived)
+
+
+@estimator_settings("afo", "afo")
 class AfoSettings:
     """Adaptive full-order flux observer (``[afo]``, Kubota, Matsuse & Nakano 1993).
 
@@ -119,8 +272,58 @@ class AfoSettings:
         ),
     ] = 2.0
 
+    def records(self, ctx: EstimatorContext) -> EstimatorRecords:
+        """Adaptation gains (:func:`default_afo_gains`) and the observer gain.
 
-@settings("ekf")
+        Parameters
+        ----------
+        ctx : EstimatorContext
+            The controller's model and the drive.
+
+        Returns
+        -------
+        EstimatorRecords
+        """
+        sc = ctx.scenario
+        Kp, Ki, k_R1, k_R2 = default_afo_gains(
+            ctx.psi0,
+            ctx.R1_hat,
+            ctx.R2_hat,
+            ctx.sigma_L1_hat,
+            ctx.M_hat,
+            ctx.L2_hat,
+            self.g1_per_s,
+            2 * math.pi * self.bandwidth_Hz,
+            self.R1_bandwidth_rad_s,
+            self.R2_bandwidth_rad_s,
+            sc.flux_injection.amplitude,
+            2 * math.pi * sc.flux_injection.frequency_Hz,
+        )
+        regen = self.gain == "regeneration"
+        g2 = self.g2_ohm
+        if regen:
+            g2 = afo_regeneration_gain(
+                ctx.R1_hat, ctx.sigma_L1_hat, ctx.M_hat, ctx.L2_hat, self.g1_per_s, self.rho
+            )
+        Kp = self.Kp if self.Kp is not None else Kp
+        Ki = self.Ki if self.Ki is not None else Ki
+        params = dict(
+            gain_mode=1 if regen else 0,
+            rho=self.rho,
+            g1=self.g1_per_s,
+            g2=self.g2_ohm,
+            Kp=Kp,
+            Ki=Ki,
+            k_R1=k_R1 if self.R1_adaptation else 0.0,
+            k_R2=k_R2 if sc.estimator.R2_adaptation == "afo" else 0.0,
+            R_min=0.5,
+            R_max=2.0,
+        )
+        derived = {"afo_Kp": Kp, "afo_Ki": Ki, "afo_g1_per_s": self.g1_per_s, "afo_g2_ohm": g2}
+        return EstimatorRecords(params, derived=derived)
+
+
+@estimator_settings("ekf", "ekf")
 class EkfSettings:
     """Extended Kalman filter for speed and R2 (``[ekf]``); noise as standard deviations.
 
@@ -144,6 +347,41 @@ class EkfSettings:
         Float, setting("measurement noise per current component (rms)", "A", gt=0.0)
     ] = 0.05
 
+    def records(self, ctx: EstimatorContext) -> EstimatorRecords:
+        """Process and measurement noise (:func:`default_ekf_noise`).
+
+        Parameters
+        ----------
+        ctx : EstimatorContext
+            The controller's model and the drive.
+
+        Returns
+        -------
+        EstimatorRecords
+        """
+        q, r, p0 = default_ekf_noise(
+            ctx.Ts,
+            ctx.sigma_L1_hat,
+            ctx.psi0,
+            ctx.R2_hat,
+            self.voltage_noise_V,
+            self.flux_noise_Wb_per_s,
+            self.acceleration_noise_rad_s2,
+            self.R2_drift_ohm_per_s,
+            self.current_noise_A,
+        )
+        on = ctx.scenario.estimator.R2_adaptation == "ekf"
+        params = dict(
+            q=q,
+            r=r,
+            p0=p0,
+            estimate_R2=on,
+            R2_min=0.5 * ctx.R2_hat,
+            R2_max=2.0 * ctx.R2_hat,
+            write_R2=on,
+        )
+        return EstimatorRecords(params)
+
 
 @settings("flux_injection")
 class FluxInjectionSettings:
@@ -156,7 +394,15 @@ class FluxInjectionSettings:
     frequency_Hz: Annotated[Float, setting("frequency of the sinusoid", "Hz", gt=0.0)] = 2.0
 
 
-@settings("mras")
+_WB = ("Wb", 1.0)
+
+
+@estimator_settings(
+    "mras",
+    "mras",
+    log_units={f: _WB for f in ("lam_v_alpha", "lam_v_beta", "lam_i_alpha", "lam_i_beta")},
+    flux_error=True,
+)
 class MrasSettings:
     """Schauder's MRAS speed estimator (``[mras]``).
 
@@ -231,3 +477,42 @@ class MrasSettings:
             gt=0.0,
         ),
     ] = 30.0
+
+    def records(self, ctx: EstimatorContext) -> EstimatorRecords:
+        """K1, K2 from the bandwidth (:func:`default_mras_gains`), each overridable; the R1
+        laws' clamps and the flux normalisation.
+
+        Parameters
+        ----------
+        ctx : EstimatorContext
+            The controller's model and the drive.
+
+        Returns
+        -------
+        EstimatorRecords
+        """
+        sc = ctx.scenario
+        K1, K2 = default_mras_gains(
+            ctx.psi0, ctx.L2_hat / ctx.R2_hat, 2 * math.pi * self.bandwidth_Hz
+        )
+        K1 = self.K1 if self.K1 is not None else K1
+        K2 = self.K2 if self.K2 is not None else K2
+        normalise = self.normalise if self.normalise is not None else sc.control.field_weakening
+        params = dict(
+            wc=self.wc_rad_s,
+            K1=K1,
+            K2=K2,
+            k_R1=self.R1_rate_per_s,
+            R1_fmax=self.R1_max_freq_Hz,
+            R1_min=0.5 * ctx.R1_hat,
+            R1_max=2.0 * ctx.R1_hat,
+            psi2_norm=ctx.psi0 * ctx.psi0 if normalise else 0.0,
+            R1_dc=self.R1_standstill,
+            # the flux build-up: four rotor time constants of the controller's model
+            R1_dc_settle=4.0 * ctx.L2_hat / ctx.R2_hat,
+        )
+        src = {
+            "mras_K1": "mras.K1" if self.K1 is not None else "mras.bandwidth_Hz",
+            "mras_K2": "mras.K2" if self.K2 is not None else "mras.bandwidth_Hz",
+        }
+        return EstimatorRecords(params, derived={"mras_K1": K1, "mras_K2": K2}, sources=src)

@@ -33,6 +33,7 @@ from imdrive.config.control import (  # noqa: F401  (NonNegativeProfile: re-expo
     OpenLoopSettings,
 )
 from imdrive.config.estimators import (
+    ESTIMATOR_SETTINGS,
     AfoSettings,
     EkfSettings,
     EstimatorSettings,
@@ -71,6 +72,7 @@ from imdrive.config.plant import (  # noqa: F401  (C and the profile types: re-e
     SaturationSettings,
     ThermalSettings,
 )
+from imdrive.config.plugins import PluginSettings, import_plugins, module_spec_of
 from imdrive.config.profiles import Profile  # noqa: F401  (re-export)
 from imdrive.config.sensors import SensorSettings
 from imdrive.config.simulation import DEFAULT_LOG_RATE_HZ, SimulationSettings, default_log_every
@@ -136,6 +138,7 @@ SECTIONS: dict[str, type] = {
     "reactive_mras": ReactiveMrasSettings,
     "afo": AfoSettings,
     "ekf": EkfSettings,
+    "plugins": PluginSettings,
     "flux_injection": FluxInjectionSettings,
     "compensator": CompensatorSettings,
     "injection": InjectionSettings,
@@ -213,6 +216,9 @@ class Scenario:
     ] = ReactiveMrasSettings()
     afo: Annotated[AfoSettings, setting("adaptive full-order flux observer")] = AfoSettings()
     ekf: Annotated[EkfSettings, setting("extended Kalman filter for speed and R2")] = EkfSettings()
+    plugins: Annotated[PluginSettings, setting("estimators from the user's own modules")] = (
+        PluginSettings()
+    )
     flux_injection: Annotated[FluxInjectionSettings, setting("sinusoid on the flux command")] = (
         FluxInjectionSettings()
     )
@@ -229,9 +235,15 @@ class Scenario:
     @model_validator(mode="before")
     @classmethod
     def _machine_table(cls, data):
-        """The file form: ``[machine]`` is a preset name plus the fields that override it."""
+        """The file form: ``[machine]`` is a preset name plus the fields that override it;
+        the modules of ``[plugins]`` are imported first (their estimators register)."""
         if not isinstance(data, dict):
             return data  # direct construction: the objects themselves
+        plugins = data.get("plugins")
+        if isinstance(plugins, dict) and isinstance(plugins.get("modules"), list | tuple):
+            import_plugins(plugins["modules"])
+        elif isinstance(plugins, PluginSettings):
+            import_plugins(plugins.modules)
         if "machine_preset" in data:
             raise ConfigError("machine_preset", "unknown key")
         if "machine" not in data or isinstance(data["machine"], MachineParams):
@@ -262,13 +274,13 @@ class Scenario:
                     f"carrier period per control period; got {self.simulation.Ts_s:g})",
                 )
         fb = self.control.speed_feedback
-        if fb not in ("measured", "mras") and (
-            self.compensator.enabled or self.injection.amplitude_A != 0.0
-        ):
+        gives_e_d0 = fb == "measured" or ESTIMATOR_SETTINGS[fb].estimator_flux_error
+        if not gives_e_d0 and (self.compensator.enabled or self.injection.amplitude_A != 0.0):
+            with_e_d0 = [n for n, c in ESTIMATOR_SETTINGS.items() if c.estimator_flux_error]
             raise ConfigError(
                 "control.speed_feedback",
                 f'"{fb}" gives no flux error e_d0: the compensator and the injection need '
-                '"mras" or "measured"',
+                f'"measured" or one of {with_e_d0}',
             )
         r2a = self.estimator.R2_adaptation
         if r2a != "compensator":
@@ -284,7 +296,49 @@ class Scenario:
                 "must be < half a switching period, 0.5/inverter.switching_frequency_Hz",
             )
         self._compensator_rules()
+        self._plugin_rules()
         return self
+
+    def _plugin_rules(self) -> None:
+        """Each ``[plugins.settings.NAME]`` table valid for its estimator's settings class
+        (stored back with its defaults filled in); the module of a plug-in estimator in use
+        listed in ``plugins.modules``, so a rerun or a worker process imports it again."""
+        tables = {}
+        for name, table in self.plugins.settings.items():
+            cls = ESTIMATOR_SETTINGS.get(name)
+            if cls is None or cls.estimator_section is not None:
+                known = [n for n, c in ESTIMATOR_SETTINGS.items() if c.estimator_section is None]
+                raise ConfigError(
+                    f"plugins.settings.{name}",
+                    f"no plug-in estimator of that name is registered (plug-ins: {known})",
+                )
+            tables[name] = _to_plain(validate(cls, table, f"plugins.settings.{name}"))
+        modules = list(self.plugins.modules)
+        cls = ESTIMATOR_SETTINGS.get(self.control.speed_feedback)
+        if cls is not None and cls.estimator_section is None:
+            spec = module_spec_of(cls)
+            if spec is not None and spec not in modules:
+                modules.append(spec)
+        if tables != self.plugins.settings or modules != list(self.plugins.modules):
+            object.__setattr__(
+                self, "plugins", PluginSettings(modules=tuple(modules), settings=tables)
+            )
+
+    def estimator_settings(self):
+        """The settings object of the estimator ``control.speed_feedback`` selects.
+
+        Returns
+        -------
+        object
+            Its section (``self.mras`` for the MRAS and for "measured"), or for a plug-in
+            estimator its ``[plugins.settings.NAME]`` table validated by its settings class
+            (defaults where the table is absent).
+        """
+        name = self.control.speed_feedback
+        cls = ESTIMATOR_SETTINGS["mras" if name == "measured" else name]
+        if cls.estimator_section is not None:
+            return getattr(self, cls.estimator_section)
+        return validate(cls, self.plugins.settings.get(name, {}), f"plugins.settings.{name}")
 
     def _compensator_rules(self) -> None:
         """The R̂2 clamps in order, given or default (one given clamp against the other's

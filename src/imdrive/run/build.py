@@ -16,10 +16,9 @@ import numpy as np
 from imdrive.config.scenario import Scenario
 from imdrive.errors import ConfigError
 from imdrive.kernels.engine import DriveParams, DriveState, log_dtype
-from imdrive.kernels.records import new_record
 from imdrive.run import blocks
 from imdrive.run.blocks import RPM, saturation_curve  # noqa: F401  (re-exported: old path)
-from imdrive.run.estimators import EstimatorContext, estimator
+from imdrive.run.estimators import EstimatorContext, build_estimator, estimator_of
 
 MAX_LOG_BYTES = 2 * 2**30  # a log larger than this is refused before anything runs
 
@@ -31,7 +30,7 @@ def check_log_size(sc: Scenario, log: np.dtype | None = None) -> None:
     """
     sim = sc.simulation
     if log is None:
-        log = log_dtype(estimator(sc.control.speed_feedback).kernel)
+        log = log_dtype(estimator_of(sc).kernel)
     log_bytes = (sim.n_steps // sim.log_every + 1) * log.itemsize
     if log_bytes > MAX_LOG_BYTES:
         raise ConfigError(
@@ -171,9 +170,7 @@ def build_arrays(sc: Scenario) -> DriveArrays:
 
 def _build_arrays(sc: Scenario) -> DriveArrays:
     """Every block's records from its own builder (:mod:`imdrive.run.blocks`)."""
-    est = estimator(sc.control.speed_feedback)
-    log = log_dtype(est.kernel)
-    check_log_size(sc, log)
+    check_log_size(sc)
     m = sc.machine
     Ts = sc.simulation.Ts_s
     model, mh = blocks.model_record(sc)
@@ -182,16 +179,13 @@ def _build_arrays(sc: Scenario) -> DriveArrays:
 
     ctx = EstimatorContext(
         scenario=sc,
-        settings=getattr(sc, est.section, None) if est.section else None,
         Ts=Ts,
         psi0=psi0,
         n_p=m.pole_pairs,
         J=m.J_kgm2,
         **mh,
     )
-    er = est.records(ctx)
-    est_params = new_record(est.kernel.params, **er.params)
-    est_state = new_record(est.kernel.state, **er.state)
+    est, est_params, est_state, er = build_estimator(sc, ctx)
     gains.update(er.derived)
 
     compensator, comp_derived = blocks.compensator_record(sc, mh["R2_hat"])
@@ -222,5 +216,5 @@ def _build_arrays(sc: Scenario) -> DriveArrays:
         log_every=sc.simulation.log_every,
         derived=derived,
         sources={**DERIVED_SOURCE, **er.sources},
-        log=log,
+        log=log_dtype(est.kernel),
     )

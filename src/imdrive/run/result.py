@@ -142,9 +142,9 @@ def columns_from_log(
 
 def _estimator_units(scenario) -> dict:
     """Units of the scenario's estimator's own log fields."""
-    from imdrive.run.estimators import estimator
+    from imdrive.run.estimators import estimator_of
 
-    return dict(estimator(scenario.control.speed_feedback).log_units)
+    return dict(estimator_of(scenario).log_units)
 
 
 def package_versions() -> dict[str, str]:

@@ -52,7 +52,7 @@ from imdrive.kernels import linearise as kl
 from imdrive.kernels import profiles as kp
 from imdrive.kernels.engine import DriveParams, DriveState
 from imdrive.run.build import build_arrays
-from imdrive.run.estimators import estimator
+from imdrive.run.estimators import estimator_of
 
 RPM = 2.0 * math.pi / 60.0  # rad/s per rpm
 
@@ -141,7 +141,7 @@ def _stationary_drive(sc: Scenario, speeds_rad_s, torques_Nm) -> _Drive:
     """Records of ``sc`` with every profile at its final value, references set per row."""
     if sc.drive.mode != "vector":
         raise ConfigError("drive.mode", "stability maps need the vector (IFOC) drive")
-    if not estimator(sc.control.speed_feedback).kernel.reduced_state:
+    if not estimator_of(sc).kernel.reduced_state:
         # the reduced state (imdrive.kernels.linearise) carries the MRAS's states only; the
         # other estimators' states would be missing from the map (a NaN Jacobian, not a result)
         raise ConfigError(
