@@ -139,6 +139,14 @@ def estimator_settings(
     return wrap
 
 
+def package_sections() -> dict[str, type]:
+    """``{section: settings class}`` of every estimator with a scenario section of its own
+    (the package's), the MRAS first, then in registration order; each is a field of the
+    scenario, so a new estimator of the package is its settings class here and no more."""
+    out = {c.estimator_section: c for c in ESTIMATOR_SETTINGS.values() if c.estimator_section}
+    return {k: out[k] for k in sorted(out, key=lambda k: k != "mras")}
+
+
 def estimator_names() -> tuple[str, ...]:
     """Every value ``control.speed_feedback`` accepts: ``"measured"`` and each estimator."""
     return ("measured", *ESTIMATOR_SETTINGS)
@@ -178,7 +186,9 @@ class EstimatorSettings:
     ] = "compensator"
 
 
-@estimator_settings("reactive-mras", "reactive_mras")
+@estimator_settings(
+    "reactive-mras", "reactive_mras", description="reactive-power MRAS speed estimator"
+)
 class ReactiveMrasSettings:
     """Reactive-power MRAS speed estimator (``[reactive_mras]``, Peng & Fukao 1994).
 
@@ -219,7 +229,7 @@ class ReactiveMrasSettings:
         return EstimatorRecords(dict(K1=K1, K2=K2), derived=derived)
 
 
-@estimator_settings("afo", "afo")
+@estimator_settings("afo", "afo", description="adaptive full-order flux observer")
 class AfoSettings:
     """Adaptive full-order flux observer (``[afo]``, Kubota, Matsuse & Nakano 1993).
 
@@ -323,7 +333,7 @@ class AfoSettings:
         return EstimatorRecords(params, derived=derived)
 
 
-@estimator_settings("ekf", "ekf")
+@estimator_settings("ekf", "ekf", description="extended Kalman filter for speed and R2")
 class EkfSettings:
     """Extended Kalman filter for speed and R2 (``[ekf]``); noise as standard deviations.
 
@@ -402,6 +412,7 @@ _WB = ("Wb", 1.0)
     "mras",
     log_units={f: _WB for f in ("lam_v_alpha", "lam_v_beta", "lam_i_alpha", "lam_i_beta")},
     flux_error=True,
+    description="Schauder's MRAS speed estimator",
 )
 class MrasSettings:
     """Schauder's MRAS speed estimator (``[mras]``).

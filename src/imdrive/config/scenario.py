@@ -40,6 +40,7 @@ from imdrive.config.estimators import (
     FluxInjectionSettings,
     MrasSettings,
     ReactiveMrasSettings,
+    package_sections,
 )
 from imdrive.config.inverter import InverterParams
 from imdrive.config.machine import MachineParams, machine_preset, preset_table
@@ -134,10 +135,7 @@ SECTIONS: dict[str, type] = {
     "open_loop": OpenLoopSettings,
     "control": ControlSettings,
     "estimator": EstimatorSettings,
-    "mras": MrasSettings,
-    "reactive_mras": ReactiveMrasSettings,
-    "afo": AfoSettings,
-    "ekf": EkfSettings,
+    **package_sections(),
     "plugins": PluginSettings,
     "flux_injection": FluxInjectionSettings,
     "compensator": CompensatorSettings,
@@ -210,12 +208,12 @@ class Scenario:
     estimator: Annotated[EstimatorSettings, setting("the controller's machine model")] = (
         EstimatorSettings()
     )
-    mras: Annotated[MrasSettings, setting("Schauder's MRAS speed estimator")] = MrasSettings()
-    reactive_mras: Annotated[
-        ReactiveMrasSettings, setting("reactive-power MRAS speed estimator")
-    ] = ReactiveMrasSettings()
-    afo: Annotated[AfoSettings, setting("adaptive full-order flux observer")] = AfoSettings()
-    ekf: Annotated[EkfSettings, setting("extended Kalman filter for speed and R2")] = EkfSettings()
+    # one section per estimator of the package (mras, reactive_mras, afo, ekf, ...), from
+    # their settings classes (config/estimators.py): a new estimator adds its own
+    for _section, _cls in package_sections().items():
+        __annotations__[_section] = Annotated[_cls, setting(_cls.estimator_description)]
+        locals()[_section] = _cls()
+    del _section, _cls
     plugins: Annotated[PluginSettings, setting("estimators from the user's own modules")] = (
         PluginSettings()
     )
