@@ -139,13 +139,16 @@ class Run:
     drive: str
 
 
-def protocol(quick: bool = False) -> list[Run]:
+def protocol(quick: bool = False, estimators=None) -> list[Run]:
     """Every run of the protocol.
 
     Parameters
     ----------
     quick : bool
         Only a small subset on the average drive (for CI).
+    estimators : iterable of str, optional
+        The estimator configurations to compare (default: every key of :data:`ESTIMATORS`;
+        a configuration of your own: :func:`scenario`'s ``estimators``).
 
     Returns
     -------
@@ -153,17 +156,23 @@ def protocol(quick: bool = False) -> list[Run]:
         Drives, then cases, then estimators (the last varying fastest).
     """
     if quick:
-        return [Run(e, c, "average") for c in QUICK_CASES for e in QUICK_ESTIMATORS]
-    return [Run(e, c, d) for d in DRIVES for c in CASES for e in ESTIMATORS]
+        names = QUICK_ESTIMATORS if estimators is None else tuple(estimators)
+        return [Run(e, c, "average") for c in QUICK_CASES for e in names]
+    names = ESTIMATORS if estimators is None else tuple(estimators)
+    return [Run(e, c, d) for d in DRIVES for c in CASES for e in names]
 
 
-def scenario(run: Run):
+def scenario(run: Run, estimators: dict | None = None):
     """The scenario of one run.
 
     Parameters
     ----------
     run : Run
         Estimator, case and drive.
+    estimators : dict, optional
+        Estimator configurations beside :data:`ESTIMATORS`: name -> overrides (e.g. a
+        plug-in estimator: ``{"mine": ['control.speed_feedback="mine"',
+        'plugins.modules=["my_module.py"]']}``).
 
     Returns
     -------
@@ -173,8 +182,13 @@ def scenario(run: Run):
     from imdrive.config.scenario import Scenario
 
     case = CASES[run.case]
+    configs = {**ESTIMATORS, **(estimators or {})}
+    if run.estimator not in configs:
+        from imdrive.errors import ConfigError
+
+        raise ConfigError("estimators", f"no estimator configuration {run.estimator!r}")
     ov = [
-        *ESTIMATORS[run.estimator],
+        *configs[run.estimator],
         *case.overrides,
         f"simulation.t_end_s={case.t_end_s}",
         "simulation.log_every=10",

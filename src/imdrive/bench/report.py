@@ -24,7 +24,7 @@ UNITS = {
 }
 
 
-def run_protocol(quick: bool = False, parallel: bool = True, runs=None):
+def run_protocol(quick: bool = False, parallel: bool = True, runs=None, estimators=None):
     """Simulate every run of the protocol.
 
     Parameters
@@ -35,6 +35,10 @@ def run_protocol(quick: bool = False, parallel: bool = True, runs=None):
         Run the batch on all cores.
     runs : list of Run, optional
         Runs (:class:`~imdrive.bench.protocol.Run`) in place of the protocol.
+    estimators : dict, optional
+        Estimator configurations beside the protocol's (name -> overrides; see
+        :func:`~imdrive.bench.protocol.scenario`); without ``runs``, the protocol compares
+        exactly these.
 
     Returns
     -------
@@ -50,9 +54,12 @@ def run_protocol(quick: bool = False, parallel: bool = True, runs=None):
 
     from imdrive.run.batch import simulate_batch
 
-    runs = protocol(quick) if runs is None else list(runs)
+    if runs is None:
+        runs = protocol(quick, None if estimators is None else list(estimators))
+    runs = list(runs)
     t0 = time.perf_counter()
-    res = simulate_batch([scenario(r) for r in runs], logs=True, parallel=parallel)
+    scenarios = [scenario(r, estimators) for r in runs]
+    res = simulate_batch(scenarios, logs=True, parallel=parallel)
     wall = time.perf_counter() - t0
     rows = []
     for r, sim in zip(runs, res.results, strict=True):

@@ -183,8 +183,12 @@ def _schema_allows(path: list[str]) -> bool:
 
     A field is a value (``simulation.Ts_s``, ``machine.preset``) or a table inside a section
     (``plant.thermal``); a whole section (``simulation``) is not one. The paths are read off
-    the settings classes (:func:`scenario_keys`).
+    the settings classes (:func:`scenario_keys`). A plug-in estimator's setting
+    (``plugins.settings.NAME.KEY``) is allowed here and checked when the scenario is validated,
+    after its module is imported.
     """
+    if len(path) == 4 and tuple(path[:2]) == ("plugins", "settings"):
+        return True
     return tuple(path) in setting_paths()
 
 
