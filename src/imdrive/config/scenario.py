@@ -169,7 +169,11 @@ class Scenario:
         Time-varying plant, load torque, DC-link inverter, which controller drives it,
         open-loop voltage, field-oriented speed control.
     estimator, mras, reactive_mras, afo, ekf : settings section
-        The controller's machine model and the speed estimators' settings.
+        The controller's machine model and the speed estimators' settings (one section per
+        estimator of the package).
+    plugins : PluginSettings
+        Modules of the user's own estimators, imported before the scenario is read, and
+        their settings (``[plugins.settings.NAME]``).
     flux_injection, compensator, injection : settings section
         Sinusoid on the flux command, the fuzzy R2 compensator, persistent excitation.
     sensor, simulation, output : settings section

@@ -14,7 +14,7 @@ An estimator has two halves registered under one name, the value of
 estimator. The loop, the batch, the sweeps and the bench use nothing else, so an estimator
 written in the user's own module (listed in the scenario's ``[plugins] modules``) runs
 wherever the package's four do. ``docs/architecture.md`` has the recipe and
-``docs/examples/own-estimator.ipynb`` a worked example.
+``docs/examples/06-own-estimator.ipynb`` a worked example.
 """
 
 from __future__ import annotations

@@ -30,8 +30,9 @@ Caching
 The engine inlines the estimator, so its cached machine code must change whenever the
 estimator's source does. The package's own cache folder is named after a hash of the package
 (:mod:`imdrive._cache`); an estimator defined outside the package gets a tag field whose
-name carries a hash of its module's source file, so an edited user estimator is a new record
-type and is compiled afresh, never taken stale from the cache.
+name carries a hash of its module's name and source file, so an edited user estimator is a
+new record type and is compiled afresh, never taken stale from the cache (and the same text
+loaded as another module does not find a loop compiled against the first).
 """
 
 from __future__ import annotations
@@ -105,7 +106,9 @@ _BY_STATE: dict[np.dtype, EstimatorKernel] = {}
 
 
 def _source_tag(func) -> str:
-    """A short hash of the file defining ``func`` ('' for the package's own files)."""
+    """A short hash of the module defining ``func``: its name and its file's text ('' for the
+    package's own files). The name counts too: a cached loop refers to the estimator's module
+    by name, so the same text loaded under another name must not find it."""
     py = getattr(func, "py_func", func)
     try:
         path = Path(inspect.getsourcefile(py) or "")
@@ -114,7 +117,7 @@ def _source_tag(func) -> str:
         return "nosource"
     if Path(__file__).resolve().parents[2] in path.resolve().parents:
         return ""  # the package's cache folder already follows its sources
-    return hashlib.sha256(text).hexdigest()[:12]
+    return hashlib.sha256(py.__module__.encode() + b"\0" + text).hexdigest()[:12]
 
 
 def _tagged(state: np.dtype, name: str, tag: str) -> np.dtype:
