@@ -492,3 +492,30 @@ def test_saturated_switching_matches_solve_ivp_with_switching_instants_as_breakp
     err = np.max(np.abs(got - i_ref))
     assert err <= 1e-4, err
 
+
+def test_saturation_table_error_bound():
+    """The run's table of the inverse magnetising curve (one Newton correction after a cubic
+    Hermite interpolation, no loop) against Newton's method to convergence: relative error
+    of ``k = |psi_m|/|psi_x|`` within ``SAT_TABLE_TOL`` over the table and beyond it."""
+    from imdrive.kernels.machine import SAT_TABLE_TOL, magnetising_ratio
+    from imdrive.run.build import saturation_curve
+
+    sc = Scenario.read("sensorless-realistic")
+    p = build_arrays(sc).params.plant[0]
+    assert p["sat_X_max"] > 0.0  # the default curve is tabulated
+    curve = saturation_curve(sc)
+    _, currents = _saturated_rhs(sc.machine, curve)
+    Ll1, Ll2 = sc.machine.Ll1_H, sc.machine.Ll2_H
+    worst = 0.0
+    for X in np.linspace(1e-3, 1.5 * p["sat_X_max"], 3001):
+        k, _ = magnetising_ratio(p, X)
+        y = np.array([X * Ll1, 0.0, 0.0, 0.0])  # psi_x = X along alpha
+        i_s, _ = currents(y)
+        k_ref = (y[0] - Ll1 * i_s[0]) / X
+        worst = max(worst, abs(k / k_ref - 1.0))
+    assert worst <= SAT_TABLE_TOL, worst
+    # a curve too sharp for the grid is not tabulated (the full solve is used instead)
+    from imdrive.kernels.machine import saturation_table
+
+    sharp = saturation_table(Ll1, Ll2, curve["Lm0"], curve["psi_sat"], 50.0)
+    assert sharp["sat_X_max"] == 0.0 or sharp["sat_table_error"] <= SAT_TABLE_TOL
