@@ -18,8 +18,10 @@ psi_r - Ll2 i_r`` and current ``i_m = i_s + i_r`` follow the magnetising curve::
 
 a power-law curve, monotone for S > 0 (see :func:`magnetising_current`). Given the states,
 ``psi_m`` is parallel to ``psi_s/Ll1 + psi_r/Ll2`` and its magnitude solves a scalar monotone
-equation (Newton, :func:`saturated_currents`). With ``p.saturation`` off the linear T-circuit
-with ``M`` is used, exactly as before.
+equation, solved from a table of the inverse curve built once per run plus one Newton
+correction (:func:`magnetising_ratio`, :func:`saturation_table`; Newton's method to
+convergence outside the table). With ``p.saturation`` off the linear T-circuit with ``M`` is
+used, exactly as before.
 
 Winding temperatures follow a first-order thermal model per winding::
 
@@ -30,7 +32,9 @@ given speed, resistances enter only as coefficients (so R1, R2 may jump without 
 of the state), and the magnetic energy is a function of state.
 
 Each control period the engine integrates the plant over the inverter's voltage segments with
-classical RK4 (:func:`integrate_segment`). RK4 rather than an exact discretisation: the plant is
+classical RK4 (:func:`integrate_segment`); the switching bridge integrates the flux equations
+alone between its edges (:func:`flux_taylor`, see :mod:`imdrive.kernels.bridge`).
+RK4 rather than an exact discretisation: the plant is
 nonlinear (speed multiplies flux, the thermal model makes R depend on state); the fastest
 electrical mode has ``|lambda| ~ 400 1/s`` so ``|lambda| h ~ 0.04`` at the default 100 us, where
 RK4's local error is ~1e-9 relative; tests/test_machine_physics.py measures it against scipy's
