@@ -422,3 +422,100 @@ def test_batch_and_sweeps_run_the_realistic_drive_bit_identical_to_single_runs()
         for name, v in one.signals.items():
             assert np.array_equal(many.signals[name], v), name
         assert np.array_equal(many.c_final, one.c_final)
+
+
+def _saturated_rhs(m, curve):
+    """The saturated machine written here: currents from the fluxes through the magnetising
+    curve, solved by Newton's method to machine precision at every evaluation."""
+    Ll1, Ll2 = m.Ll1_H, m.Ll2_H
+    Lm0, psi_sat, S = curve["Lm0"], curve["psi_sat"], curve["S"]
+    G = 1 / Ll1 + 1 / Ll2
+
+    def currents(y):
+        x = y[0:2] / Ll1 + y[2:4] / Ll2
+        X = np.hypot(*x)
+        if X == 0.0:
+            return y[0:2] / Ll1, y[2:4] / Ll2
+        mm = X / (G + 1 / Lm0)
+        for _ in range(100):
+            r = (mm / psi_sat) ** S
+            step = (G * mm + mm / Lm0 * (1 + r) - X) / (G + (1 + (S + 1) * r) / Lm0)
+            mm -= step
+            if abs(step) <= 1e-16 * mm:
+                break
+        pm = mm / X * x
+        return (y[0:2] - pm) / Ll1, (y[2:4] - pm) / Ll2
+
+    def rhs(t, y, va, vb):
+        i_s, i_r = currents(y)
+        w_r = m.pole_pairs * y[4]
+        dps = np.array([va, vb]) - m.R1_ohm * i_s
+        dpr = -m.R2_ohm * i_r + w_r * np.array([-y[3], y[2]])
+        Te = 1.5 * m.pole_pairs * (y[0] * i_s[1] - y[1] * i_s[0])
+        return np.concatenate([dps, dpr, [Te / m.J_kgm2]])
+
+    return rhs, currents
+
+
+@pytest.mark.parametrize("V_ll", [220.0, 270.0])
+def test_saturated_switching_matches_solve_ivp_with_switching_instants_as_breakpoints(V_ll):
+    """Saturation on the switching bridge: the inrush from standstill (the flux's DC offset
+    drives the machine to about twice its rated flux, deep into the curve) against solve_ivp
+    on a saturated machine written here, the switching instants as breakpoints."""
+    from imdrive.run.build import saturation_curve
+
+    sc = _sc(
+        "free-acceleration",
+        "inverter.model=switching",
+        "inverter.Vdc_V=400",
+        "plant.saturation.enabled=true",
+        f"open_loop.voltage_V={V_ll}",
+        "simulation.t_end_s=0.02",
+    )
+    res = simulate(sc)
+    m = sc.machine
+    Ts, Vdc = sc.simulation.Ts_s, sc.inverter.Vdc_V
+    rhs, currents = _saturated_rhs(m, saturation_curve(sc))
+    y = np.zeros(5)
+    i_ref = [np.zeros(2)]
+    for k in range(sc.simulation.n_steps):
+        va, vb = res["v_ref_alpha_V"][k], res["v_ref_beta_V"][k]
+        for t0, t1, sa, sb in _svpwm_segments(va, vb, Vdc, Ts):
+            sol = solve_ivp(
+                rhs, (t0, t1), y, method="DOP853", rtol=1e-11, atol=1e-12, args=(sa, sb)
+            )
+            y = sol.y[:, -1]
+        i_ref.append(currents(y)[0])
+    i_ref = np.array(i_ref)
+    got = np.column_stack([res["i_alpha_A"], res["i_beta_A"]])
+    assert np.max(np.abs(i_ref)) > 50.0
+    err = np.max(np.abs(got - i_ref))
+    assert err <= 1e-4, err
+
+
+def test_saturation_table_error_bound():
+    """The run's table of the inverse magnetising curve (one Newton correction after a cubic
+    Hermite interpolation, no loop) against Newton's method to convergence: relative error
+    of ``k = |psi_m|/|psi_x|`` within ``SAT_TABLE_TOL`` over the table and beyond it."""
+    from imdrive.kernels.machine import SAT_TABLE_TOL, magnetising_ratio
+    from imdrive.run.build import saturation_curve
+
+    sc = Scenario.read("sensorless-realistic")
+    p = build_arrays(sc).params.plant[0]
+    assert p["sat_X_max"] > 0.0  # the default curve is tabulated
+    curve = saturation_curve(sc)
+    _, currents = _saturated_rhs(sc.machine, curve)
+    Ll1, Ll2 = sc.machine.Ll1_H, sc.machine.Ll2_H
+    worst = 0.0
+    for X in np.linspace(1e-3, 1.5 * p["sat_X_max"], 3001):
+        k, _ = magnetising_ratio(p, X)
+        y = np.array([X * Ll1, 0.0, 0.0, 0.0])  # psi_x = X along alpha
+        i_s, _ = currents(y)
+        k_ref = (y[0] - Ll1 * i_s[0]) / X
+        worst = max(worst, abs(k / k_ref - 1.0))
+    assert worst <= SAT_TABLE_TOL, worst
+    # a curve too sharp for the grid is not tabulated (the full solve is used instead)
+    from imdrive.kernels.machine import saturation_table
+
+    sharp = saturation_table(Ll1, Ll2, curve["Lm0"], curve["psi_sat"], 50.0)
+    assert sharp["sat_X_max"] == 0.0 or sharp["sat_table_error"] <= SAT_TABLE_TOL

@@ -18,8 +18,10 @@ psi_r - Ll2 i_r`` and current ``i_m = i_s + i_r`` follow the magnetising curve::
 
 a power-law curve, monotone for S > 0 (see :func:`magnetising_current`). Given the states,
 ``psi_m`` is parallel to ``psi_s/Ll1 + psi_r/Ll2`` and its magnitude solves a scalar monotone
-equation (Newton, :func:`saturated_currents`). With ``p.saturation`` off the linear T-circuit
-with ``M`` is used, exactly as before.
+equation, solved from a table of the inverse curve built once per run plus one Newton
+correction (:func:`magnetising_ratio`, :func:`saturation_table`; Newton's method to
+convergence outside the table). With ``p.saturation`` off the linear T-circuit with ``M`` is
+used, exactly as before.
 
 Winding temperatures follow a first-order thermal model per winding::
 
@@ -30,7 +32,9 @@ given speed, resistances enter only as coefficients (so R1, R2 may jump without 
 of the state), and the magnetic energy is a function of state.
 
 Each control period the engine integrates the plant over the inverter's voltage segments with
-classical RK4 (:func:`integrate_segment`). RK4 rather than an exact discretisation: the plant is
+classical RK4 (:func:`integrate_segment`); the switching bridge integrates the flux equations
+alone between its edges (:func:`flux_taylor`, see :mod:`imdrive.kernels.bridge`).
+RK4 rather than an exact discretisation: the plant is
 nonlinear (speed multiplies flux, the thermal model makes R depend on state); the fastest
 electrical mode has ``|lambda| ~ 400 1/s`` so ``|lambda| h ~ 0.04`` at the default 100 us, where
 RK4's local error is ~1e-9 relative; tests/test_machine_physics.py measures it against scipy's
@@ -45,6 +49,12 @@ import numpy as np
 from numba import njit
 
 from imdrive.kernels.records import b1, c16, f8, record_dtype
+
+#: Cells of the inverse magnetising-curve table (:func:`saturation_table`).
+SAT_CELLS = 12
+#: Largest relative error of the table's ``k`` (after its Newton correction) that
+#: :func:`saturation_table` accepts; past it the table is left out and the full solve used.
+SAT_TABLE_TOL = 1e-9
 
 #: Parameters of the true machine and its load (SI; temperatures in degC).
 PLANT_PARAMS = record_dtype(
@@ -73,6 +83,14 @@ PLANT_PARAMS = record_dtype(
         ("Lm0", f8),  # unsaturated magnetising inductance of the curve, H
         ("psi_sat", f8),  # saturation flux of the curve, Wb
         ("S", f8),  # exponent of the curve
+        # table of the inverse magnetising curve (see saturation_table; sat_X_max = 0: none)
+        ("sat_X_max", f8),  # end of the table in |psi_x|, A
+        ("sat_inv_h", f8),  # 1 / cell width, 1/A
+        ("sat_G", f8),  # 1/Ll1 + 1/Ll2, 1/H
+        ("sat_inv_Lm0", f8),  # 1/Lm0, 1/H
+        ("sat_inv_psi_sat", f8),  # 1/psi_sat, 1/Wb
+        ("sat_k", f8, (SAT_CELLS + 1,)),  # k = |psi_m| / |psi_x| at the nodes, H
+        ("sat_dk", f8, (SAT_CELLS + 1,)),  # h dk/d|psi_x| at the nodes, H
     ]
 )
 
@@ -153,22 +171,11 @@ def magnetising_energy(psi_m, Lm0, psi_sat, S):
 
 
 @njit(cache=True)
-def saturated_currents(p, psi_s_a, psi_s_b, psi_r_a, psi_r_b, m0=-1.0):
-    """Stator and rotor currents with main-flux saturation, A; and ``|psi_m|``, Wb.
-
-    ``psi_m = k psi_x`` with ``psi_x = psi_s/Ll1 + psi_r/Ll2``, where ``m = |psi_m|`` solves
-    ``G m + i_m(m) = |psi_x|``, ``G = 1/Ll1 + 1/Ll2`` (monotone and convex: Newton from the
-    linear solution with ``M`` converges in two or three steps near rated flux; ``m0 >= 0`` is
-    a better start, e.g. the solution of the previous RK4 stage).
-    """
-    x_a = psi_s_a / p.Ll1 + psi_r_a / p.Ll2
-    x_b = psi_s_b / p.Ll1 + psi_r_b / p.Ll2
-    X = math.sqrt(x_a * x_a + x_b * x_b)
+def _solve_magnetising(p, X, m):
+    """Newton's method on ``G m + i_m(m) = X`` from ``m`` to convergence; returns ``m`` and
+    ``F'(m)`` (the full solve: used where the table does not reach)."""
     G = 1.0 / p.Ll1 + 1.0 / p.Ll2
-    if m0 >= 0.0:
-        m = m0
-    else:
-        m = X / (G + 1.0 / p.M)  # the linear solution with M, the curve's value near rated flux
+    dF = G + 1.0 / p.Lm0
     for _ in range(30):
         r = _power(m / p.psi_sat, p.S)
         F = G * m + m / p.Lm0 * (1.0 + r) - X
@@ -179,14 +186,167 @@ def saturated_currents(p, psi_s_a, psi_s_b, psi_r_a, psi_r_b, m0=-1.0):
         # is of order 1e-16, so one more iteration would only confirm it
         if abs(step) <= 1e-8 * m:
             break
-    k = m / X if X > 0.0 else 0.0
+    return m, dF
+
+
+@njit(cache=True)
+def magnetising_ratio(p, X):
+    """``k = |psi_m| / |psi_x|`` at ``|psi_x| = X`` (H) and its derivative ``dk/dX`` (H/A).
+
+    ``|psi_m| = m`` solves ``F(m) = G m + i_m(m) = X`` (:func:`saturated_currents`). Inside
+    the table (``X < p.sat_X_max``, built once per run by :func:`saturation_table`): a cubic
+    Hermite interpolation of ``k`` on a uniform grid in ``X``, then one Newton correction of
+    ``m`` (no loop: from the table's relative error ``e`` it leaves ``~ S e^2``, below
+    ``SAT_TABLE_TOL``, which :func:`saturation_table` checks when it builds the table).
+    Outside the table (deep saturation, or no table): Newton's method to convergence.
+    """
+    G = 1.0 / p.Ll1 + 1.0 / p.Ll2
+    if X <= 0.0:
+        return 1.0 / (G + 1.0 / p.Lm0), 0.0
+    if X < p.sat_X_max:
+        s = X * p.sat_inv_h
+        j = min(int(s), SAT_CELLS - 1)
+        t = s - j
+        t2 = t * t
+        t3 = t2 * t
+        k = (
+            (2.0 * t3 - 3.0 * t2 + 1.0) * p.sat_k[j]
+            + (t3 - 2.0 * t2 + t) * p.sat_dk[j]
+            + (3.0 * t2 - 2.0 * t3) * p.sat_k[j + 1]
+            + (t3 - t2) * p.sat_dk[j + 1]
+        )
+        m = k * X
+        r = _power(m * p.sat_inv_psi_sat, p.S)
+        F = p.sat_G * m + m * p.sat_inv_Lm0 * (1.0 + r) - X
+        inv_dF = 1.0 / (p.sat_G + (1.0 + (p.S + 1.0) * r) * p.sat_inv_Lm0)
+        m -= F * inv_dF
+    else:
+        m, dF = _solve_magnetising(p, X, X / (G + 1.0 / p.M))
+        inv_dF = 1.0 / dF
+    inv_X = 1.0 / X
+    k = m * inv_X
+    return k, (inv_dF - k) * inv_X
+
+
+@njit(cache=True)
+def magnetising_ratio_series(p, X):
+    """``k`` (:func:`magnetising_ratio`) and its first two derivatives in ``u = X^2``.
+
+    Returns ``(k, dk/du, d2k/du2)`` (H, H/A^2, H/A^4) from the curve's derivatives at the
+    solution: with ``F(m) = G m + i_m(m)``, ``m' = 1/F'``, ``m'' = -F'' m'^3``, then
+    ``k' = (m' - k)/X``, ``k'' = (m'' - 2 k')/X`` in ``X``, and ``dk/du = k'/(2X)``,
+    ``d2k/du2 = (k'' - k'/X)/(4 X^2)``. The switching bridge expands ``k`` to second order
+    in ``u`` about the period's start (no square root, no solve inside the period).
+    """
+    k, k1 = magnetising_ratio(p, X)
+    if X <= 1e-9 * p.sat_X_max or X <= 0.0:
+        return k, 0.0, 0.0
+    m = k * X
+    G = 1.0 / p.Ll1 + 1.0 / p.Ll2
+    r = _power(m / p.psi_sat, p.S)
+    dF = G + (1.0 + (p.S + 1.0) * r) / p.Lm0
+    d2F = (p.S + 1.0) * p.S * r / (m * p.Lm0)
+    m1 = 1.0 / dF
+    m2 = -d2F * m1 * m1 * m1
+    k2 = (m2 - 2.0 * k1) / X
+    inv_2X = 0.5 / X
+    return k, k1 * inv_2X, (k2 - k1 / X) * inv_2X * inv_2X
+
+
+def saturation_table(Ll1: float, Ll2: float, Lm0: float, psi_sat: float, S: float) -> dict:
+    """The inverse magnetising curve tabulated once per run (the ``sat_*`` plant fields).
+
+    ``k(X) = m/X`` with ``m`` the solution of ``(1/Ll1 + 1/Ll2) m + i_m(m) = X``, at
+    ``SAT_CELLS + 1`` nodes uniform in ``X`` from 0 to ``F(1.6 psi_sat)`` (1.6 times the
+    saturation flux: past 2 times the rated flux with the default curve), with the exact
+    derivatives ``dk/dX = (1/F'(m) - k)/X`` for a cubic Hermite interpolation. The table is
+    checked here on 20 001 points against Newton's method run to convergence, with the one
+    Newton correction :func:`magnetising_ratio` applies; if the relative error of ``k``
+    exceeds ``SAT_TABLE_TOL`` (a curve too sharp for the grid) the table is left out
+    (``sat_X_max = 0``) and the kernel solves the curve by Newton everywhere.
+
+    Returns
+    -------
+    dict
+        ``sat_X_max`` (A), ``sat_inv_h`` (1/A), ``sat_k`` (H), ``sat_dk`` (H, times the cell
+        width) and ``sat_table_error`` (the measured relative error of ``k``, not a field).
+    """
+    G = 1.0 / Ll1 + 1.0 / Ll2
+
+    def F(m):
+        return G * m + m / Lm0 * (1.0 + (m / psi_sat) ** S)
+
+    def dF(m):
+        return G + (1.0 + (S + 1.0) * (m / psi_sat) ** S) / Lm0
+
+    def solve(X):
+        m = X / (G + 1.0 / Lm0)
+        for _ in range(200):
+            step = (F(m) - X) / dF(m)
+            m = m - step
+            if np.all(np.abs(step) <= 1e-15 * np.maximum(m, 1e-300)):
+                break
+        return m
+
+    X_max = float(F(1.6 * psi_sat))
+    old_err = np.seterr(over="ignore", invalid="ignore")  # a sharp curve overflows: refused
+    h = X_max / SAT_CELLS
+    X = np.linspace(0.0, X_max, SAT_CELLS + 1)
+    m = solve(X)
+    k = np.empty_like(X)
+    dk = np.empty_like(X)
+    k[0] = 1.0 / (G + 1.0 / Lm0)
+    dk[0] = 0.0
+    k[1:] = m[1:] / X[1:]
+    dk[1:] = (1.0 / dF(m[1:]) - k[1:]) / X[1:]
+    # check: the kernel's formula (Hermite, then one Newton step) against the full solve
+    Xc = np.linspace(0.0, X_max, 20001)[1:-1]
+    s = Xc / h
+    j = np.minimum(s.astype(int), SAT_CELLS - 1)
+    t = s - j
+    kc = (
+        (2 * t**3 - 3 * t**2 + 1) * k[j]
+        + (t**3 - 2 * t**2 + t) * h * dk[j]
+        + (3 * t**2 - 2 * t**3) * k[j + 1]
+        + (t**3 - t**2) * h * dk[j + 1]
+    )
+    mc = kc * Xc
+    mc = mc - (F(mc) - Xc) / dF(mc)
+    err = float(np.max(np.abs(mc / solve(Xc) - 1.0)))
+    np.seterr(**old_err)
+    ok = bool(np.isfinite(err) and err <= SAT_TABLE_TOL)
+    return {
+        "sat_X_max": X_max if ok else 0.0,
+        "sat_inv_h": 1.0 / h if ok else 0.0,
+        "sat_G": G,
+        "sat_inv_Lm0": 1.0 / Lm0,
+        "sat_inv_psi_sat": 1.0 / psi_sat,
+        "sat_k": k if ok else np.zeros_like(k),
+        "sat_dk": h * dk if ok else np.zeros_like(dk),
+        "sat_table_error": err,
+    }
+
+
+@njit(cache=True)
+def saturated_currents(p, psi_s_a, psi_s_b, psi_r_a, psi_r_b, m0=-1.0):
+    """Stator and rotor currents with main-flux saturation, A; and ``|psi_m|``, Wb.
+
+    ``psi_m = k psi_x`` with ``psi_x = psi_s/Ll1 + psi_r/Ll2``, where ``m = |psi_m|`` solves
+    ``G m + i_m(m) = |psi_x|``, ``G = 1/Ll1 + 1/Ll2`` (monotone and convex), and
+    ``k = m/|psi_x|`` comes from :func:`magnetising_ratio` (the run's table, or Newton's
+    method where it does not reach). ``m0`` is not used (kept for the call signature).
+    """
+    x_a = psi_s_a / p.Ll1 + psi_r_a / p.Ll2
+    x_b = psi_s_b / p.Ll1 + psi_r_b / p.Ll2
+    X = math.sqrt(x_a * x_a + x_b * x_b)
+    k, _ = magnetising_ratio(p, X)
     pm_a = k * x_a
     pm_b = k * x_b
     i_s_a = (psi_s_a - pm_a) / p.Ll1
     i_s_b = (psi_s_b - pm_b) / p.Ll1
     i_r_a = (psi_r_a - pm_a) / p.Ll2
     i_r_b = (psi_r_b - pm_b) / p.Ll2
-    return i_s_a, i_s_b, i_r_a, i_r_b, m
+    return i_s_a, i_s_b, i_r_a, i_r_b, k * X
 
 
 @njit(cache=True)
@@ -469,6 +629,91 @@ def integrate_short(p, x, v_a, v_b, R1b, R2b, TL0, dt, m0=-1.0):
     x.E_em += dt * k2[10]
     x.E_load += dt * k2[11]
     return k2[12]
+
+
+@njit(cache=True)
+def current_coefficients(p, k):
+    """``(c_ss, c_sr, c_rr)`` of ``i_s = c_ss psi_s + c_sr psi_r``, ``i_r = c_sr psi_s + c_rr
+    psi_r``, 1/H.
+
+    Linear machine: the inverse of ``[[L1, M], [M, L2]]``. Saturated, with the magnetising
+    ratio ``k = |psi_m|/|psi_x|`` held (:func:`magnetising_ratio`): ``psi_m = k psi_x`` makes
+    the currents ``(psi_s - psi_m)/Ll1``, ``(psi_r - psi_m)/Ll2`` linear in the fluxes.
+    """
+    if p.saturation:
+        g1 = 1.0 / p.Ll1
+        g2 = 1.0 / p.Ll2
+        return (1.0 - k * g1) * g1, -k * g1 * g2, (1.0 - k * g2) * g2
+    L1 = p.Ll1 + p.M
+    L2 = p.Ll2 + p.M
+    inv_d = 1.0 / (L1 * L2 - p.M * p.M)
+    return L2 * inv_d, -p.M * inv_d, L1 * inv_d
+
+
+@njit(cache=True)
+def flux_rates(sa, sb, ra, rb, va, vb, a_ss, a_sr, a_rs, a_rr, w_r):
+    """``d/dt (psi_s, psi_r)`` of the electrical equations with held coefficients, Wb/s.
+
+    ``d psi_s/dt = v + a_ss psi_s + a_sr psi_r``, ``d psi_r/dt = a_rs psi_s + a_rr psi_r +
+    j w_r psi_r`` with ``a_ss = -R1 c_ss``, ``a_sr = -R1 c_sr``, ``a_rs = -R2 c_sr``,
+    ``a_rr = -R2 c_rr`` (:func:`current_coefficients`).
+    """
+    return (
+        va + a_ss * sa + a_sr * ra,
+        vb + a_ss * sb + a_sr * rb,
+        a_rs * sa + a_rr * ra - w_r * rb,
+        a_rs * sb + a_rr * rb + w_r * ra,
+    )
+
+
+@njit(cache=True)
+def flux_taylor(sa, sb, ra, rb, d1, a_ss, a_sr, a_rs, a_rr, w_r, w_r1, h, order):
+    """Fluxes at ``h/2`` and ``h`` of the held-coefficient electrical system (8-tuple).
+
+    The system ``dy/dt = A(t) y + b`` (:func:`flux_rates`; the voltage ``b`` constant over
+    the interval) with the speed linear in time, ``A(t) = A + t A1`` (``A1 y = j w_r1 psi_r``,
+    ``w_r1`` the electrical speed's rate of change, rad/s^2), has the derivatives
+    ``d2 = A d1 + A1 y``, ``d3 = A d2 + 2 A1 d1``, ``d4 = A d3 + 3 A1 d2`` (``dn`` the n-th
+    derivative at the interval's start, ``d1`` given), so its Taylor series
+    ``y(tau) = y + tau d1 + tau^2/2 d2 + ...`` is exact up to ``order``. Order 4 is the
+    classical RK4 of a linear system (local error ``(|lambda| h)^5/120``); order 2 serves
+    intervals far shorter than the fastest time constant (dead times).
+    """
+    d2 = flux_rates(d1[0], d1[1], d1[2], d1[3], 0.0, 0.0, a_ss, a_sr, a_rs, a_rr, w_r)
+    d2 = (d2[0], d2[1], d2[2] - w_r1 * rb, d2[3] + w_r1 * ra)
+    if order >= 4:
+        d3 = flux_rates(d2[0], d2[1], d2[2], d2[3], 0.0, 0.0, a_ss, a_sr, a_rs, a_rr, w_r)
+        d3 = (d3[0], d3[1], d3[2] - 2.0 * w_r1 * d1[3], d3[3] + 2.0 * w_r1 * d1[2])
+        d4 = flux_rates(d3[0], d3[1], d3[2], d3[3], 0.0, 0.0, a_ss, a_sr, a_rs, a_rr, w_r)
+        d4 = (d4[0], d4[1], d4[2] - 3.0 * w_r1 * d2[3], d4[3] + 3.0 * w_r1 * d2[2])
+        q = 0.5 * h
+        c2 = 0.5 * q
+        c3 = q / 3.0
+        c4 = 0.25 * q
+        m0 = sa + q * (d1[0] + c2 * (d2[0] + c3 * (d3[0] + c4 * d4[0])))
+        m1 = sb + q * (d1[1] + c2 * (d2[1] + c3 * (d3[1] + c4 * d4[1])))
+        m2 = ra + q * (d1[2] + c2 * (d2[2] + c3 * (d3[2] + c4 * d4[2])))
+        m3 = rb + q * (d1[3] + c2 * (d2[3] + c3 * (d3[3] + c4 * d4[3])))
+        c2 = 0.5 * h
+        c3 = h / 3.0
+        c4 = 0.25 * h
+        e0 = sa + h * (d1[0] + c2 * (d2[0] + c3 * (d3[0] + c4 * d4[0])))
+        e1 = sb + h * (d1[1] + c2 * (d2[1] + c3 * (d3[1] + c4 * d4[1])))
+        e2 = ra + h * (d1[2] + c2 * (d2[2] + c3 * (d3[2] + c4 * d4[2])))
+        e3 = rb + h * (d1[3] + c2 * (d2[3] + c3 * (d3[3] + c4 * d4[3])))
+        return m0, m1, m2, m3, e0, e1, e2, e3
+    q = 0.5 * h
+    c2 = 0.5 * q
+    m0 = sa + q * (d1[0] + c2 * d2[0])
+    m1 = sb + q * (d1[1] + c2 * d2[1])
+    m2 = ra + q * (d1[2] + c2 * d2[2])
+    m3 = rb + q * (d1[3] + c2 * d2[3])
+    c2 = 0.5 * h
+    e0 = sa + h * (d1[0] + c2 * d2[0])
+    e1 = sb + h * (d1[1] + c2 * d2[1])
+    e2 = ra + h * (d1[2] + c2 * d2[2])
+    e3 = rb + h * (d1[3] + c2 * d2[3])
+    return m0, m1, m2, m3, e0, e1, e2, e3
 
 
 @njit(cache=True)

@@ -22,7 +22,7 @@ from imdrive.kernels.compensator import COMPENSATOR_PARAMS, COMPENSATOR_STATE
 from imdrive.kernels.engine import DRIVE_FOC, DRIVE_OPEN_LOOP, SAMPLE_STATE, SIM_PARAMS, DriveState
 from imdrive.kernels.ifoc import CONTROL_PARAMS, CONTROL_STATE
 from imdrive.kernels.inverter import INVERTER_CODES, INVERTER_PARAMS, INVERTER_STATE
-from imdrive.kernels.machine import PLANT_PARAMS, initial_plant_state
+from imdrive.kernels.machine import PLANT_PARAMS, initial_plant_state, saturation_table
 from imdrive.kernels.model import MODEL_STATE
 from imdrive.kernels.records import new_record
 from imdrive.kernels.sensors import SENSOR_PARAMS
@@ -40,7 +40,12 @@ def saturation_curve(sc: Scenario) -> dict:
     psi_sat = sat.psi_sat_Wb
     if psi_sat is None:
         psi_sat = m.rated_flux_Wb * (rho / (1.0 - rho)) ** (1.0 / S)
-    return {"saturation": sat.enabled, "Lm0": Lm0, "psi_sat": psi_sat, "S": S}
+    fields = {"saturation": sat.enabled, "Lm0": Lm0, "psi_sat": psi_sat, "S": S}
+    if sat.enabled:  # the inverse curve tabulated once per run (no Newton loop per step)
+        table = saturation_table(m.Ll1_H, m.Ll2_H, Lm0, psi_sat, S)
+        table.pop("sat_table_error")
+        fields.update(table)
+    return fields
 
 
 def plant_record(sc: Scenario) -> np.ndarray:
