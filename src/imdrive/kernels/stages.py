@@ -58,7 +58,7 @@ from imdrive.kernels.profiles import (
     PR_V_AMP,
     profile_at,
 )
-from imdrive.kernels.records import c16, f8, i8, record_dtype
+from imdrive.kernels.records import b1, c16, f8, i8, record_dtype
 from imdrive.kernels.sensors import measure_current
 
 S_OK = 0
@@ -88,6 +88,8 @@ PERIOD = record_dtype(
         ("v_cmd_ab", c16),  # what the controller commands and believes applied, V
         ("v_app_ab", c16),  # the period-average voltage at the terminals, V
         ("n_seg", i8),  # segments of the average model
+        ("i_next_ab", c16),  # the plant's current after the period (check), A: the next
+        ("have_next", b1),  # sample's, so a saturated machine's curve is solved once a period
     ]
 )
 
@@ -101,7 +103,11 @@ def measure(sim, pp, psen, pt, pv, pn, x, pr):
     pr.R1_base = pp.R1 * profile_at(pt, pv, pn, PR_R1_SCALE, t)
     pr.R2_base = pp.R2 * profile_at(pt, pv, pn, PR_R2_SCALE, t)
     pr.T_L0 = profile_at(pt, pv, pn, PR_LOAD, t)
-    i_s_alpha, i_s_beta = stator_current(pp, x)
+    if pr.have_next:  # the current the last check computed from this same state
+        i_s_alpha = pr.i_next_ab.real
+        i_s_beta = pr.i_next_ab.imag
+    else:
+        i_s_alpha, i_s_beta = stator_current(pp, x)
     pr.i_s_ab = complex(i_s_alpha, i_s_beta)
     i_meas_alpha, i_meas_beta = measure_current(psen, i_s_alpha, i_s_beta, pr.k)
     pr.i_meas_ab = complex(i_meas_alpha, i_meas_beta)
@@ -336,8 +342,13 @@ def _controller_finite(smp, mdl, ctl, cmp):
 
 @njit(cache=True)
 def check(sim, pp, x, smp, mdl, ctl, est, cmp, pr):
-    """Divergence after the period: ``S_OK`` or ``S_NAN``, ``S_CURRENT``, ``S_SPEED``."""
+    """Divergence after the period: ``S_OK`` or ``S_NAN``, ``S_CURRENT``, ``S_SPEED``.
+
+    Keeps the plant's current in ``pr.i_next_ab`` for the next :func:`measure`.
+    """
     i_s_alpha, i_s_beta = stator_current(pp, x)
+    pr.i_next_ab = complex(i_s_alpha, i_s_beta)
+    pr.have_next = True
     i_mag = math.sqrt(i_s_alpha * i_s_alpha + i_s_beta * i_s_beta)
     if not (math.isfinite(i_mag) and math.isfinite(x.w_m)):
         return S_NAN
