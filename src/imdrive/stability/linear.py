@@ -48,11 +48,21 @@ import numpy as np
 
 from imdrive.config.scenario import Scenario
 from imdrive.errors import ConfigError
-from imdrive.kernels import linearise as kl
-from imdrive.kernels import profiles as kp
-from imdrive.kernels.engine import DriveParams, DriveState
-from imdrive.run.build import build_arrays
-from imdrive.run.estimators import estimator_of
+from imdrive.run import linear as rl
+from imdrive.run.linear import (  # noqa: F401  (re-exported: old names)
+    StationaryDrive,
+    model_coefficients,
+    stationary_drive,
+)
+from imdrive.stability.steady import (  # noqa: F401  (re-exported: old path)
+    _initial_state,
+    _plant_in_frame,
+    continuous_steady_state,
+)
+
+_Drive = StationaryDrive  # the 0.2 private names, kept for callers that reached in
+_stationary_drive = stationary_drive
+_coefficients = model_coefficients
 
 RPM = 2.0 * math.pi / 60.0  # rad/s per rpm
 
@@ -125,224 +135,6 @@ def map_scenario(
     return replace(sc, estimator=replace(est, **ch), compensator=comp, injection=inj)
 
 
-@dataclass
-class _Drive:
-    """One drive's records with constant profiles, replicated to ``n`` rows."""
-
-    P: DriveParams
-    S: DriveState
-    TH: np.ndarray  # (n, 2) frozen winding temperatures, degC
-    Ts: float
-    v_max: float
-    i_max: float
-
-
-def _stationary_drive(sc: Scenario, speeds_rad_s, torques_Nm) -> _Drive:
-    """Records of ``sc`` with every profile at its final value, references set per row."""
-    if sc.drive.mode != "vector":
-        raise ConfigError("drive.mode", "stability maps need the vector (IFOC) drive")
-    if not estimator_of(sc).kernel.reduced_state:
-        # the reduced state (imdrive.kernels.linearise) carries the MRAS's states only; the
-        # other estimators' states would be missing from the map (a NaN Jacobian, not a result)
-        raise ConfigError(
-            "control.speed_feedback",
-            f'stability maps cover "mras" and "measured": the reduced state of the map does '
-            f'not carry the states of "{sc.control.speed_feedback}"',
-        )
-    if sc.plant.speed_mode == "imposed":
-        raise ConfigError("plant.speed_mode", "stability maps need the mechanical model")
-    if sc.sensor.i_offset_alpha_A != 0.0 or sc.sensor.i_offset_beta_A != 0.0:
-        raise ConfigError(
-            "sensor", "a current-sensor offset breaks rotation invariance (no fixed point)"
-        )
-    # the reduced state covers the average-value drive; per-phase effects are not rotation
-    # invariant (no fixed point in the controller's frame), and the delay's held voltage is
-    # not part of the state yet
-    if sc.inverter.model != "average":
-        raise ConfigError("inverter.model", 'stability maps need the "average" inverter model')
-    if sc.inverter.dead_time_s > 0.0 or sc.inverter.device_drop_V > 0.0:
-        raise ConfigError(
-            "inverter.dead_time_s",
-            "dead time and device drops act per phase: no fixed point (set both to 0)",
-        )
-    if sc.sensor.per_phase or sc.sensor.vdc_gain != 1.0:
-        raise ConfigError(
-            "sensor", "per-phase sensor errors break rotation invariance (no fixed point)"
-        )
-    if sc.control.delay_periods != 0:
-        raise ConfigError(
-            "control.delay_periods", "stability maps model the drive without computation delay"
-        )
-    a = build_arrays(replace(sc, simulation=replace(sc.simulation, t_end_s=sc.simulation.Ts_s)))
-    n = len(speeds_rad_s)
-    rep = lambda arr: np.repeat(arr, n, axis=0)  # noqa: E731
-    pv = a.params.prof_v[0]
-    pn = a.params.prof_n[0]
-    final = np.array([pv[s, pn[s] - 1] for s in range(kp.N_PROF)])
-    prof_t = np.zeros((n, kp.N_PROF, 1))
-    prof_v = np.repeat(final[None, :, None], n, axis=0)
-    prof_v[:, kp.PR_SPEED_REF, 0] = speeds_rad_s
-    prof_v[:, kp.PR_LOAD, 0] = torques_Nm
-    # every block's record replicated (whatever the blocks are), then the profiles replaced
-    P = DriveParams(*(f if name == "tables" else rep(f) for name, f in a.params._asdict().items()))
-    P = P._replace(
-        prof_t=prof_t,
-        prof_v=prof_v,
-        prof_n=np.ones((n, kp.N_PROF), dtype=np.int64),
-        table_idx=np.zeros(n, dtype=np.int64),
-    )
-    S = DriveState(*(rep(f) for f in a.state0))
-    TH = np.repeat(np.array([[S.plant["theta1"][0], S.plant["theta2"][0]]]), n, axis=0)
-    return _Drive(
-        P=P,
-        S=S,
-        TH=TH,
-        Ts=a.Ts,
-        v_max=float(a.params.control["v_max"][0]),
-        i_max=float(a.params.control["i_max"][0]),
-    )
-
-
-# ------------------------------------------------------------------------------------------
-# continuous steady state (initial guess)
-
-
-def _coefficients(P: DriveParams, S: DriveState) -> dict:
-    """Plant, model and controller constants of row 0 (SI)."""
-    pp = P.plant[0]
-    md = S.model[0]
-    c = {k: float(pp[k]) for k in ("R1", "R2", "Ll1", "Ll2", "M", "n_p", "J", "B", "k_visc")}
-    c["k_fan"] = float(pp["k_fan"])
-    pv = P.prof_v[0]
-    c["R1"] *= pv[kp.PR_R1_SCALE, 0]
-    c["R2"] *= pv[kp.PR_R2_SCALE, 0]
-    c["L1"] = c["Ll1"] + c["M"]
-    c["L2"] = c["Ll2"] + c["M"]
-    for k in ("R1_hat", "R2_hat", "Ll1_hat", "Ll2_hat", "M_hat"):
-        c[k] = float(md[k])
-    c["L1_hat"] = c["Ll1_hat"] + c["M_hat"]
-    c["L2_hat"] = c["Ll2_hat"] + c["M_hat"]
-    c["sL1_hat"] = c["L1_hat"] - c["M_hat"] ** 2 / c["L2_hat"]
-    c["psi_ref"] = float(pv[kp.PR_FLUX_REF, 0])
-    c["sensorless"] = bool(P.sim[0]["sensorless"])
-    c["wc"] = float(P.est[0]["wc"])  # an MRAS drive (_stationary_drive refuses the others)
-    c["K2"] = float(P.est[0]["K2"])
-    c["decouple"] = bool(P.control[0]["decouple"])
-    return c
-
-
-def _plant_in_frame(c, iq, w_m, w_ref):
-    """Currents, fluxes, synchronous speed and torque for imposed ``id* + j iq*``."""
-    i_d = min(c["psi_ref"] / c["M_hat"], 1e300)
-    I = i_d + 1j * iq
-    w_fb = w_ref if c["sensorless"] else w_m
-    w_sl_cmd = c["R2_hat"] * iq / (c["L2_hat"] * i_d)
-    w_e = c["n_p"] * w_fb + w_sl_cmd
-    slip = w_e - c["n_p"] * w_m
-    psi_r = c["M"] * I / (1.0 + 1j * slip * c["L2"] / c["R2"])
-    i_r = (psi_r - c["M"] * I) / c["L2"]
-    psi_s = c["L1"] * I + c["M"] * i_r
-    T_e = 1.5 * c["n_p"] * (psi_s.real * iq - psi_s.imag * i_d)
-    return I, psi_s, psi_r, w_e, T_e
-
-
-def _residuals(c, iq, w_m, w_ref, T_L):
-    I, psi_s, _, w_e, T_e = _plant_in_frame(c, iq, w_m, w_ref)
-    T_load = T_L + (c["B"] + c["k_visc"]) * w_m + c["k_fan"] * w_m * np.abs(w_m)
-    r1 = (T_e - T_load) / (1.5 * c["n_p"] * c["psi_ref"])  # in A of iq
-    if c["sensorless"]:
-        w_safe = np.where(np.abs(w_e) < 1e-9, 1e-9, w_e)
-        r2 = c["sL1_hat"] * iq - psi_s.imag + (c["R1"] - c["R1_hat"]) * I.real / w_safe
-        r2 = r2 / c["psi_ref"] * (c["psi_ref"] / c["M_hat"])  # in A
-    else:
-        r2 = (w_m - w_ref) * c["J"]
-    return r1, r2
-
-
-def continuous_steady_state(c: dict, w_ref, T_L, n_iter: int = 40):
-    """Solve the continuous steady state for ``(iq*, w_m)`` at every ``(w_ref, T_L)`` pair.
-
-    Newton's method, vectorised over the points, with a finite-difference 2 x 2 Jacobian
-    (equations in the module docstring).
-
-    Returns
-    -------
-    iq, w_m : ndarray
-        q current (A) and true mechanical speed (rad/s).
-    ok : ndarray of bool
-        Converged to a residual below 1e-9 A.
-    """
-    w_ref = np.asarray(w_ref, dtype=float)
-    T_L = np.asarray(T_L, dtype=float)
-    k_t = 1.5 * c["n_p"] * c["M"] / c["L2"] * c["psi_ref"]
-    T_req = T_L + (c["B"] + c["k_visc"]) * w_ref + c["k_fan"] * w_ref * np.abs(w_ref)
-    iq = T_req / k_t
-    w_m = w_ref + (c["R2_hat"] / c["R2"] - 1.0) * (c["R2"] / c["L2"]) * iq / (
-        c["psi_ref"] / c["M_hat"]
-    ) / c["n_p"] * float(c["sensorless"])
-    ok = np.zeros(w_ref.shape, dtype=bool)
-    with np.errstate(all="ignore"):
-        for _ in range(n_iter):
-            r1, r2 = _residuals(c, iq, w_m, w_ref, T_L)
-            ok = np.isfinite(r1) & np.isfinite(r2) & (np.abs(r1) < 1e-9) & (np.abs(r2) < 1e-9)
-            if ok.all():
-                break
-            h1 = 1e-7 * (np.abs(iq) + 1.0)
-            h2 = 1e-7 * (np.abs(w_m) + 1.0)
-            a1, a2 = _residuals(c, iq + h1, w_m, w_ref, T_L)
-            b1, b2 = _residuals(c, iq, w_m + h2, w_ref, T_L)
-            j11, j21 = (a1 - r1) / h1, (a2 - r2) / h1
-            j12, j22 = (b1 - r1) / h2, (b2 - r2) / h2
-            det = j11 * j22 - j12 * j21
-            d_iq = (-r1 * j22 + r2 * j12) / det
-            d_wm = (-j11 * r2 + j21 * r1) / det
-            # limit the step: at most 20 A and 50 rad/s per iteration
-            d_iq = np.clip(d_iq, -20.0, 20.0)
-            d_wm = np.clip(d_wm, -50.0, 50.0)
-            iq = np.where(ok, iq, iq + d_iq)
-            w_m = np.where(ok, w_m, w_m + d_wm)
-    return iq, w_m, ok & np.isfinite(iq) & np.isfinite(w_m)
-
-
-def _initial_state(c: dict, Ts: float, iq, w_m, w_ref) -> np.ndarray:
-    """Reduced states (N, N_Z) of the continuous steady state, as seen at a sample instant."""
-    I, psi_s, psi_r, w_e, _ = _plant_in_frame(c, iq, w_m, w_ref)
-    n = len(iq)
-    z = np.zeros((n, kl.N_Z))
-    i_d = I.real
-    v = c["R1"] * I + 1j * w_e * psi_s
-    # the voltage held over the last period and the last sample, in this sample's frame
-    v_prev = v * np.exp(-0.5j * w_e * Ts)
-    i_prev = I * np.exp(-1j * w_e * Ts)
-    psi_hat = c["M_hat"] * i_d
-    ff = np.zeros(n, dtype=complex)
-    if c["decouple"]:
-        ff = -w_e * c["sL1_hat"] * iq + 1j * w_e * (
-            c["sL1_hat"] * i_d + c["M_hat"] / c["L2_hat"] * psi_hat
-        )
-    int_dq = v - ff
-    w_r_hat = c["n_p"] * (w_ref if c["sensorless"] else w_m)
-    T2h = c["L2_hat"] / c["R2_hat"]
-    lam_i = c["M_hat"] * I / (1.0 + 1j * (w_e - w_r_hat) * T2h)
-    filt = 1j * w_e / (1j * w_e + c["wc"]) if c["wc"] > 0 else np.ones(n)
-    lam_f = lam_i * filt
-    den = 1j * w_e + c["wc"]
-    den = np.where(np.abs(den) < 1e-9, 1e-9, den)
-    lam_v = (c["L2_hat"] / c["M_hat"]) * ((v - c["R1_hat"] * I) - 1j * w_e * c["sL1_hat"] * I) / den
-    for k, val in ((0, psi_s), (2, psi_r), (5, v_prev), (7, i_prev), (10, int_dq)):
-        z[:, k] = val.real
-        z[:, k + 1] = val.imag
-    z[:, 4] = w_m
-    z[:, 9] = iq
-    z[:, 12] = psi_hat
-    for k, val in ((13, lam_v), (15, lam_i), (17, lam_f)):
-        z[:, k] = val.real
-        z[:, k + 1] = val.imag
-    z[:, 19] = w_r_hat / c["K2"] if c["K2"] != 0 else 0.0
-    z[:, 20] = w_r_hat
-    return z
-
-
 # ------------------------------------------------------------------------------------------
 # operating points
 
@@ -369,7 +161,7 @@ class OperatingPoints:
         Newton iterations on the discrete map.
     Ts : float
         Control period, s.
-    drive : _Drive
+    drive : StationaryDrive
         The records (row ``i`` is point ``i``), for :func:`propagate`.
     """
 
@@ -382,12 +174,12 @@ class OperatingPoints:
     residual: np.ndarray
     iterations: np.ndarray
     Ts: float
-    drive: _Drive = field(repr=False)
+    drive: StationaryDrive = field(repr=False)
     coeffs: dict = field(repr=False, default_factory=dict)
 
     def eigenvalues(self) -> np.ndarray:
         """Eigenvalues of every ``A`` (N, N_Z), z-plane; NaN rows where status is not ok."""
-        ev = np.full((len(self.status), kl.N_Z), np.nan + 0j)
+        ev = np.full((len(self.status), rl.N_Z), np.nan + 0j)
         ok = self.status == STATUS_OK
         if ok.any():
             ev[ok] = np.linalg.eigvals(self.A[ok])
@@ -410,8 +202,8 @@ def solve_operating_points(sc: Scenario, speeds_rpm, torques_Nm) -> OperatingPoi
         sc = map_scenario(sc)
     n = len(speeds)
     w_ref = speeds * RPM
-    d = _stationary_drive(sc, w_ref, torques)
-    c = _coefficients(d.P, d.S)
+    d = stationary_drive(sc, w_ref, torques)
+    c = model_coefficients(d.P, d.S)
     iq, w_m, ok = continuous_steady_state(c, w_ref, torques)
     status = np.full(n, STATUS_OK, dtype=object)
     status[~ok] = STATUS_NONE
@@ -422,25 +214,25 @@ def solve_operating_points(sc: Scenario, speeds_rpm, torques_Nm) -> OperatingPoi
         V_mag = np.abs(c["R1"] * I + 1j * w_e * psi_s)
     status[ok & (I_mag > d.i_max)] = STATUS_CURRENT
     status[ok & (I_mag <= d.i_max) & (V_mag > d.v_max)] = STATUS_VOLTAGE
-    Z = np.zeros((n, kl.N_Z))
+    Z = np.zeros((n, rl.N_Z))
     good = status == STATUS_OK
     if good.any():
         Z[good] = _initial_state(c, d.Ts, iq[good], w_m[good], w_ref[good])
-    A = np.full((n, kl.N_Z, kl.N_Z), np.nan)
-    B = np.full((n, kl.N_Z, kl.N_U), np.nan)
+    A = np.full((n, rl.N_Z, rl.N_Z), np.nan)
+    B = np.full((n, rl.N_Z, rl.N_U), np.nan)
     res = np.full(n, np.nan)
     its = np.zeros(n, dtype=np.int64)
     idx = np.flatnonzero(good)
     if len(idx):
-        sub_P = DriveParams(*(f[idx] if f.ndim >= 1 and f.shape[0] == n else f for f in d.P))
-        sub_S = DriveState(*(f[idx].copy() for f in d.S))
+        sub_P = rl.DriveParams(*(f[idx] if f.ndim >= 1 and f.shape[0] == n else f for f in d.P))
+        sub_S = rl.DriveState(*(f[idx].copy() for f in d.S))
         Zs = np.ascontiguousarray(Z[idx])
-        As = np.empty((len(idx), kl.N_Z, kl.N_Z))
-        Bs = np.empty((len(idx), kl.N_Z, kl.N_U))
+        As = np.empty((len(idx), rl.N_Z, rl.N_Z))
+        Bs = np.empty((len(idx), rl.N_Z, rl.N_U))
         sts = np.empty(len(idx), dtype=np.int64)
         rs = np.empty(len(idx))
         its_s = np.empty(len(idx), dtype=np.int64)
-        kl.solve_points(
+        rl.solve_points(
             sub_P,
             sub_S,
             Zs,
@@ -454,8 +246,8 @@ def solve_operating_points(sc: Scenario, speeds_rpm, torques_Nm) -> OperatingPoi
             _NEWTON_ITER,
         )
         Z[idx], A[idx], B[idx], res[idx], its[idx] = Zs, As, Bs, rs, its_s
-        status[idx[sts == kl.P_NO_CONVERGENCE]] = STATUS_NONE
-        status[idx[sts == kl.P_DIVERGED]] = STATUS_DIVERGED
+        status[idx[sts == rl.P_NO_CONVERGENCE]] = STATUS_NONE
+        status[idx[sts == rl.P_DIVERGED]] = STATUS_DIVERGED
     bad = status != STATUS_OK
     Z[bad] = np.nan
     A[bad] = np.nan
@@ -491,7 +283,7 @@ def output_matrix(c: dict) -> np.ndarray:
     The currents are the plant's stator current at the sample, in the controller's frame:
     ``i_s = (L2 psi_s - M psi_r) / (L1 L2 - M^2)``.
     """
-    C = np.zeros((4, kl.N_Z))
+    C = np.zeros((4, rl.N_Z))
     C[0, 4] = 1.0 / RPM
     C[1, 20] = 1.0 / (c["n_p"] * RPM)
     D = c["L1"] * c["L2"] - c["M"] ** 2
@@ -656,18 +448,18 @@ class OperatingPoint:
         """
         d = self._ops.drive
         P = d.P
-        saved = P.prof_v[0, [kp.PR_SPEED_REF, kp.PR_LOAD], 0].copy()
-        P.prof_v[0, kp.PR_SPEED_REF, 0] += du[0] * RPM
-        P.prof_v[0, kp.PR_LOAD, 0] += du[1]
+        saved = P.prof_v[0, [rl.PR_SPEED_REF, rl.PR_LOAD], 0].copy()
+        P.prof_v[0, rl.PR_SPEED_REF, 0] += du[0] * RPM
+        P.prof_v[0, rl.PR_LOAD, 0] += du[1]
         try:
-            S = DriveState(*(f.copy() for f in d.S))
-            out = np.empty(kl.N_Z)
+            S = rl.DriveState(*(f.copy() for f in d.S))
+            out = np.empty(rl.N_Z)
             z0 = np.ascontiguousarray(self.z + np.asarray(dz, dtype=float))
-            st = kl.propagate(P, S, 0, z0, int(n_steps), d.TH[0, 0], d.TH[0, 1], out)
+            st = rl.propagate(P, S, 0, z0, int(n_steps), d.TH[0, 0], d.TH[0, 1], out)
         finally:
-            P.prof_v[0, [kp.PR_SPEED_REF, kp.PR_LOAD], 0] = saved
+            P.prof_v[0, [rl.PR_SPEED_REF, rl.PR_LOAD], 0] = saved
         if st != 0:
-            return np.full(kl.N_Z, np.nan)
+            return np.full(rl.N_Z, np.nan)
         return out - self.z
 
 

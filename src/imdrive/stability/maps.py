@@ -14,9 +14,7 @@ import numpy as np
 
 from imdrive.config.scenario import Scenario
 from imdrive.errors import ConfigError
-from imdrive.kernels import linearise as kl
-from imdrive.kernels import profiles as kp
-from imdrive.kernels.engine import DriveParams, DriveState
+from imdrive.run import linear as rl
 from imdrive.stability.linear import (
     RPM,
     STATUS_OK,
@@ -183,19 +181,19 @@ def simulate_steps(
     if not len(idx):
         return sim_stable, growth, ops
     d = ops.drive
-    P = DriveParams(*(f[idx].copy() if f.shape[0] == n else f for f in d.P))
-    S = DriveState(*(f[idx].copy() for f in d.S))
-    P.prof_v[:, kp.PR_SPEED_REF, 0] += step_rpm * RPM
+    P = rl.DriveParams(*(f[idx].copy() if f.shape[0] == n else f for f in d.P))
+    S = rl.DriveState(*(f[idx].copy() for f in d.S))
+    P.prof_v[:, rl.PR_SPEED_REF, 0] += step_rpm * RPM
     z_old = ops.z[idx]
     rng = np.random.default_rng(seed)
-    Z0 = z_old + 1e-6 * rng.standard_normal(z_old.shape) * (np.abs(z_old) + kl.Z_SCALE)
+    Z0 = z_old + 1e-6 * rng.standard_normal(z_old.shape) * (np.abs(z_old) + rl.Z_SCALE)
     Z1 = np.where((stepped.status[idx] == STATUS_OK)[:, None], stepped.z[idx], z_old)
     n_win = max(int(round(0.05 / ops.Ts)), 1)
     n_steps = int(round(horizon_s / ops.Ts))
     n_w = n_steps // n_win
     peaks = np.empty((len(idx), n_w))
     status = np.empty(len(idx), dtype=np.int64)
-    kl.step_check(
+    rl.step_check(
         P,
         S,
         np.ascontiguousarray(Z0),
