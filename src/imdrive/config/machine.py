@@ -700,7 +700,8 @@ def check_nameplate(m: MachineParams) -> None:
     Raises
     ------
     ConfigError
-        A rated speed not below synchronous speed; a given rated torque (or ``P / w_m`` of a
+        (Field names relative to ``[machine]``: the settings class prefixes them.) A rated
+        speed not below synchronous speed; a given rated torque (or ``P / w_m`` of a
         given rated speed) not below the circuit's breakdown torque at rated voltage and
         frequency; a given rated current (or ``P / (sqrt 3 V eta cos phi)`` of given
         efficiency and power factor) not above the circuit's no-load current. The message
@@ -718,7 +719,7 @@ def check_nameplate(m: MachineParams) -> None:
     n_sync = 60.0 * f / m.pole_pairs
     if m.rated_speed_rpm is not None and not m.rated_speed_rpm < n_sync:
         raise ConfigError(
-            "machine.rated_speed_rpm",
+            "rated_speed_rpm",
             f"{m.rated_speed_rpm:g} rpm must be below the synchronous speed "
             f"60 rated_frequency_Hz / pole_pairs = {n_sync:.6g} rpm",
         )
@@ -727,10 +728,10 @@ def check_nameplate(m: MachineParams) -> None:
         "(the circuit R1_ohm, R2_ohm, Ll1_H, Ll2_H, M_H at rated_voltage_V, rated_frequency_Hz)"
     )
     if m.rated_torque_Nm is not None:
-        torque, field = m.rated_torque_Nm, "machine.rated_torque_Nm"
+        torque, field = m.rated_torque_Nm, "rated_torque_Nm"
     elif m.rated_speed_rpm is not None:
         torque = P / (m.rated_speed_rpm * math.pi / 30.0)
-        field = "machine.rated_speed_rpm"
+        field = "rated_speed_rpm"
     else:
         torque = field = None
     if torque is not None and not torque < T_bd:
@@ -741,10 +742,10 @@ def check_nameplate(m: MachineParams) -> None:
         )
     I_0 = _no_load_current_rms(m)
     if m.rated_current_rms_A is not None:
-        current, field = m.rated_current_rms_A, "machine.rated_current_rms_A"
+        current, field = m.rated_current_rms_A, "rated_current_rms_A"
     elif m.rated_efficiency is not None and m.rated_power_factor is not None:
         current = P / (math.sqrt(3.0) * V * m.rated_efficiency * m.rated_power_factor)
-        field = "machine.rated_efficiency, rated_power_factor"
+        field = "rated_efficiency, rated_power_factor"
     else:
         current = None
     if current is not None and not current > I_0:
@@ -792,3 +793,27 @@ def check_nameplate(m: MachineParams) -> None:
 
 def _warn(field: str, rule: str) -> None:
     warnings.warn(ConfigWarning(field, rule), stacklevel=3)
+
+
+def rated_point_comment(m: MachineParams) -> str:
+    """The derived rated point as TOML comment lines (for ``imdrive show``).
+
+    Parameters
+    ----------
+    m : MachineParams
+        The machine.
+
+    Returns
+    -------
+    str
+        ``# name = value  (how it was obtained)`` lines, or one line saying why there is none.
+    """
+    try:
+        rp = rated_point(m)
+    except ConfigError as exc:
+        return f"# no rated point: {exc}\n"
+    lines = ["# rated point (imdrive.config.machine.rated_point; not keys of the file):"]
+    for k, v in rp.to_dict().items():
+        how = rp.sources.get(k, "")
+        lines.append(f"#   {k} = {v:.6g}" + (f"  ({how})" if how else ""))
+    return "\n".join(lines) + "\n"
