@@ -16,7 +16,7 @@ adds the breakdown torque ratio ``T_bd / T_n`` and the starting current ratio ``
 Equations (per phase, star equivalent, rms; ``s_n = 1 - n / n_sync``)::
 
     Z_n   = V_ph / I_n (cos phi + j sin phi)                 rated-point input impedance
-    P_in  = P / eta,  P_ag = P / (1 - s_n)                   (T_n = P / w_m, P_ag = T_n w_s)
+    P_in  = 3 V_ph I_n cos phi,  P_ag = P / (1 - s_n)        (T_n = P / w_m, P_ag = T_n w_s)
     R1    = (P_in - P_ag) / (3 I_n^2)                        every loss but the rotor's
     Z(s)  = R1 + j X1 + (j X_M || (R2 / s + j X2)) = Z_n      at s = s_n     (2 equations)
     T_bd(R1, R2, X1, X2, X_M) = (T_bd / T_n) T_n              Thevenin closed form (1 equation)
@@ -31,8 +31,11 @@ deep-bar or double-cage effect):
 
 * every loss other than the rotor copper loss (stator copper, iron, friction and windage,
   stray load) is lumped into ``R1``, so that the circuit's input power at the rated point is
-  ``P / eta``; ``R1`` is then larger than a measured stator resistance (by the iron,
-  mechanical and stray losses over ``3 I^2``);
+  the electrical ``3 V_ph I_n cos phi``; ``R1`` is then larger than a measured stator
+  resistance (by the iron, mechanical and stray losses over ``3 I^2``). The efficiency this
+  implies, ``P / (sqrt 3 V I cos phi)``, is the nameplate's when the nameplate is
+  consistent; the difference (rounding on a real plate) is reported as the ``efficiency``
+  residual, and rated torque, current and power factor are met exactly whatever it is;
 * the rotor copper loss is ``s P_ag`` (no mechanical loss between air gap and shaft);
 * ``X1 / (X1 + X2) = k``: 0.5 for NEMA design A and D and wound rotors, 0.4 for design B,
   0.3 for design C (IEEE Std 112); the default 0.5;
@@ -174,7 +177,8 @@ class NameplateFit:
         The estimated machine (circuit, nameplate fields, J).
     residuals : dict of str to float
         Relative error of each fitted quantity (``rated_R``, ``rated_X`` of the rated-point
-        impedance over ``|Z_n|``; ``breakdown_torque``; ``starting_current``).
+        impedance over ``|Z_n|``; ``breakdown_torque``; ``starting_current``) and of the
+        efficiency the circuit implies against the given one (``efficiency``).
     assumed : tuple of str
         What was assumed for want of data (empty when nothing was).
     """
@@ -232,13 +236,15 @@ def estimate_circuit(plate: Nameplate, description: str = "") -> NameplateFit:
     sin_phi = math.sqrt(1.0 - p.power_factor**2)
     Z_abs = V_ph / p.current_A
     Z_n = Z_abs * complex(p.power_factor, sin_phi)
-    P_in = p.power_W / p.efficiency
+    P_in = 3.0 * V_ph * p.current_A * p.power_factor
     P_ag = T_n * w_s
     R1 = (P_in - P_ag) / (3.0 * p.current_A**2)
-    if not R1 > 0:  # pragma: no cover - excluded by Nameplate's efficiency < 1 - slip
-        raise ConfigError("efficiency", "leaves no loss for the stator")
-    if not R1 < Z_n.real:
-        raise ConfigError("power_factor", "too low for the efficiency: no rotor power is left")
+    if not R1 > 0:
+        raise ConfigError(
+            "power_factor",
+            f"sqrt(3) V I cos phi = {P_in:.5g} W is not above the air-gap power P / (1 - s) = "
+            f"{P_ag:.5g} W (current or power factor too low for the power)",
+        )
 
     assumed = []
     ratio = p.breakdown_torque_ratio
@@ -287,6 +293,7 @@ def estimate_circuit(plate: Nameplate, description: str = "") -> NameplateFit:
     if p.starting_current_ratio is not None:
         names.append("starting_current")
     fit = dict(zip(names, (float(v) for v in r), strict=True))
+    fit["efficiency"] = p.power_W / P_in / p.efficiency - 1.0  # implied over given
 
     J = p.J_kgm2
     if J is None:
@@ -401,7 +408,15 @@ def machine_from_nameplate_command(args) -> int:
     text = machine_toml(fit, plate)
     for what in fit.assumed:
         print(f"imdrive: note: assumed {what}", file=sys.stderr)
-    worst = max(abs(v) for v in fit.residuals.values())
+    eta_error = fit.residuals["efficiency"]
+    if abs(eta_error) > 0.02:
+        print(
+            f"imdrive: note: sqrt(3) V I cos phi eta is {100 * eta_error:+.1f} % off the rated "
+            "power: the circuit meets power, speed, current and power factor, its efficiency "
+            "is P / (sqrt(3) V I cos phi)",
+            file=sys.stderr,
+        )
+    worst = max(abs(v) for k, v in fit.residuals.items() if k != "efficiency")
     if worst > 1e-3:
         print(
             f"imdrive: note: no single-cage circuit meets all the data (largest relative "
