@@ -96,15 +96,15 @@ class Nameplate:
     current_A : float
         Rated line current, rms, A.
     power_factor : float
-        Rated power factor.
+        Rated power factor, dimensionless.
     efficiency : float
-        Rated efficiency.
+        Rated efficiency, dimensionless.
     breakdown_torque_ratio : float or None
-        Breakdown (pull-out) torque over rated torque.
+        Breakdown (pull-out) torque over rated torque, dimensionless.
     starting_current_ratio : float or None
-        Locked-rotor current over rated current.
+        Locked-rotor current over rated current, dimensionless.
     leakage_split : float
-        ``X1 / (X1 + X2)`` (:data:`LEAKAGE_SPLIT`); freed when both the breakdown torque and
+        ``X1 / (X1 + X2)``, dimensionless (:data:`LEAKAGE_SPLIT`); freed when both the breakdown torque and
         the starting current are given.
     J_kgm2 : float or None
         Rotor inertia, kg m^2; ``None``: from an inertia constant of

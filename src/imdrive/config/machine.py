@@ -59,7 +59,8 @@ class MachineParams:
         Nameplate speed, shaft torque and line current (rms); ``None``: derived
         (:func:`rated_point` says how).
     rated_power_factor, rated_efficiency : float or None
-        Nameplate power factor and efficiency at rated load; ``None``: derived.
+        Nameplate power factor and efficiency at rated load, dimensionless; ``None``:
+        derived.
     file : str or None
         A TOML file of ``[machine]`` values, loaded when a scenario (or
         :func:`machine_preset`) is read: its values lie over the preset's, and the
@@ -520,13 +521,13 @@ class RatedPoint:
     synchronous_speed_rpm, speed_rpm : float
         ``60 f / n_p`` and the rated speed, rpm.
     slip : float
-        Rated slip ``1 - speed / synchronous speed``.
+        Rated slip ``1 - speed / synchronous speed``, dimensionless.
     torque_Nm : float
         Rated shaft torque, N m.
     current_rms_A, current_peak_A : float
         Rated line current, A (rms, and its peak ``sqrt 2`` times).
     power_factor, efficiency : float
-        At rated load.
+        At rated load, dimensionless.
     magnetising_current_rms_A : float
         ``|I1 + I2|`` of the circuit at rated torque, rms, A.
     psi_r_Wb : float
@@ -534,9 +535,11 @@ class RatedPoint:
     no_load_current_rms_A : float
         Line current of the circuit at synchronous speed, rated voltage, rms, A.
     breakdown_torque_Nm, breakdown_slip : float
-        Maximum motoring torque of the circuit at rated voltage and frequency, and its slip.
+        Maximum motoring torque of the circuit at rated voltage and frequency, N m, and its
+        slip, dimensionless.
     circuit_speed_rpm, circuit_current_rms_A, circuit_power_factor : float
-        The circuit's own speed, current and power factor loaded to ``torque_Nm``.
+        The circuit's own speed (rpm), current (A rms) and power factor (dimensionless) loaded
+        to ``torque_Nm``.
     sources : dict of str to str
         How each nameplate quantity was obtained (``"nameplate"`` or the formula).
     """
