@@ -533,6 +533,7 @@ def test_direct_on_line_simulation_at_rated_load_meets_circuit_and_nameplate(nam
     res = simulate(sc)
     fin = res.final_values()
     assert not res.diverged
+    assert res.summary()["machine_rated"] == rp.to_dict()  # summary.json carries it
     i_rms = math.hypot(fin["i_alpha_A"], fin["i_beta_A"]) / math.sqrt(2)
     assert fin["speed_rpm"] == pytest.approx(rp.circuit_speed_rpm, rel=5e-4)
     assert i_rms == pytest.approx(rp.circuit_current_rms_A, rel=0.01)

@@ -173,8 +173,10 @@ class MachineParams:
 
     @model_validator(mode="after")
     def _nameplate_rules(self):
-        """The nameplate against the circuit: contradictions refused, oddities warned."""
-        check_nameplate(self)
+        """The nameplate against the circuit: contradictions refused, oddities warned (once
+        per distinct circuit and nameplate: a sweep that varies the load costs nothing)."""
+        for field, rule in _nameplate_findings(_CircuitAndPlate.of(self)):
+            warnings.warn(ConfigWarning(field, rule), stacklevel=2)
         return self
 
     # derived quantities -------------------------------------------------------------------
@@ -794,8 +796,52 @@ def check_nameplate(m: MachineParams) -> None:
         )
 
 
+@dataclass(frozen=True)
+class _CircuitAndPlate:
+    """The fields :func:`check_nameplate` reads (hashable: the key of its cache)."""
+
+    R1_ohm: float
+    R2_ohm: float
+    Ll1_H: float
+    Ll2_H: float
+    M_H: float
+    pole_pairs: int
+    rated_power_W: float
+    rated_voltage_V: float
+    rated_frequency_Hz: float
+    rated_speed_rpm: float | None
+    rated_torque_Nm: float | None
+    rated_current_rms_A: float | None
+    rated_power_factor: float | None
+    rated_efficiency: float | None
+
+    @classmethod
+    def of(cls, m) -> _CircuitAndPlate:
+        return cls(**{f.name: getattr(m, f.name) for f in fields(cls)})
+
+    @property
+    def L1_H(self) -> float:
+        return self.Ll1_H + self.M_H
+
+    @property
+    def L2_H(self) -> float:
+        return self.Ll2_H + self.M_H
+
+
+@functools.lru_cache(maxsize=1024)
+def _nameplate_findings(key: _CircuitAndPlate) -> tuple[tuple[str, str], ...]:
+    """:func:`check_nameplate`'s warnings as ``(field, rule)`` pairs, computed once per
+    distinct circuit and nameplate (its errors are raised, and not cached)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", ConfigWarning)
+        check_nameplate(key)  # it reads only these fields
+    return tuple(
+        (w.message.field, w.message.rule) for w in caught if isinstance(w.message, ConfigWarning)
+    )
+
+
 def _warn(field: str, rule: str) -> None:
-    warnings.warn(ConfigWarning(field, rule), stacklevel=3)
+    warnings.warn(ConfigWarning(field, rule), stacklevel=2)
 
 
 def rated_point_comment(m: MachineParams) -> str:
