@@ -104,8 +104,8 @@ class Nameplate:
     starting_current_ratio : float or None
         Locked-rotor current over rated current, dimensionless.
     leakage_split : float
-        ``X1 / (X1 + X2)``, dimensionless (:data:`LEAKAGE_SPLIT`); freed when both the breakdown torque and
-        the starting current are given.
+        ``X1 / (X1 + X2)``, dimensionless (:data:`LEAKAGE_SPLIT`); freed when both the
+        breakdown torque and the starting current are given.
     J_kgm2 : float or None
         Rotor inertia, kg m^2; ``None``: from an inertia constant of
         :data:`DEFAULT_INERTIA_CONSTANT_S`.
