@@ -109,7 +109,7 @@ NUMBA_ALLOWED = ("kernels", "_cache")
 #: order inside a package: a module may import only siblings listed before it
 INTRA = {
     "fuzzy": ("tables", "inference", "fit"),
-    "analysis": ("circuit", "foc", "figures"),
+    "analysis": ("circuit", "foc", "figures", "nameplate"),
 }
 
 MAX_LEVELS = 6

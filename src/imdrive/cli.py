@@ -38,9 +38,10 @@ import os
 import sys
 import time
 import tomllib
+import warnings
 from pathlib import Path
 
-from imdrive.errors import ConfigError, EnvironmentFailure, describe_os_error
+from imdrive.errors import ConfigError, ConfigWarning, EnvironmentFailure, describe_os_error
 
 EXIT_OK = 0
 EXIT_DIVERGED = 1
@@ -103,7 +104,7 @@ def _cmd_presets(args) -> int:
 
 
 def _cmd_show(args) -> int:
-    from imdrive.config.machine import machine_preset, machine_presets
+    from imdrive.config.machine import machine_preset, machine_presets, rated_point_comment
     from imdrive.config.presets import preset_names, preset_text
 
     if args.preset not in preset_names() and args.preset in machine_presets():
@@ -117,12 +118,14 @@ def _cmd_show(args) -> int:
             f"# a scenario uses it with [machine] preset = {args.preset!r} (any key below may be\n"
             "# overridden in that section); these are its values\n"
             + dumps({"machine": {"preset": args.preset, **values}})
+            + rated_point_comment(m)
         )
         return EXIT_OK
     if args.all:
         from imdrive.config.scenario import Scenario
 
-        sys.stdout.write(Scenario.read(args.preset).to_toml())
+        scenario = Scenario.read(args.preset)
+        sys.stdout.write(scenario.to_toml() + "\n" + rated_point_comment(scenario.machine))
     else:
         sys.stdout.write(preset_text(args.preset))
     return EXIT_OK
@@ -591,7 +594,62 @@ def build_parser() -> argparse.ArgumentParser:
     be.add_argument("--out", metavar="DIR", required=True)
     be.add_argument("-q", "--quiet", action="store_true")
     be.set_defaults(func=_cmd_bench_estimators)
+    _add_machine_from_nameplate(sub)
     return p
+
+
+def _cmd_machine_from_nameplate(args) -> int:
+    from imdrive.analysis.nameplate import machine_from_nameplate_command
+
+    return machine_from_nameplate_command(args)
+
+
+def _add_machine_from_nameplate(sub) -> None:
+    mn = sub.add_parser(
+        "machine-from-nameplate",
+        help="estimate a machine's equivalent circuit from its nameplate (a TOML file)",
+        description="Estimate the T-equivalent circuit from nameplate and catalogue data "
+        "(imdrive.analysis.nameplate: method, assumptions) and write a [machine] TOML file "
+        'for a scenario\'s [machine] file = "...".',
+        epilog=_examples(
+            "imdrive machine-from-nameplate --power-kw 2.2 --voltage 400 --frequency 50 "
+            "--poles 4 --speed 1436 --current 5 --pf 0.79 --efficiency 0.82 "
+            "--breakdown-ratio 2.9 --out my-motor.toml"
+        ),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    for flag, dest, kind, text in (
+        ("--power-kw", "power_kW", float, "rated shaft power, kW"),
+        ("--voltage", "voltage", float, "rated line-to-line voltage, V rms"),
+        ("--frequency", "frequency", float, "rated frequency, Hz"),
+        ("--poles", "poles", int, "number of poles (4 for 1500/1800 rpm machines)"),
+        ("--speed", "speed", float, "rated speed, rpm"),
+        ("--current", "current", float, "rated line current, A rms"),
+        ("--pf", "pf", float, "rated power factor (0-1)"),
+        ("--efficiency", "efficiency", float, "rated efficiency (0-1, not %)"),
+    ):
+        mn.add_argument(flag, dest=dest, type=kind, required=True, help=text)
+    mn.add_argument("--breakdown-ratio", type=float, help="breakdown torque / rated torque")
+    mn.add_argument("--starting-current-ratio", type=float, help="locked-rotor / rated current")
+    mn.add_argument(
+        "--design",
+        choices=("A", "B", "C", "D", "wound"),
+        default="A",
+        help="NEMA design letter: the X1/X2 split (IEEE Std 112); default A (1:1)",
+    )
+    mn.add_argument("--J", type=float, help="rotor inertia, kg m^2 (default: H = 0.5 s)")
+    mn.add_argument("--description", help="text for the machine's description")
+    mn.add_argument("--out", metavar="FILE", help="write the TOML here (default: stdout)")
+    mn.set_defaults(func=_cmd_machine_from_nameplate)
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None):
+    """A :class:`~imdrive.errors.ConfigWarning` as one line ``imdrive: warning: field: rule``;
+    other warnings as Python prints them."""
+    if issubclass(category, ConfigWarning):
+        print(f"imdrive: warning: {message}", file=sys.stderr)
+    else:
+        print(warnings.formatwarning(message, category, filename, lineno, line), file=sys.stderr)
 
 
 def _examples(*lines: str) -> str:
@@ -610,7 +668,9 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     args.t0 = time.perf_counter()
     try:
-        return args.func(args)
+        with warnings.catch_warnings():
+            warnings.showwarning = _show_warning
+            return args.func(args)
     except ConfigError as exc:
         return _fail(f"{exc}{_did_you_mean(exc, args)}", EXIT_BAD_INPUT)
     except EnvironmentFailure as exc:

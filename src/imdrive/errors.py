@@ -18,6 +18,25 @@ class ConfigError(ValueError):
         super().__init__(f"{self.field}: {self.rule}")
 
 
+class ConfigWarning(UserWarning):
+    """A suspicious but possible input (a rated slip above 10 %, a power factor of 0.3).
+
+    The run goes on; the command line prints it as one line ``imdrive: warning: field: rule``.
+
+    Parameters
+    ----------
+    field : str
+        Dotted path of the field, e.g. ``machine.rated_speed_rpm``.
+    rule : str
+        What looks wrong, e.g. ``rated slip 14 % is above 10 %``.
+    """
+
+    def __init__(self, field: str, rule: str):
+        self.field = _one_line(field)
+        self.rule = _one_line(rule)
+        super().__init__(f"{self.field}: {self.rule}")
+
+
 def _one_line(text: str) -> str:
     """``text`` with control characters escaped (a key may hold a newline): one line."""
     text = str(text)

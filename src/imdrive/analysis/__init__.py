@@ -13,7 +13,9 @@ see :mod:`imdrive`).
   sensorless detuning law (:func:`detuning_speed_error_rpm`), derived in that module's
   docstring together with its relation to the paper's eq. (10);
 * :mod:`imdrive.analysis.figures` — :func:`plot_speed_error_vs_R2` (matplotlib, imported
-  lazily).
+  lazily);
+* :mod:`imdrive.analysis.nameplate` — the equivalent circuit estimated from nameplate and
+  catalogue data (:class:`Nameplate`, :func:`estimate_circuit`).
 
 Every public name is re-exported here.
 """
@@ -32,6 +34,7 @@ from imdrive.analysis.foc import (
     detuning_speed_error_rpm,
     foc_operating_point,
 )
+from imdrive.analysis.nameplate import Nameplate, NameplateFit, estimate_circuit
 
 __all__ = [
     "SteadyState",
@@ -42,4 +45,7 @@ __all__ = [
     "foc_operating_point",
     "detuning_speed_error_rpm",
     "plot_speed_error_vs_R2",
+    "Nameplate",
+    "NameplateFit",
+    "estimate_circuit",
 ]

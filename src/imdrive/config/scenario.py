@@ -43,7 +43,13 @@ from imdrive.config.estimators import (
     package_sections,
 )
 from imdrive.config.inverter import InverterParams
-from imdrive.config.machine import MachineParams, machine_preset, preset_table
+from imdrive.config.machine import (  # noqa: F401  (preset_table: re-export)
+    MachineParams,
+    machine_preset,
+    machine_table,
+    preset_table,
+    resolve_machine_file,
+)
 from imdrive.config.output import OutputSettings
 
 # the override walk, re-exported here for the 0.1 import path ``imdrive.config.scenario``
@@ -258,7 +264,7 @@ class Scenario:
         if not isinstance(preset, str):
             raise ConfigError("machine.preset", f"must be a string, got {preset!r}")
         data = dict(data)
-        data["machine"] = preset_table(preset) | table
+        data["machine"] = machine_table(preset, table)  # preset < its file < this table
         data["machine_preset"] = preset
         return data
 
@@ -395,7 +401,9 @@ class Scenario:
         return validate(cls, data)
 
     @classmethod
-    def from_toml(cls, text: str, overrides: list[str] | tuple[str, ...] = ()) -> Scenario:
+    def from_toml(
+        cls, text: str, overrides: list[str] | tuple[str, ...] = (), *, base_dir=None
+    ) -> Scenario:
         """Parse TOML text, apply ``key.path=value`` overrides, validate.
 
         Parameters
@@ -404,6 +412,9 @@ class Scenario:
             A scenario file's text.
         overrides : list of str
             ``key.path=value`` strings (values parsed as TOML), applied in order.
+        base_dir : str or pathlib.Path, optional
+            The folder a relative ``[machine] file`` of ``text`` is read from (the scenario
+            file's); default the working directory, as for an override's.
 
         Returns
         -------
@@ -415,6 +426,7 @@ class Scenario:
             data = tomllib.loads(text.removeprefix("\ufeff"))  # a UTF-8 byte-order mark
         except tomllib.TOMLDecodeError as exc:
             raise ConfigError("scenario", f"invalid TOML: {exc}") from None
+        resolve_machine_file(data, base_dir)
         for ov in overrides:
             apply_override(data, ov)
         return cls.from_dict(data)
@@ -440,7 +452,8 @@ class Scenario:
 
         if str(preset_or_path).endswith(".json") and preset_or_path not in preset_names():
             return cls._from_summary(preset_or_path, overrides)
-        return cls.from_toml(scenario_text(preset_or_path), overrides)
+        base_dir = None if preset_or_path in preset_names() else Path(preset_or_path).parent
+        return cls.from_toml(scenario_text(preset_or_path), overrides, base_dir=base_dir)
 
     @classmethod
     def _from_summary(cls, path, overrides) -> Scenario:

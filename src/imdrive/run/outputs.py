@@ -87,6 +87,9 @@ SUMMARY_DOCS = {
     "friction work, change of magnetic and kinetic energy",
     "compensation": "how the R2 compensator did (null when it is off): see "
     "imdrive.run.metrics.compensation_metrics",
+    "machine_rated": "the machine's rated point: nameplate where given, else derived from the "
+    "circuit (voltage, frequency, speed, slip, torque, current, power factor, efficiency, "
+    "magnetising current, rotor flux, breakdown torque): imdrive.config.machine.rated_point",
 }
 
 

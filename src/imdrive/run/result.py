@@ -557,6 +557,7 @@ class SimulationResult:
             "final": self.final_values(),
             "energy_J": {k: float(v) for k, v in self.energy_balance().items()},
             "compensation": self.compensation_metrics(),
+            "machine_rated": _machine_rated(self.scenario.machine),
         }
 
     def to_csv(self, path) -> None:
@@ -663,6 +664,18 @@ def _finite_or_null(obj):
         items = [_finite_or_null(v) for v in obj]
         return [v for v, _ in items], any(n for _, n in items)
     return obj, False
+
+
+def _machine_rated(machine) -> dict | None:
+    """The machine's rated point (:func:`imdrive.config.machine.rated_point`), or ``None`` when
+    its circuit has none (it cannot deliver the rated power)."""
+    from imdrive.config.machine import rated_point
+    from imdrive.errors import ConfigError
+
+    try:
+        return rated_point(machine).to_dict()
+    except ConfigError:
+        return None
 
 
 def summary_json(summary: dict) -> str:

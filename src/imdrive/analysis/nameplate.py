@@ -1,0 +1,448 @@
+"""Nameplate and catalogue data -> T-equivalent circuit (an estimate, with its assumptions).
+
+A motor's nameplate gives rated power ``P``, line voltage ``V``, frequency ``f``, poles,
+speed ``n``, line current ``I``, power factor ``cos phi`` and efficiency ``eta``; a catalogue
+adds the breakdown torque ratio ``T_bd / T_n`` and the starting current ratio ``I_st / I_n``.
+:func:`estimate_circuit` finds the single-cage T-circuit (``R1``, ``R2``, ``X1``, ``X2``,
+``X_M``) that reproduces these exactly, following the manufacturer-data approach of
+
+* J. Pedra, F. Córcoles, "Estimation of induction motor double-cage model parameters from
+  manufacturer data", IEEE Trans. Energy Conversion 19(2), 2004 (its single-cage model:
+  the rated point's active and reactive power and the breakdown torque fix the circuit);
+* M. H. Haque, "Determination of NEMA design induction motor parameters from manufacturer
+  data", IEEE Trans. Energy Conversion 23(4), 2008 (the same data, with the stator/rotor
+  leakage split of IEEE Std 112 by NEMA design letter).
+
+Equations (per phase, star equivalent, rms; ``s_n = 1 - n / n_sync``)::
+
+    Z_n   = V_ph / I_n (cos phi + j sin phi)                 rated-point input impedance
+    P_in  = 3 V_ph I_n cos phi,  P_ag = P / (1 - s_n)        (T_n = P / w_m, P_ag = T_n w_s)
+    R1    = (P_in - P_ag) / (3 I_n^2)                        every loss but the rotor's
+    Z(s)  = R1 + j X1 + (j X_M || (R2 / s + j X2)) = Z_n      at s = s_n     (2 equations)
+    T_bd(R1, R2, X1, X2, X_M) = (T_bd / T_n) T_n              Thevenin closed form (1 equation)
+    |Z(1)| = V_ph / I_st                                      if the starting current is given
+
+with ``X1 = k (X1 + X2)``. The unknowns ``R2``, ``X1 + X2``, ``X_M`` (and ``k`` when the
+starting current is also given) are found by least squares on the logarithms (exact when the
+data are consistent: the residuals are reported).
+
+Assumptions (the circuit is imdrive's plant model: no iron-loss branch, no saturation, no
+deep-bar or double-cage effect):
+
+* every loss other than the rotor copper loss (stator copper, iron, friction and windage,
+  stray load) is lumped into ``R1``, so that the circuit's input power at the rated point is
+  the electrical ``3 V_ph I_n cos phi``; ``R1`` is then larger than a measured stator
+  resistance (by the iron, mechanical and stray losses over ``3 I^2``). The efficiency this
+  implies, ``P / (sqrt 3 V I cos phi)``, is the nameplate's when the nameplate is
+  consistent; the difference (rounding on a real plate) is reported as the ``efficiency``
+  residual, and rated torque, current and power factor are met exactly whatever it is;
+* the rotor copper loss is ``s P_ag`` (no mechanical loss between air gap and shaft);
+* ``X1 / (X1 + X2) = k``: 0.5 for NEMA design A and D and wound rotors, 0.4 for design B,
+  0.3 for design C (IEEE Std 112); the default 0.5;
+* a single-cage circuit cannot reproduce both the rated point and the starting point of a
+  deep-bar rotor: when both the breakdown torque and the starting current are given the fit
+  frees ``k`` (kept within 0.05-0.95), and a residual remains if the data need a double
+  cage;
+* without a breakdown torque ratio (nor a starting current) the ratio is assumed
+  (:data:`DEFAULT_BREAKDOWN_RATIO`), and the result says so.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from imdrive.config.machine import MachineParams
+from imdrive.errors import ConfigError
+
+__all__ = [
+    "DEFAULT_BREAKDOWN_RATIO",
+    "LEAKAGE_SPLIT",
+    "Nameplate",
+    "NameplateFit",
+    "estimate_circuit",
+]
+
+#: Breakdown torque over rated torque assumed when neither it nor the starting current is given
+#: (a typical NEMA design B / IEC design N value; catalogues print the machine's own).
+DEFAULT_BREAKDOWN_RATIO = 2.5
+
+#: X1 / (X1 + X2) by NEMA design letter (IEEE Std 112).
+LEAKAGE_SPLIT = {"A": 0.5, "B": 0.4, "C": 0.3, "D": 0.5, "wound": 0.5}
+
+#: An inertia constant ``H = J w_m^2 / (2 P)``, s, for a J the data do not give.
+DEFAULT_INERTIA_CONSTANT_S = 0.5
+
+
+@dataclass(frozen=True)
+class Nameplate:
+    """Nameplate and catalogue data of a three-phase induction motor (SI; rpm for speed).
+
+    Attributes
+    ----------
+    power_W : float
+        Rated shaft power, W.
+    voltage_V : float
+        Rated line-to-line rms voltage, V.
+    frequency_Hz : float
+        Rated frequency, Hz.
+    poles : int
+        Number of poles (2 n_p).
+    speed_rpm : float
+        Rated speed, rpm (below ``120 f / poles``).
+    current_A : float
+        Rated line current, rms, A.
+    power_factor : float
+        Rated power factor, dimensionless.
+    efficiency : float
+        Rated efficiency, dimensionless.
+    breakdown_torque_ratio : float or None
+        Breakdown (pull-out) torque over rated torque, dimensionless.
+    starting_current_ratio : float or None
+        Locked-rotor current over rated current, dimensionless.
+    leakage_split : float
+        ``X1 / (X1 + X2)``, dimensionless (:data:`LEAKAGE_SPLIT`); freed when both the
+        breakdown torque and the starting current are given.
+    J_kgm2 : float or None
+        Rotor inertia, kg m^2; ``None``: from an inertia constant of
+        :data:`DEFAULT_INERTIA_CONSTANT_S`.
+    """
+
+    power_W: float
+    voltage_V: float
+    frequency_Hz: float
+    poles: int
+    speed_rpm: float
+    current_A: float
+    power_factor: float
+    efficiency: float
+    breakdown_torque_ratio: float | None = None
+    starting_current_ratio: float | None = None
+    leakage_split: float = 0.5
+    J_kgm2: float | None = None
+
+    def __post_init__(self):
+        for name in ("power_W", "voltage_V", "frequency_Hz", "speed_rpm", "current_A"):
+            v = getattr(self, name)
+            if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
+                raise ConfigError(name, f"must be a finite number > 0, got {v!r}")
+        if not (isinstance(self.poles, int) and self.poles >= 2 and self.poles % 2 == 0):
+            raise ConfigError("poles", f"must be an even integer >= 2, got {self.poles!r}")
+        for name in ("power_factor", "efficiency"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and 0 < v < 1):
+                raise ConfigError(name, f"must be between 0 and 1 (exclusive), got {v!r}")
+        if not 0.05 <= self.leakage_split <= 0.95:
+            raise ConfigError("leakage_split", "must be within 0.05-0.95")
+        n_sync = 120.0 * self.frequency_Hz / self.poles
+        if not self.speed_rpm < n_sync:
+            raise ConfigError(
+                "speed_rpm", f"must be below the synchronous speed 120 f / poles = {n_sync:g} rpm"
+            )
+        if self.breakdown_torque_ratio is not None and not self.breakdown_torque_ratio > 1:
+            raise ConfigError("breakdown_torque_ratio", "must be > 1")
+        if self.starting_current_ratio is not None and not self.starting_current_ratio > 1:
+            raise ConfigError("starting_current_ratio", "must be > 1")
+        if self.J_kgm2 is not None and not self.J_kgm2 > 0:
+            raise ConfigError("J_kgm2", "must be > 0")
+        slip = 1.0 - self.speed_rpm / n_sync
+        if not self.efficiency < 1.0 - slip:
+            raise ConfigError(
+                "efficiency",
+                f"{self.efficiency:g} must be below 1 - slip = {1 - slip:.4g} (the rotor copper "
+                "loss alone is slip x air-gap power)",
+            )
+
+    @property
+    def slip(self) -> float:
+        """Rated slip ``1 - n / n_sync``."""
+        return 1.0 - self.speed_rpm * self.poles / (120.0 * self.frequency_Hz)
+
+    @property
+    def torque_Nm(self) -> float:
+        """Rated torque ``P / (2 pi n / 60)``, N m."""
+        return self.power_W / (self.speed_rpm * math.pi / 30.0)
+
+
+@dataclass(frozen=True)
+class NameplateFit:
+    """The estimated circuit and how well it reproduces the data.
+
+    Attributes
+    ----------
+    machine : MachineParams
+        The estimated machine (circuit, nameplate fields, J).
+    residuals : dict of str to float
+        Relative error of each fitted quantity (``rated_R``, ``rated_X`` of the rated-point
+        impedance over ``|Z_n|``; ``breakdown_torque``; ``starting_current``) and of the
+        efficiency the circuit implies against the given one (``efficiency``).
+    assumed : tuple of str
+        What was assumed for want of data (empty when nothing was).
+    """
+
+    machine: MachineParams
+    residuals: dict = field(default_factory=dict)
+    assumed: tuple = ()
+
+
+def _impedance(R1, R2, X1, X2, XM, s):
+    Z2 = R2 / s + 1j * X2
+    return R1 + 1j * X1 + 1j * XM * Z2 / (Z2 + 1j * XM)
+
+
+def _breakdown_torque(R1, X1, X2, XM, V_ph, w_s):
+    """Maximum torque of the circuit (Thevenin form, rms phase voltage), N m."""
+    den = R1 + 1j * (X1 + XM)
+    V_th = V_ph * 1j * XM / den
+    Z_th = 1j * XM * (R1 + 1j * X1) / den
+    root = math.hypot(Z_th.real, Z_th.imag + X2)
+    return 3.0 * abs(V_th) ** 2 / (2.0 * w_s * (Z_th.real + root))
+
+
+def estimate_circuit(plate: Nameplate, description: str = "") -> NameplateFit:
+    """Estimate the T-equivalent circuit from nameplate and catalogue data.
+
+    Parameters
+    ----------
+    plate : Nameplate
+        The data.
+    description : str
+        Text for the machine's ``description``.
+
+    Returns
+    -------
+    NameplateFit
+        The machine (validated :class:`~imdrive.config.machine.MachineParams`), the fit's
+        relative residuals and the assumptions made.
+
+    Raises
+    ------
+    ConfigError
+        Data no single-cage circuit can meet (naming the quantity).
+
+    Notes
+    -----
+    The method and its assumptions are in the module docstring.
+    """
+    p = plate
+    V_ph = p.voltage_V / math.sqrt(3.0)
+    w_e = 2.0 * math.pi * p.frequency_Hz
+    w_s = w_e / (p.poles / 2)  # synchronous mechanical speed, rad/s
+    s_n = p.slip
+    T_n = p.torque_Nm
+    sin_phi = math.sqrt(1.0 - p.power_factor**2)
+    Z_abs = V_ph / p.current_A
+    Z_n = Z_abs * complex(p.power_factor, sin_phi)
+    P_in = 3.0 * V_ph * p.current_A * p.power_factor
+    P_ag = T_n * w_s
+    R1 = (P_in - P_ag) / (3.0 * p.current_A**2)
+    if not R1 > 0:
+        raise ConfigError(
+            "power_factor",
+            f"sqrt(3) V I cos phi = {P_in:.5g} W is not above the air-gap power P / (1 - s) = "
+            f"{P_ag:.5g} W (current or power factor too low for the power)",
+        )
+
+    assumed = []
+    ratio = p.breakdown_torque_ratio
+    if ratio is None and p.starting_current_ratio is None:
+        ratio = DEFAULT_BREAKDOWN_RATIO
+        assumed.append(f"breakdown torque ratio {DEFAULT_BREAKDOWN_RATIO:g} (not given)")
+    free_split = ratio is not None and p.starting_current_ratio is not None
+
+    def unpack(x):
+        R2, Xl, XM = np.exp(x[:3])
+        k = p.leakage_split
+        if free_split:
+            k = 0.05 + 0.9 / (1.0 + math.exp(-x[3]))
+        return R2, k * Xl, (1.0 - k) * Xl, XM
+
+    def residuals(x):
+        R2, X1, X2, XM = unpack(x)
+        Z = _impedance(R1, R2, X1, X2, XM, s_n)
+        out = [(Z.real - Z_n.real) / Z_abs, (Z.imag - Z_n.imag) / Z_abs]
+        if ratio is not None:
+            out.append(_breakdown_torque(R1, X1, X2, XM, V_ph, w_s) / (ratio * T_n) - 1.0)
+        if p.starting_current_ratio is not None:
+            I_st = V_ph / abs(_impedance(R1, R2, X1, X2, XM, 1.0))
+            out.append(I_st / (p.starting_current_ratio * p.current_A) - 1.0)
+        return np.array(out)
+
+    # start: rotor branch ~ R2/s resistive, magnetising current ~ 0.9 of the reactive current
+    x0 = [
+        math.log(s_n * (Z_n.real - R1)),
+        math.log(0.15 * Z_abs),
+        math.log(V_ph / (0.9 * p.current_A * max(sin_phi, 0.1))),
+    ]
+    if free_split:
+        x0.append(math.log((p.leakage_split - 0.05) / (0.95 - p.leakage_split)))
+    best = None
+    for scale in (0.15, 0.05, 0.4):  # a few starts for the leakage: the fit is not convex
+        x0[1] = math.log(scale * Z_abs)
+        sol = least_squares(residuals, x0, method="lm" if not free_split else "trf", xtol=1e-15)
+        if best is None or sol.cost < best.cost:
+            best = sol
+    R2, X1, X2, XM = unpack(best.x)
+    r = residuals(best.x)
+    names = ["rated_R", "rated_X"]
+    if ratio is not None:
+        names.append("breakdown_torque")
+    if p.starting_current_ratio is not None:
+        names.append("starting_current")
+    fit = dict(zip(names, (float(v) for v in r), strict=True))
+    fit["efficiency"] = p.power_W / P_in / p.efficiency - 1.0  # implied over given
+
+    J = p.J_kgm2
+    if J is None:
+        w_m = p.speed_rpm * math.pi / 30.0
+        J = 2.0 * DEFAULT_INERTIA_CONSTANT_S * p.power_W / w_m**2
+        assumed.append(f"J from an inertia constant H = {DEFAULT_INERTIA_CONSTANT_S:g} s")
+    machine = MachineParams(
+        R1_ohm=R1,
+        R2_ohm=R2,
+        Ll1_H=X1 / w_e,
+        Ll2_H=X2 / w_e,
+        M_H=XM / w_e,
+        pole_pairs=p.poles // 2,
+        J_kgm2=J,
+        rated_power_W=float(p.power_W),
+        rated_voltage_V=float(p.voltage_V),
+        rated_frequency_Hz=float(p.frequency_Hz),
+        rated_speed_rpm=float(p.speed_rpm),
+        rated_current_rms_A=float(p.current_A),
+        rated_power_factor=float(p.power_factor),
+        rated_efficiency=float(p.efficiency),
+        description=description,
+    )
+    return NameplateFit(machine=machine, residuals=fit, assumed=tuple(assumed))
+
+
+# ------------------------------------------------------------------------------------------
+# the command line: imdrive machine-from-nameplate
+
+
+def machine_toml(fit: NameplateFit, plate: Nameplate) -> str:
+    """The estimated machine as a TOML file for ``[machine] file = "..."``.
+
+    Parameters
+    ----------
+    fit : NameplateFit
+        The result of :func:`estimate_circuit`.
+    plate : Nameplate
+        The data it came from (written into ``source``).
+
+    Returns
+    -------
+    str
+        A ``[machine]`` table with every MachineParams field, ``source`` and ``notes``.
+    """
+    from imdrive.config.toml_writer import dumps
+
+    data_text = (
+        f"{plate.power_W:g} W, {plate.voltage_V:g} V, {plate.frequency_Hz:g} Hz, "
+        f"{plate.poles} poles, {plate.speed_rpm:g} rpm, {plate.current_A:g} A, "
+        f"cos phi {plate.power_factor:g}, eta {plate.efficiency:g}"
+    )
+    if plate.breakdown_torque_ratio is not None:
+        data_text += f", T_bd/T_n {plate.breakdown_torque_ratio:g}"
+    if plate.starting_current_ratio is not None:
+        data_text += f", I_st/I_n {plate.starting_current_ratio:g}"
+    residuals = ", ".join(f"{k} {v:+.1e}" for k, v in fit.residuals.items())
+    values = {k: v for k, v in fit.machine.to_dict().items() if v is not None and k != "file"}
+    table = {
+        "source": f"imdrive machine-from-nameplate from {data_text}",
+        "notes": (
+            "single-cage T-circuit fitted to the rated point and breakdown torque "
+            "(imdrive.analysis.nameplate; Pedra & Corcoles 2004, Haque 2008); R1 lumps every "
+            "loss but the rotor's; "
+            + (f"assumed: {'; '.join(fit.assumed)}; " if fit.assumed else "")
+            + f"relative residuals: {residuals}"
+        ),
+        **values,
+    }
+    return (
+        "# An induction machine estimated from its nameplate by imdrive machine-from-nameplate.\n"
+        '# Use it in a scenario: [machine] file = "THIS_FILE.toml"\n' + dumps({"machine": table})
+    )
+
+
+def machine_from_nameplate_command(args) -> int:
+    """``imdrive machine-from-nameplate``: estimate, check, write the TOML (or print it).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (``power_kW``, ``voltage``, ``frequency``, ``poles``,
+        ``speed``, ``current``, ``pf``, ``efficiency``, ``breakdown_ratio``,
+        ``starting_current_ratio``, ``design``, ``J``, ``description``, ``out``).
+
+    Returns
+    -------
+    int
+        0 (errors are raised as :class:`~imdrive.errors.ConfigError`).
+    """
+    import sys
+    from pathlib import Path
+
+    flags = {
+        "power_W": "--power-kw",
+        "voltage_V": "--voltage",
+        "frequency_Hz": "--frequency",
+        "poles": "--poles",
+        "speed_rpm": "--speed",
+        "current_A": "--current",
+        "power_factor": "--pf",
+        "efficiency": "--efficiency",
+        "breakdown_torque_ratio": "--breakdown-ratio",
+        "starting_current_ratio": "--starting-current-ratio",
+        "J_kgm2": "--J",
+    }
+    try:
+        plate = _plate_from_args(args)
+    except ConfigError as exc:
+        raise ConfigError(flags.get(exc.field, exc.field), exc.rule) from None
+    fit = estimate_circuit(plate, description=args.description or "")
+    text = machine_toml(fit, plate)
+    for what in fit.assumed:
+        print(f"imdrive: note: assumed {what}", file=sys.stderr)
+    eta_error = fit.residuals["efficiency"]
+    if abs(eta_error) > 0.02:
+        print(
+            f"imdrive: note: sqrt(3) V I cos phi eta is {100 * eta_error:+.1f} % off the rated "
+            "power: the circuit meets power, speed, current and power factor, its efficiency "
+            "is P / (sqrt(3) V I cos phi)",
+            file=sys.stderr,
+        )
+    worst = max(abs(v) for k, v in fit.residuals.items() if k != "efficiency")
+    if worst > 1e-3:
+        print(
+            f"imdrive: note: no single-cage circuit meets all the data (largest relative "
+            f"residual {worst:.2g}); the least-squares compromise is written",
+            file=sys.stderr,
+        )
+    if args.out:
+        Path(args.out).write_text(text, encoding="utf-8")
+        print(f"imdrive: wrote {args.out}", file=sys.stderr)
+    else:
+        sys.stdout.write(text)
+    return 0
+
+
+def _plate_from_args(args) -> Nameplate:
+    return Nameplate(
+        power_W=args.power_kW * 1e3,
+        voltage_V=args.voltage,
+        frequency_Hz=args.frequency,
+        poles=args.poles,
+        speed_rpm=args.speed,
+        current_A=args.current,
+        power_factor=args.pf,
+        efficiency=args.efficiency,
+        breakdown_torque_ratio=args.breakdown_ratio,
+        starting_current_ratio=args.starting_current_ratio,
+        leakage_split=LEAKAGE_SPLIT[args.design],
+        J_kgm2=args.J,
+    )
