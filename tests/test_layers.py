@@ -49,7 +49,7 @@ Depth
 -----
 The longest chain of imports between imdrive modules is measured twice: in modules, and in
 levels, i.e. in the ranks it passes through (consecutive modules of one rank count once). The
-levels must stay within :data:`MAX_LEVELS` (the issue's "at most 6 import levels"); the module
+levels must stay within :data:`MAX_LEVELS` ("at most 6 import levels"); the module
 count is printed for information (inside a layer, a chain of small modules is no cost).
 
 Known violations

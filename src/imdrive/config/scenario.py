@@ -44,7 +44,7 @@ from imdrive.config.inverter import InverterParams
 from imdrive.config.machine import MachineParams, machine_preset, preset_table
 from imdrive.config.output import OutputSettings
 
-# the override walk, re-exported here for the 0.1 import path ``imdrive.config.scenario``
+# the override walk, re-exported: importing it from imdrive.config.scenario keeps working
 from imdrive.config.overrides import (  # noqa: F401  (the private ones: re-exports)
     FILE_PATHS,
     Key,
