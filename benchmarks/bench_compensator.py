@@ -1,6 +1,6 @@
 """What the R2 compensator costs: run time of the sensorless preset with and without it.
 
-The target (issue "fuzzy-logic rotor-resistance compensator"): the compensator adds at most
+The target: the fuzzy-logic rotor-resistance compensator adds at most
 10 % to the run time of the sensorless preset. Three variants of the same 3 s ``sensorless``
 preset are timed (kernel time only, ``--repeat`` runs after a warm-up); the overhead is computed
 from the fastest run of each variant (the least disturbed on a shared machine), and medians are

@@ -79,12 +79,14 @@ def batch(scenarios):
     return simulate_batch(scenarios, logs=True)
 
 
+@pytest.mark.slow
 def test_the_set_is_what_it_claims(singles):
     assert [r.diverged for r in singles] == [False] * 5 + [True]
     assert len({r.scenario.simulation.n_steps for r in singles}) == 2
     assert len({r.scenario.compensator.table for r in singles}) == 2
 
 
+@pytest.mark.slow
 def test_batch_logs_are_bit_identical_to_single_runs(singles, batch):
     assert list(batch.metrics.columns) == list(COLUMNS)
     assert len(batch.results) == len(singles)
@@ -160,6 +162,7 @@ def test_empty_batch_and_bad_arguments(scenarios):
         simulate_batch(scenarios[:1], window_s=-1.0)
 
 
+@pytest.mark.slow
 def test_memory_per_drive_is_linear_and_under_1kB():
     """Without logs the batch keeps ~120 B per drive: measure the growth from N to 2N."""
     base = Scenario.read("sensorless", ["simulation.t_end_s=0.002"])

@@ -18,7 +18,7 @@ def test_any_source_change_gives_a_new_cache_folder(tmp_path):
     assert _cache.source_hash(copy) == h0  # stable
     assert h0 == _cache.source_hash(pkg)
     # a change in a kernel the engine calls (not the engine's own file) must invalidate it
-    mras = copy / "mras.py"
+    mras = copy / "kernels" / "estimators" / "mras.py"
     mras.write_text(mras.read_text() + "\n# changed\n")
     assert _cache.source_hash(copy) != h0
 

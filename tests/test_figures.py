@@ -137,6 +137,7 @@ def _labels(figs):
                 yield ax, axis, axis.get_label().get_text()
 
 
+@pytest.mark.slow
 def test_one_unit_per_quantity_across_the_figures(fig5, injection):
     figs = _all_figures(fig5, injection)
     seen: dict[str, list] = {}
@@ -162,6 +163,7 @@ def test_one_unit_per_quantity_across_the_figures(fig5, injection):
 COLUMN_NAME = re.compile(r"^[a-zA-Z0-9]+(_[a-zA-Z0-9]+)*_(rpm|Nm|A|Wb|ohm|V|C|rad|s)$")
 
 
+@pytest.mark.slow
 def test_legends_say_what_a_signal_is(fig5, injection):
     entries = set()
     for fig in _all_figures(fig5, injection):

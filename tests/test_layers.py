@@ -38,16 +38,18 @@ rank layer                                        why it sits there
 ``config`` and ``kernels`` never import each other (the run layer translates one into the
 other), and ``config`` and ``analysis`` never load numba, not even through what they import.
 
-Exempt: ``imdrive/__init__.py`` and the top-level deprecation shims (files directly in
-``src/imdrive/`` that call :func:`imdrive._deprecated.reexport`) are aliases of other modules,
-so their own imports are not checked; package code must not import a shim. Importing the root
-``imdrive`` (for ``__version__``) counts as importing the highest layer the root itself imports.
+Exempt: ``imdrive/__init__.py`` (an alias of other modules: its own imports are not checked).
+The 0.1 import paths (``imdrive.scenario``, ``imdrive.simulate``, ...) have no file: the one
+compatibility module :mod:`imdrive._deprecated` builds them on import from the modules
+:data:`~imdrive._deprecated.OLD_PATHS` names (read here from its source); package code must not
+import an old path. Importing the root ``imdrive`` (for ``__version__``) counts as importing the
+highest layer the root itself imports.
 
 Depth
 -----
 The longest chain of imports between imdrive modules is measured twice: in modules, and in
 levels, i.e. in the ranks it passes through (consecutive modules of one rank count once). The
-levels must stay within :data:`MAX_LEVELS` (the issue's "at most 6 import levels"); the module
+levels must stay within :data:`MAX_LEVELS` ("at most 6 import levels"); the module
 count is printed for information (inside a layer, a chain of small modules is no cost).
 
 Known violations
@@ -136,6 +138,19 @@ class Edge:
         return f"{self.path.relative_to(SRC.parent)}:{self.line}"
 
 
+def _old_paths() -> frozenset[str]:
+    # the keys of imdrive._deprecated.OLD_PATHS, read from the source (nothing imported)
+    tree = ast.parse((PKG / "_deprecated.py").read_text(encoding="utf-8"))
+    for node in tree.body:
+        target = getattr(node, "target", None) or (getattr(node, "targets", None) or [None])[0]
+        if isinstance(target, ast.Name) and target.id == "OLD_PATHS":
+            return frozenset(ast.literal_eval(node.value))
+    raise AssertionError("imdrive/_deprecated.py defines no OLD_PATHS")
+
+
+OLD_PATHS = _old_paths()
+
+
 def _module_name(path: Path) -> tuple[str, bool]:
     parts = list(path.relative_to(SRC).with_suffix("").parts)
     is_pkg = parts[-1] == "__init__"
@@ -152,7 +167,8 @@ class _Collector(ast.NodeVisitor):
     def _add(self, target: str, node) -> None:
         if not target.startswith("imdrive"):
             target = target.split(".")[0]
-        elif target not in self.modules:  # e.g. a name misspelt; keep the closest module
+        elif target not in self.modules and target not in OLD_PATHS:
+            # e.g. a name misspelt; keep the closest module
             while target not in self.modules and "." in target:
                 target = target.rpartition(".")[0]
         edge = Edge(self.name, target, self.path, node.lineno, self.depth == 0)
@@ -178,7 +194,7 @@ class _Collector(ast.NodeVisitor):
             base = ".".join(parts + ([node.module] if node.module else []))
         for alias in node.names:
             sub = f"{base}.{alias.name}"
-            self._add(sub if sub in self.modules else base, node)
+            self._add(sub if sub in self.modules or sub in OLD_PATHS else base, node)
 
     def visit_Call(self, node):
         f = node.func
@@ -193,20 +209,9 @@ class _Collector(ast.NodeVisitor):
         self.generic_visit(node)
 
 
-def _is_shim(path: Path, tree: ast.Module) -> bool:
-    if path.parent != PKG or path.name in ("__init__.py", "_deprecated.py"):
-        return False
-    return any(
-        isinstance(n, ast.Call)
-        and (getattr(n.func, "id", None) or getattr(n.func, "attr", None)) == "reexport"
-        for n in ast.walk(tree)
-    )
-
-
 @dataclass(frozen=True)
 class Graph:
     modules: dict[str, Path]
-    shims: frozenset[str]
     edges: tuple[Edge, ...]
 
     def out(self, name: str) -> list[Edge]:
@@ -223,15 +228,13 @@ def graph() -> Graph:
     for p in paths:
         name, _ = _module_name(p)
         modules[name] = p
-    shims, edges = set(), []
+    edges = []
     for name, p in modules.items():
         tree = ast.parse(p.read_text(encoding="utf-8"), filename=str(p))
-        if _is_shim(p, tree):
-            shims.add(name)
         col = _Collector(name, p.name == "__init__.py", p, modules)
         col.visit(tree)
         edges += col.edges
-    return Graph(modules, frozenset(shims), tuple(edges))
+    return Graph(modules, tuple(edges))
 
 
 def layer(module: str) -> str | None:
@@ -240,7 +243,7 @@ def layer(module: str) -> str | None:
 
 
 def exempt(module: str) -> bool:
-    return module == "imdrive" or module in graph().shims
+    return module == "imdrive"
 
 
 @cache
@@ -271,10 +274,12 @@ def rank_violations():
     g = graph()
     found = []
     for e in g.edges:
-        if exempt(e.importer) or e.target not in g.modules:
+        if exempt(e.importer):
             continue
-        if e.target in g.shims:
-            found.append((e, "shim: package code imports a deprecation shim"))
+        if e.target in OLD_PATHS:
+            found.append((e, "shim: package code imports a deprecated 0.1 import path"))
+            continue
+        if e.target not in g.modules:
             continue
         src, dst = layer(e.importer), layer(e.target)
         if src in ONLY and dst not in ONLY[src]:
@@ -287,15 +292,15 @@ def rank_violations():
 
 def test_every_module_has_a_layer():
     missing = sorted({layer(m) for m in graph().modules if layer(m) and layer(m) not in RANK})
-    missing = [m for m in missing if f"imdrive.{m}" not in graph().shims]
     assert not missing, f"give these a rank in RANK of tests/test_layers.py: {missing}"
 
 
-def test_shims_are_detected():
-    # the old 0.1 paths (imdrive.scenario, imdrive.simulate, ...) are shims; a silent
-    # change of _deprecated.reexport must not turn the shim rule off
-    assert {"imdrive.scenario", "imdrive.simulate", "imdrive.engine"} <= graph().shims
-    assert "imdrive.cli" not in graph().shims
+def test_old_paths_are_detected():
+    # the old 0.1 paths (imdrive.scenario, imdrive.simulate, ...) come from OLD_PATHS and have
+    # no file of their own; a silent change of _deprecated must not turn the shim rule off
+    assert {"imdrive.scenario", "imdrive.simulate", "imdrive.engine"} <= OLD_PATHS
+    assert not OLD_PATHS & set(graph().modules), "an old path has a file again"
+    assert "imdrive.cli" not in OLD_PATHS
 
 
 def test_no_layer_imports_upward():
@@ -343,7 +348,7 @@ def test_numba_free_layers_statically(name):
 
 
 def test_numba_free_layers_at_run_time():
-    mods = [m for m in graph().modules if layer(m) in NUMBA_FREE and m not in graph().shims]
+    mods = [m for m in graph().modules if layer(m) in NUMBA_FREE]
     code = textwrap.dedent(f"""
         import importlib, sys
         for m in {mods!r}:

@@ -44,6 +44,7 @@ def test_an_estimator_without_the_filtered_integrator_does_not_ring():
     assert est < 15.0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("speed_rpm", [150.0, 300.0])
 @pytest.mark.parametrize("feedback", ["measured", "mras"])
 def test_the_mode_is_at_the_stator_frequency_and_lightly_damped(speed_rpm, feedback):

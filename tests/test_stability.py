@@ -77,6 +77,7 @@ def test_steady_state_generalises_the_analytic_foc_point(sensorless):
     assert op.current_dq_A.imag == pytest.approx(ref.iq_A, rel=5e-3)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "speed, torque, r1",
     [(1000, 12, 1.0), (30, -12, 1.0), (1000, 12, 1.1), (200, -6, 1.0), (-600, 8, 0.95)],

@@ -188,6 +188,7 @@ def test_local_sweep_table_matches_single_runs(local_run):
     )
 
 
+@pytest.mark.slow
 def test_dask_cluster_gives_the_same_table(local_run, tmp_path):
     distributed = pytest.importorskip("dask.distributed")
     sweep, _, df = local_run
@@ -204,6 +205,7 @@ def test_dask_cluster_gives_the_same_table(local_run, tmp_path):
     pd.testing.assert_frame_equal(remote, df)
 
 
+@pytest.mark.slow
 def test_killed_sweep_resumes_without_loss_or_duplicates(tmp_path, local_run):
     # slow runs (many RK4 sub-steps) so that the kill lands mid-way
     text = SMALL.replace("chunk_size = 5", "chunk_size = 1").replace(

@@ -13,8 +13,11 @@ Conventions (used everywhere in the package)
 * ``w_m`` is mechanical speed (rad/s), ``w_r = n_p * w_m`` electrical rotor speed (rad/s).
 """
 
+from imdrive import _deprecated
 from imdrive.config.machine import MachineParams, machine_preset, machine_presets
 from imdrive.errors import ConfigError, SimulationDiverged
+
+_deprecated.install()  # the 0.1 import paths (imdrive.scenario, ...), with a DeprecationWarning
 
 __version__ = "0.2.0.dev0"
 

@@ -168,6 +168,33 @@ def _solve_detuned_x(machine: MachineParams, i_d: float, k: float, T_req: float)
     return sign * brentq(g, xs[j - 1], xs[j], xtol=1e-15, rtol=4 * np.finfo(float).eps)
 
 
+def _speed_loop_steady_state(machine, k, psi_ref, i_d, w_m_ref, load, sensorless):
+    """Where the speed loop settles (see :func:`foc_operating_point`, Notes): mechanical speed
+    and its feedback, rad/s; q current, A; true slip, rad/s; torque, N m."""
+    n_p = machine.pole_pairs
+    M, L2, R2 = machine.M_H, machine.L2_H, machine.R2_ohm
+    B = machine.B_Nms
+    if sensorless:
+        a = R2 / (1.5 * n_p**2 * psi_ref**2)  # w_m - w_m_ref = (k - 1) a T_e
+        den = 1.0 - B * (k - 1.0) * a
+        if den <= 0.0:
+            raise ConfigError("R2_ratio", "no steady state: friction feedback through detuning")
+        torque = (load + B * w_m_ref) / den
+        i_q = torque * L2 / (1.5 * n_p * M * psi_ref)
+        w_sl = (R2 / L2) * i_q / i_d
+        w_m = w_m_ref + (k - 1.0) * w_sl / n_p
+        w_m_est = w_m_ref
+    else:
+        w_m = w_m_ref
+        w_m_est = w_m
+        torque_req = load + B * w_m
+        x = _solve_detuned_x(machine, i_d, k, torque_req)
+        i_q = x * i_d
+        w_sl = k * (R2 / L2) * i_q / i_d
+        torque = float(_detuned_torque(machine, i_d, x, k))
+    return w_m, w_m_est, i_q, w_sl, torque
+
+
 def foc_operating_point(
     machine: MachineParams,
     speed_rpm: float,
@@ -240,30 +267,11 @@ def foc_operating_point(
     n_p = machine.pole_pairs
     M, L2, R2 = machine.M_H, machine.L2_H, machine.R2_ohm
     T2 = L2 / R2
-    B = machine.B_Nms
     w_m_ref = float(speed_rpm) / _RPM_PER_RAD_S
-    load = float(load_Nm)
     i_d = psi_ref / M
-
-    if sensorless:
-        a = R2 / (1.5 * n_p**2 * psi_ref**2)  # w_m - w_m_ref = (k - 1) a T_e
-        den = 1.0 - B * (k - 1.0) * a
-        if den <= 0.0:
-            raise ConfigError("R2_ratio", "no steady state: friction feedback through detuning")
-        torque = (load + B * w_m_ref) / den
-        i_q = torque * L2 / (1.5 * n_p * M * psi_ref)
-        w_sl = (R2 / L2) * i_q / i_d
-        w_m = w_m_ref + (k - 1.0) * w_sl / n_p
-        w_m_est = w_m_ref
-    else:
-        w_m = w_m_ref
-        w_m_est = w_m
-        torque_req = load + B * w_m
-        x = _solve_detuned_x(machine, i_d, k, torque_req)
-        i_q = x * i_d
-        w_sl = k * (R2 / L2) * i_q / i_d
-        torque = float(_detuned_torque(machine, i_d, x, k))
-
+    w_m, w_m_est, i_q, w_sl, torque = _speed_loop_steady_state(
+        machine, k, psi_ref, i_d, w_m_ref, float(load_Nm), sensorless
+    )
     w_sl_cmd = k * (R2 / L2) * i_q / i_d
     w_e = n_p * w_m + w_sl
     i_s = complex(i_d, i_q)

@@ -85,10 +85,11 @@ def _to_plain(obj):
 
 
 def _convert(tp, val, path: str):
-    """Kept for :mod:`imdrive.sweep` (which passes the value to ``dataclasses.replace``).
+    """The value for the field at ``path``, as :mod:`imdrive.sweep` passes it to
+    ``dataclasses.replace``.
 
-    The settings classes validate their fields themselves now: the value is returned as is and
-    the constructor that receives it checks and converts it, naming the same ``path``.
+    The settings classes validate their fields themselves: the value is returned as is and the
+    constructor that receives it checks and converts it, naming the same ``path``.
     """
     return val
 

@@ -52,7 +52,7 @@ from imdrive.config.machine import (  # noqa: F401  (preset_table: re-export)
 )
 from imdrive.config.output import OutputSettings
 
-# the override walk, re-exported here for the 0.1 import path ``imdrive.config.scenario``
+# the override walk, re-exported: importing it from imdrive.config.scenario keeps working
 from imdrive.config.overrides import (  # noqa: F401  (the private ones: re-exports)
     FILE_PATHS,
     Key,

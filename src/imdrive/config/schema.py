@@ -1,8 +1,9 @@
 """The scenario file's keys, read off the pydantic settings classes: one walk for all users.
 
-:func:`scenario_keys` lists every key a scenario file (and ``--set``, and a sweep axis) may
-name, with its field metadata; :mod:`imdrive.config.overrides` checks paths against it and
-:mod:`imdrive.config.docs` writes ``docs/scenarios.md`` from it. :func:`json_schema` is the
+:func:`scenario_keys` (defined in :mod:`imdrive.config.overrides`, which checks override
+paths against it, and re-exported here) lists every key a scenario file (and ``--set``, and a
+sweep axis) may name, with its field metadata; :mod:`imdrive.config.docs` writes
+``docs/scenarios.md`` from it. :func:`json_schema` is the
 JSON Schema of a scenario file, from the same classes.
 
 The file differs from the :class:`~imdrive.config.scenario.Scenario` object in one place: the

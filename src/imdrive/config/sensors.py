@@ -12,8 +12,8 @@ class SensorSettings:
     """Sensor imperfections (``[sensor]``).
 
     Two phase-current sensors (a and b; ``i_c = -i_a - i_b``), each with gain, offset, Gaussian
-    noise (seeded) and ADC quantisation, plus the DC-link voltage sensor's gain; and the 0.1
-    offsets of the α/β current. Models in :mod:`imdrive.kernels.sensors`.
+    noise (seeded) and ADC quantisation, plus the DC-link voltage sensor's gain; and DC
+    offsets on the α and β currents. Models in :mod:`imdrive.kernels.sensors`.
     """
 
     i_offset_alpha_A: Annotated[Float, setting("DC offset of the measured α current", "A")] = 0.0

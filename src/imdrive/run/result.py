@@ -1,8 +1,12 @@
-"""The result of a run: named signals with their unit in the name, summary, export, figures."""
+"""The result of a run: named signals with their unit in the name, summary, export, figures.
+
+The columns and their units are in :mod:`imdrive.run.columns`, the files of a result folder in
+:mod:`imdrive.run.files` and :mod:`imdrive.run.formats` (one module per output format); this
+module re-exports their names.
+"""
 
 from __future__ import annotations
 
-import json
 import math
 import platform
 from dataclasses import dataclass, field
@@ -13,6 +17,24 @@ import numpy as np
 from imdrive.kernels.engine import S_CURRENT, S_NAN, S_OK, S_SPEED, DriveParams, DriveState
 from imdrive.kernels.machine import magnetic_energy
 from imdrive.kernels.records import record_bytes
+from imdrive.run.columns import (  # noqa: F401  (re-exports)
+    _DIRECT,
+    LOG_UNITS,
+    OPEN_LOOP_COLUMNS,
+    RPM,
+    SQ3_2,
+    VECTOR_COLUMNS,
+    columns_from_log,
+)
+from imdrive.run.files import (  # noqa: F401  (re-exports)
+    NULL_NOTE,
+    RESULT_FILES,
+    _finite_or_null,
+    check_result_folder,
+    is_result_folder,
+    summary_json,
+)
+from imdrive.run.formats import output_formats
 from imdrive.run.metrics import (
     CONVERGENCE_BAND,
     DEFAULT_WINDOW_S,
@@ -22,9 +44,6 @@ from imdrive.run.metrics import (
     lost_control_time,
 )
 
-RPM = 2.0 * math.pi / 60.0
-SQ3_2 = math.sqrt(3.0) / 2.0
-
 STATUS_TEXT = {
     S_OK: "ok",
     S_NAN: "a state became NaN or infinite",
@@ -32,112 +51,6 @@ STATUS_TEXT = {
     S_SPEED: "speed |w_m| exceeded simulation.divergence_speed_rpm",
 }
 STATUS_SIGNAL = {S_NAN: "state", S_CURRENT: "i_s_A", S_SPEED: "speed_rpm"}
-
-#: The units table: log field (SI, see each block's LOG_FIELDS) -> (unit, scale). The exported
-#: column is ``f"{field}_{unit}"`` holding ``log[field] * scale``. ``v_alpha_V``/``v_beta_V``
-#: are the period-average voltage applied at the terminals over [t_k, t_k + Ts) (the bridge's
-#: true average with the switching model, dead time included; the commanded one at the last
-#: sample, which has no period after it); ``v_ref_*`` the controller's reference at sample k;
-#: ``i_*_meas_A`` what the current sensors report, ``i_alpha_A``/``i_beta_A`` the true current.
-LOG_UNITS = {
-    "time": ("s", 1.0),
-    "speed": ("rpm", 1.0 / RPM),
-    "torque": ("Nm", 1.0),
-    "load_torque": ("Nm", 1.0),
-    "i_alpha": ("A", 1.0),
-    "i_beta": ("A", 1.0),
-    "psi_r_alpha": ("Wb", 1.0),
-    "psi_r_beta": ("Wb", 1.0),
-    "R1": ("ohm", 1.0),
-    "R2": ("ohm", 1.0),
-    "flux": ("Wb", 1.0),
-    "theta1": ("C", 1.0),
-    "theta2": ("C", 1.0),
-    "v_alpha": ("V", 1.0),
-    "v_beta": ("V", 1.0),
-    "v_ref_alpha": ("V", 1.0),
-    "v_ref_beta": ("V", 1.0),
-    "i_alpha_meas": ("A", 1.0),
-    "i_beta_meas": ("A", 1.0),
-    "speed_ref": ("rpm", 1.0 / RPM),
-    "id_ref": ("A", 1.0),
-    "iq_ref": ("A", 1.0),
-    "i_d": ("A", 1.0),
-    "i_q": ("A", 1.0),
-    "theta_e": ("rad", 1.0),
-    "speed_est": ("rpm", 1.0 / RPM),
-    "e_d0": ("Wb", 1.0),
-    "e_q0": ("Wb", 1.0),
-    "lam_v_alpha": ("Wb", 1.0),
-    "lam_v_beta": ("Wb", 1.0),
-    "lam_i_alpha": ("Wb", 1.0),
-    "lam_i_beta": ("Wb", 1.0),
-    "R2_est": ("ohm", 1.0),
-    "R1_est": ("ohm", 1.0),
-    "e_d0_demod": ("Wb", 1.0),
-    "comp_frozen": ("flags", 1.0),
-    "inj_freq": ("Hz", 1.0),
-}
-# column -> (log field, scale) for every column taken straight from the log
-_DIRECT = {f"{f}_{u}": (f, k) for f, (u, k) in LOG_UNITS.items()}
-_DIRECT["w_m_rad_s"] = ("speed", 1.0)  # the speed in SI as well
-
-OPEN_LOOP_COLUMNS = (
-    "time_s speed_rpm w_m_rad_s torque_Nm load_torque_Nm i_a_A i_b_A i_c_A i_alpha_A i_beta_A "
-    "i_alpha_meas_A i_beta_meas_A psi_r_alpha_Wb psi_r_beta_Wb v_alpha_V v_beta_V "
-    "v_ref_alpha_V v_ref_beta_V R1_ohm R2_ohm flux_Wb theta1_C theta2_C"
-).split()
-VECTOR_COLUMNS = (
-    OPEN_LOOP_COLUMNS
-    + (
-        "speed_ref_rpm speed_est_rpm id_ref_A iq_ref_A i_d_A i_q_A R2_est_ohm e_d0_Wb e_q0_Wb "
-        "theta_e_rad lam_v_alpha_Wb lam_v_beta_Wb lam_i_alpha_Wb lam_i_beta_Wb e_d0_demod_Wb "
-        "comp_frozen_flags inj_freq_Hz R1_est_ohm"
-    ).split()
-)
-
-
-def columns_from_log(
-    log: np.ndarray, vector: bool, extra_units: dict | None = None
-) -> dict[str, np.ndarray]:
-    """Named, unit-carrying columns from a kernel log (a record array of the drive's log dtype).
-
-    Parameters
-    ----------
-    log : numpy.ndarray
-        The log records, SI units.
-    vector : bool
-        Field-oriented drive (the controller's columns too) or open loop.
-    extra_units : dict, optional
-        ``{field: (unit, scale)}`` of the estimator's own log fields
-        (:class:`imdrive.run.estimators.Estimator` ``log_units``); a standard column whose field
-        the log lacks (another estimator's) is left out.
-
-    Returns
-    -------
-    dict
-        ``{column: values}``, the standard columns in their order, then the estimator's own.
-    """
-    out = {}
-    fields = set(log.dtype.names)
-    names = list(VECTOR_COLUMNS if vector else OPEN_LOOP_COLUMNS)
-    if vector:
-        for field, (unit, scale) in (extra_units or {}).items():
-            name = f"{field}_{unit}"
-            if name not in names:
-                names.insert(names.index("e_d0_demod_Wb"), name)
-            if field in fields:
-                out[name] = log[field] * scale
-    for name in names:
-        if name in _DIRECT and name not in out:
-            field, scale = _DIRECT[name]
-            if field in fields:
-                out[name] = log[field] * scale
-    ia, ib = log["i_alpha"], log["i_beta"]
-    out["i_a_A"] = ia.copy()
-    out["i_b_A"] = -0.5 * ia + SQ3_2 * ib
-    out["i_c_A"] = -0.5 * ia - SQ3_2 * ib
-    return {n: out[n] for n in names if n in out}
 
 
 def _estimator_units(scenario) -> dict:
@@ -355,16 +268,6 @@ class SimulationResult:
             raise SimulationDiverged(self.end_time_s, STATUS_TEXT[self.status], self)
         return self
 
-    def _write_exports(self, folder: Path) -> None:
-        """The optional exports the scenario's ``[output]`` asks for (MAT, Parquet)."""
-        from imdrive.run import export
-
-        out = self.scenario.output
-        if out.mat:
-            export.to_mat(self, folder / "timeseries.mat")
-        if out.parquet:
-            export.to_parquet(self, folder / "timeseries.parquet")
-
     def to_xarray(self):
         """The signals as an ``xarray.Dataset`` (needs xarray).
 
@@ -568,9 +471,9 @@ class SimulationResult:
         path : str or pathlib.Path
             The file to write.
         """
-        names = self.columns
-        data = np.column_stack([self.signals[n] for n in names])
-        np.savetxt(path, data, delimiter=",", header=",".join(names), comments="", fmt="%.9g")
+        from imdrive.run.formats.csv import to_csv
+
+        to_csv(self, path)
 
     def save(
         self,
@@ -580,9 +483,10 @@ class SimulationResult:
         force: bool = False,
         report: bool | None = None,
     ) -> list[Path]:
-        """Write ``timeseries.csv``, ``summary.json``, PNG figures and ``report.html`` (the
-        interactive report, :mod:`imdrive.run.report`) as the folder ``out_dir``; ``figures``,
-        ``csv``, ``report`` None: as the scenario's ``[output]`` says.
+        """Write ``summary.json`` and every output format the scenario's ``[output]`` turns on
+        (:mod:`imdrive.run.formats`: ``timeseries.csv``, PNG figures, ``report.html``, the MAT
+        and Parquet exports) as the folder ``out_dir``; ``figures``, ``csv``, ``report`` given:
+        they override ``[output]``.
 
         The folder is replaced as a whole (:func:`imdrive._io.replace_folder`): the files are
         written into a staging folder beside it, fsynced, and the staging folder takes its
@@ -615,110 +519,18 @@ class SimulationResult:
 
         out_dir = Path(out_dir)
         check_result_folder(out_dir, force)
-        figures = self.scenario.output.figures if figures is None else figures
-        csv = self.scenario.output.csv if csv is None else csv
-        report = self.scenario.output.report if report is None else report
+        output = self.scenario.output
+        wanted = {f.key: getattr(output, f.key) for f in output_formats()}
+        for key, given in (("figures", figures), ("csv", csv), ("report", report)):
+            if given is not None:
+                wanted[key] = given
         with replace_folder(out_dir) as staging:
-            if csv:
-                self.to_csv(staging / "timeseries.csv")
-            self._write_exports(staging)
-            if figures:
-                from imdrive.run.plots import save_figures
-
-                save_figures(self, staging)
-            if report:
-                from imdrive.run.report import write_run_report
-
-                write_run_report(self, staging / "report.html")
+            for fmt in output_formats():  # every registered format its [output] key turns on
+                if wanted[fmt.key]:
+                    fmt.write(self, staging)
             (staging / "summary.json").write_text(summary_json(self.summary()))
             names = sorted(p.name for p in staging.iterdir())
         return [out_dir / n for n in names if n != "summary.json"] + [out_dir / "summary.json"]
 
 
 #: The files :meth:`SimulationResult.save` may write besides PNG figures
-RESULT_FILES = (
-    "summary.json",
-    "timeseries.csv",
-    "report.html",
-    "timeseries.mat",
-    "timeseries.parquet",
-)
-
-NULL_NOTE = (
-    "null stands for a value that is not a finite number (NaN or infinite: a diverged run's "
-    "last states, a metric with no samples); JSON has no NaN or Infinity"
-)
-
-
-def _finite_or_null(obj):
-    """``obj`` with every non-finite float replaced by None (recursively); and whether any was."""
-    if isinstance(obj, float):
-        return (obj, False) if math.isfinite(obj) else (None, True)
-    if isinstance(obj, dict):
-        out, any_null = {}, False
-        for k, v in obj.items():
-            out[k], n = _finite_or_null(v)
-            any_null |= n
-        return out, any_null
-    if isinstance(obj, list | tuple):
-        items = [_finite_or_null(v) for v in obj]
-        return [v for v, _ in items], any(n for _, n in items)
-    return obj, False
-
-
-def _machine_rated(machine) -> dict | None:
-    """The machine's rated point (:func:`imdrive.config.machine.rated_point`), or ``None`` when
-    its circuit has none (it cannot deliver the rated power)."""
-    from imdrive.config.machine import rated_point
-    from imdrive.errors import ConfigError
-
-    try:
-        return rated_point(machine).to_dict()
-    except ConfigError:
-        return None
-
-
-def summary_json(summary: dict) -> str:
-    """``summary`` as strict JSON: NaN and infinities written as null, with a ``"note"`` saying
-    so when there are any (most JSON parsers refuse bare ``NaN``/``Infinity``)."""
-    clean, any_null = _finite_or_null(summary)
-    if any_null:
-        clean["note"] = NULL_NOTE
-    return json.dumps(clean, indent=2, allow_nan=False) + "\n"
-
-
-def is_result_folder(folder) -> bool:
-    """Whether ``folder`` is missing, empty, or holds only what :meth:`SimulationResult.save`
-    writes (``summary.json``, ``timeseries.csv``, ``report.html``, the exports, PNG figures,
-    staging leftovers)."""
-    from imdrive._io import LOCK_NAME, is_partial
-
-    folder = Path(folder)
-    if not folder.exists():
-        return True
-    if not folder.is_dir():
-        return False
-    for p in folder.iterdir():
-        n = p.name
-        if is_partial(n) or n == LOCK_NAME:
-            continue
-        if p.is_file() and (n in RESULT_FILES or n.endswith(".png")):
-            continue
-        return False
-    return True
-
-
-def check_result_folder(folder, force: bool = False) -> None:
-    """Refuse (:class:`~imdrive.errors.ConfigError` on ``--out``) to replace a folder that is
-    not an imdrive result, unless ``force``."""
-    from imdrive.errors import ConfigError
-
-    folder = Path(folder)
-    if folder.exists() and not folder.is_dir():
-        raise ConfigError("--out", f"{folder} exists and is not a folder")
-    if not force and not is_result_folder(folder):
-        raise ConfigError(
-            "--out",
-            f"{folder} holds files that are not an imdrive result and would be deleted: choose "
-            "another folder, or add --force to replace it as a whole",
-        )

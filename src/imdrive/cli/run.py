@@ -1,0 +1,106 @@
+"""``imdrive run``: one drive from a preset, a scenario file or a run's summary.json."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+from imdrive.cli._common import EXIT_DIVERGED, EXIT_LOST_CONTROL, EXIT_OK, _examples, _out_path
+
+
+def _run_folder_name(preset_or_file: str) -> str:
+    """The default folder name of ``imdrive run``: a preset's name, or the file's own name
+    without its suffix (``my.toml`` -> ``out/my``), not the scenario's ``name``; for a run's
+    ``summary.json``, its folder's name + ``-rerun`` (``out/my/summary.json`` -> ``out/my-rerun``).
+    """
+    from imdrive.config.presets import preset_names
+
+    if preset_or_file in preset_names():
+        return preset_or_file
+    path = Path(preset_or_file)
+    if path.suffix == ".json":  # a run's summary.json: beside that run, never over it
+        return f"{path.resolve().parent.name}-rerun"
+    return path.stem
+
+
+def _cmd_run(args) -> int:
+    from imdrive.config.scenario import Scenario
+    from imdrive.run.build import build_arrays
+    from imdrive.run.result import check_result_folder
+    from imdrive.run.simulate import kernels_cached, simulate
+
+    scenario = Scenario.read(args.scenario, args.set or [])
+    out = _out_path(args.out, _run_folder_name(args.scenario))
+    check_result_folder(out, args.force)
+    arrays = build_arrays(scenario)  # every derived quantity checked before anything runs
+    if not args.quiet:
+        if not kernels_cached():
+            print("imdrive: compiling the kernels (first run only) ...", file=sys.stderr)
+        print(
+            f"imdrive: running {scenario.name} ({scenario.simulation.t_end_s:g} s) ...",
+            file=sys.stderr,
+        )
+    res = simulate(scenario, arrays)
+    res.save(out, force=args.force)
+    s = res.summary()
+    if res.diverged:
+        print(
+            f"imdrive: error: {res.divergence_message}; partial results in {out}", file=sys.stderr
+        )
+        return EXIT_DIVERGED
+    if res.lost_control:
+        print(f"imdrive: error: {res.lost_control_message}; results in {out}", file=sys.stderr)
+        return EXIT_LOST_CONTROL
+    if not args.quiet:
+        fin = s["final"]
+        print(
+            f"imdrive: done in {time.perf_counter() - args.t0:.1f} s (simulation "
+            f"{res.wall_time_s:.3f} s, {s['real_time_factor']:.0f}x real time); final speed "
+            f"{fin['speed_rpm']:.2f} rpm, torque {fin['torque_Nm']:.3f} N m -> {out}",
+            file=sys.stderr,
+        )
+    return EXIT_OK
+
+
+def add_parser(sub) -> None:
+    """Register ``imdrive run``.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The ``imdrive`` parser's sub-commands.
+    """
+    r = sub.add_parser(
+        "run",
+        help="run a preset or scenario file",
+        description="Run one drive: a built-in preset by name, a scenario TOML file, or a "
+        "run's summary.json (to run it again). Writes timeseries.csv, summary.json, PNG figures "
+        "and report.html (interactive; open it in a browser) into out/PRESET, or out/FILE for a "
+        "file named FILE.toml, unless --out says otherwise. Exit codes: imdrive --help.",
+        epilog=_examples(
+            "imdrive run sensorless",
+            "imdrive run sensorless --set simulation.t_end_s=2 --set load.torque_Nm=6",
+            "imdrive run my.toml --out results/my-run",
+            "imdrive run out/sensorless/summary.json",
+        ),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    r.add_argument("scenario", metavar="PRESET_OR_FILE")
+    r.add_argument(
+        "--out", metavar="DIR", help="output folder (default out/PRESET, or out/FILE for FILE.toml)"
+    )
+    r.add_argument(
+        "--set",
+        action="append",
+        metavar="KEY.PATH=VALUE",
+        help="override a scenario value, e.g. --set simulation.t_end_s=2 (repeatable)",
+    )
+    r.add_argument(
+        "--force",
+        action="store_true",
+        help="replace an --out folder that holds files other than an imdrive result",
+    )
+    r.add_argument("-q", "--quiet", action="store_true")
+    r.set_defaults(func=_cmd_run)

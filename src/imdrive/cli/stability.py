@@ -1,0 +1,136 @@
+"""``imdrive stability``: small-signal stability maps over speed x load torque."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+from imdrive.cli._common import EXIT_OK, _examples
+from imdrive.errors import ConfigError
+
+
+def _parse_range(text: str, name: str):
+    """``MIN:MAX:N`` -> N evenly spaced values (one-line ConfigError otherwise)."""
+    import numpy as np
+
+    rule = f"expected MIN:MAX:N with finite MIN < MAX and integer N >= 2 (got {text!r})"
+    parts = text.split(":")
+    if len(parts) != 3:
+        raise ConfigError(name, rule)
+    try:
+        lo, hi, n = float(parts[0]), float(parts[1]), int(parts[2])
+    except ValueError:
+        raise ConfigError(name, rule) from None
+    if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi and n >= 2):
+        raise ConfigError(name, rule)
+    if n > 1000:
+        raise ConfigError(name, f"at most 1000 points per axis (got {n})")
+    return np.linspace(lo, hi, n)
+
+
+def _parse_ratios(text: str | None, name: str) -> list[float]:
+    if not text:
+        return []
+    out = []
+    for part in text.split(","):
+        try:
+            v = float(part)
+        except ValueError:
+            raise ConfigError(
+                name, f"expected comma-separated numbers > 0 (got {text!r})"
+            ) from None
+        if not (v > 0 and v < float("inf")):
+            raise ConfigError(name, f"ratios must be finite and > 0 (got {part!r})")
+        out.append(v)
+    return out
+
+
+def _cmd_stability(args) -> int:
+    import pandas as pd
+
+    from imdrive.config.scenario import Scenario
+
+    speeds = _parse_range(args.speeds, "--speeds")
+    torques = _parse_range(args.torques, "--torques")
+    r1 = _parse_ratios(args.R1_ratios, "--r1-ratios")
+    r2 = _parse_ratios(args.R2_ratios, "--r2-ratios")
+    scenario = Scenario.read(args.scenario, args.set or [])
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise ConfigError("--out", f"{out} exists and is not a folder")
+
+    from imdrive.stability.maps import stability_map
+    from imdrive.stability.plots import plot_map, plot_overlay
+
+    t0 = time.perf_counter()
+    base = stability_map(scenario, speeds, torques)
+    frames = [base.assign(map="base")]
+    over_r1 = {
+        f"R1_hat/R1 = {r:g}": stability_map(scenario, speeds, torques, R1_ratio=r) for r in r1
+    }
+    over_r2 = {
+        f"R2_hat/R2 = {r:g}": stability_map(scenario, speeds, torques, R2_ratio=r) for r in r2
+    }
+    for label, df in {**over_r1, **over_r2}.items():
+        frames.append(df.assign(map=label))
+    wall = time.perf_counter() - t0
+    out.mkdir(parents=True, exist_ok=True)
+    pd.concat(frames, ignore_index=True).to_csv(out / "stability.csv", index=False)
+    plot_map(base, out / "stability.png", title=f"{scenario.name}: small-signal stability")
+    if over_r1:
+        plot_overlay({"as configured": base, **over_r1}, out / "stability_R1.png")
+    if over_r2:
+        plot_overlay({"as configured": base, **over_r2}, out / "stability_R2.png")
+    if not args.quiet:
+        ok = base["status"] == "ok"
+        print(
+            f"imdrive: stability of {scenario.name}: {len(base)} points in {wall:.2f} s, "
+            f"{int(base['stable'].sum())} stable, {int(ok.sum() - base['stable'].sum())} unstable, "
+            f"{int((~ok).sum())} without steady state -> {out / 'stability.csv'}",
+            file=sys.stderr,
+        )
+    return EXIT_OK
+
+
+def add_parser(sub) -> None:
+    """Register ``imdrive stability``.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The ``imdrive`` parser's sub-commands.
+    """
+    st = sub.add_parser(
+        "stability",
+        help="small-signal stability map over speed x load torque",
+        description="Solve the closed loop's steady state and its discrete small-signal model "
+        "at every point of a speed x torque grid; write stability.csv and heatmap PNGs.",
+        epilog=_examples(
+            "imdrive stability sensorless --out out/stability",
+            "imdrive stability sensorless --speeds 0:300:31 --torques=-12:12:25 "
+            "--r2-ratios 0.8,1.2 --out out/stability-low",
+        ),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    st.add_argument("scenario", metavar="PRESET_OR_FILE")
+    st.add_argument(
+        "--set", action="append", metavar="KEY.PATH=VALUE", help="override (repeatable)"
+    )
+    st.add_argument("--speeds", default="0:1500:50", metavar="MIN:MAX:N", help="speed refs, rpm")
+    st.add_argument(
+        "--torques",
+        default="-24:24:40",
+        metavar="MIN:MAX:N",
+        help="load torques, N m (write --torques=-24:24:40 for a negative start)",
+    )
+    st.add_argument(
+        "--r1-ratios", dest="R1_ratios", metavar="A,B,...", help="overlay maps for R1_hat/R1"
+    )
+    st.add_argument(
+        "--r2-ratios", dest="R2_ratios", metavar="A,B,...", help="overlay maps for R2_hat/R2"
+    )
+    st.add_argument("--out", metavar="DIR", required=True)
+    st.add_argument("-q", "--quiet", action="store_true")
+    st.set_defaults(func=_cmd_stability)

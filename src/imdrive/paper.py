@@ -1,6 +1,0 @@
-"""Deprecated (0.1 layout): the names now live in
-:mod:`imdrive.studies.paper`."""
-
-from imdrive._deprecated import reexport
-
-reexport(__name__, "imdrive.studies.paper")

@@ -1,0 +1,134 @@
+"""The exported columns of a run: each log field's unit and scale (:data:`LOG_UNITS`), the
+columns of an open-loop and of a vector-controlled run, and the unit a column's name ends with.
+
+The exported column is ``f"{field}_{unit}"`` holding ``log[field] * scale`` (``speed`` ->
+``speed_rpm``); :mod:`imdrive.run.result` re-exports these names.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+RPM = 2.0 * math.pi / 60.0
+SQ3_2 = math.sqrt(3.0) / 2.0
+
+#: The units table: log field (SI, see each block's LOG_FIELDS) -> (unit, scale). The exported
+#: column is ``f"{field}_{unit}"`` holding ``log[field] * scale``. ``v_alpha_V``/``v_beta_V``
+#: are the period-average voltage applied at the terminals over [t_k, t_k + Ts) (the bridge's
+#: true average with the switching model, dead time included; the commanded one at the last
+#: sample, which has no period after it); ``v_ref_*`` the controller's reference at sample k;
+#: ``i_*_meas_A`` what the current sensors report, ``i_alpha_A``/``i_beta_A`` the true current.
+LOG_UNITS = {
+    "time": ("s", 1.0),
+    "speed": ("rpm", 1.0 / RPM),
+    "torque": ("Nm", 1.0),
+    "load_torque": ("Nm", 1.0),
+    "i_alpha": ("A", 1.0),
+    "i_beta": ("A", 1.0),
+    "psi_r_alpha": ("Wb", 1.0),
+    "psi_r_beta": ("Wb", 1.0),
+    "R1": ("ohm", 1.0),
+    "R2": ("ohm", 1.0),
+    "flux": ("Wb", 1.0),
+    "theta1": ("C", 1.0),
+    "theta2": ("C", 1.0),
+    "v_alpha": ("V", 1.0),
+    "v_beta": ("V", 1.0),
+    "v_ref_alpha": ("V", 1.0),
+    "v_ref_beta": ("V", 1.0),
+    "i_alpha_meas": ("A", 1.0),
+    "i_beta_meas": ("A", 1.0),
+    "speed_ref": ("rpm", 1.0 / RPM),
+    "id_ref": ("A", 1.0),
+    "iq_ref": ("A", 1.0),
+    "i_d": ("A", 1.0),
+    "i_q": ("A", 1.0),
+    "theta_e": ("rad", 1.0),
+    "speed_est": ("rpm", 1.0 / RPM),
+    "e_d0": ("Wb", 1.0),
+    "e_q0": ("Wb", 1.0),
+    "lam_v_alpha": ("Wb", 1.0),
+    "lam_v_beta": ("Wb", 1.0),
+    "lam_i_alpha": ("Wb", 1.0),
+    "lam_i_beta": ("Wb", 1.0),
+    "R2_est": ("ohm", 1.0),
+    "R1_est": ("ohm", 1.0),
+    "e_d0_demod": ("Wb", 1.0),
+    "comp_frozen": ("flags", 1.0),
+    "inj_freq": ("Hz", 1.0),
+}
+# column -> (log field, scale) for every column taken straight from the log
+_DIRECT = {f"{f}_{u}": (f, k) for f, (u, k) in LOG_UNITS.items()}
+_DIRECT["w_m_rad_s"] = ("speed", 1.0)  # the speed in SI as well
+
+OPEN_LOOP_COLUMNS = (
+    "time_s speed_rpm w_m_rad_s torque_Nm load_torque_Nm i_a_A i_b_A i_c_A i_alpha_A i_beta_A "
+    "i_alpha_meas_A i_beta_meas_A psi_r_alpha_Wb psi_r_beta_Wb v_alpha_V v_beta_V "
+    "v_ref_alpha_V v_ref_beta_V R1_ohm R2_ohm flux_Wb theta1_C theta2_C"
+).split()
+VECTOR_COLUMNS = (
+    OPEN_LOOP_COLUMNS
+    + (
+        "speed_ref_rpm speed_est_rpm id_ref_A iq_ref_A i_d_A i_q_A R2_est_ohm e_d0_Wb e_q0_Wb "
+        "theta_e_rad lam_v_alpha_Wb lam_v_beta_Wb lam_i_alpha_Wb lam_i_beta_Wb e_d0_demod_Wb "
+        "comp_frozen_flags inj_freq_Hz R1_est_ohm"
+    ).split()
+)
+
+
+def columns_from_log(
+    log: np.ndarray, vector: bool, extra_units: dict | None = None
+) -> dict[str, np.ndarray]:
+    """Named, unit-carrying columns from a kernel log (a record array of the drive's log dtype).
+
+    Parameters
+    ----------
+    log : numpy.ndarray
+        The log records, SI units.
+    vector : bool
+        Field-oriented drive (the controller's columns too) or open loop.
+    extra_units : dict, optional
+        ``{field: (unit, scale)}`` of the estimator's own log fields (its settings class's
+        ``estimator_log_units``); a standard column whose field the log lacks (another
+        estimator's) is left out.
+
+    Returns
+    -------
+    dict
+        ``{column: values}``, the standard columns in their order, with the estimator's own
+        before ``e_d0_demod_Wb``.
+    """
+    out = {}
+    fields = set(log.dtype.names)
+    names = list(VECTOR_COLUMNS if vector else OPEN_LOOP_COLUMNS)
+    if vector:
+        for field, (unit, scale) in (extra_units or {}).items():
+            name = f"{field}_{unit}"
+            if name not in names:
+                names.insert(names.index("e_d0_demod_Wb"), name)
+            if field in fields:
+                out[name] = log[field] * scale
+    for name in names:
+        if name in _DIRECT and name not in out:
+            field, scale = _DIRECT[name]
+            if field in fields:
+                out[name] = log[field] * scale
+    ia, ib = log["i_alpha"], log["i_beta"]
+    out["i_a_A"] = ia.copy()
+    out["i_b_A"] = -0.5 * ia + SQ3_2 * ib
+    out["i_c_A"] = -0.5 * ia - SQ3_2 * ib
+    return {n: out[n] for n in names if n in out}
+
+
+#: unit suffixes of the exported columns, longest first so ``_rad_s`` wins over ``_s``
+_SUFFIXES = ("rad_s", "ohm", "rpm", "Nm", "Wb", "rad", "A", "V", "C", "s")
+
+
+def unit_of(column: str) -> str:
+    """The unit a column's name ends with; ``"1"`` for a dimensionless column."""
+    for u in _SUFFIXES:
+        if column.endswith("_" + u):
+            return "rad/s" if u == "rad_s" else u
+    return "1"

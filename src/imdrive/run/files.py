@@ -1,0 +1,85 @@
+"""A result folder: summary.json as strict JSON, the files a result may hold, and the check
+that refuses to replace a folder that is not a result."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+from imdrive.run.formats import output_formats
+
+#: The file names :meth:`~imdrive.run.result.SimulationResult.save` may write (summary.json and
+#: every registered format's fixed names; the PNG figures' names vary, see
+#: :func:`is_result_folder`)
+RESULT_FILES = ("summary.json",) + tuple(
+    name for f in output_formats() for name in f.files if not any(c in name for c in "*?[")
+)
+
+NULL_NOTE = (
+    "null stands for a value that is not a finite number (NaN or infinite: a diverged run's "
+    "last states, a metric with no samples); JSON has no NaN or Infinity"
+)
+
+
+def _finite_or_null(obj):
+    """``obj`` with every non-finite float replaced by None (recursively); and whether any was."""
+    if isinstance(obj, float):
+        return (obj, False) if math.isfinite(obj) else (None, True)
+    if isinstance(obj, dict):
+        out, any_null = {}, False
+        for k, v in obj.items():
+            out[k], n = _finite_or_null(v)
+            any_null |= n
+        return out, any_null
+    if isinstance(obj, list | tuple):
+        items = [_finite_or_null(v) for v in obj]
+        return [v for v, _ in items], any(n for _, n in items)
+    return obj, False
+
+
+def summary_json(summary: dict) -> str:
+    """``summary`` as strict JSON: NaN and infinities written as null, with a ``"note"`` saying
+    so when there are any (most JSON parsers refuse bare ``NaN``/``Infinity``)."""
+    clean, any_null = _finite_or_null(summary)
+    if any_null:
+        clean["note"] = NULL_NOTE
+    return json.dumps(clean, indent=2, allow_nan=False) + "\n"
+
+
+def is_result_folder(folder) -> bool:
+    """Whether ``folder`` is missing, empty, or holds only what
+    :meth:`~imdrive.run.result.SimulationResult.save` writes (``summary.json``, the files of
+    every output format of :mod:`imdrive.run.formats`, staging leftovers)."""
+    from imdrive._io import LOCK_NAME, is_partial
+
+    folder = Path(folder)
+    if not folder.exists():
+        return True
+    if not folder.is_dir():
+        return False
+    formats = output_formats()
+    for p in folder.iterdir():
+        n = p.name
+        if is_partial(n) or n == LOCK_NAME:
+            continue
+        if p.is_file() and (n == "summary.json" or any(f.owns(n) for f in formats)):
+            continue
+        return False
+    return True
+
+
+def check_result_folder(folder, force: bool = False) -> None:
+    """Refuse (:class:`~imdrive.errors.ConfigError` on ``--out``) to replace a folder that is
+    not an imdrive result, unless ``force``."""
+    from imdrive.errors import ConfigError
+
+    folder = Path(folder)
+    if folder.exists() and not folder.is_dir():
+        raise ConfigError("--out", f"{folder} exists and is not a folder")
+    if not force and not is_result_folder(folder):
+        raise ConfigError(
+            "--out",
+            f"{folder} holds files that are not an imdrive result and would be deleted: choose "
+            "another folder, or add --force to replace it as a whole",
+        )
