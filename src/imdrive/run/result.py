@@ -53,6 +53,18 @@ STATUS_TEXT = {
 STATUS_SIGNAL = {S_NAN: "state", S_CURRENT: "i_s_A", S_SPEED: "speed_rpm"}
 
 
+def _machine_rated(machine) -> dict | None:
+    """The machine's rated point (:func:`imdrive.config.machine.rated_point`), or ``None`` when
+    its circuit has none (it cannot deliver the rated power)."""
+    from imdrive.config.machine import rated_point
+    from imdrive.errors import ConfigError
+
+    try:
+        return rated_point(machine).to_dict()
+    except ConfigError:
+        return None
+
+
 def _estimator_units(scenario) -> dict:
     """Units of the scenario's estimator's own log fields."""
     from imdrive.run.estimators import estimator_of
