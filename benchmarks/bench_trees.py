@@ -2,10 +2,11 @@
 
 Run from the repository root with the imdrive venv::
 
-    python benchmarks/bench_trees.py OLD_REV [--repeat N] [--rounds R] [--presets a,b,...]
+    python benchmarks/bench_trees.py OLD_REV [--new NEW_REV] [--repeat N] [--rounds R]
+        [--presets a,b,...]
 
-``OLD_REV`` is a git revision (e.g. ``HEAD~3``, a tag); it is checked out into a temporary
-worktree. Each round runs, for each preset, one subprocess per tree (old, new, then new, old
+``OLD_REV`` and ``NEW_REV`` (default ``HEAD``) are git revisions (e.g. ``HEAD~3``, a tag);
+each is checked out into a temporary worktree, so edits made while it runs do not count. Each round runs, for each preset, one subprocess per tree (old, new, then new, old
 in the next round, so drift of the machine's load falls on both): the subprocess imports
 imdrive from that tree's ``src`` (``PYTHONPATH``), compiles or loads the kernel, then times
 ``--repeat`` runs of ``run_drive`` over the whole preset in process CPU time (robust on a
@@ -46,10 +47,9 @@ from imdrive.run import simulate as _s
 preset, repeat = sys.argv[1], int(sys.argv[2])
 sc = Scenario.read(preset)
 a = build_arrays(sc)
-try:
-    log = _s.new_log(a.n_steps // a.log_every + 1, a.params)
-except TypeError:  # a tree whose new_log takes the row count only
-    log = _s.new_log(a.n_steps // a.log_every + 1)
+n_rows = a.n_steps // a.log_every + 1
+# a tree whose drive carries its log dtype, or one with a single log dtype
+log = _s.new_log(n_rows, a.log) if hasattr(a, "log") else _s.new_log(n_rows)
 run_drive(a.params, copy_state(a.state0), 0, 1, log, a.log_every)  # compile or load
 times = []
 for _ in range(repeat):
@@ -68,14 +68,16 @@ def _run(src: Path, preset: str, repeat: int) -> dict:
         env=env,
         capture_output=True,
         text=True,
-        check=True,
     )
+    if out.returncode != 0:
+        raise SystemExit(f"{src}: {preset} failed:\n{out.stderr[-2000:]}")
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("old_rev")
+    ap.add_argument("--new", default="HEAD", help="the new revision (default HEAD)")
     ap.add_argument("--repeat", type=int, default=5, help="timed runs per subprocess")
     ap.add_argument("--rounds", type=int, default=2, help="alternations old/new")
     ap.add_argument("--presets", default=",".join(PRESETS))
@@ -84,13 +86,14 @@ def main(argv=None) -> int:
     print(machine_line())
     presets = [p for p in args.presets.split(",") if p]
     with tempfile.TemporaryDirectory() as tmp:
-        old = Path(tmp) / "old"
-        subprocess.run(
-            ["git", "-C", str(ROOT), "worktree", "add", "--detach", "-q", str(old), args.old_rev],
-            check=True,
-        )
+        revs = {"old": args.old_rev, "new": args.new}
+        for tree, rev in revs.items():
+            subprocess.run(
+                ["git", "-C", str(ROOT), "worktree", "add", "--detach", "-q", f"{tmp}/{tree}", rev],
+                check=True,
+            )
         try:
-            trees = {"old": old / "src", "new": ROOT / "src"}
+            trees = {tree: Path(tmp) / tree / "src" for tree in revs}
             times: dict[str, dict[str, list[float]]] = {p: {"old": [], "new": []} for p in presets}
             periods = {}
             for r in range(args.rounds):
@@ -101,10 +104,12 @@ def main(argv=None) -> int:
                         periods[p] = res["periods"]
                         times[p][tree] += [t / res["periods"] * 1e6 for t in res["times"]]
         finally:
-            subprocess.run(
-                ["git", "-C", str(ROOT), "worktree", "remove", "--force", str(old)], check=False
-            )
-    print(f"\nkernel CPU time per control period, us (old = {args.old_rev}, new = working tree)")
+            for tree in revs:
+                subprocess.run(
+                    ["git", "-C", str(ROOT), "worktree", "remove", "--force", f"{tmp}/{tree}"],
+                    check=False,
+                )
+    print(f"\nkernel CPU time per control period, us (old = {args.old_rev}, new = {args.new})")
     print(f"{'preset':24s} {'old':32s} {'new':32s} new/old")
     for p in presets:
         o, n = times[p]["old"], times[p]["new"]
