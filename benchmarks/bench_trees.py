@@ -6,8 +6,9 @@ Run from the repository root with the imdrive venv::
         [--presets a,b,...]
 
 ``OLD_REV`` and ``NEW_REV`` (default ``HEAD``) are git revisions (e.g. ``HEAD~3``, a tag);
-each is checked out into a temporary worktree, so edits made while it runs do not count. Each round runs, for each preset, one subprocess per tree (old, new, then new, old
-in the next round, so drift of the machine's load falls on both): the subprocess imports
+each is checked out into a temporary worktree, so edits made while it runs do not count.
+Each round runs, for each preset, one subprocess per tree (old, new, then new, old in the
+next round, so drift of the machine's load falls on both): the subprocess imports
 imdrive from that tree's ``src`` (``PYTHONPATH``), compiles or loads the kernel, then times
 ``--repeat`` runs of ``run_drive`` over the whole preset in process CPU time (robust on a
 shared machine). Prints, per preset, each tree's range (lowest-highest, median, runs) and the
