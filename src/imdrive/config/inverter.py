@@ -29,8 +29,9 @@ class InverterParams:
 
     Parameters
     ----------
-    Vdc_V : float
-        DC-link voltage, V. Default ``220*sqrt(2)``: a diode rectifier on a 220 V line.
+    Vdc_V : float or None
+        DC-link voltage, V. Unset (``None``): ``sqrt(2)`` times the machine's rated line
+        voltage, a diode rectifier on the machine's own supply (the scenario fills it in).
     model : str
         ``"average"``: average-value model with the SVM voltage limit; ``"switching"``: the
         two-level bridge switched at ``switching_frequency_Hz``.
@@ -45,14 +46,15 @@ class InverterParams:
     """
 
     Vdc_V: Annotated[
-        Float,
+        Float | None,
         setting(
             "DC-link voltage; the largest voltage vector is Vdc/√3",
             "V",
             gt=0.0,
-            default_doc="220·√2 ≈ 311.1 (a diode rectifier on a 220 V line)",
+            default_doc="√2 × machine.rated_voltage_V (a diode rectifier on the machine's rated "
+            "line voltage; 311.1 V for the 220 V Table IV machine)",
         ),
-    ] = 220.0 * math.sqrt(2.0)
+    ] = None
     model: Annotated[
         InverterModel,
         setting(
@@ -97,4 +99,9 @@ class InverterParams:
     @property
     def v_max_V(self) -> float:
         """Largest voltage space vector in the linear SVM range, Vdc/sqrt(3), V."""
+        if self.Vdc_V is None:
+            raise ValueError(
+                "inverter.Vdc_V is unset: it follows the machine's rated voltage, filled in by "
+                "the Scenario (read scenario.inverter.v_max_V)"
+            )
         return self.Vdc_V / math.sqrt(3.0)

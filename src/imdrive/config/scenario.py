@@ -18,7 +18,9 @@ constructors, ``dataclasses.replace``).
 
 from __future__ import annotations
 
+import math
 import tomllib
+import warnings
 from dataclasses import replace
 from pathlib import Path
 from typing import Annotated
@@ -94,7 +96,7 @@ from imdrive.config.validation import (  # noqa: F401  (re-exports)
     settings,
     validate,
 )
-from imdrive.errors import ConfigError
+from imdrive.errors import ConfigError, ConfigWarning
 
 __all__ = [
     "DEFAULT_LOG_RATE_HZ",
@@ -271,6 +273,7 @@ class Scenario:
     @model_validator(mode="after")
     def _joint_rules(self):
         """Rules between sections, checked on the final scenario."""
+        self._machine_defaults()
         inv = self.inverter
         if inv.model == "switching":
             f_Ts = inv.switching_frequency_Hz * self.simulation.Ts_s
@@ -347,6 +350,36 @@ class Scenario:
         if cls.estimator_section is not None:
             return getattr(self, cls.estimator_section)
         return validate(cls, self.plugins.settings.get(name, {}), f"plugins.settings.{name}")
+
+    def _machine_defaults(self) -> None:
+        """Defaults that follow the machine, filled in (and derived again when the machine
+        changes): the DC link from the rated voltage. An explicit DC link that cannot reach
+        the rated voltage is refused below half of it, else warned about."""
+        inv = self.inverter
+        V_rated = self.machine.rated_voltage_V
+        if inv.Vdc_V is None or getattr(inv, "_Vdc_auto", False):
+            inv = replace(inv, Vdc_V=V_rated * math.sqrt(2.0))
+            object.__setattr__(inv, "_Vdc_auto", True)
+            object.__setattr__(self, "inverter", inv)
+            return
+        reach = inv.Vdc_V / math.sqrt(2.0)  # the line voltage the SVM's linear range reaches
+        if reach < 0.5 * V_rated:
+            raise ConfigError(
+                "inverter.Vdc_V",
+                f"{inv.Vdc_V:g} V reaches {reach:.0f} V line-to-line, less than half of "
+                f"machine.rated_voltage_V = {V_rated:g} V: leave Vdc_V unset (√2 × the rated "
+                "voltage) or raise it",
+            )
+        if reach < 0.98 * V_rated:
+            warnings.warn(
+                ConfigWarning(
+                    "inverter.Vdc_V",
+                    f"{inv.Vdc_V:g} V reaches {reach:.0f} V line-to-line, below "
+                    f"machine.rated_voltage_V = {V_rated:g} V: the drive is voltage-limited "
+                    f"from about {100 * reach / V_rated:.0f} % of base speed",
+                ),
+                stacklevel=2,
+            )
 
     def _compensator_rules(self) -> None:
         """The R̂2 clamps in order, given or default (one given clamp against the other's
@@ -522,6 +555,14 @@ class Scenario:
         if getattr(self.simulation, "_log_every_auto", False):
             # the default decimation follows Ts_s: let it be derived again from the new one
             data["simulation"].pop("log_every", None)
+        if any(parts[:2] in (("machine", "preset"), ("machine", "file")) for parts, _ in items):
+            # another parameter set: keep only what this scenario changed of its own
+            base = preset_table(self.machine_preset)
+            data["machine"] = {
+                k: v
+                for k, v in data["machine"].items()
+                if k == "preset" or k not in base or base[k] != v
+            }
         for parts, value in items:
             if parts[0] == "machine" and parts[-1] != "preset":
                 data.setdefault("machine", {})
@@ -555,4 +596,6 @@ class Scenario:
         out["machine"] = m
         for key in SECTIONS:
             out[key] = _to_plain(getattr(self, key))
+        if getattr(self.inverter, "_Vdc_auto", False):  # derived from the machine: unset
+            out["inverter"]["Vdc_V"] = None
         return out
