@@ -49,6 +49,49 @@ class CompensatorSettings:
     G_CR_ohm: Annotated[
         Float, setting("change of R̂2 per output level and period", "ohm", ge=0.0)
     ] = 0.001
+    G_CR_pu: Annotated[
+        Float | None,
+        setting(
+            "change of R̂2 per output level and period in per-unit of the initial R̂2; when "
+            "set it replaces G_CR_ohm, so the step follows the machine",
+            ge=0.0,
+            default_doc="unset: G_CR_ohm",
+        ),
+    ] = None
+    gain_E_pu: Annotated[
+        Float | None,
+        setting(
+            "gain_E_per_Wb in per-unit of the machine's rated flux (gain_E_per_Wb = gain_E_pu "
+            "/ ψ_rated); when set it replaces gain_E_per_Wb",
+            gt=0.0,
+            default_doc="unset: gain_E_per_Wb",
+        ),
+    ] = None
+    gain_DE_pu: Annotated[
+        Float | None,
+        setting(
+            "gain_DE_per_Wb in per-unit of the machine's rated flux; when set it replaces "
+            "gain_DE_per_Wb",
+            gt=0.0,
+            default_doc="unset: gain_DE_per_Wb",
+        ),
+    ] = None
+    R2_min_ratio: Annotated[
+        Float | None,
+        setting(
+            "lower clamp of R̂2 as a multiple of the initial R̂2 (instead of R2_min_ohm)",
+            gt=0.0,
+            default_doc="0.5 unless R2_min_ohm is set",
+        ),
+    ] = None
+    R2_max_ratio: Annotated[
+        Float | None,
+        setting(
+            "upper clamp of R̂2 as a multiple of the initial R̂2 (instead of R2_max_ohm)",
+            gt=0.0,
+            default_doc="2 unless R2_max_ohm is set",
+        ),
+    ] = None
     R2_min_ohm: Annotated[
         Float | None,
         setting("lower clamp of R̂2", "ohm", gt=0.0, default_doc="0.5 × the initial R̂2"),
@@ -181,6 +224,16 @@ class InjectionSettings:
     amplitude_A: Annotated[
         Float, setting("amplitude of the sinusoid added to id* (0: off)", "A", ge=0.0)
     ] = 0.0
+    amplitude_pu: Annotated[
+        Float | None,
+        setting(
+            "the amplitude in per-unit of the machine's rated magnetising current ψ_rated/M "
+            "(peak); when set it replaces amplitude_A, so the excitation follows the machine",
+            ge=0.0,
+            lt=1.0,
+            default_doc="unset: amplitude_A",
+        ),
+    ] = None
     frequency_Hz: Annotated[Float, setting("frequency of the sinusoid", "Hz", gt=0.0)] = 2.0
     frequency2_Hz: Annotated[
         Float | None,

@@ -175,6 +175,29 @@ class EstimatorSettings:
         Float | None,
         setting("magnetising inductance", "H", gt=0.0, default_doc="the plant's"),
     ] = None
+    R1_ratio: Annotated[
+        Float | None,
+        setting(
+            "R̂1 as a multiple of the plant's R1 (a starting error that follows the machine; "
+            "instead of R1_ohm)",
+            gt=0.0,
+            default_doc="unset: R1_ohm",
+        ),
+    ] = None
+    R2_ratio: Annotated[
+        Float | None,
+        setting(
+            "the initial R̂2 as a multiple of the plant's R2 (instead of R2_ohm)",
+            gt=0.0,
+            default_doc="unset: R2_ohm",
+        ),
+    ] = None
+    M_ratio: Annotated[
+        Float | None,
+        setting(
+            "M̂ as a multiple of the plant's M (instead of M_H)", gt=0.0, default_doc="unset: M_H"
+        ),
+    ] = None
     R2_adaptation: Annotated[
         Literal["compensator", "afo", "ekf"],
         setting(

@@ -73,6 +73,7 @@ from imdrive.config.overrides import (  # noqa: F401  (the private ones: re-expo
     setting_paths,
     table_paths,
 )
+from imdrive.config.perunit import resolve
 from imdrive.config.plant import (  # noqa: F401  (C and the profile types: re-exports)
     C,
     LoadSettings,
@@ -286,7 +287,8 @@ class Scenario:
                 )
         fb = self.control.speed_feedback
         gives_e_d0 = fb == "measured" or ESTIMATOR_SETTINGS[fb].estimator_flux_error
-        if not gives_e_d0 and (self.compensator.enabled or self.injection.amplitude_A != 0.0):
+        injecting = resolve(self).inj_amp != 0.0
+        if not gives_e_d0 and (self.compensator.enabled or injecting):
             with_e_d0 = [n for n, c in ESTIMATOR_SETTINGS.items() if c.estimator_flux_error]
             raise ConfigError(
                 "control.speed_feedback",
@@ -386,9 +388,8 @@ class Scenario:
         default: ``R2_min_ohm`` above the default ``R2_max_ohm`` made R̂2 jump); the decision
         period and the injection against the run and the machine."""
         comp = self.compensator
-        R2h = self.estimator.R2_ohm if self.estimator.R2_ohm is not None else self.machine.R2_ohm
-        lo = comp.R2_min_ohm if comp.R2_min_ohm is not None else 0.5 * R2h
-        hi = comp.R2_max_ohm if comp.R2_max_ohm is not None else 2.0 * R2h
+        r = resolve(self)
+        R2h, lo, hi = r.R2_hat, r.R2_min, r.R2_max
         if not lo < hi:
             field = (
                 "compensator.R2_min_ohm"
@@ -407,12 +408,64 @@ class Scenario:
         if 1.0 / (inj.frequency_Hz * Ts) > 2e9:
             raise ConfigError("injection.frequency_Hz", "has a period of more than 2e9 periods")
         i_rated = self.machine.rated_current_A
-        if inj.amplitude_A > i_rated:
+        if r.inj_amp > i_rated:
             raise ConfigError(
-                "injection.amplitude_A",
+                "injection.amplitude_pu"
+                if inj.amplitude_pu is not None
+                else "injection.amplitude_A",
                 f"must be <= the machine's rated peak current {i_rated:.3g} A (a persistent "
-                f"excitation is a small perturbation of the flux current; got {inj.amplitude_A:g})",
+                f"excitation is a small perturbation of the flux current; got {r.inj_amp:g} A)",
             )
+        self._per_unit_warnings(r)
+
+    def _per_unit_warnings(self, r) -> None:
+        """A machine-dependent setting given as an absolute value far from what suits this
+        machine (typically a value tuned for another machine) is warned about, one line each."""
+        comp, inj, m = self.compensator, self.injection, self.machine
+        notes = []
+        if comp.enabled and comp.G_CR_pu is None and not 1e-4 <= r.G_CR / r.R2_hat <= 0.2:
+            notes.append(
+                (
+                    "compensator.G_CR_ohm",
+                    f"{r.G_CR:g} ohm is {100 * r.G_CR / r.R2_hat:.3g} % of the initial R̂2 "
+                    f"({r.R2_hat:.3g} ohm) per step: set compensator.G_CR_pu instead",
+                )
+            )
+        absolute = comp.R2_min_ohm is not None or comp.R2_max_ohm is not None
+        if comp.enabled and absolute and not r.R2_min <= m.R2_ohm <= r.R2_max:
+            notes.append(
+                (
+                    "compensator.R2_min_ohm",
+                    f"the clamps [{r.R2_min:.3g}, {r.R2_max:.3g}] ohm exclude the machine's R2 = "
+                    f"{m.R2_ohm:.3g} ohm, so R̂2 cannot reach it: set R2_min_ratio/R2_max_ratio",
+                )
+            )
+        i_m = m.rated_flux_Wb / m.M_H
+        if inj.amplitude_pu is None and r.inj_amp > 0.0 and not 0.01 <= r.inj_amp / i_m <= 0.3:
+            notes.append(
+                (
+                    "injection.amplitude_A",
+                    f"{r.inj_amp:g} A is {100 * r.inj_amp / i_m:.3g} % of the rated magnetising "
+                    f"current {i_m:.3g} A: set injection.amplitude_pu instead",
+                )
+            )
+        est = self.estimator
+        for key, value, plant in (
+            ("R1_ohm", est.R1_ohm, m.R1_ohm),
+            ("R2_ohm", est.R2_ohm, m.R2_ohm),
+            ("M_H", est.M_H, m.M_H),
+        ):
+            if value is not None and not 0.5 <= value / plant <= 2.0:
+                notes.append(
+                    (
+                        f"estimator.{key}",
+                        f"{value:g} is {value / plant:.3g} x the machine's {plant:.4g}: a "
+                        f"starting value for another machine? set estimator.{key.split('_')[0]}"
+                        "_ratio instead",
+                    )
+                )
+        for field_, rule in notes:
+            warnings.warn(ConfigWarning(field_, rule), stacklevel=3)
 
     # -- construction ----------------------------------------------------------------------
     @classmethod

@@ -12,6 +12,7 @@ import math
 
 import numpy as np
 
+from imdrive.config.perunit import resolve
 from imdrive.config.profiles import Profile
 from imdrive.config.scenario import Scenario
 from imdrive.design.gains import default_current_gains, default_speed_gains
@@ -134,15 +135,11 @@ def sensor_record(sc: Scenario) -> np.ndarray:
 
 
 def model_record(sc: Scenario) -> tuple[np.ndarray, dict]:
-    """``MODEL_STATE`` (the controller's machine model; unset estimates: the plant's) and the
+    """``MODEL_STATE`` (the controller's machine model: its estimates, absolute or as ratios of
+    the plant's, :func:`imdrive.config.perunit.resolve`; unset: the plant's) and the
     model's inductances ``R1_hat, R2_hat, M_hat, L1_hat, L2_hat, sigma_L1_hat`` as a dict."""
-    m = sc.machine
-    est = sc.estimator
-    R1h = est.R1_ohm if est.R1_ohm is not None else m.R1_ohm
-    R2h = est.R2_ohm if est.R2_ohm is not None else m.R2_ohm
-    Ll1h = est.Ll1_H if est.Ll1_H is not None else m.Ll1_H
-    Ll2h = est.Ll2_H if est.Ll2_H is not None else m.Ll2_H
-    Mh = est.M_H if est.M_H is not None else m.M_H
+    r = resolve(sc)
+    R1h, R2h, Ll1h, Ll2h, Mh = r.R1_hat, r.R2_hat, r.Ll1_hat, r.Ll2_hat, r.M_hat
     model = new_record(MODEL_STATE, R1_hat=R1h, R2_hat=R2h, Ll1_hat=Ll1h, Ll2_hat=Ll2h, M_hat=Mh)
     L1h, L2h = Ll1h + Mh, Ll2h + Mh
     sigma_L1 = L1h - Mh**2 / L2h
@@ -223,7 +220,7 @@ def compensator_period(sc: Scenario) -> int:
         comp_period = 0.01
     n_comp = max(int(round(comp_period / Ts)), 1)
     f3 = inj.frequency3_Hz
-    if f3 is not None and comp.enabled and inj.amplitude_A > 0.0:
+    if f3 is not None and comp.enabled and resolve(sc).inj_amp > 0.0:
         cycles = n_comp * Ts * f3
         if abs(cycles - round(cycles)) > 1e-6 * max(cycles, 1.0):
             raise ConfigError(
@@ -234,32 +231,34 @@ def compensator_period(sc: Scenario) -> int:
     return n_comp
 
 
-def compensator_record(sc: Scenario, R2h: float) -> tuple[np.ndarray, dict]:
+def compensator_record(sc: Scenario) -> tuple[np.ndarray, dict]:
     """``COMPENSATOR_PARAMS`` (fuzzy compensator, injection, gating, step law) and what to
-    report; ``R2h`` is the initial estimate the default clamps are relative to."""
+    report; gains, clamps and amplitude absolute or in per-unit of the machine
+    (:func:`imdrive.config.perunit.resolve`)."""
     comp = sc.compensator
     inj = sc.injection
+    r = resolve(sc)
     n_comp = compensator_period(sc)
-    R2_min = comp.R2_min_ohm if comp.R2_min_ohm is not None else 0.5 * R2h
-    R2_max = comp.R2_max_ohm if comp.R2_max_ohm is not None else 2.0 * R2h
+    R2_min = r.R2_min
+    R2_max = r.R2_max
     record = new_record(
         COMPENSATOR_PARAMS,
         enabled=comp.enabled,
         t_on=comp.t_on_s,
         n=n_comp,
-        G_E=comp.gain_E_per_Wb,
-        G_DE=comp.gain_DE_per_Wb,
-        G_CR=comp.G_CR_ohm,
+        G_E=r.gain_E,
+        G_DE=r.gain_DE,
+        G_CR=r.G_CR,
         R2_min=R2_min,
         R2_max=R2_max,
         demodulated=comp.input == "demodulated",
         average=comp.average,
-        inj_amp=inj.amplitude_A,
+        inj_amp=r.inj_amp,
         inj_freq=inj.frequency_Hz,
         inj_lpf=inj.lowpass_rad_s,
         inj_t_on=inj.t_on_s,
         inj_hp_wc=sc.mras.wc_rad_s if inj.compensate_filter else 0.0,
-        **_gating(sc),
+        **_gating(sc, r),
     )
     derived = {
         "compensator_period_steps": n_comp,
@@ -269,33 +268,33 @@ def compensator_record(sc: Scenario, R2h: float) -> tuple[np.ndarray, dict]:
     return record, derived
 
 
-def _gating(sc) -> dict:
+def _gating(sc, r) -> dict:
     """The compensator's gating, frequency-schedule and step-law parameters (off: zeros)."""
     comp = sc.compensator
     on = comp.gating if comp.gating is not None else comp.input == "demodulated"
     out = {}
     inj = sc.injection
     headroom = inj.headroom if inj.headroom is not None else sc.control.field_weakening
-    if headroom and inj.amplitude_A > 0.0:
+    if headroom and r.inj_amp > 0.0:
         if not inj.headroom_from < inj.headroom_to:
             raise ConfigError("injection.headroom_from", "must be < injection.headroom_to")
         out["inj_v_lo"] = inj.headroom_from
         out["inj_v_hi"] = inj.headroom_to
     if comp.step_law == "adaptive":
-        dmax = comp.drift_max_ohm if comp.drift_max_ohm is not None else 3.0 * comp.G_CR_ohm
+        dmax = comp.drift_max_ohm if comp.drift_max_ohm is not None else 3.0 * r.G_CR
         out |= {
             "fine": True,
             "fine_gain": comp.fine_gain,
             "drift_gain": comp.drift_gain,
             "drift_max": dmax,
-            "drift_fmin": _drift_fmin(sc),
+            "drift_fmin": _drift_fmin(sc, r),
         }
     if not (on and comp.enabled):
         return out
     f2 = inj.frequency2_Hz
     if f2 is None:
         f2 = 2.0 * inj.frequency_Hz
-    injecting = inj.amplitude_A > 0.0
+    injecting = r.inj_amp > 0.0
     return out | {
         "gate": True,
         "gate_dw": comp.gate_speed_rpm * RPM,
@@ -312,12 +311,12 @@ def _gating(sc) -> dict:
     }
 
 
-def _drift_fmin(sc) -> float:
+def _drift_fmin(sc, r) -> float:
     """Stator frequency below which the adaptive law has no drift term, Hz (0: never)."""
     comp = sc.compensator
     if comp.drift_min_freq_Hz is not None:
         return comp.drift_min_freq_Hz
-    if sc.injection.amplitude_A <= 0.0:
+    if r.inj_amp <= 0.0:
         return 0.0
     f2 = sc.injection.frequency2_Hz
     return max(sc.injection.frequency_Hz, f2 if f2 is not None else 2 * sc.injection.frequency_Hz)

@@ -188,7 +188,7 @@ def _build_arrays(sc: Scenario) -> DriveArrays:
     est, est_params, est_state, er = build_estimator(sc, ctx)
     gains.update(er.derived)
 
-    compensator, comp_derived = blocks.compensator_record(sc, mh["R2_hat"])
+    compensator, comp_derived = blocks.compensator_record(sc)
     prof_t, prof_v, prof_n = blocks.profile_arrays(sc)
     params = DriveParams(
         sim=blocks.sim_record(sc),

@@ -1,0 +1,124 @@
+"""Settings in per-unit of the machine, resolved to the SI values the blocks run on.
+
+A scenario may state a machine-dependent setting in per-unit of the machine instead of an
+absolute value, so it stays tuned when ``[machine]`` changes:
+
+==========================================  ===============================================
+per-unit key                                SI value
+==========================================  ===============================================
+``estimator.R1_ratio``, ``R2_ratio``,       ``ratio x`` the plant's R1, R2, M (the
+``M_ratio``                                 controller's starting model)
+``compensator.R2_min_ratio``, ``_max_``     ``ratio x R2_hat(0)`` (default 0.5 and 2)
+``compensator.G_CR_pu``                     ``G_CR_pu x R2_hat(0)``, ohm per output level
+``compensator.gain_E_pu``, ``gain_DE_pu``   ``gain / psi_rated``, 1/Wb
+``injection.amplitude_pu``                  ``amplitude_pu x psi_rated / M``, A (peak)
+``inverter.Vdc_V`` unset                    ``sqrt(2) x rated line voltage`` (the scenario)
+==========================================  ===============================================
+
+``psi_rated`` is :attr:`~imdrive.config.machine.MachineParams.rated_flux_Wb` (the no-load
+rotor flux at rated voltage and frequency) and ``psi_rated / M`` the rated magnetising
+current. :func:`resolve` is the one place these are turned into SI values: the scenario's
+checks and the drive's records both use it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from imdrive.errors import ConfigError
+
+
+@dataclass(frozen=True)
+class Resolved:
+    """The SI values of the settings that may be given in per-unit.
+
+    Attributes
+    ----------
+    R1_hat, R2_hat, M_hat : float
+        The controller's starting R1, R2 (ohm) and M (H).
+    Ll1_hat, Ll2_hat : float
+        Its leakage inductances, H.
+    R2_min, R2_max : float
+        Clamps of R2_hat, ohm.
+    G_CR : float
+        R2_hat step per output level, ohm.
+    gain_E, gain_DE : float
+        Input scalings of the compensator, 1/Wb.
+    inj_amp : float
+        Injection amplitude, A (peak).
+    """
+
+    R1_hat: float
+    R2_hat: float
+    M_hat: float
+    Ll1_hat: float
+    Ll2_hat: float
+    R2_min: float
+    R2_max: float
+    G_CR: float
+    gain_E: float
+    gain_DE: float
+    inj_amp: float
+
+
+def _one_of(absolute, ratio, base: float, names: tuple[str, str]):
+    if absolute is not None and ratio is not None:
+        raise ConfigError(names[1], f"set {names[0]} or {names[1]}, not both")
+    if ratio is not None:
+        return ratio * base
+    return absolute
+
+
+def resolve(sc) -> Resolved:
+    """The SI values of scenario ``sc``'s per-unit-capable settings (module docstring).
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+
+    Returns
+    -------
+    Resolved
+
+    Raises
+    ------
+    ConfigError
+        An absolute value and its per-unit twin both set (naming the per-unit key).
+    """
+    m = sc.machine
+    est = sc.estimator
+    R1 = _one_of(est.R1_ohm, est.R1_ratio, m.R1_ohm, ("estimator.R1_ohm", "estimator.R1_ratio"))
+    R2 = _one_of(est.R2_ohm, est.R2_ratio, m.R2_ohm, ("estimator.R2_ohm", "estimator.R2_ratio"))
+    M = _one_of(est.M_H, est.M_ratio, m.M_H, ("estimator.M_H", "estimator.M_ratio"))
+    R1 = m.R1_ohm if R1 is None else R1
+    R2 = m.R2_ohm if R2 is None else R2
+    M = m.M_H if M is None else M
+    comp = sc.compensator
+    lo = _one_of(
+        comp.R2_min_ohm,
+        comp.R2_min_ratio,
+        R2,
+        ("compensator.R2_min_ohm", "compensator.R2_min_ratio"),
+    )
+    hi = _one_of(
+        comp.R2_max_ohm,
+        comp.R2_max_ratio,
+        R2,
+        ("compensator.R2_max_ohm", "compensator.R2_max_ratio"),
+    )
+    psi = m.rated_flux_Wb
+    inj = sc.injection
+    return Resolved(
+        R1_hat=R1,
+        R2_hat=R2,
+        M_hat=M,
+        Ll1_hat=est.Ll1_H if est.Ll1_H is not None else m.Ll1_H,
+        Ll2_hat=est.Ll2_H if est.Ll2_H is not None else m.Ll2_H,
+        R2_min=0.5 * R2 if lo is None else lo,
+        R2_max=2.0 * R2 if hi is None else hi,
+        G_CR=comp.G_CR_ohm if comp.G_CR_pu is None else comp.G_CR_pu * R2,
+        gain_E=comp.gain_E_per_Wb if comp.gain_E_pu is None else comp.gain_E_pu / psi,
+        gain_DE=comp.gain_DE_per_Wb if comp.gain_DE_pu is None else comp.gain_DE_pu / psi,
+        inj_amp=inj.amplitude_A if inj.amplitude_pu is None else inj.amplitude_pu * psi / m.M_H,
+    )
