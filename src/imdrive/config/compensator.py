@@ -147,6 +147,15 @@ class CompensatorSettings:
             gt=0.0,
         ),
     ] = 0.97
+    gate_band_pu: Annotated[
+        Float | None,
+        setting(
+            "gate_band_Hz in per-unit of the injection frequency in use at the start; when set "
+            "it replaces gate_band_Hz",
+            ge=0.0,
+            default_doc="unset: gate_band_Hz",
+        ),
+    ] = None
     gate_band_Hz: Annotated[
         Float,
         setting(
@@ -235,6 +244,33 @@ class InjectionSettings:
         ),
     ] = None
     frequency_Hz: Annotated[Float, setting("frequency of the sinusoid", "Hz", gt=0.0)] = 2.0
+    frequency_pu: Annotated[
+        Float | None,
+        setting(
+            "the frequency in per-unit of the rotor's corner frequency R̂2/(2π L̂2) of the "
+            "controller's starting model, where the in-phase sensitivity of the detection "
+            "peaks; when set it replaces frequency_Hz (and frequency2_pu, frequency3_pu their "
+            "twins), rounded so a period is a whole number of control periods",
+            gt=0.0,
+            default_doc="unset: frequency_Hz",
+        ),
+    ] = None
+    frequency2_pu: Annotated[
+        Float | None,
+        setting(
+            "frequency2_Hz in per-unit of the same corner frequency (with frequency_pu)",
+            gt=0.0,
+            default_doc="2 × frequency_pu",
+        ),
+    ] = None
+    frequency3_pu: Annotated[
+        Float | None,
+        setting(
+            "frequency3_Hz in per-unit of the same corner frequency (with frequency_pu)",
+            gt=0.0,
+            default_doc="unset: frequency3_Hz",
+        ),
+    ] = None
     frequency2_Hz: Annotated[
         Float | None,
         setting(

@@ -12,6 +12,9 @@ per-unit key                                SI value
 ``compensator.G_CR_pu``                     ``G_CR_pu x R2_hat(0)``, ohm per output level
 ``compensator.gain_E_pu``, ``gain_DE_pu``   ``gain / psi_rated``, 1/Wb
 ``injection.amplitude_pu``                  ``amplitude_pu x psi_rated / M``, A (peak)
+``injection.frequency_pu`` (``2_``, ``3_``) ``pu x R2_hat(0) / (2 pi L2_hat)``, Hz, rounded
+                                            to whole control periods
+``compensator.gate_band_pu``                ``pu x`` the first injection frequency, Hz
 ``inverter.Vdc_V`` unset                    ``sqrt(2) x rated line voltage`` (the scenario)
 ==========================================  ===============================================
 
@@ -23,6 +26,7 @@ checks and the drive's records both use it.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from imdrive.errors import ConfigError
@@ -46,6 +50,12 @@ class Resolved:
         Input scalings of the compensator, 1/Wb.
     inj_amp : float
         Injection amplitude, A (peak).
+    inj_f1, inj_f2 : float
+        Injection frequency and the alternative one of the gating, Hz.
+    inj_f3 : float or None
+        The third frequency of the schedule, Hz (``None``: two frequencies).
+    gate_band : float
+        The gating's band around the stator frequency, Hz.
     """
 
     R1_hat: float
@@ -59,6 +69,16 @@ class Resolved:
     gain_E: float
     gain_DE: float
     inj_amp: float
+    inj_f1: float
+    inj_f2: float
+    inj_f3: float | None
+    gate_band: float
+
+
+def _whole_periods(f: float, Ts: float) -> float:
+    """``f`` moved to the nearest frequency whose period is a whole number of ``Ts``."""
+    n = max(round(1.0 / (f * Ts)), 1)
+    return 1.0 / (n * Ts)
 
 
 def _one_of(absolute, ratio, base: float, names: tuple[str, str]):
@@ -109,6 +129,19 @@ def resolve(sc) -> Resolved:
     )
     psi = m.rated_flux_Wb
     inj = sc.injection
+    if inj.frequency_pu is not None:
+        L2_hat = (est.Ll2_H if est.Ll2_H is not None else m.Ll2_H) + M
+        f_corner = R2 / (2.0 * math.pi * L2_hat)
+        Ts = sc.simulation.Ts_s
+        f1 = _whole_periods(inj.frequency_pu * f_corner, Ts)
+        # the others: whole multiples of the first's period where they are whole multiples
+        f2 = f1 * (inj.frequency2_pu / inj.frequency_pu if inj.frequency2_pu else 2.0)
+        f3 = None if inj.frequency3_pu is None else f1 * inj.frequency3_pu / inj.frequency_pu
+    else:
+        f1 = inj.frequency_Hz
+        f2 = inj.frequency2_Hz if inj.frequency2_Hz is not None else 2.0 * f1
+        f3 = inj.frequency3_Hz
+    band = comp.gate_band_Hz if comp.gate_band_pu is None else comp.gate_band_pu * f1
     return Resolved(
         R1_hat=R1,
         R2_hat=R2,
@@ -121,4 +154,8 @@ def resolve(sc) -> Resolved:
         gain_E=comp.gain_E_per_Wb if comp.gain_E_pu is None else comp.gain_E_pu / psi,
         gain_DE=comp.gain_DE_per_Wb if comp.gain_DE_pu is None else comp.gain_DE_pu / psi,
         inj_amp=inj.amplitude_A if inj.amplitude_pu is None else inj.amplitude_pu * psi / m.M_H,
+        inj_f1=f1,
+        inj_f2=f2,
+        inj_f3=f3,
+        gate_band=band,
     )

@@ -215,16 +215,17 @@ def compensator_period(sc: Scenario) -> int:
     if comp.period_s is not None:
         comp_period = comp.period_s
     elif comp.input == "demodulated":
-        comp_period = 1.0 / inj.frequency_Hz
+        comp_period = 1.0 / resolve(sc).inj_f1
     else:
         comp_period = 0.01
     n_comp = max(int(round(comp_period / Ts)), 1)
-    f3 = inj.frequency3_Hz
-    if f3 is not None and comp.enabled and resolve(sc).inj_amp > 0.0:
+    r = resolve(sc)
+    f3 = r.inj_f3
+    if f3 is not None and comp.enabled and r.inj_amp > 0.0:
         cycles = n_comp * Ts * f3
         if abs(cycles - round(cycles)) > 1e-6 * max(cycles, 1.0):
             raise ConfigError(
-                "injection.frequency3_Hz",
+                "injection.frequency3_pu" if inj.frequency3_pu else "injection.frequency3_Hz",
                 f"the compensator period ({n_comp * Ts:g} s) must hold a whole number of its "
                 f"periods (got {cycles:g})",
             )
@@ -254,7 +255,7 @@ def compensator_record(sc: Scenario) -> tuple[np.ndarray, dict]:
         demodulated=comp.input == "demodulated",
         average=comp.average,
         inj_amp=r.inj_amp,
-        inj_freq=inj.frequency_Hz,
+        inj_freq=r.inj_f1,
         inj_lpf=inj.lowpass_rad_s,
         inj_t_on=inj.t_on_s,
         inj_hp_wc=sc.mras.wc_rad_s if inj.compensate_filter else 0.0,
@@ -291,23 +292,18 @@ def _gating(sc, r) -> dict:
         }
     if not (on and comp.enabled):
         return out
-    f2 = inj.frequency2_Hz
-    if f2 is None:
-        f2 = 2.0 * inj.frequency_Hz
+    f2 = r.inj_f2
+    band = r.gate_band
     injecting = r.inj_amp > 0.0
     return out | {
         "gate": True,
         "gate_dw": comp.gate_speed_rpm * RPM,
         "gate_diq": comp.gate_iq_A,
         "gate_v": comp.gate_voltage,
-        "gate_df": comp.gate_band_Hz if injecting else 0.0,
+        "gate_df": band if injecting else 0.0,
         "gate_hold": float(comp.gate_hold_periods),
-        "inj_freq2": f2 if injecting and comp.gate_band_Hz > 0 else 0.0,
-        "inj_freq3": (
-            inj.frequency3_Hz
-            if inj.frequency3_Hz is not None and injecting and comp.gate_band_Hz > 0
-            else 0.0
-        ),
+        "inj_freq2": f2 if injecting and band > 0 else 0.0,
+        "inj_freq3": (r.inj_f3 if r.inj_f3 is not None and injecting and band > 0 else 0.0),
     }
 
 
@@ -318,8 +314,7 @@ def _drift_fmin(sc, r) -> float:
         return comp.drift_min_freq_Hz
     if r.inj_amp <= 0.0:
         return 0.0
-    f2 = sc.injection.frequency2_Hz
-    return max(sc.injection.frequency_Hz, f2 if f2 is not None else 2 * sc.injection.frequency_Hz)
+    return max(r.inj_f1, r.inj_f2)
 
 
 def fuzzy_lookup_table(sc: Scenario) -> np.ndarray:
@@ -360,8 +355,9 @@ def profile_arrays(sc: Scenario):
 def _compensator_state(sc) -> np.ndarray:
     """Initial COMPENSATOR_STATE: zeros (no previous iq* yet), the injection frequency in use."""
     st = np.zeros(1, dtype=COMPENSATOR_STATE)
-    st[0]["inj_f"] = sc.injection.frequency_Hz
-    st[0]["inj_f_prev"] = sc.injection.frequency_Hz
+    f1 = resolve(sc).inj_f1
+    st[0]["inj_f"] = f1
+    st[0]["inj_f_prev"] = f1
     return st
 
 
