@@ -169,7 +169,11 @@ class Scenario:
         Time-varying plant, load torque, DC-link inverter, which controller drives it,
         open-loop voltage, field-oriented speed control.
     estimator, mras, reactive_mras, afo, ekf : settings section
-        The controller's machine model and the speed estimators' settings.
+        The controller's machine model and the speed estimators' settings (one section per
+        estimator of the package, from its settings class).
+    plugins : PluginSettings
+        Estimators from the user's own modules (``[plugins] modules``) and their settings
+        (``[plugins.settings.NAME]``).
     flux_injection, compensator, injection : settings section
         Sinusoid on the flux command, the fuzzy R2 compensator, persistent excitation.
     sensor, simulation, output : settings section
@@ -539,3 +543,11 @@ class Scenario:
         for key in SECTIONS:
             out[key] = _to_plain(getattr(self, key))
         return out
+
+
+# the estimators' sections come from their settings classes (package_sections), so a new
+# estimator of the package is named in the docstring without an edit here
+_FOUR = "mras, reactive_mras, afo, ekf"
+assert Scenario.__doc__ and _FOUR in Scenario.__doc__
+Scenario.__doc__ = Scenario.__doc__.replace(_FOUR, ", ".join(package_sections()), 1)
+del _FOUR
