@@ -22,6 +22,7 @@ import pytest
 
 import imdrive.config
 from imdrive.config import docs
+from imdrive.config.estimators import ESTIMATOR_SETTINGS
 from imdrive.config.inverter import InverterParams
 from imdrive.config.machine import MachineParams, machine_preset
 from imdrive.config.overrides import is_setting
@@ -130,6 +131,11 @@ def test_only_the_first_error_one_line():
 
 M = {"R1_ohm": 0.435, "R2_ohm": 0.816, "Ll1_H": 0.002, "Ll2_H": 0.002, "M_H": 0.0693}
 
+# the package's first four in this order, then every further registered estimator (each adds
+# its settings class, config/estimators.py) in registration order
+_FIRST = ("measured", "mras", "reactive-mras", "afo", "ekf")
+_KNOWN_ESTIMATORS = [*_FIRST, *(n for n in ESTIMATOR_SETTINGS if n not in _FIRST)]
+
 DIRECT = [
     (lambda: MachineParams(**(M | {"R1_ohm": -1})), "machine.R1_ohm: must be > 0 (got -1.0)"),
     (lambda: MachineParams(**(M | {"pole_pairs": 0})), "machine.pole_pairs: must be >= 1 (got 0)"),
@@ -137,7 +143,7 @@ DIRECT = [
     (lambda: MachineParams(**M, bogus=1), "machine.bogus: unknown key"),
     (
         lambda: ControlSettings(speed_feedback="x"),
-        "control.speed_feedback: must be one of 'measured', 'mras', 'reactive-mras', 'afo', 'ekf'",
+        "control.speed_feedback: must be one of " + ", ".join(map(repr, _KNOWN_ESTIMATORS)),
     ),
     (lambda: ThermalSettings(tau1_s=0), "plant.thermal.tau1_s: must be > 0 (got 0.0)"),
     (lambda: SimulationSettings(substeps="a"), "simulation.substeps: must be an integer, got 'a'"),

@@ -52,6 +52,7 @@ ESTIMATORS: dict[str, list[str]] = {
         "flux_injection.amplitude=0.1",
         "flux_injection.frequency_Hz=2.0",
     ],
+    "smo-mras": ['control.speed_feedback="smo-mras"'],
 }
 
 

@@ -21,6 +21,7 @@ from pathlib import Path
 
 import annotated_types
 
+from imdrive.config.estimators import package_sections
 from imdrive.config.machine import machine_preset, machine_presets
 from imdrive.config.profiles import Profile
 from imdrive.config.scenario import DEFAULT_MACHINE_PRESET, Scenario
@@ -170,10 +171,9 @@ def _type(key: Key) -> str:
     elif typing.get_origin(hint) is dict:
         name = "tables by estimator name"
     if key.path == ("control", "speed_feedback"):
-        return (
-            '`"measured"` or `"mras"` or `"reactive-mras"` or `"afo"` or `"ekf"` or a plug-in '
-            "estimator's name"
-        )
+        # the package's estimators, from their settings classes (the MRAS first)
+        names = ["measured", *(c.estimator_name for c in package_sections().values())]
+        return " or ".join(f'`"{n}"`' for n in names) + " or a plug-in estimator's name"
     if name is None:  # pragma: no cover - a new kind of field needs a name here
         raise TypeError(f"no docs name for {hint!r} ({key.dotted})")
     return " ".join([name, *rules])

@@ -179,10 +179,10 @@ class Scenario:
         open-loop voltage, field-oriented speed control.
     estimator, mras, reactive_mras, afo, ekf : settings section
         The controller's machine model and the speed estimators' settings (one section per
-        estimator of the package).
+        estimator of the package, from its settings class).
     plugins : PluginSettings
-        Modules of the user's own estimators, imported before the scenario is read, and
-        their settings (``[plugins.settings.NAME]``).
+        Estimators from the user's own modules (``[plugins] modules``) and their settings
+        (``[plugins.settings.NAME]``).
     flux_injection, compensator, injection : settings section
         Sinusoid on the flux command, the fuzzy R2 compensator, persistent excitation.
     sensor, simulation, output : settings section
@@ -652,3 +652,11 @@ class Scenario:
         if getattr(self.inverter, "_Vdc_auto", False):  # derived from the machine: unset
             out["inverter"]["Vdc_V"] = None
         return out
+
+
+# the estimators' sections come from their settings classes (package_sections), so a new
+# estimator of the package is named in the docstring without an edit here
+_FOUR = "mras, reactive_mras, afo, ekf"
+assert Scenario.__doc__ and _FOUR in Scenario.__doc__
+Scenario.__doc__ = Scenario.__doc__.replace(_FOUR, ", ".join(package_sections()), 1)
+del _FOUR
