@@ -140,6 +140,24 @@ class CompensatorSettings:
             gt=0.0,
         ),
     ] = 0.3
+    gate_speed_pu: Annotated[
+        Float | None,
+        setting(
+            "gate_speed_rpm in per-unit of the machine's rated slip speed; when set it "
+            "replaces gate_speed_rpm",
+            gt=0.0,
+            default_doc="unset: gate_speed_rpm",
+        ),
+    ] = None
+    gate_iq_pu: Annotated[
+        Float | None,
+        setting(
+            "gate_iq_A in per-unit of the machine's rated current (machine.rated_current_A, "
+            "peak); when set it replaces gate_iq_A",
+            gt=0.0,
+            default_doc="unset: gate_iq_A",
+        ),
+    ] = None
     gate_voltage: Annotated[
         Float,
         setting(

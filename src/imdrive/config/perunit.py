@@ -15,6 +15,8 @@ per-unit key                                SI value
 ``injection.frequency_pu`` (``2_``, ``3_``) ``pu x R2_hat(0) / (2 pi L2_hat)``, Hz, rounded
                                             to whole control periods
 ``compensator.gate_band_pu``                ``pu x`` the first injection frequency, Hz
+``compensator.gate_speed_pu``               ``pu x`` the rated slip speed, rpm
+``compensator.gate_iq_pu``                  ``pu x machine.rated_current_A``, A
 ``inverter.Vdc_V`` unset                    ``sqrt(2) x rated line voltage`` (the scenario)
 ==========================================  ===============================================
 
@@ -56,6 +58,8 @@ class Resolved:
         The third frequency of the schedule, Hz (``None``: two frequencies).
     gate_band : float
         The gating's band around the stator frequency, Hz.
+    gate_speed_rpm, gate_iq_A : float
+        The gating's speed (rpm) and iq* (A) thresholds of a transient.
     """
 
     R1_hat: float
@@ -73,6 +77,8 @@ class Resolved:
     inj_f2: float
     inj_f3: float | None
     gate_band: float
+    gate_speed_rpm: float
+    gate_iq_A: float
 
 
 def _whole_periods(f: float, Ts: float) -> float:
@@ -142,6 +148,13 @@ def resolve(sc) -> Resolved:
         f2 = inj.frequency2_Hz if inj.frequency2_Hz is not None else 2.0 * f1
         f3 = inj.frequency3_Hz
     band = comp.gate_band_Hz if comp.gate_band_pu is None else comp.gate_band_pu * f1
+    gate_speed = comp.gate_speed_rpm
+    if comp.gate_speed_pu is not None:
+        from imdrive.config.machine import rated_point
+
+        rp = rated_point(m)
+        gate_speed = comp.gate_speed_pu * (rp.synchronous_speed_rpm - rp.speed_rpm)
+    gate_iq = comp.gate_iq_A if comp.gate_iq_pu is None else comp.gate_iq_pu * m.rated_current_A
     return Resolved(
         R1_hat=R1,
         R2_hat=R2,
@@ -158,4 +171,6 @@ def resolve(sc) -> Resolved:
         inj_f2=f2,
         inj_f3=f3,
         gate_band=band,
+        gate_speed_rpm=gate_speed,
+        gate_iq_A=gate_iq,
     )

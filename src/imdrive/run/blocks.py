@@ -297,8 +297,8 @@ def _gating(sc, r) -> dict:
     injecting = r.inj_amp > 0.0
     return out | {
         "gate": True,
-        "gate_dw": comp.gate_speed_rpm * RPM,
-        "gate_diq": comp.gate_iq_A,
+        "gate_dw": r.gate_speed_rpm * RPM,
+        "gate_diq": r.gate_iq_A,
         "gate_v": comp.gate_voltage,
         "gate_df": band if injecting else 0.0,
         "gate_hold": float(comp.gate_hold_periods),
