@@ -47,16 +47,27 @@ def _parse_ratios(text: str | None, name: str) -> list[float]:
     return out
 
 
+def _default_grid(scenario) -> tuple[str, str]:
+    """The map's default axes in per-unit of the machine: speeds 0 to the rated speed (50
+    points), load torques within twice the rated torque (41 points), as ``MIN:MAX:N``."""
+    from imdrive.config.machine import rated_point
+
+    rp = rated_point(scenario.machine)
+    n, t = rp.speed_rpm, 2.0 * rp.torque_Nm
+    return f"0:{n:.6g}:50", f"{-t:.6g}:{t:.6g}:41"
+
+
 def _cmd_stability(args) -> int:
     import pandas as pd
 
     from imdrive.config.scenario import Scenario
 
-    speeds = _parse_range(args.speeds, "--speeds")
-    torques = _parse_range(args.torques, "--torques")
     r1 = _parse_ratios(args.R1_ratios, "--r1-ratios")
     r2 = _parse_ratios(args.R2_ratios, "--r2-ratios")
     scenario = Scenario.read(args.scenario, args.set or [])
+    speed_range, torque_range = _default_grid(scenario)
+    speeds = _parse_range(args.speeds or speed_range, "--speeds")
+    torques = _parse_range(args.torques or torque_range, "--torques")
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise ConfigError("--out", f"{out} exists and is not a folder")
@@ -118,12 +129,16 @@ def add_parser(sub) -> None:
     st.add_argument(
         "--set", action="append", metavar="KEY.PATH=VALUE", help="override (repeatable)"
     )
-    st.add_argument("--speeds", default="0:1500:50", metavar="MIN:MAX:N", help="speed refs, rpm")
+    st.add_argument(
+        "--speeds",
+        metavar="MIN:MAX:N",
+        help="speed refs, rpm (default 0 to the machine's rated speed, 50 points)",
+    )
     st.add_argument(
         "--torques",
-        default="-24:24:40",
         metavar="MIN:MAX:N",
-        help="load torques, N m (write --torques=-24:24:40 for a negative start)",
+        help="load torques, N m (default within twice the machine's rated torque, 41 points; "
+        "write --torques=-24:24:40 for a negative start)",
     )
     st.add_argument(
         "--r1-ratios", dest="R1_ratios", metavar="A,B,...", help="overlay maps for R1_hat/R1"

@@ -174,3 +174,31 @@ def resolve(sc) -> Resolved:
         gate_speed_rpm=gate_speed,
         gate_iq_A=gate_iq,
     )
+
+
+def lost_control_rpm(sc) -> float:
+    """The loss-of-control bound of scenario ``sc``, rpm: ``simulation.lost_control_rpm``, or
+    by default twice the machine's rated slip speed, at least 1 % of its rated speed (a drive
+    in control holds its speed within the slip error that even a 100 % R2_hat error causes).
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+
+    Returns
+    -------
+    float
+        The bound, rpm (0: not checked).
+    """
+    given = sc.simulation.lost_control_rpm
+    if given is not None:
+        return given
+    from imdrive.config.machine import rated_point
+
+    try:
+        rp = rated_point(sc.machine)
+    except ConfigError:  # a circuit without a rated point: the synchronous speed's 10 %
+        return 0.1 * 60.0 * sc.machine.rated_frequency_Hz / sc.machine.pole_pairs
+    slip_rpm = rp.synchronous_speed_rpm - rp.speed_rpm
+    return max(2.0 * slip_rpm, 0.01 * rp.speed_rpm)

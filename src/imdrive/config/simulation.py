@@ -79,14 +79,16 @@ class SimulationSettings:
         Float, setting("speed magnitude that stops a diverging run", "rpm", gt=0.0)
     ] = 20000.0
     lost_control_rpm: Annotated[
-        Float,
+        Float | None,
         setting(
             "loss of control: the actual speed departs from its reference by more than this "
             "(vector control, free speed; 0: not checked)",
             "rpm",
             ge=0.0,
+            default_doc="twice the machine's rated slip speed, at least 1 % of its rated speed "
+            "(158 rpm on Table IV)",
         ),
-    ] = 200.0
+    ] = None
     lost_control_s: Annotated[
         Float,
         setting("... for at least this long without interruption", "s", gt=0.0),

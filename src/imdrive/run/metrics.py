@@ -54,6 +54,7 @@ import math
 
 import numpy as np
 
+from imdrive.config.perunit import lost_control_rpm
 from imdrive.kernels.batch import CONVERGENCE_BAND, METRICS
 
 DEFAULT_WINDOW_S = 0.5
@@ -73,12 +74,9 @@ __all__ = [
 def lost_control_check(scenario) -> tuple[float, float]:
     """``(bound, duration)`` of the loss-of-control check: rad/s (0: off) and s."""
     sim = scenario.simulation
-    on = (
-        scenario.drive.mode == "vector"
-        and scenario.plant.speed_mode != "imposed"
-        and sim.lost_control_rpm > 0.0
-    )
-    return (sim.lost_control_rpm * math.pi / 30.0 if on else 0.0), sim.lost_control_s
+    bound = lost_control_rpm(scenario)
+    on = scenario.drive.mode == "vector" and scenario.plant.speed_mode != "imposed" and bound > 0
+    return (bound * math.pi / 30.0 if on else 0.0), sim.lost_control_s
 
 
 def lost_control_time(time_s, speed_rpm, speed_ref_rpm, bound_rpm, duration_s) -> float:

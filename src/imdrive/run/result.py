@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from imdrive.config.perunit import lost_control_rpm
 from imdrive.kernels.engine import S_CURRENT, S_NAN, S_OK, S_SPEED, DriveParams, DriveState
 from imdrive.kernels.machine import magnetic_energy
 from imdrive.kernels.records import record_bytes
@@ -245,7 +246,8 @@ class SimulationResult:
         sim = self.scenario.simulation
         return (
             f"lost control at t = {self.lost_control_at_s:.6g} s: the speed stayed more than "
-            f"{sim.lost_control_rpm:g} rpm from its reference for {sim.lost_control_s:g} s or "
+            f"{lost_control_rpm(self.scenario):.3g} rpm from its reference for "
+            f"{sim.lost_control_s:g} s or "
             "longer (simulation.lost_control_rpm, lost_control_s)"
         )
 
