@@ -101,8 +101,16 @@ class ControlSettings:
         ),
     ] = None
     speed_bandwidth_Hz: Annotated[
-        Float, setting("speed-loop bandwidth the speed PI gains are derived from", "Hz", gt=0.0)
-    ] = 5.0
+        Float | None,
+        setting(
+            "speed-loop bandwidth the speed PI gains are derived from",
+            "Hz",
+            gt=0.0,
+            default_doc="5 Hz, raised for a machine whose rated torque would pull the speed "
+            "down by more than 5 % of its rated speed in a rated-load step (config/perunit.py "
+            "speed_bandwidth_Hz; at most a tenth of current_bandwidth_Hz)",
+        ),
+    ] = None
     current_bandwidth_Hz: Annotated[
         Float,
         setting("current-loop bandwidth the current PI gains are derived from", "Hz", gt=0.0),

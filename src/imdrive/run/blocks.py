@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from imdrive.config.perunit import resolve
+from imdrive.config.perunit import resolve, speed_bandwidth_Hz
 from imdrive.config.profiles import Profile
 from imdrive.config.scenario import Scenario
 from imdrive.design.gains import default_current_gains, default_speed_gains
@@ -170,7 +170,7 @@ def control_record(sc: Scenario, mh: dict, psi0: float) -> tuple[np.ndarray, dic
     kp_i, ki_i = default_current_gains(
         mh["sigma_L1_hat"], R_sigma, 2 * math.pi * ctl.current_bandwidth_Hz
     )
-    kp_w, ki_w = default_speed_gains(m.J_kgm2, k_t, 2 * math.pi * ctl.speed_bandwidth_Hz)
+    kp_w, ki_w = default_speed_gains(m.J_kgm2, k_t, 2 * math.pi * speed_bandwidth_Hz(sc))
     gains = {
         "current_kp": ctl.current_kp if ctl.current_kp is not None else kp_i,
         "current_ki": ctl.current_ki if ctl.current_ki is not None else ki_i,

@@ -1,0 +1,239 @@
+"""The drive over the machine library: every published machine, in per-unit of itself.
+
+For each machine of ``config/data/machines.toml`` and each of two drives -- ``sensorless``
+(Schauder's MRAS, no R2 tracking) and ``injection-robust`` (the recommended R2-tracking
+preset) -- a grid in per-unit of the machine: speed reference as a fraction of its rated speed,
+load torque as a fraction of its rated torque (negative: regenerating), and the controller's
+starting ``R2_hat(0)/R2``. Only ``[machine]`` and the operating point change: every other
+setting the presets leave derived or state in per-unit (config/perunit.py), which is what
+this study checks.
+
+Times follow the machine too (:func:`timeline`): the speed reference ramps from 0 at 0.5 s over
+``max(1 s, 2 tau_m)`` (``tau_m = J w_rated / T_rated``, the time the rated torque takes to
+reach the rated speed, so the ramp needs at most half the rated torque), the load steps 0.5 s
+after the ramp, and the run ends ``T_END_S - 2 s`` later, stretched by ``T2 / T2_TableIV``
+for a machine whose rotor is slower than Table IV's (the R2 detection's injection frequency,
+hence its decisions, scale with ``1/T2``). Its verdict (:func:`verdict`):
+
+* ``lost``: it lost control (the speed left its reference by the loss-of-control bound for a
+  second) or diverged;
+* ``converged``: ``sensorless``: the steady speed error equals the detuning law's
+  ``slip (R2_hat/R2 - 1)`` (:func:`imdrive.analysis.detuning_speed_error_rpm`) within the
+  tolerance; ``injection-robust``: R2_hat within 2 % of R2 and the speed error within the
+  tolerance. The tolerance is 1 rpm or 0.1 % of the rated speed, whichever is larger;
+* ``not converged``: stable, but outside those bounds at the end.
+
+``python -m imdrive.studies.machines OUT_CSV`` runs the grid (252 drives) and writes
+the runs; ``python -m imdrive.studies.machines --markdown CSV`` prints the table of
+docs/machine-envelope.md, which a test re-renders from the stored CSV.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from imdrive.analysis import detuning_speed_error_rpm
+from imdrive.config.machine import machine_presets, rated_point
+from imdrive.config.scenario import Scenario
+from imdrive.errors import ConfigWarning
+from imdrive.run.batch import simulate_batch
+
+DRIVES = ("sensorless", "injection-robust")
+SPEEDS_PU = (0.1, 0.5, 1.0)
+LOADS_PU = (-1.0, 0.0, 1.0)
+R2_RATIOS = (0.8, 1.2)
+T_END_S = 14.5
+R2_BAND_PCT = 2.0
+
+
+def tolerance_rpm(rated_speed_rpm: float) -> float:
+    """The speed tolerance: 1 rpm or 0.1 % of the rated speed, whichever is larger, rpm."""
+    return max(1.0, 1e-3 * rated_speed_rpm)
+
+
+#: Table IV's rotor time constant L2/R2, s (the time scale the presets' timings were set for)
+T2_TABLE_IV = 0.0870
+
+
+def timeline(machine) -> tuple[float, float, float]:
+    """``(ramp_s, load_at_s, t_end_s)`` of a run on ``machine`` (module docstring)."""
+    rp = rated_point(machine)
+    w_rated = rp.speed_rpm * math.pi / 30.0
+    tau_m = machine.J_kgm2 * w_rated / rp.torque_Nm
+    ramp = max(1.0, 2.0 * tau_m)
+    load_at = 0.5 + ramp + 0.5
+    T2 = (machine.Ll2_H + machine.M_H) / machine.R2_ohm
+    return ramp, load_at, load_at + (T_END_S - 2.0) * max(1.0, T2 / T2_TABLE_IV)
+
+
+def scenarios(machines=None, drives=DRIVES, speeds=SPEEDS_PU, loads=LOADS_PU, ratios=R2_RATIOS):
+    """The grid's scenarios and a row describing each.
+
+    Parameters
+    ----------
+    machines : sequence of str, optional
+        Machine presets (default: the whole library).
+    drives : sequence of str
+        Scenario presets.
+    speeds, loads : sequence of float
+        Speed reference and load torque in per-unit of the machine's rated speed and torque.
+    ratios : sequence of float
+        ``R2_hat(0)/R2``.
+
+    Returns
+    -------
+    list of Scenario
+    pandas.DataFrame
+        ``machine, drive, speed_pu, load_pu, R2_ratio, speed_rpm, load_Nm, rated_speed_rpm``.
+    """
+    rows, out = [], []
+    for m in machines or machine_presets():
+        for drive in drives:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", ConfigWarning)
+                base = Scenario.read(drive, [f'machine.preset="{m}"'])
+            rp = rated_point(base.machine)
+            ramp, load_at, t_end = timeline(base.machine)
+            for s in speeds:
+                for load in loads:
+                    for r in ratios:
+                        n, T = s * rp.speed_rpm, load * rp.torque_Nm
+                        ov = [
+                            f"control.speed_ref_rpm={{initial=0, changes=[{{at=0.5, to={n}, "
+                            f"over={ramp}}}]}}",
+                            f"load.torque_Nm={{initial=0, changes=[{{at={load_at}, to={T}}}]}}",
+                            f"simulation.t_end_s={t_end}",
+                            f"estimator.R2_ohm={r * base.machine.R2_ohm}",
+                        ]
+                        if base.estimator.R2_ratio is not None:
+                            ov[-1] = f"estimator.R2_ratio={r}"
+                        out.append(base.with_overrides(ov))
+                        rows.append(
+                            dict(
+                                machine=m,
+                                drive=drive,
+                                speed_pu=s,
+                                load_pu=load,
+                                R2_ratio=r,
+                                speed_rpm=n,
+                                load_Nm=T,
+                                rated_speed_rpm=rp.speed_rpm,
+                            )
+                        )
+    return out, pd.DataFrame(rows)
+
+
+def verdict(row) -> str:
+    """``lost``, ``converged`` or ``not converged`` for one run (module docstring)."""
+    if row["status"] != 0 or row["lost_control"]:
+        return "lost"
+    tol = tolerance_rpm(row["rated_speed_rpm"])
+    if row["drive"] == "injection-robust":
+        ok = abs(row["R2_error_pct"]) <= R2_BAND_PCT and abs(row["speed_error_rpm"]) <= tol
+    else:
+        ok = abs(row["speed_error_rpm"] - row["detuning_law_rpm"]) <= tol
+    return "converged" if ok else "not converged"
+
+
+def run(machines=None, **grid) -> pd.DataFrame:
+    """Run the grid and return one row per drive with its metrics and verdict.
+
+    Parameters
+    ----------
+    machines : sequence of str, optional
+        Machine presets (default: the whole library).
+    **grid
+        ``drives``, ``speeds``, ``loads``, ``ratios`` of :func:`scenarios`.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The grid's columns, the batch metrics, ``detuning_law_rpm`` and ``verdict``.
+    """
+    scs, table = scenarios(machines, **grid)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConfigWarning)
+        res = simulate_batch(scs, errors="record")
+    m = res.metrics.drop(columns=["drive"])
+    table = pd.concat([table, m], axis=1)
+    table["detuning_law_rpm"] = [
+        float(detuning_speed_error_rpm(sc.machine, row.speed_rpm, row.load_Nm, row.R2_ratio))
+        if row.drive == "sensorless"
+        else math.nan
+        for sc, row in zip(scs, table.itertuples(), strict=True)
+    ]
+    table["verdict"] = [verdict(r) for _, r in table.iterrows()]
+    return table
+
+
+def markdown(table: pd.DataFrame) -> str:
+    """The per-machine table: runs converged / not converged / lost for each drive.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        As :func:`run` returns it (or read back from its CSV).
+
+    Returns
+    -------
+    str
+        A Markdown table, one row per machine, one column group per drive.
+    """
+    lines = [
+        "| machine | " + " | ".join(f"{d}: converged / not / lost" for d in DRIVES) + " |",
+        "|---|" + "---|" * len(DRIVES),
+    ]
+    for m, g in table.groupby("machine", sort=False):
+        cells = []
+        for d in DRIVES:
+            v = g[g["drive"] == d]["verdict"]
+            n = len(v)
+            c, nc, lost = ((v == k).sum() for k in ("converged", "not converged", "lost"))
+            cells.append(f"{c} / {nc} / {lost} of {n} ({100 * c / n:.0f} %)" if n else "–")
+        lines.append(f"| {m} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+PAGE = Path(__file__).resolve().parents[3] / "docs" / "machine-envelope.md"
+CSV = PAGE.parent / "data" / "machine_envelope.csv"
+_BEGIN = (
+    "<!-- table: python -m imdrive.studies.machines --markdown docs/data/machine_envelope.csv -->"
+)
+_END = "<!-- end of table -->"
+
+
+def page_with_table(text: str, table_md: str) -> str:
+    """``text`` (docs/machine-envelope.md) with the generated table between its markers."""
+    a = text.index(_BEGIN) + len(_BEGIN)
+    b = text.index(_END)
+    return text[:a] + "\n" + table_md + text[b:]
+
+
+def main(argv=None) -> int:
+    """``python -m imdrive.studies.machines OUT_CSV`` or ``--markdown CSV`` (docstring)."""
+    argv = sys.argv[1:] if argv is None else argv
+    if len(argv) == 2 and argv[0] == "--markdown":
+        sys.stdout.write(markdown(pd.read_csv(argv[1])))
+        return 0
+    if len(argv) != 1:
+        print(__doc__.splitlines()[0], "\nusage: OUT_CSV | --markdown CSV", file=sys.stderr)
+        return 2
+    table = run()
+    Path(argv[0]).parent.mkdir(parents=True, exist_ok=True)
+    table.to_csv(argv[0], index=False, float_format="%.9g")
+    sys.stdout.write(markdown(table))
+    if Path(argv[0]).resolve() == CSV and PAGE.exists():  # the docs' own table: refresh it
+        PAGE.write_text(page_with_table(PAGE.read_text(), markdown(pd.read_csv(CSV))))
+    counts = table["verdict"].value_counts().to_dict()
+    print(f"{len(table)} runs: {counts}", file=sys.stderr)
+    return 0 if np.isfinite(len(table)) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
