@@ -44,3 +44,35 @@ def test_reduced_grid_on_two_machines():
     ]
     # the law's error is +20 % of each machine's own rated slip (Table IV 79 rpm, Aalto 61 rpm)
     assert t["detuning_law_rpm"].between(8.0, 20.0).all()
+
+
+def test_a_sweep_axis_over_machines_keeps_the_settings_per_unit():
+    """``"machine.preset"`` as an axis: each run gets its machine, the DC link of its rated
+    voltage and the starting R2 error as a ratio of its own R2."""
+    import warnings
+
+    from imdrive.errors import ConfigWarning
+    from imdrive.sweep import parse_sweep
+
+    sweep = parse_sweep(
+        """
+        name = "library"
+        base = "injection-robust"
+        [axes]
+        "machine.preset" = { values = ["paper-table-iv", "krause-50hp", "aalto-2.2kw"] }
+        R2_ratio = [0.8, 1.2]
+        """
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ConfigWarning)  # nothing tuned for another machine
+        runs = [sweep.scenario(i) for i in range(6)]
+    from imdrive.config.perunit import resolve
+
+    for sc, (machine, ratio) in zip(
+        runs,
+        [(m, r) for m in ("paper-table-iv", "krause-50hp", "aalto-2.2kw") for r in (0.8, 1.2)],
+        strict=True,
+    ):
+        assert sc.machine_preset == machine
+        assert sc.inverter.Vdc_V == pytest.approx(sc.machine.rated_voltage_V * 2**0.5)
+        assert resolve(sc).R2_hat == pytest.approx(ratio * sc.machine.R2_ohm)

@@ -14,6 +14,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from imdrive.config.perunit import resolve
 from imdrive.config.scenario import Scenario
 from imdrive.errors import ConfigError
 from imdrive.run.simulate import simulate
@@ -85,7 +86,7 @@ def test_grid_runs_are_the_product_last_axis_fastest(small_file):
     assert sw.run_values(2) == (0.8, 900, "stable")
     assert sw.run_values(11) == (1.2, 900, "unstable")
     sc = sw.scenario(7)  # R2_ratio 1.0, 900 rpm, unstable
-    assert sc.estimator.R2_ohm == pytest.approx(R2)
+    assert sc.estimator.R2_ratio == 1.0 and resolve(sc).R2_hat == pytest.approx(R2)
     assert sc.control.speed_ref_rpm.points[-1] == (0.2, 900.0)
     assert sc.control.speed_ref_rpm.points[:-1] == ((0.0, 0.0), (0.05, 0.0))
     assert sc.control.current_kp == 150.0 and sc.inverter.Vdc_V == 1e5
@@ -98,7 +99,7 @@ def test_run_scenarios_equal_scenario_read_with_the_same_overrides(small_file):
         "simulation.t_end_s=0.4",
         "control.speed_ref_rpm={ initial = 0, changes = [{ at = 0.05, to = 900, over = 0.15 }] }",
         "load.torque_Nm={ initial = 0, changes = [{ at = 0.25, to = 6 }] }",
-        f"estimator.R2_ohm={1.2 * R2}",
+        "estimator.R2_ratio=1.2",  # the R2_ratio axis: a ratio of the run's machine's R2
     ]
     assert sw.scenario(10) == Scenario.read("sensorless", ov)
     # the fast path for key paths (dataclasses.replace) equals the TOML-dict path
@@ -151,7 +152,7 @@ def test_step_ranges_and_preset_sweep():
     ref_p = Scenario.read("paper-fig5")
     ref_i = Scenario.read("injection-fig5")
     assert paper.compensator == ref_p.compensator
-    assert paper.estimator.R2_ohm == pytest.approx(ref_p.estimator.R2_ohm, rel=1e-15)
+    assert resolve(paper).R2_hat == pytest.approx(ref_p.estimator.R2_ohm, rel=1e-15)
     assert inj.compensator == ref_i.compensator and inj.injection == ref_i.injection
     assert paper.control == ref_p.control and paper.load == ref_p.load
     plain = dm.scenario_for((1.0, 50, 0.0, "uncompensated"))

@@ -48,9 +48,12 @@ Axes
     An axis is named by a scenario key path (``estimator.R2_ohm``, ``control.current_kp``,
     ``machine.J_kgm2``, ...; values as in a scenario file) or is one of
 
-    * ``R2_ratio``  — R2_hat/R2: sets ``estimator.R2_ohm`` to the value times the run's
-      ``machine.R2_ohm``;
-    * ``R1_ratio``  — R1_hat/R1: the same for ``estimator.R1_ohm``;
+    * ``R2_ratio``  — R2_hat/R2: sets ``estimator.R2_ratio`` (the starting R2_hat is the value
+      times the run's ``machine.R2_ohm``; an ``estimator.R2_ohm`` of the base is dropped);
+    * ``R1_ratio``  — R1_hat/R1: the same for ``estimator.R1_ratio``;
+    * ``"machine.preset"`` — machines of the library (``{ values = ["krause-50hp", ...] }``):
+      every setting the base leaves derived or states in per-unit follows each run's machine
+      (docs/machine-envelope.md);
     * ``speed_rpm`` — the final speed reference: sets the value of the last breakpoint of
       ``control.speed_ref_rpm`` (the base's ramp or step then ends at this speed);
     * ``load_Nm``   — the final load: the same for ``load.torque_Nm``;

@@ -23,8 +23,8 @@ from imdrive.errors import ConfigError
 
 CONVENIENCE = ("R2_ratio", "R1_ratio", "speed_rpm", "load_Nm")
 CONVENIENCE_TARGET = {
-    "R2_ratio": "estimator.R2_ohm",
-    "R1_ratio": "estimator.R1_ohm",
+    "R2_ratio": "estimator.R2_ratio",
+    "R1_ratio": "estimator.R1_ratio",
     "speed_rpm": "control.speed_ref_rpm",
     "load_Nm": "load.torque_Nm",
 }
@@ -348,11 +348,12 @@ def _with_final(profile: Profile, value: float) -> Profile:
 
 
 def _with_R2_ratio(sc: Scenario, ratio: float) -> Scenario:
-    return replace(sc, estimator=replace(sc.estimator, R2_ohm=ratio * sc.machine.R2_ohm))
+    # as a ratio, so it follows the machine of the run (a machine axis may change it)
+    return replace(sc, estimator=replace(sc.estimator, R2_ohm=None, R2_ratio=ratio))
 
 
 def _with_R1_ratio(sc: Scenario, ratio: float) -> Scenario:
-    return replace(sc, estimator=replace(sc.estimator, R1_ohm=ratio * sc.machine.R1_ohm))
+    return replace(sc, estimator=replace(sc.estimator, R1_ohm=None, R1_ratio=ratio))
 
 
 def _with_speed(sc: Scenario, rpm: float) -> Scenario:
