@@ -246,3 +246,26 @@ def speed_bandwidth_Hz(sc) -> float:
     w_bw = 0.6 * rp.torque_Nm / (m.J_kgm2 * SPEED_DIP_PU * w_rated)
     need = w_bw / (2.0 * math.pi)
     return max(SPEED_BANDWIDTH_MIN_HZ, min(need, sc.control.current_bandwidth_Hz / 10.0))
+
+
+def divergence_speed_rpm(sc) -> float:
+    """The speed that stops a diverging run, rpm: ``simulation.divergence_speed_rpm``, or by
+    default ``20000/1800`` times the machine's synchronous speed (20 000 rpm on the 1800 rpm
+    Table IV machine, where the bound was first set; a 2-pole 400 Hz spindle would have hit a
+    fixed 20 000 rpm in normal operation).
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+
+    Returns
+    -------
+    float
+        The bound, rpm.
+    """
+    given = sc.simulation.divergence_speed_rpm
+    if given is not None:
+        return given
+    m = sc.machine
+    return 20000.0 * (60.0 * m.rated_frequency_Hz / m.pole_pairs) / 1800.0

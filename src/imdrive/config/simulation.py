@@ -76,8 +76,15 @@ class SimulationSettings:
         ),
     ] = None
     divergence_speed_rpm: Annotated[
-        Float, setting("speed magnitude that stops a diverging run", "rpm", gt=0.0)
-    ] = 20000.0
+        Float | None,
+        setting(
+            "speed magnitude that stops a diverging run",
+            "rpm",
+            gt=0.0,
+            default_doc="20000/1800 (about 11) × the machine's synchronous speed: 20000 rpm on "
+            "Table IV",
+        ),
+    ] = None
     lost_control_rpm: Annotated[
         Float | None,
         setting(

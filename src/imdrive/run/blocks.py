@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from imdrive.config.perunit import resolve, speed_bandwidth_Hz
+from imdrive.config.perunit import divergence_speed_rpm, resolve, speed_bandwidth_Hz
 from imdrive.config.profiles import Profile
 from imdrive.config.scenario import Scenario
 from imdrive.design.gains import default_current_gains, default_speed_gains
@@ -92,7 +92,7 @@ def sim_record(sc: Scenario) -> np.ndarray:
         Ts=sc.simulation.Ts_s,
         nsub=sc.simulation.substeps,
         i_lim=divergence_current(sc),
-        w_lim=sc.simulation.divergence_speed_rpm * RPM,
+        w_lim=divergence_speed_rpm(sc) * RPM,
         mode=DRIVE_FOC if sc.drive.mode == "vector" else DRIVE_OPEN_LOOP,
         sensorless=ctl.speed_feedback != "measured",
         delay=ctl.delay_periods,
