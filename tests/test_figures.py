@@ -44,7 +44,7 @@ def _all_figures(fig5, injection):
             plots.estimator_figure(res),
             plots.compensation_figure(res),
             plots.result_figure(res),
-            plots.result_figure(res, signals=["e_d0_Wb", "flux_Wb", "R2_est_ohm"]),
+            plots.result_figure(res, signals=["e_d0_Wb", "flux_Wb", "R2_hat_ohm"]),
         ]
     figs.append(paper.figure_e_d0_vs_ratio(pd.read_csv(FIGURES / "e_d0_vs_R2_ratio.csv")))
     figs.append(paper.figure_e_d0_vs_Ts(pd.read_csv(FIGURES / "e_d0_vs_Ts.csv")))

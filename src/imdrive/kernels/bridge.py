@@ -49,7 +49,7 @@ from imdrive.kernels.machine import (
 
 @njit(cache=True)
 def switching_period(
-    pinv, sinv, pp, x, v_a, v_b, Vdc_meas, R1b, R2b, TL0, Ts, nsub, work, ev, trace
+    pinv, sinv, pp, x, v_alpha, v_beta, Vdc_meas, R1b, R2b, TL0, Ts, nsub, work, ev, trace
 ):
     """Integrate the plant over one carrier period of the switching bridge (updates ``x``).
 
@@ -66,7 +66,7 @@ def switching_period(
     of every interval while it has rows (pass a zero-row array for none): the current ripple's
     extremes are at these instants.
     """
-    d = duty_cycles(v_a, v_b, Vdc_meas)
+    d = duty_cycles(v_alpha, v_beta, Vdc_meas)
     ev_t = ev[0]
     ev_leg = ev[1]
     ev_state = ev[2]
@@ -115,8 +115,8 @@ def switching_period(
     int_is2 = 0.0
     int_ir2 = 0.0
     e_in = 0.0
-    acc_a = 0.0
-    acc_b = 0.0
+    acc_alpha = 0.0
+    acc_beta = 0.0
     short = Ts / (40.0 * nsub)  # intervals up to this long: one second-order step
     t = 0.0
     j = 0
@@ -207,8 +207,8 @@ def switching_period(
                 ira = era
                 irb = erb
                 Te = Te_e
-            acc_a += dt * va
-            acc_b += dt * vb
+            acc_alpha += dt * va
+            acc_beta += dt * vb
             t = t_next
         if kind == 0:
             break
@@ -253,4 +253,4 @@ def switching_period(
     x.E_cu += p_cu1 + p_cu2
     x.E_em += int_Te * w_avg
     x.E_load += load_int * w_avg
-    return acc_a / Ts, acc_b / Ts
+    return acc_alpha / Ts, acc_beta / Ts

@@ -83,12 +83,12 @@ def quantise(u, bits, full_scale):
 
 
 @njit(cache=True)
-def measure_current(p, i_s_a, i_s_b, k):
+def measure_current(p, i_s_alpha, i_s_beta, k):
     """Measured stator current ``(i_alpha, i_beta)`` at sample ``k``, A."""
     if not p.phase_model:
-        return i_s_a + p.i_offset_ab.real, i_s_b + p.i_offset_ab.imag
-    ia = i_s_a
-    ib = -0.5 * i_s_a + 0.5 * math.sqrt(3.0) * i_s_b
+        return i_s_alpha + p.i_offset_ab.real, i_s_beta + p.i_offset_ab.imag
+    ia = i_s_alpha
+    ib = -0.5 * i_s_alpha + 0.5 * math.sqrt(3.0) * i_s_beta
     ma = p.gain_a * ia + p.offset_a
     mb = p.gain_b * ib + p.offset_b
     if p.noise_rms > 0.0:

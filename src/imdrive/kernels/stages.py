@@ -288,8 +288,8 @@ def log_row(row, pp, pe, x, mdl, ctl, est, cmp, pr):
     row.e_d0 = pr.e_dq0.real
     row.e_q0 = pr.e_dq0.imag
     estimator_log(row, pe, est, pp.n_p)
-    row.R2_est = mdl.R2_hat
-    row.R1_est = mdl.R1_hat
+    row.R2_hat = mdl.R2_hat
+    row.R1_hat = mdl.R1_hat
     log_compensator(row, cmp)
 
 

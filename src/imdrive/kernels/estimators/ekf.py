@@ -64,19 +64,19 @@ EKF_STATE = record_dtype(
 
 
 @njit(cache=True)
-def _f(v_a, v_b, ia, ib, la, lb, w, R2, R1, M, L2, sL1):
+def _f(v_alpha, v_beta, ia, ib, la, lb, w, R2, R1, M, L2, sL1):
     k = M / L2
     Rs = R1 + k * k * R2
     a = R2 / L2
-    dia = (v_a - Rs * ia + k * a * la + k * w * lb) / sL1
-    dib = (v_b - Rs * ib + k * a * lb - k * w * la) / sL1
+    dia = (v_alpha - Rs * ia + k * a * la + k * w * lb) / sL1
+    dib = (v_beta - Rs * ib + k * a * lb - k * w * la) / sL1
     dla = M * a * ia - a * la - w * lb
     dlb = M * a * ib - a * lb + w * la
     return dia, dib, dla, dlb
 
 
 @njit(cache=True)
-def ekf_step(p, m, s, v_prev_a, v_prev_b, i_a, i_b, Ts):
+def ekf_step(p, m, s, v_prev_alpha, v_prev_beta, i_alpha, i_beta, Ts):
     """Predict over the period that ended, update with the current sample (updates ``s``).
 
     Parameters
@@ -86,9 +86,9 @@ def ekf_step(p, m, s, v_prev_a, v_prev_b, i_a, i_b, Ts):
         The controller's model: ``R1_hat``, inductances, and ``R2_hat`` (the initial R2 state).
     s : EKF_STATE record
         Updated in place; ``w_r_hat`` electrical rad/s, ``x[5]`` the R2 estimate, ohm.
-    v_prev_a, v_prev_b : float
+    v_prev_alpha, v_prev_beta : float
         Voltage applied over the period that just ended, V.
-    i_a, i_b : float
+    i_alpha, i_beta : float
         Stator current at this sample, A.
     Ts : float
         Control period, s.
@@ -99,8 +99,8 @@ def ekf_step(p, m, s, v_prev_a, v_prev_b, i_a, i_b, Ts):
     W = s.W
     if not s.started:
         x[:] = 0.0
-        x[0] = i_a
-        x[1] = i_b
+        x[0] = i_alpha
+        x[1] = i_beta
         x[5] = m.R2_hat
         P[:, :] = 0.0
         for j in range(N_X):
@@ -146,17 +146,17 @@ def ekf_step(p, m, s, v_prev_a, v_prev_b, i_a, i_b, Ts):
         F[r, r] += 1.0
     # mean: RK4 over the period
     h = 0.5 * Ts
-    k1 = _f(v_prev_a, v_prev_b, ia, ib, la, lb, w, R2, R1, M, L2, sL1)
+    k1 = _f(v_prev_alpha, v_prev_beta, ia, ib, la, lb, w, R2, R1, M, L2, sL1)
     k2 = _f(
-        v_prev_a, v_prev_b, ia + h * k1[0], ib + h * k1[1], la + h * k1[2], lb + h * k1[3],
+        v_prev_alpha, v_prev_beta, ia + h * k1[0], ib + h * k1[1], la + h * k1[2], lb + h * k1[3],
         w, R2, R1, M, L2, sL1,
     )  # fmt: skip
     k3 = _f(
-        v_prev_a, v_prev_b, ia + h * k2[0], ib + h * k2[1], la + h * k2[2], lb + h * k2[3],
+        v_prev_alpha, v_prev_beta, ia + h * k2[0], ib + h * k2[1], la + h * k2[2], lb + h * k2[3],
         w, R2, R1, M, L2, sL1,
     )  # fmt: skip
     k4 = _f(
-        v_prev_a, v_prev_b, ia + Ts * k3[0], ib + Ts * k3[1], la + Ts * k3[2],
+        v_prev_alpha, v_prev_beta, ia + Ts * k3[0], ib + Ts * k3[1], la + Ts * k3[2],
         lb + Ts * k3[3], w, R2, R1, M, L2, sL1,
     )  # fmt: skip
     c6 = Ts / 6.0
@@ -184,7 +184,7 @@ def ekf_step(p, m, s, v_prev_a, v_prev_b, i_a, i_b, Ts):
         for j in range(N_X):
             P[5, j] = 0.0
             P[j, 5] = 0.0
-    # update with z = (i_a, i_b), H = [I2 0]
+    # update with z = (i_alpha, i_beta), H = [I2 0]
     s00 = P[0, 0] + p.r
     s01 = P[0, 1]
     s11 = P[1, 1] + p.r
@@ -192,8 +192,8 @@ def ekf_step(p, m, s, v_prev_a, v_prev_b, i_a, i_b, Ts):
     i00 = s11 / det
     i01 = -s01 / det
     i11 = s00 / det
-    y0 = i_a - x[0]
-    y1 = i_b - x[1]
+    y0 = i_alpha - x[0]
+    y1 = i_beta - x[1]
     for r in range(N_X):  # K = P[:, 0:2] S^-1, in W[:, 0:2]
         W[r, 0] = P[r, 0] * i00 + P[r, 1] * i01
         W[r, 1] = P[r, 0] * i01 + P[r, 1] * i11
