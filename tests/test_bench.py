@@ -1,4 +1,4 @@
-"""The estimator bench (issue 12): its table's numbers are the runs' numbers."""
+"""The estimator bench: its table's numbers are the runs' numbers."""
 
 import math
 

@@ -1,4 +1,4 @@
-"""The figures show the finding (issue 15, item 8): the steady e_d0 bias is visible in a zoomed
+"""The figures show the finding: the steady e_d0 bias is visible in a zoomed
 panel, the compensator's switch-on is marked, every quantity has one unit across the figures
 (flux in mWb, no hidden multiplier), legends say what a signal is, and heatmap annotations are
 sized to their cells in a colour that contrasts with them."""

@@ -1,4 +1,4 @@
-"""Every preset gives bit for bit the results stored from the first release.
+"""Every preset gives bit for bit the results stored in tests/data/preset_baseline.json.
 
 ``tests/data/preset_baseline.json`` holds, per preset, the status, the number of periods, the
 final value of every column, the energies, the compensation metrics and a SHA-256 of every

@@ -1,7 +1,7 @@
-"""Issue 10: robustness of the sensorless drive and of the injection compensator.
+"""Robustness of the sensorless drive and of the injection compensator.
 
-One test per finding of the trial, each at an operating point of its class chosen here (not
-one of the trial's), asserting the fixed behaviour.
+One test per class of operating point where the drive or the compensator can fail (load steps,
+ramps, low speed, detuning), each at a point chosen here, asserting the required behaviour.
 """
 
 from __future__ import annotations
@@ -99,13 +99,13 @@ def test_default_tuning_is_stable_over_the_R1_range():
     for r in (0.85, 1.15):
         df = stability_map(sc, speeds, [12.0], R1_ratio=r)
         assert df.stable.all(), (r, df[~df.stable])
-    # the first release's tuning was not (its limit: 1.05 at 1500 rpm)
+    # the paper tuning (wc = 5 rad/s, 40 Hz) is not (its limit: 1.05 at 1500 rpm)
     old = Scenario.read("sensorless", ["mras.wc_rad_s=5", "mras.bandwidth_Hz=40"])
     assert not stability_map(old, speeds, [12.0], R1_ratio=1.1).stable.all()
 
 
 def test_no_limit_cycle_with_overestimated_R1():
-    """R1_hat = 1.1 R1 at 1250 rpm, 9 N m: the first release limit-cycled here."""
+    """R1_hat = 1.1 R1 at 1250 rpm, 9 N m: the default tuning holds the speed, no limit cycle."""
     sc = Scenario.read(
         "sensorless",
         [

@@ -1,4 +1,4 @@
-"""Issue 10, third part: standstill R1 identification, the frequency schedule's hysteresis,
+"""Low-speed robustness: standstill R1 identification, the frequency schedule's hysteresis,
 the adaptive law's drift at low stator frequency and against a large error, and the
 filter-compensated detection. Operating points chosen here, not the envelope's grid."""
 

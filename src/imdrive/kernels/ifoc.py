@@ -56,7 +56,7 @@ CONTROL_PARAMS = record_dtype(
         ("angle_advance", f8),  # where in the next periods the voltage acts, periods (0.5, 1.5)
         ("dtc_u", f8),  # dead-time compensation: assumed t_d f_sw Vdc_meas per phase, V (0: off)
         ("dtc_band", f8),  # its current band (smooth sign), A
-        ("fw", b1),  # field weakening by voltage feedback (issue 10)
+        ("fw", b1),  # field weakening by voltage feedback
         ("fw_v", f8),  # voltage use it holds, fraction of v_max
         ("fw_rate", f8),  # its integral gain, 1/s per unit of voltage use
         ("fw_min", f8),  # lowest flux factor

@@ -21,7 +21,7 @@ a power-law curve, monotone for S > 0 (see :func:`magnetising_current`). Given t
 equation, solved from a table of the inverse curve built once per run plus one Newton
 correction (:func:`magnetising_ratio`, :func:`saturation_table`; Newton's method to
 convergence outside the table). With ``p.saturation`` off the linear T-circuit with ``M`` is
-used, exactly as before.
+used.
 
 Winding temperatures follow a first-order thermal model per winding::
 

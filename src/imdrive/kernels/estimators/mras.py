@@ -33,7 +33,7 @@ quarter of the design flux). Measured on a 1000 -> 2500 rpm ramp in 2 s at 6 N m
 weakening: without it the estimate fell 570 rpm behind and the drive ran away (lost control
 at 5.8 s); see docs/stability.md.
 
-Online R1 estimation (issue 10, opt-in ``k_R1 > 0``; this project's law, in the spirit of the
+Online R1 estimation (opt-in ``k_R1 > 0``; this project's law, in the spirit of the
 paper's reference [5], which estimates R1 by an MRAS, and of Kubota et al.'s R1 adaptation,
 IEEE Trans. Ind. Appl. 29(2), 1993). An error ``dR1 = R1_hat - R1`` enters only the reference
 model: in steady state at the stator frequency ``w_e`` it shifts the filtered voltage-model
