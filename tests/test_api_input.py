@@ -1,4 +1,4 @@
-"""What a new user met (issue 15, item 8): inputs that used to fail late or cryptically."""
+"""Bad input is refused early, in one line that names the field and the rule."""
 
 import tomllib
 

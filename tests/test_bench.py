@@ -1,4 +1,4 @@
-"""The estimator bench (issue 12): its table's numbers are the runs' numbers."""
+"""The estimator bench: its table's numbers are the runs' numbers."""
 
 import math
 
@@ -44,7 +44,7 @@ def test_lost_control_needs_a_long_excursion():
         "time_s": t,
         "speed_ref_rpm": ref,
         "speed_est_rpm": ref,
-        "R2_est_ohm": np.ones_like(t),
+        "R2_hat_ohm": np.ones_like(t),
         "R2_ohm": np.ones_like(t),
         "i_alpha_A": np.ones_like(t),
         "i_beta_A": np.zeros_like(t),

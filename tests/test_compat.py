@@ -61,7 +61,9 @@ def test_readme_example_of_0_1_still_runs():
     res = simulate(Scenario.read("sensorless-detuned", ["simulation.t_end_s=0.2"]))
     df = res.to_pandas()
     assert list(df.columns[:3]) == ["time_s", "speed_rpm", "w_m_rad_s"]
-    assert {"speed_est_rpm", "R2_est_ohm", "e_d0_Wb"} <= set(df.columns)
+    assert {"speed_est_rpm", "R2_hat_ohm", "e_d0_Wb"} <= set(df.columns)
+    with pytest.warns(DeprecationWarning, match="R2_hat_ohm"):
+        assert res["R2_est_ohm"] is res["R2_hat_ohm"]  # the 0.1 README's column name
 
 
 def test_top_level_simulate_stays_callable_after_the_old_module_is_imported():

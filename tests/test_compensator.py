@@ -112,7 +112,7 @@ def test_compensator_acts_only_after_enable_time():
         ],
     )
     res = simulate(sc)
-    r2 = res["R2_est_ohm"]
+    r2 = res["R2_hat_ohm"]
     t = res.time_s
     assert np.all(r2[t < 2.5] == 0.9792)
     changes = t[1:][np.diff(r2) != 0]
@@ -146,7 +146,7 @@ def test_mras_and_slip_use_the_updated_estimate_at_once():
     )
     w_f = fixed.window(3.5)
     w_c = clamped.window(3.5)
-    assert np.all(np.abs(w_c["R2_est_ohm"] - 0.9) <= 1e-5)
+    assert np.all(np.abs(w_c["R2_hat_ohm"] - 0.9) <= 1e-5)
     dev_f = np.mean(w_f["speed_rpm"] - w_f["speed_ref_rpm"])
     dev_c = np.mean(w_c["speed_rpm"] - w_c["speed_ref_rpm"])
     assert dev_f > 1.0  # R2_hat = 0.9 > 0.816: the drive runs fast

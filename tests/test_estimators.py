@@ -1,4 +1,4 @@
-"""The alternative speed estimators (issue 12): accuracy with exact parameters and one
+"""The alternative speed estimators: accuracy with exact parameters and one
 published or analytic property each.
 
 * every estimator holds its speed estimate within 0.1 rpm at 1000 and 150 rpm, rated load;

@@ -1,4 +1,4 @@
-"""The figures show the finding (issue 15, item 8): the steady e_d0 bias is visible in a zoomed
+"""The figures show the finding: the steady e_d0 bias is visible in a zoomed
 panel, the compensator's switch-on is marked, every quantity has one unit across the figures
 (flux in mWb, no hidden multiplier), legends say what a signal is, and heatmap annotations are
 sized to their cells in a colour that contrasts with them."""
@@ -44,7 +44,7 @@ def _all_figures(fig5, injection):
             plots.estimator_figure(res),
             plots.compensation_figure(res),
             plots.result_figure(res),
-            plots.result_figure(res, signals=["e_d0_Wb", "flux_Wb", "R2_est_ohm"]),
+            plots.result_figure(res, signals=["e_d0_Wb", "flux_Wb", "R2_hat_ohm"]),
         ]
     figs.append(paper.figure_e_d0_vs_ratio(pd.read_csv(FIGURES / "e_d0_vs_R2_ratio.csv")))
     figs.append(paper.figure_e_d0_vs_Ts(pd.read_csv(FIGURES / "e_d0_vs_Ts.csv")))

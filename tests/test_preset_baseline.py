@@ -1,9 +1,11 @@
-"""Every preset gives bit for bit the results stored before the layout refactor (issue 14).
+"""Every preset gives bit for bit the results stored in tests/data/preset_baseline.json.
 
 ``tests/data/preset_baseline.json`` holds, per preset, the status, the number of periods, the
 final value of every column, the energies, the compensation metrics and a SHA-256 of every
 logged column. It was written by ``tests/data/make_preset_baseline.py`` from the first release
-(commit 6816c96) before any code moved; regenerate it only for an intended change of numerics.
+(commit 6816c96); regenerate it only for an intended change of numerics. It keeps the column
+names of then: the fingerprint reads a renamed column (``R2_est_ohm`` -> ``R2_hat_ohm``) under
+its new name and hashes it under the stored one.
 
 The baseline logged every period unless the preset sets ``simulation.log_every``; since the
 default became a decimation (about 1 kHz), a preset that does not set it is run with

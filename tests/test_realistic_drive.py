@@ -1,4 +1,4 @@
-"""The realistic drive (issue 9): switching bridge, dead time, delay, sensors, saturation.
+"""The realistic drive: switching bridge, dead time, delay, sensors, saturation.
 
 Each test compares imdrive with something computed independently of its kernels: an SVPWM
 bridge and machine written here and integrated by scipy's solve_ivp with the switching instants

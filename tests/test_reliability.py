@@ -1,4 +1,4 @@
-"""Issue 13, reliability: each class of defect the first release's trial found, as a test.
+"""Reliability: each class of defect in storing, naming and running, as a test.
 
 1. damaged sweep stores resume; writes are durable; one writer per store;
 2. a run whose derived parameters overflow is refused (imdrive run) or recorded as failed

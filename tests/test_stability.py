@@ -1,4 +1,4 @@
-"""Stability maps (issue 11): steady state, linearisation, maps, their check by simulation.
+"""Stability maps: steady state, linearisation, maps, their check by simulation.
 
 Each test can fail: the steady state is compared with a long simulation of the engine, the
 linear model with the nonlinear loop's own response, the map's verdicts with simulations from
@@ -33,8 +33,8 @@ from imdrive.stability.maps import MAP_COLUMNS, stability_map, validate_map
 
 @pytest.fixture(scope="module")
 def sensorless():
-    """The sensorless preset with the first release's MRAS tuning (wc = 5 rad/s, 40 Hz), the
-    drive the measurements of docs/stability.md were made on (issue 10 changed the defaults)."""
+    """The sensorless preset with the paper tuning of the MRAS (wc = 5 rad/s, 40 Hz), the drive
+    the measurements of docs/stability.md were made on (the defaults are tuned otherwise)."""
     return Scenario.read("sensorless", ["mras.wc_rad_s=5", "mras.bandwidth_Hz=40"])
 
 

@@ -1,4 +1,4 @@
-"""Indirect field-oriented control and Schauder's MRAS (issue: sensorless vector control).
+"""Indirect field-oriented control and Schauder's MRAS: the sensorless vector drive.
 
 Every test runs the drive to a steady state and compares with theory: the field-orientation
 conditions, the equivalent-circuit steady state of the sensorless drive (imdrive.analysis), and

@@ -6,7 +6,15 @@ commit message)::
     python tests/data/make_preset_baseline.py
 
 ``tests/test_preset_baseline.py`` compares every preset against this file bit for bit: a
-refactor of the layout (issue 14) must not change a single bit of any result.
+change that is not meant to alter the numerics (a refactor, a rename) must not change a single
+bit of any result.
+
+The stored file predates the naming glossary, which renamed the columns ``R2_est_ohm`` and
+``R1_est_ohm`` to ``R2_hat_ohm`` and ``R1_hat_ohm`` and the compensation metrics
+``R2_est_*`` to ``R2_hat_*`` (:data:`imdrive.run.columns.RENAMED_COLUMNS`,
+:data:`~imdrive.run.columns.RENAMED_METRICS`). :func:`fingerprint` reads a column asked for by
+its old name under the new one and hashes it under the name asked for, so the stored hashes
+still compare the same bytes; a regenerated file uses the new names.
 """
 
 from __future__ import annotations
@@ -17,25 +25,37 @@ from pathlib import Path
 
 import numpy as np
 
+from imdrive.run.columns import RENAMED_COLUMNS, RENAMED_METRICS
+
 HERE = Path(__file__).resolve().parent
 OUT = HERE / "preset_baseline.json"
 
 
 def fingerprint(res, columns) -> dict:
-    """Status, final values, energies, compensation metrics and a SHA-256 of the columns."""
+    """Status, final values, energies, compensation metrics and a SHA-256 of the columns.
+
+    ``columns`` are the names to hash, in order; a renamed column's old name is read under its
+    new name and hashed (and keyed) under the old one. When ``columns`` use the old names, so
+    do the compensation metrics' keys.
+    """
     h = hashlib.sha256()
     for name in columns:
         h.update(name.encode())
-        h.update(np.ascontiguousarray(res.signals[name], dtype=np.float64).tobytes())
+        values = res.signals[RENAMED_COLUMNS.get(name, name)]
+        h.update(np.ascontiguousarray(values, dtype=np.float64).tobytes())
     summary = res.summary()
+    comp = summary["compensation"]
+    if comp is not None and any(name in RENAMED_COLUMNS for name in columns):
+        old = {new: old for old, new in RENAMED_METRICS.items()}
+        comp = {old.get(k, k): v for k, v in comp.items()}
     return {
         "status": int(res.status),
         "k_end": int(res.k_end),
         "columns": list(columns),
         "signals_sha256": h.hexdigest(),
-        "final": {k: summary["final"][k] for k in columns},
+        "final": {k: summary["final"][RENAMED_COLUMNS.get(k, k)] for k in columns},
         "energy_J": summary["energy_J"],
-        "compensation": summary["compensation"],
+        "compensation": comp,
     }
 
 

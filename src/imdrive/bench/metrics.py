@@ -25,6 +25,8 @@ import math
 
 import numpy as np
 
+from imdrive.run.columns import with_current_names
+
 STEADY_WINDOW_S = 0.5
 R2_BAND = 0.02
 LOST_ABS_RPM = 50.0
@@ -75,7 +77,7 @@ def run_metrics(sig, t_eval_s: float, diverged: bool) -> dict:
     ----------
     sig : Mapping[str, array_like]
         The run's columns, each in the unit its name ends with: it needs ``time_s``,
-        ``speed_rpm``, ``speed_ref_rpm``, ``speed_est_rpm``, ``R2_est_ohm``, ``R2_ohm``,
+        ``speed_rpm``, ``speed_ref_rpm``, ``speed_est_rpm``, ``R2_hat_ohm``, ``R2_ohm``,
         ``i_alpha_A``, ``i_beta_A``.
     t_eval_s : float
         Start of the window of the RMS and lost-control metrics, s.
@@ -87,11 +89,12 @@ def run_metrics(sig, t_eval_s: float, diverged: bool) -> dict:
     dict
         Metric name (:data:`METRICS`, unit in the name) -> value.
     """
+    sig = with_current_names(sig)  # a mapping with an old column name still works
     t = np.asarray(sig["time_s"])
     w = np.asarray(sig["speed_rpm"])
     ref = np.asarray(sig["speed_ref_rpm"])
     est = np.asarray(sig["speed_est_rpm"])
-    R2h = np.asarray(sig["R2_est_ohm"])
+    R2h = np.asarray(sig["R2_hat_ohm"])
     R2 = np.asarray(sig["R2_ohm"])
     i_mag = np.hypot(sig["i_alpha_A"], sig["i_beta_A"])
     dt = float(t[1] - t[0]) if len(t) > 1 else 0.0

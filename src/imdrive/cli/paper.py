@@ -28,8 +28,8 @@ def _cmd_paper(args) -> int:
     for row in res["compensation"]:
         t = row["time_to_tolerance_s"]
         print(
-            f"  {row['preset']:<24} R2_hat {row['R2_est_initial_ohm']:.4f} -> "
-            f"{row['R2_est_final_ohm']:.4f} ohm ({row['R2_est_final_error_pct']:+.1f} %), "
+            f"  {row['preset']:<24} R2_hat {row['R2_hat_initial_ohm']:.4f} -> "
+            f"{row['R2_hat_final_ohm']:.4f} ohm ({row['R2_hat_final_error_pct']:+.1f} %), "
             f"within 2 %: {'never' if t is None else f'{t:.1f} s'}, speed error "
             f"{row['speed_error_before_rpm']:+.2f} -> {row['speed_error_after_rpm']:+.2f} rpm",
             file=sys.stderr,

@@ -113,7 +113,7 @@ def accumulate(log, n_rows, k_first, k_win0, acc_arr, lc_bound=0.0, lc_n=0):
         if i_mag > acc.peak:
             acc.peak = i_mag
         r2 = row.R2
-        if not (abs(row.R2_est - r2) / r2 <= CONVERGENCE_BAND):
+        if not (abs(row.R2_hat - r2) / r2 <= CONVERGENCE_BAND):
             acc.last_bad = k
         if k >= k_win0:
             sp = row.speed * _INV_RPM
@@ -151,9 +151,9 @@ def summarize(acc, last, n_valid, ok, Ts, out):
         out.speed_ripple_rpm = nan
         out.torque_mean_Nm = nan
         out.convergence_time_s = nan
-    out.R2_hat_final_ohm = last.R2_est
+    out.R2_hat_final_ohm = last.R2_hat
     out.R2_final_ohm = last.R2
-    out.R2_error_pct = 100.0 * (last.R2_est - last.R2) / last.R2
+    out.R2_error_pct = 100.0 * (last.R2_hat - last.R2) / last.R2
     out.peak_current_A = acc.peak
     out.final_speed_rpm = last.speed * _INV_RPM
     out.final_speed_ref_rpm = last.speed_ref * _INV_RPM

@@ -48,8 +48,117 @@ from imdrive.kernels.machine import (
 
 
 @njit(cache=True)
+def _held(k, g1, g2, R1, R2):
+    """The current coefficients (:func:`imdrive.kernels.machine.current_coefficients`, saturated)
+    and the flux equations' ``a = -R c`` at a held magnetising ratio ``k``."""
+    c_ss = (1.0 - k * g1) * g1
+    c_sr = -k * g1 * g2
+    c_rr = (1.0 - k * g2) * g2
+    return c_ss, c_sr, c_rr, -R1 * c_ss, -R1 * c_sr, -R2 * c_sr, -R2 * c_rr
+
+
+@njit(cache=True)
+def _currents(c_ss, c_sr, c_rr, sa, sb, ra, rb):
+    """Stator and rotor currents ``(i_s_alpha, i_s_beta, i_r_alpha, i_r_beta)`` of the fluxes."""
+    return (
+        c_ss * sa + c_sr * ra,
+        c_ss * sb + c_sr * rb,
+        c_sr * sa + c_rr * ra,
+        c_sr * sb + c_rr * rb,
+    )
+
+
+@njit(cache=True)
+def _next_event(sinv, ev_t, ev_leg, j, n, Ts):
+    """``(t, kind, leg)`` of the next event: kind 0 the period's end, 1 gate command ``j``,
+    2 a pending dead-time transition (which comes first at equal times)."""
+    t_next = Ts
+    kind = 0
+    leg = -1
+    for q in range(3):
+        if 0.0 <= sinv.pend_t[q] < Ts and sinv.pend_t[q] <= t_next:
+            t_next = sinv.pend_t[q]
+            kind = 2
+            leg = q
+    if j < n and ev_t[j] < t_next:
+        t_next = ev_t[j]
+        kind = 1
+        leg = int(ev_leg[j])
+    return t_next, kind, leg
+
+
+@njit(cache=True)
+def _ratio_series(pp, sa, sb, ra, rb, g1, g2):
+    """``(k, dk/du, d2k/du2, u0, x_alpha, x_beta)``: the magnetising ratio as a quadratic in
+    ``u = |psi_x|^2`` about the period's start (zeros without saturation)."""
+    k = 0.0
+    k_u = 0.0
+    k_uu = 0.0
+    u0 = 0.0
+    xa = 0.0
+    xb = 0.0
+    if pp.saturation:
+        xa = sa * g1 + ra * g2
+        xb = sb * g1 + rb * g2
+        u0 = xa * xa + xb * xb
+        k, k_u, k_uu = magnetising_ratio_series(pp, math.sqrt(u0))
+    return k, k_u, k_uu, u0, xa, xb
+
+
+@njit(cache=True)
+def _apply_event(pinv, sinv, kind, leg, ev_state, j, isa, isb, t):
+    """Apply event ``kind`` (1: gate command ``j``, its dead time decided by the leg's current
+    from the stator current ``(isa, isb)``, alpha/beta; 2: a dead time's end) at ``t``;
+    returns the index of the next gate command."""
+    if kind == 1:
+        i_leg = 0.0
+        if pinv.t_d > 0.0:  # the dead time's direction needs the leg's current
+            i_leg = phase_values(isa, isb)[leg]
+        apply_command(pinv, sinv, leg, ev_state[j], i_leg, t)
+        return j + 1
+    sinv.pole[leg] = sinv.pend_s[leg]
+    sinv.pend_t[leg] = -1.0
+    return j
+
+
+@njit(cache=True)
+def _close_period(pp, x, TL0, Ts, R1, R2, w0, dw0, sa, sb, ra, rb, int_Te, int_W, int_is2,
+                  int_ir2, e_in):  # fmt: skip
+    """The state at the period's end from the fluxes and the period's integrals (the speed
+    from the torque's integral, the rotor flux's angle corrected for the speed's change, the
+    temperatures from the copper losses, the energies)."""
+    if pp.speed_imposed:
+        w1 = w0
+        load_int = Ts * (load_torque(pp, TL0, w0) + pp.B * w0)
+    else:
+        w1p = w0 + (int_Te - Ts * (load_torque(pp, TL0, w0) + pp.B * w0)) / pp.J
+        w_mid = 0.5 * (w0 + w1p)
+        load_int = Ts * (load_torque(pp, TL0, w_mid) + pp.B * w_mid)
+        w1 = w0 + (int_Te - load_int) / pp.J
+    w_avg = 0.5 * (w0 + w1)
+    # the error of the speed's linear model: int (w(t) - w0 - t dw0) dt over the period, with
+    # w(t) from the torque's double integral; the rotor flux turned n_p times that too little
+    if not pp.speed_imposed:
+        dth = pp.n_p * ((int_W - 0.5 * Ts * load_int) / pp.J - 0.5 * Ts * Ts * dw0)
+        ra, rb = ra - dth * rb, rb + dth * ra
+    x.psi_s_ab = complex(sa, sb)
+    x.psi_r_ab = complex(ra, rb)
+    x.w_m = w1
+    x.theta_m += Ts * w_avg
+    p_cu1 = 1.5 * R1 * int_is2  # copper losses over the period, J
+    p_cu2 = 1.5 * R2 * int_ir2
+    if pp.thermal:
+        x.theta1 += (pp.Rth1 * p_cu1 - Ts * (x.theta1 - pp.theta_amb)) / pp.tau1
+        x.theta2 += (pp.Rth2 * p_cu2 - Ts * (x.theta2 - pp.theta_amb)) / pp.tau2
+    x.E_in += 1.5 * e_in
+    x.E_cu += p_cu1 + p_cu2
+    x.E_em += int_Te * w_avg
+    x.E_load += load_int * w_avg
+
+
+@njit(cache=True)
 def switching_period(
-    pinv, sinv, pp, x, v_a, v_b, Vdc_meas, R1b, R2b, TL0, Ts, nsub, work, ev, trace
+    pinv, sinv, pp, x, v_alpha, v_beta, Vdc_meas, R1b, R2b, TL0, Ts, nsub, work, ev, trace
 ):
     """Integrate the plant over one carrier period of the switching bridge (updates ``x``).
 
@@ -66,7 +175,7 @@ def switching_period(
     of every interval while it has rows (pass a zero-row array for none): the current ripple's
     extremes are at these instants.
     """
-    d = duty_cycles(v_a, v_b, Vdc_meas)
+    d = duty_cycles(v_alpha, v_beta, Vdc_meas)
     ev_t = ev[0]
     ev_leg = ev[1]
     ev_state = ev[2]
@@ -81,22 +190,9 @@ def switching_period(
     sb = x.psi_s_ab.imag
     ra = x.psi_r_ab.real
     rb = x.psi_r_ab.imag
-    k = 0.0
-    k_u = 0.0
-    k_uu = 0.0
-    u0 = 0.0
-    xa = 0.0
-    xb = 0.0
-    if sat:  # k as a quadratic in u = |psi_x|^2 about the period's start
-        xa = sa * g1 + ra * g2
-        xb = sb * g1 + rb * g2
-        u0 = xa * xa + xb * xb
-        k, k_u, k_uu = magnetising_ratio_series(pp, math.sqrt(u0))
+    k, k_u, k_uu, u0, xa, xb = _ratio_series(pp, sa, sb, ra, rb, g1, g2)
     c_ss, c_sr, c_rr = current_coefficients(pp, k)
-    isa = c_ss * sa + c_sr * ra
-    isb = c_ss * sb + c_sr * rb
-    ira = c_sr * sa + c_rr * ra
-    irb = c_sr * sb + c_rr * rb
+    isa, isb, ira, irb = _currents(c_ss, c_sr, c_rr, sa, sb, ra, rb)
     n_p = pp.n_p
     Tk = 1.5 * n_p
     Te = Tk * (sa * isb - sb * isa)
@@ -105,35 +201,17 @@ def switching_period(
     if not pp.speed_imposed:
         dw0 = (Te - load_torque(pp, TL0, w0) - pp.B * w0) / pp.J
     w_r1 = n_p * dw0  # the electrical speed, linear over the period from its start's slope
-    a_ss = -R1 * c_ss
-    a_sr = -R1 * c_sr
-    a_rs = -R2 * c_sr
-    a_rr = -R2 * c_rr
+    a_ss, a_sr, a_rs, a_rr = -R1 * c_ss, -R1 * c_sr, -R2 * c_sr, -R2 * c_rr
 
-    int_Te = 0.0  # integrals over the period (Simpson per interval)
-    int_W = 0.0  # int_0^Ts int_0^t T_e ds dt, for the held speed's correction
-    int_is2 = 0.0
-    int_ir2 = 0.0
-    e_in = 0.0
-    acc_a = 0.0
-    acc_b = 0.0
+    # integrals over the period (Simpson per interval); int_W = int_0^Ts int_0^t T_e ds dt,
+    # for the held speed's correction; acc_* the volt-seconds applied
+    int_Te = int_W = int_is2 = int_ir2 = e_in = acc_alpha = acc_beta = 0.0
     short = Ts / (40.0 * nsub)  # intervals up to this long: one second-order step
     t = 0.0
     j = 0
     n_tr = 0
     while True:
-        t_next = Ts
-        kind = 0  # 0: end of period, 1: gate command, 2: dead-time transition
-        leg = -1
-        for q in range(3):
-            if 0.0 <= sinv.pend_t[q] < Ts and sinv.pend_t[q] <= t_next:
-                t_next = sinv.pend_t[q]
-                kind = 2
-                leg = q
-        if j < n and ev_t[j] < t_next:
-            t_next = ev_t[j]
-            kind = 1
-            leg = int(ev_leg[j])
+        t_next, kind, leg = _next_event(sinv, ev_t, ev_leg, j, n, Ts)
         if t_next > t:
             if n_tr < trace.shape[0]:
                 trace[n_tr, 0] = t
@@ -142,11 +220,7 @@ def switching_period(
                 n_tr += 1
             va, vb = pole_voltages_ab(pinv, sinv, pinv.Vdc, isa, isb)
             dt = t_next - t
-            n_step = 1
-            order = 2
-            if dt > short:
-                n_step = nsub
-                order = 4
+            n_step, order = (nsub, 4) if dt > short else (1, 2)
             h = dt / n_step
             h6 = h / 6.0
             for i_step in range(n_step):
@@ -157,40 +231,19 @@ def switching_period(
                     pxb = xb + 0.5 * h * (d1[1] * g1 + d1[3] * g2)
                     du = pxa * pxa + pxb * pxb - u0
                     k_mid = k + du * (k_u + 0.5 * k_uu * du)
-                    c_ss = (1.0 - k_mid * g1) * g1
-                    c_sr = -k_mid * g1 * g2
-                    c_rr = (1.0 - k_mid * g2) * g2
-                    a_ss = -R1 * c_ss
-                    a_sr = -R1 * c_sr
-                    a_rs = -R2 * c_sr
-                    a_rr = -R2 * c_rr
+                    c_ss, c_sr, c_rr, a_ss, a_sr, a_rs, a_rr = _held(k_mid, g1, g2, R1, R2)
                     d1 = flux_rates(sa, sb, ra, rb, va, vb, a_ss, a_sr, a_rs, a_rr, w_r)
                 y = flux_taylor(sa, sb, ra, rb, d1, a_ss, a_sr, a_rs, a_rr, w_r, w_r1, h, order)
                 # the middle: currents with the held coefficients
-                msa = c_ss * y[0] + c_sr * y[2]
-                msb = c_ss * y[1] + c_sr * y[3]
-                mra = c_sr * y[0] + c_rr * y[2]
-                mrb = c_sr * y[1] + c_rr * y[3]
-                sa = y[4]
-                sb = y[5]
-                ra = y[6]
-                rb = y[7]
+                msa, msb, mra, mrb = _currents(c_ss, c_sr, c_rr, y[0], y[1], y[2], y[3])
+                sa, sb, ra, rb = y[4], y[5], y[6], y[7]
                 if sat:  # the end: k of the curve at the end's |psi_x|
                     xa = sa * g1 + ra * g2
                     xb = sb * g1 + rb * g2
                     du = xa * xa + xb * xb - u0
                     k_end = k + du * (k_u + 0.5 * k_uu * du)
-                    c_ss = (1.0 - k_end * g1) * g1
-                    c_sr = -k_end * g1 * g2
-                    c_rr = (1.0 - k_end * g2) * g2
-                    a_ss = -R1 * c_ss
-                    a_sr = -R1 * c_sr
-                    a_rs = -R2 * c_sr
-                    a_rr = -R2 * c_rr
-                esa = c_ss * sa + c_sr * ra
-                esb = c_ss * sb + c_sr * rb
-                era = c_sr * sa + c_rr * ra
-                erb = c_sr * sb + c_rr * rb
+                    c_ss, c_sr, c_rr, a_ss, a_sr, a_rs, a_rr = _held(k_end, g1, g2, R1, R2)
+                esa, esb, era, erb = _currents(c_ss, c_sr, c_rr, sa, sb, ra, rb)
                 Te_m = Tk * (y[0] * msb - y[1] * msa)
                 Te_e = Tk * (sa * esb - sb * esa)
                 int_W += h * int_Te + h * h6 * (Te + 2.0 * Te_m)
@@ -202,55 +255,18 @@ def switching_period(
                 int_ir2 += h6 * (
                     ira * ira + irb * irb + 4.0 * (mra * mra + mrb * mrb) + era * era + erb * erb
                 )
-                isa = esa
-                isb = esb
-                ira = era
-                irb = erb
-                Te = Te_e
-            acc_a += dt * va
-            acc_b += dt * vb
+                isa, isb, ira, irb, Te = esa, esb, era, erb, Te_e
+            acc_alpha += dt * va
+            acc_beta += dt * vb
             t = t_next
         if kind == 0:
             break
-        if kind == 1:
-            i_leg = 0.0
-            if pinv.t_d > 0.0:  # the dead time's direction needs the leg's current
-                i_leg = phase_values(isa, isb)[leg]
-            apply_command(pinv, sinv, leg, ev_state[j], i_leg, t)
-            j += 1
-        else:
-            sinv.pole[leg] = sinv.pend_s[leg]
-            sinv.pend_t[leg] = -1.0
+        j = _apply_event(pinv, sinv, kind, leg, ev_state, j, isa, isb, t)
     for q in range(3):  # a dead time running past the period ends in the next one
         if sinv.pend_t[q] >= 0.0:
             sinv.pend_t[q] -= Ts
 
     # --- the rest of the state, from the period's integrals
-    if pp.speed_imposed:
-        w1 = w0
-        load_int = Ts * (load_torque(pp, TL0, w0) + pp.B * w0)
-    else:
-        w1p = w0 + (int_Te - Ts * (load_torque(pp, TL0, w0) + pp.B * w0)) / pp.J
-        w_mid = 0.5 * (w0 + w1p)
-        load_int = Ts * (load_torque(pp, TL0, w_mid) + pp.B * w_mid)
-        w1 = w0 + (int_Te - load_int) / pp.J
-    w_avg = 0.5 * (w0 + w1)
-    # the error of the speed's linear model: int (w(t) - w0 - t dw0) dt over the period, with
-    # w(t) from the torque's double integral; the rotor flux turned n_p times that too little
-    if not pp.speed_imposed:
-        dth = n_p * ((int_W - 0.5 * Ts * load_int) / pp.J - 0.5 * Ts * Ts * dw0)
-        ra, rb = ra - dth * rb, rb + dth * ra
-    x.psi_s_ab = complex(sa, sb)
-    x.psi_r_ab = complex(ra, rb)
-    x.w_m = w1
-    x.theta_m += Ts * w_avg
-    p_cu1 = 1.5 * R1 * int_is2  # copper losses over the period, J
-    p_cu2 = 1.5 * R2 * int_ir2
-    if pp.thermal:
-        x.theta1 += (pp.Rth1 * p_cu1 - Ts * (x.theta1 - pp.theta_amb)) / pp.tau1
-        x.theta2 += (pp.Rth2 * p_cu2 - Ts * (x.theta2 - pp.theta_amb)) / pp.tau2
-    x.E_in += 1.5 * e_in
-    x.E_cu += p_cu1 + p_cu2
-    x.E_em += int_Te * w_avg
-    x.E_load += load_int * w_avg
-    return acc_a / Ts, acc_b / Ts
+    _close_period(pp, x, TL0, Ts, R1, R2, w0, dw0, sa, sb, ra, rb, int_Te, int_W, int_is2,
+                  int_ir2, e_in)  # fmt: skip
+    return acc_alpha / Ts, acc_beta / Ts

@@ -35,8 +35,8 @@ of induction motor with rotor resistance adaptation", IEEE Trans. Ind. Appl. 30(
 This project's part is feeding its demodulated flux error to the paper's fuzzy table, the
 gating below and the measurements.
 
-Adaptive step law (issue 10; ``p.fine``, this project's)
--------------------------------------------------------
+Adaptive step law (``p.fine``, this project's)
+----------------------------------------------
 The published law changes R2_hat by whole multiples of ``G_CR``: with the injection presets'
 20 mohm (2.5 % of R2) and the dead zone ``|G_E E| <= 0.25`` the final error is quantised to
 about +-0.7 %, and a drifting R2 is followed only once the error has grown into the levels
@@ -69,8 +69,8 @@ period, lagged by 8 %). With ``p.fine`` the update is a second-order tracking lo
   earlier, so the injection's own iq* ripple does not trip it. The drift rate is then per
   half period.
 
-Gating and injection-frequency scheduling (issue 10; ``p.gate``)
-----------------------------------------------------------------
+Gating and injection-frequency scheduling (``p.gate``)
+------------------------------------------------------
 :func:`compensator_gate_sample` is called every control period with the speed reference and
 feedback, iq* and the voltage use, and accumulates over the compensator period. At a decision
 instant the update is skipped (R2_hat frozen, ``s.frozen`` says why, a bit mask) when during
@@ -90,8 +90,8 @@ the period that ends
 
 The blind band: in the stationary frame the injected flux oscillation appears at
 ``|f_e| +- f_inj``; when ``|f_e|`` is near ``f_inj`` the lower side band is near DC, where
-both models' ``1/(s + wc)`` filters remove it, and the detected signal collapses (the trial
-measured R2_hat frozen 12-15 % off at 54 rpm / 1.5 N m and 100 rpm / -6 N m). Rather than
+both models' ``1/(s + wc)`` filters remove it, and the detected signal collapses (measured:
+R2_hat frozen 12-15 % off at 54 rpm / 1.5 N m and 100 rpm / -6 N m). Rather than
 freezing there (which would never converge at such an operating point), the injection
 frequency is chosen from the operating point: at each decision instant, if ``|f_e|`` (the
 period mean of the controller's stator frequency) is within ``p.gate_df`` (Hz) of the present
@@ -155,7 +155,7 @@ COMPENSATOR_PARAMS = record_dtype(
         ("gate_df", f8),  # blind band half-width around the injection frequency, Hz
         ("gate_hold", f8),  # decisions skipped after a gating event
         ("inj_freq2", f8),  # the alternative injection frequency, Hz (0: none)
-        ("fine", b1),  # adaptive step law (issue 10): fine level and drift term
+        ("fine", b1),  # adaptive step law: fine level and drift term
         ("fine_gain", f8),  # fine level per unit of scaled E inside the first threshold
         ("drift_gain", f8),  # share of each fine step added to the drift rate
         ("drift_max", f8),  # bound of the drift rate, ohm per compensator period

@@ -242,24 +242,9 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
         pr.e_dq0 = 0j
         if foc:
             estimate(
-                sim,
-                pp,
-                pe,
-                pk,
-                pt,
-                pv,
-                pn,
-                table,
-                x,
-                mdl,
-                ctl,
-                est,
-                cmp,
-                smp,
-                est_in[0],
-                pr,
+                sim, pp, pe, pk, pt, pv, pn, table, x, mdl, ctl, est, cmp, smp, est_in[0], pr,
                 Vdc_meas,
-            )
+            )  # fmt: skip
         control(sim, pc, pt, pv, pn, x, mdl, ctl, smp, pr, foc)
         modulate(pinv, pc, smp, pr, switching, Vdc_meas, seg_dt, seg_va, seg_vb, Ts)
 
@@ -270,22 +255,9 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
             break
 
         plant(
-            pinv,
-            sinv,
-            pp,
-            x,
-            pr,
-            switching,
-            Vdc_meas,
-            nsub,
-            work,
-            ev,
-            no_trace,
-            seg_dt,
-            seg_va,
-            seg_vb,
-            Ts,
-        )
+            pinv, sinv, pp, x, pr, switching, Vdc_meas, nsub, work, ev, no_trace, seg_dt,
+            seg_va, seg_vb, Ts,
+        )  # fmt: skip
         if switching and logged:  # the true average, known only now
             log[k // log_every].v_alpha = pr.v_app_ab.real
             log[k // log_every].v_beta = pr.v_app_ab.imag

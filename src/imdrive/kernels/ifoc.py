@@ -56,7 +56,7 @@ CONTROL_PARAMS = record_dtype(
         ("angle_advance", f8),  # where in the next periods the voltage acts, periods (0.5, 1.5)
         ("dtc_u", f8),  # dead-time compensation: assumed t_d f_sw Vdc_meas per phase, V (0: off)
         ("dtc_band", f8),  # its current band (smooth sign), A
-        ("fw", b1),  # field weakening by voltage feedback (issue 10)
+        ("fw", b1),  # field weakening by voltage feedback
         ("fw_v", f8),  # voltage use it holds, fraction of v_max
         ("fw_rate", f8),  # its integral gain, 1/s per unit of voltage use
         ("fw_min", f8),  # lowest flux factor
@@ -102,7 +102,7 @@ def open_loop_voltage(s, v_amp, f_Hz, Ts):
 
 
 @njit(cache=True)
-def foc_step(p, m, s, i_a, i_b, w_fb_m, w_ref_m, psi_ref, i_inj, Ts):
+def foc_step(p, m, s, i_alpha, i_beta, w_fb_m, w_ref_m, psi_ref, i_inj, Ts):
     """One period of indirect field-oriented speed control (updates ``c``).
 
     Parameters
@@ -112,7 +112,7 @@ def foc_step(p, m, s, i_a, i_b, w_fb_m, w_ref_m, psi_ref, i_inj, Ts):
         The controller's machine model; ``R2_hat`` is the estimate the slip uses.
     s : CONTROL_STATE record
         Updated in place.
-    i_a, i_b : float
+    i_alpha, i_beta : float
         Measured stator current, stationary frame, A.
     w_fb_m : float
         Speed feedback, mechanical rad/s (measured or estimated).
@@ -127,7 +127,7 @@ def foc_step(p, m, s, i_a, i_b, w_fb_m, w_ref_m, psi_ref, i_inj, Ts):
 
     Returns
     -------
-    v_a, v_b : float
+    v_alpha, v_beta : float
         Voltage reference for the next period, stationary frame, V.
     """
     M, L1, L2, sigma_L1 = model_inductances(m)
@@ -157,8 +157,8 @@ def foc_step(p, m, s, i_a, i_b, w_fb_m, w_ref_m, psi_ref, i_inj, Ts):
     th = s.theta_e
     cs = math.cos(th)
     sn = math.sin(th)
-    i_d = cs * i_a + sn * i_b
-    i_q = -sn * i_a + cs * i_b
+    i_d = cs * i_alpha + sn * i_beta
+    i_q = -sn * i_alpha + cs * i_beta
     w_sl = M * iq_ref / (T2_hat * psi_div)
     s.psi_hat = g * psi_hat + (1.0 - g) * M * id_ref
     w_e = n_p * w_fb_m + w_sl
@@ -189,15 +189,15 @@ def foc_step(p, m, s, i_a, i_b, w_fb_m, w_ref_m, psi_ref, i_inj, Ts):
     th_mid = th + p.angle_advance * w_e * Ts
     cm = math.cos(th_mid)
     sm = math.sin(th_mid)
-    v_a = cm * v_d - sm * v_q
-    v_b = sm * v_d + cm * v_q
-    v_a, v_b = limit_magnitude(v_a, v_b, v_max)
+    v_alpha = cm * v_d - sm * v_q
+    v_beta = sm * v_d + cm * v_q
+    v_alpha, v_beta = limit_magnitude(v_alpha, v_beta, v_max)
 
     s.theta_e = wrap_angle(th + w_e * Ts)
     s.w_e = w_e
     s.i_ref_dq = complex(id_ref, iq_ref)
     s.i_s_dq = complex(i_d, i_q)
-    return v_a, v_b
+    return v_alpha, v_beta
 
 
 @njit(cache=True)
@@ -216,14 +216,14 @@ def log_control(row, s, w_ref_m, theta_k):
 
 
 @njit(cache=True)
-def dead_time_feedforward(p, i_a, i_b):
+def dead_time_feedforward(p, i_alpha, i_beta):
     """Dead-time compensation added to the voltage reference, ``(alpha, beta)``, V.
 
     Each phase's pole voltage is raised by ``sgn_b(i_x) u`` with ``u = t_d,assumed f_sw
     Vdc_meas`` (``p.dtc_u``), the averaged loss the dead time causes, signed by the measured
     phase current (smooth inside ``p.dtc_band``).
     """
-    ia, ib, ic = phase_values(i_a, i_b)
+    ia, ib, ic = phase_values(i_alpha, i_beta)
     u = p.dtc_u
     return clarke(
         smooth_sign(ia, p.dtc_band) * u,

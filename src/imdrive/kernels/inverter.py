@@ -79,19 +79,19 @@ LOG_FIELDS = ("v_alpha", "v_beta", "v_ref_alpha", "v_ref_beta")
 
 
 @njit(cache=True)
-def limit_magnitude(v_a, v_b, v_max):
-    """Scale ``(v_a, v_b)`` down to magnitude ``v_max`` if longer; direction is kept."""
-    mag = math.sqrt(v_a * v_a + v_b * v_b)
+def limit_magnitude(v_alpha, v_beta, v_max):
+    """Scale ``(v_alpha, v_beta)`` down to magnitude ``v_max`` if longer; direction is kept."""
+    mag = math.sqrt(v_alpha * v_alpha + v_beta * v_beta)
     if mag > v_max:
         k = v_max / mag
-        return v_a * k, v_b * k
-    return v_a, v_b
+        return v_alpha * k, v_beta * k
+    return v_alpha, v_beta
 
 
 @njit(cache=True)
-def phase_values(x_a, x_b):
+def phase_values(x_alpha, x_beta):
     """Phase quantities ``(x_a, x_b, x_c)`` of a space vector (amplitude-invariant Clarke)."""
-    return x_a, -0.5 * x_a + 0.5 * SQRT3 * x_b, -0.5 * x_a - 0.5 * SQRT3 * x_b
+    return x_alpha, -0.5 * x_alpha + 0.5 * SQRT3 * x_beta, -0.5 * x_alpha - 0.5 * SQRT3 * x_beta
 
 
 @njit(cache=True)
@@ -113,12 +113,12 @@ def smooth_sign(i, band):
 
 
 @njit(cache=True)
-def pole_error(p, i_a, i_b, Ts):
+def pole_error(p, i_alpha, i_beta, Ts):
     """Averaged dead-time and device-drop error of the applied voltage, ``(alpha, beta)``, V.
 
     Per phase ``-sgn_b(i_x) (t_d f_sw Vdc + V_drop)``, transformed to the stationary frame.
     """
-    ia, ib, ic = phase_values(i_a, i_b)
+    ia, ib, ic = phase_values(i_alpha, i_beta)
     u = p.t_d * p.f_sw * p.Vdc + p.v_drop
     ea = -smooth_sign(ia, p.i_band) * u
     eb = -smooth_sign(ib, p.i_band) * u
@@ -127,15 +127,15 @@ def pole_error(p, i_a, i_b, Ts):
 
 
 @njit(cache=True)
-def inverter_segments(p, v_ref_a, v_ref_b, i_a, i_b, Ts, seg_dt, seg_va, seg_vb):
+def inverter_segments(p, v_ref_alpha, v_ref_beta, i_alpha, i_beta, Ts, seg_dt, seg_va, seg_vb):
     """Voltage segments the machine sees over one period of the average-value model.
 
     Parameters
     ----------
     p : INVERTER_PARAMS record
-    v_ref_a, v_ref_b : float
+    v_ref_alpha, v_ref_beta : float
         Voltage reference from the controller, stationary frame, V.
-    i_a, i_b : float
+    i_alpha, i_beta : float
         Stator current at the start of the period, A (sign of the averaged dead-time error).
     Ts : float
         Control period, s.
@@ -148,10 +148,10 @@ def inverter_segments(p, v_ref_a, v_ref_b, i_a, i_b, Ts, seg_dt, seg_va, seg_vb)
         Number of segments written.
     """
     v_max = p.Vdc / SQRT3
-    va, vb = limit_magnitude(v_ref_a, v_ref_b, v_max)
+    va, vb = limit_magnitude(v_ref_alpha, v_ref_beta, v_max)
     seg_dt[0] = Ts
     if p.t_d > 0.0 or p.v_drop > 0.0:
-        ea, eb = pole_error(p, i_a, i_b, Ts)
+        ea, eb = pole_error(p, i_alpha, i_beta, Ts)
         seg_va[0] = va + ea
         seg_vb[0] = vb + eb
     else:  # untouched, so the ideal model stays bit for bit what it was
@@ -161,12 +161,12 @@ def inverter_segments(p, v_ref_a, v_ref_b, i_a, i_b, Ts, seg_dt, seg_va, seg_vb)
 
 
 @njit(cache=True)
-def duty_cycles(v_a, v_b, Vdc_meas):
-    """Duty cycles of the three legs for reference ``(v_a, v_b)`` (min-max injection).
+def duty_cycles(v_alpha, v_beta, Vdc_meas):
+    """Duty cycles of the three legs for reference ``(v_alpha, v_beta)`` (min-max injection).
 
     ``Vdc_meas`` is the DC-link voltage the controller measures; duties are clipped to [0, 1].
     """
-    xa, xb, xc = phase_values(v_a, v_b)
+    xa, xb, xc = phase_values(v_alpha, v_beta)
     v0 = -0.5 * (max(xa, xb, xc) + min(xa, xb, xc))
     da = min(max(0.5 + (xa + v0) / Vdc_meas, 0.0), 1.0)
     db = min(max(0.5 + (xb + v0) / Vdc_meas, 0.0), 1.0)
@@ -250,13 +250,13 @@ def apply_command(p, s, x, new_gate, i_x, t):
 
 
 @njit(cache=True)
-def pole_voltages_ab(p, s, Vdc, i_a, i_b):
+def pole_voltages_ab(p, s, Vdc, i_alpha, i_beta):
     """Stator voltage ``(alpha, beta)`` of the bridge's present pole states, V."""
     va = (s.pole[0] - 0.5) * Vdc
     vb = (s.pole[1] - 0.5) * Vdc
     vc = (s.pole[2] - 0.5) * Vdc
     if p.v_drop > 0.0:
-        ia, ib, ic = phase_values(i_a, i_b)
+        ia, ib, ic = phase_values(i_alpha, i_beta)
         va -= smooth_sign(ia, 0.0) * p.v_drop
         vb -= smooth_sign(ib, 0.0) * p.v_drop
         vc -= smooth_sign(ic, 0.0) * p.v_drop

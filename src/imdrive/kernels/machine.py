@@ -21,7 +21,7 @@ a power-law curve, monotone for S > 0 (see :func:`magnetising_current`). Given t
 equation, solved from a table of the inverse curve built once per run plus one Newton
 correction (:func:`magnetising_ratio`, :func:`saturation_table`; Newton's method to
 convergence outside the table). With ``p.saturation`` off the linear T-circuit with ``M`` is
-used, exactly as before.
+used.
 
 Winding temperatures follow a first-order thermal model per winding::
 
@@ -49,12 +49,16 @@ import numpy as np
 from numba import njit
 
 from imdrive.kernels.records import b1, c16, f8, record_dtype
-
-#: Cells of the inverse magnetising-curve table (:func:`saturation_table`).
-SAT_CELLS = 12
-#: Largest relative error of the table's ``k`` (after its Newton correction) that
-#: :func:`saturation_table` accepts; past it the table is left out and the full solve used.
-SAT_TABLE_TOL = 1e-9
+from imdrive.kernels.saturation import (  # noqa: F401  (re-exported: the model's import path)
+    SAT_CELLS,
+    SAT_TABLE_TOL,
+    magnetising_current,
+    magnetising_energy,
+    magnetising_ratio,
+    magnetising_ratio_series,
+    saturated_currents,
+    saturation_table,
+)
 
 #: Parameters of the true machine and its load (SI; temperatures in degC).
 PLANT_PARAMS = record_dtype(
@@ -128,264 +132,58 @@ LOG_FIELDS = (
 
 
 @njit(cache=True)
-def currents_from_fluxes(psi_s_a, psi_s_b, psi_r_a, psi_r_b, L1, L2, M):
+def currents_from_fluxes(psi_s_alpha, psi_s_beta, psi_r_alpha, psi_r_beta, L1, L2, M):
     """Stator and rotor currents from the flux linkages, A.
 
     Inverts ``[psi_s; psi_r] = [[L1, M], [M, L2]] [i_s; i_r]``.
     """
     inv_d = 1.0 / (L1 * L2 - M * M)
-    i_s_a = (L2 * psi_s_a - M * psi_r_a) * inv_d
-    i_s_b = (L2 * psi_s_b - M * psi_r_b) * inv_d
-    i_r_a = (L1 * psi_r_a - M * psi_s_a) * inv_d
-    i_r_b = (L1 * psi_r_b - M * psi_s_b) * inv_d
-    return i_s_a, i_s_b, i_r_a, i_r_b
+    i_s_alpha = (L2 * psi_s_alpha - M * psi_r_alpha) * inv_d
+    i_s_beta = (L2 * psi_s_beta - M * psi_r_beta) * inv_d
+    i_r_alpha = (L1 * psi_r_alpha - M * psi_s_alpha) * inv_d
+    i_r_beta = (L1 * psi_r_beta - M * psi_s_beta) * inv_d
+    return i_s_alpha, i_s_beta, i_r_alpha, i_r_beta
 
 
 @njit(cache=True)
-def _power(y, S):
-    """``y**S`` for ``y >= 0``; by repeated squaring when ``S`` is a small whole number (the
-    saturation curve is evaluated several times per RK4 stage: ``pow`` would dominate)."""
-    n = int(S)
-    if n == S and 0 < n <= 64:
-        r = 1.0
-        b = y
-        while n > 0:
-            if n & 1:
-                r *= b
-            b *= b
-            n >>= 1
-        return r
-    return y**S
-
-
-@njit(cache=True)
-def magnetising_current(psi_m, Lm0, psi_sat, S):
-    """Magnitude of the magnetising current on the curve at flux magnitude ``psi_m``, A."""
-    return psi_m / Lm0 * (1.0 + _power(psi_m / psi_sat, S))
-
-
-@njit(cache=True)
-def magnetising_energy(psi_m, Lm0, psi_sat, S):
-    """Energy of the magnetising branch per unit 1.5, ``int_0^psi_m i_m dpsi``, J."""
-    return psi_m * psi_m / (2.0 * Lm0) + psi_m ** (S + 2.0) / ((S + 2.0) * Lm0 * psi_sat**S)
-
-
-@njit(cache=True)
-def _solve_magnetising(p, X, m):
-    """Newton's method on ``G m + i_m(m) = X`` from ``m`` to convergence; returns ``m`` and
-    ``F'(m)`` (the full solve: used where the table does not reach)."""
-    G = 1.0 / p.Ll1 + 1.0 / p.Ll2
-    dF = G + 1.0 / p.Lm0
-    for _ in range(30):
-        r = _power(m / p.psi_sat, p.S)
-        F = G * m + m / p.Lm0 * (1.0 + r) - X
-        dF = G + (1.0 + (p.S + 1.0) * r) / p.Lm0
-        step = F / dF
-        m -= step
-        # Newton converges quadratically: after a step of relative size 1e-8 the error left
-        # is of order 1e-16, so one more iteration would only confirm it
-        if abs(step) <= 1e-8 * m:
-            break
-    return m, dF
-
-
-@njit(cache=True)
-def magnetising_ratio(p, X):
-    """``k = |psi_m| / |psi_x|`` at ``|psi_x| = X`` (H) and its derivative ``dk/dX`` (H/A).
-
-    ``|psi_m| = m`` solves ``F(m) = G m + i_m(m) = X`` (:func:`saturated_currents`). Inside
-    the table (``X < p.sat_X_max``, built once per run by :func:`saturation_table`): a cubic
-    Hermite interpolation of ``k`` on a uniform grid in ``X``, then one Newton correction of
-    ``m`` (no loop: from the table's relative error ``e`` it leaves ``~ S e^2``, below
-    ``SAT_TABLE_TOL``, which :func:`saturation_table` checks when it builds the table).
-    Outside the table (deep saturation, or no table): Newton's method to convergence.
-    """
-    G = 1.0 / p.Ll1 + 1.0 / p.Ll2
-    if X <= 0.0:
-        return 1.0 / (G + 1.0 / p.Lm0), 0.0
-    if X < p.sat_X_max:
-        s = X * p.sat_inv_h
-        j = min(int(s), SAT_CELLS - 1)
-        t = s - j
-        t2 = t * t
-        t3 = t2 * t
-        k = (
-            (2.0 * t3 - 3.0 * t2 + 1.0) * p.sat_k[j]
-            + (t3 - 2.0 * t2 + t) * p.sat_dk[j]
-            + (3.0 * t2 - 2.0 * t3) * p.sat_k[j + 1]
-            + (t3 - t2) * p.sat_dk[j + 1]
-        )
-        m = k * X
-        r = _power(m * p.sat_inv_psi_sat, p.S)
-        F = p.sat_G * m + m * p.sat_inv_Lm0 * (1.0 + r) - X
-        inv_dF = 1.0 / (p.sat_G + (1.0 + (p.S + 1.0) * r) * p.sat_inv_Lm0)
-        m -= F * inv_dF
-    else:
-        m, dF = _solve_magnetising(p, X, X / (G + 1.0 / p.M))
-        inv_dF = 1.0 / dF
-    inv_X = 1.0 / X
-    k = m * inv_X
-    return k, (inv_dF - k) * inv_X
-
-
-@njit(cache=True)
-def magnetising_ratio_series(p, X):
-    """``k`` (:func:`magnetising_ratio`) and its first two derivatives in ``u = X^2``.
-
-    Returns ``(k, dk/du, d2k/du2)`` (H, H/A^2, H/A^4) from the curve's derivatives at the
-    solution: with ``F(m) = G m + i_m(m)``, ``m' = 1/F'``, ``m'' = -F'' m'^3``, then
-    ``k' = (m' - k)/X``, ``k'' = (m'' - 2 k')/X`` in ``X``, and ``dk/du = k'/(2X)``,
-    ``d2k/du2 = (k'' - k'/X)/(4 X^2)``. The switching bridge expands ``k`` to second order
-    in ``u`` about the period's start (no square root, no solve inside the period).
-    """
-    k, k1 = magnetising_ratio(p, X)
-    if X <= 1e-9 * p.sat_X_max or X <= 0.0:
-        return k, 0.0, 0.0
-    m = k * X
-    G = 1.0 / p.Ll1 + 1.0 / p.Ll2
-    r = _power(m / p.psi_sat, p.S)
-    dF = G + (1.0 + (p.S + 1.0) * r) / p.Lm0
-    d2F = (p.S + 1.0) * p.S * r / (m * p.Lm0)
-    m1 = 1.0 / dF
-    m2 = -d2F * m1 * m1 * m1
-    k2 = (m2 - 2.0 * k1) / X
-    inv_2X = 0.5 / X
-    return k, k1 * inv_2X, (k2 - k1 / X) * inv_2X * inv_2X
-
-
-def saturation_table(Ll1: float, Ll2: float, Lm0: float, psi_sat: float, S: float) -> dict:
-    """The inverse magnetising curve tabulated once per run (the ``sat_*`` plant fields).
-
-    ``k(X) = m/X`` with ``m`` the solution of ``(1/Ll1 + 1/Ll2) m + i_m(m) = X``, at
-    ``SAT_CELLS + 1`` nodes uniform in ``X`` from 0 to ``F(1.6 psi_sat)`` (1.6 times the
-    saturation flux: past 2 times the rated flux with the default curve), with the exact
-    derivatives ``dk/dX = (1/F'(m) - k)/X`` for a cubic Hermite interpolation. The table is
-    checked here on 20 001 points against Newton's method run to convergence, with the one
-    Newton correction :func:`magnetising_ratio` applies; if the relative error of ``k``
-    exceeds ``SAT_TABLE_TOL`` (a curve too sharp for the grid) the table is left out
-    (``sat_X_max = 0``) and the kernel solves the curve by Newton everywhere.
-
-    Returns
-    -------
-    dict
-        ``sat_X_max`` (A), ``sat_inv_h`` (1/A), ``sat_k`` (H), ``sat_dk`` (H, times the cell
-        width) and ``sat_table_error`` (the measured relative error of ``k``, not a field).
-    """
-    G = 1.0 / Ll1 + 1.0 / Ll2
-
-    def F(m):
-        return G * m + m / Lm0 * (1.0 + (m / psi_sat) ** S)
-
-    def dF(m):
-        return G + (1.0 + (S + 1.0) * (m / psi_sat) ** S) / Lm0
-
-    def solve(X):
-        m = X / (G + 1.0 / Lm0)
-        for _ in range(200):
-            step = (F(m) - X) / dF(m)
-            m = m - step
-            if np.all(np.abs(step) <= 1e-15 * np.maximum(m, 1e-300)):
-                break
-        return m
-
-    X_max = float(F(1.6 * psi_sat))
-    old_err = np.seterr(over="ignore", invalid="ignore")  # a sharp curve overflows: refused
-    h = X_max / SAT_CELLS
-    X = np.linspace(0.0, X_max, SAT_CELLS + 1)
-    m = solve(X)
-    k = np.empty_like(X)
-    dk = np.empty_like(X)
-    k[0] = 1.0 / (G + 1.0 / Lm0)
-    dk[0] = 0.0
-    k[1:] = m[1:] / X[1:]
-    dk[1:] = (1.0 / dF(m[1:]) - k[1:]) / X[1:]
-    # check: the kernel's formula (Hermite, then one Newton step) against the full solve
-    Xc = np.linspace(0.0, X_max, 20001)[1:-1]
-    s = Xc / h
-    j = np.minimum(s.astype(int), SAT_CELLS - 1)
-    t = s - j
-    kc = (
-        (2 * t**3 - 3 * t**2 + 1) * k[j]
-        + (t**3 - 2 * t**2 + t) * h * dk[j]
-        + (3 * t**2 - 2 * t**3) * k[j + 1]
-        + (t**3 - t**2) * h * dk[j + 1]
-    )
-    mc = kc * Xc
-    mc = mc - (F(mc) - Xc) / dF(mc)
-    err = float(np.max(np.abs(mc / solve(Xc) - 1.0)))
-    np.seterr(**old_err)
-    ok = bool(np.isfinite(err) and err <= SAT_TABLE_TOL)
-    return {
-        "sat_X_max": X_max if ok else 0.0,
-        "sat_inv_h": 1.0 / h if ok else 0.0,
-        "sat_G": G,
-        "sat_inv_Lm0": 1.0 / Lm0,
-        "sat_inv_psi_sat": 1.0 / psi_sat,
-        "sat_k": k if ok else np.zeros_like(k),
-        "sat_dk": h * dk if ok else np.zeros_like(dk),
-        "sat_table_error": err,
-    }
-
-
-@njit(cache=True)
-def saturated_currents(p, psi_s_a, psi_s_b, psi_r_a, psi_r_b, m0=-1.0):
-    """Stator and rotor currents with main-flux saturation, A; and ``|psi_m|``, Wb.
-
-    ``psi_m = k psi_x`` with ``psi_x = psi_s/Ll1 + psi_r/Ll2``, where ``m = |psi_m|`` solves
-    ``G m + i_m(m) = |psi_x|``, ``G = 1/Ll1 + 1/Ll2`` (monotone and convex), and
-    ``k = m/|psi_x|`` comes from :func:`magnetising_ratio` (the run's table, or Newton's
-    method where it does not reach). ``m0`` is not used (kept for the call signature).
-    """
-    x_a = psi_s_a / p.Ll1 + psi_r_a / p.Ll2
-    x_b = psi_s_b / p.Ll1 + psi_r_b / p.Ll2
-    X = math.sqrt(x_a * x_a + x_b * x_b)
-    k, _ = magnetising_ratio(p, X)
-    pm_a = k * x_a
-    pm_b = k * x_b
-    i_s_a = (psi_s_a - pm_a) / p.Ll1
-    i_s_b = (psi_s_b - pm_b) / p.Ll1
-    i_r_a = (psi_r_a - pm_a) / p.Ll2
-    i_r_b = (psi_r_b - pm_b) / p.Ll2
-    return i_s_a, i_s_b, i_r_a, i_r_b, k * X
-
-
-@njit(cache=True)
-def plant_currents(p, psi_s_a, psi_s_b, psi_r_a, psi_r_b):
+def plant_currents(p, psi_s_alpha, psi_s_beta, psi_r_alpha, psi_r_beta):
     """Stator and rotor currents of the plant (linear or saturated), A."""
-    i_s_a, i_s_b, i_r_a, i_r_b, _ = plant_currents_m(p, psi_s_a, psi_s_b, psi_r_a, psi_r_b, -1.0)
-    return i_s_a, i_s_b, i_r_a, i_r_b
+    i_s_alpha, i_s_beta, i_r_alpha, i_r_beta, _ = plant_currents_m(
+        p, psi_s_alpha, psi_s_beta, psi_r_alpha, psi_r_beta, -1.0
+    )
+    return i_s_alpha, i_s_beta, i_r_alpha, i_r_beta
 
 
 @njit(cache=True)
-def plant_currents_m(p, psi_s_a, psi_s_b, psi_r_a, psi_r_b, m0):
+def plant_currents_m(p, psi_s_alpha, psi_s_beta, psi_r_alpha, psi_r_beta, m0):
     """:func:`plant_currents` and ``|psi_m|`` (0 when linear), from a start ``m0`` for the
     saturated solve (``m0 < 0``: the default start)."""
     if p.saturation:
-        return saturated_currents(p, psi_s_a, psi_s_b, psi_r_a, psi_r_b, m0)
+        return saturated_currents(p, psi_s_alpha, psi_s_beta, psi_r_alpha, psi_r_beta, m0)
     L1 = p.Ll1 + p.M
     L2 = p.Ll2 + p.M
-    i_s_a, i_s_b, i_r_a, i_r_b = currents_from_fluxes(
-        psi_s_a, psi_s_b, psi_r_a, psi_r_b, L1, L2, p.M
+    i_s_alpha, i_s_beta, i_r_alpha, i_r_beta = currents_from_fluxes(
+        psi_s_alpha, psi_s_beta, psi_r_alpha, psi_r_beta, L1, L2, p.M
     )
-    return i_s_a, i_s_b, i_r_a, i_r_b, 0.0
+    return i_s_alpha, i_s_beta, i_r_alpha, i_r_beta, 0.0
 
 
 @njit(cache=True)
 def stator_current_m(p, x, m0):
     """:func:`stator_current` and ``|psi_m|`` from the start ``m0`` of the saturated solve."""
-    i_s_a, i_s_b, _, _, m = plant_currents_m(
+    i_s_alpha, i_s_beta, _, _, m = plant_currents_m(
         p, x.psi_s_ab.real, x.psi_s_ab.imag, x.psi_r_ab.real, x.psi_r_ab.imag, m0
     )
-    return i_s_a, i_s_b, m
+    return i_s_alpha, i_s_beta, m
 
 
 @njit(cache=True)
 def stator_current(p, x):
     """Stator current ``(i_s_alpha, i_s_beta)`` of plant state ``x``, A."""
-    i_s_a, i_s_b, _, _ = plant_currents(
+    i_s_alpha, i_s_beta, _, _ = plant_currents(
         p, x.psi_s_ab.real, x.psi_s_ab.imag, x.psi_r_ab.real, x.psi_r_ab.imag
     )
-    return i_s_a, i_s_b
+    return i_s_alpha, i_s_beta
 
 
 @njit(cache=True)
@@ -405,13 +203,13 @@ def load_torque(p, TL0, w_m):
 
 
 @njit(cache=True)
-def electromagnetic_torque(psi_s_a, psi_s_b, i_s_a, i_s_b, n_p):
+def electromagnetic_torque(psi_s_alpha, psi_s_beta, i_s_alpha, i_s_beta, n_p):
     """T_e = 1.5 n_p (psi_s x i_s), N m."""
-    return 1.5 * n_p * (psi_s_a * i_s_b - psi_s_b * i_s_a)
+    return 1.5 * n_p * (psi_s_alpha * i_s_beta - psi_s_beta * i_s_alpha)
 
 
 @njit(cache=True)
-def _rates(p, psa, psb, pra, prb, w_m, th1, th2, v_a, v_b, R1_base, R2_base, TL0, m0=-1.0):
+def _rates(p, psa, psb, pra, prb, w_m, th1, th2, v_alpha, v_beta, R1_base, R2_base, TL0, m0=-1.0):
     """The plant's time derivatives from its state variables (the equations of the module
     docstring), as a 12-tuple in the field order of ``PLANT_STATE``.
 
@@ -426,16 +224,16 @@ def _rates(p, psa, psb, pra, prb, w_m, th1, th2, v_a, v_b, R1_base, R2_base, TL0
     else:
         R1 = R1_base
         R2 = R2_base
-    i_s_a, i_s_b, i_r_a, i_r_b, m = plant_currents_m(p, psa, psb, pra, prb, m0)
+    i_s_alpha, i_s_beta, i_r_alpha, i_r_beta, m = plant_currents_m(p, psa, psb, pra, prb, m0)
     w_r = n_p * w_m
-    T_e = electromagnetic_torque(psa, psb, i_s_a, i_s_b, n_p)
+    T_e = electromagnetic_torque(psa, psb, i_s_alpha, i_s_beta, n_p)
     T_L = load_torque(p, TL0, w_m)
     if not p.speed_imposed:
         dw = (T_e - T_L - p.B * w_m) / p.J
     else:  # speed imposed: the engine writes x.w_m from its profile every period
         dw = 0.0
-    p_cu1 = 1.5 * R1 * (i_s_a * i_s_a + i_s_b * i_s_b)
-    p_cu2 = 1.5 * R2 * (i_r_a * i_r_a + i_r_b * i_r_b)
+    p_cu1 = 1.5 * R1 * (i_s_alpha * i_s_alpha + i_s_beta * i_s_beta)
+    p_cu2 = 1.5 * R2 * (i_r_alpha * i_r_alpha + i_r_beta * i_r_beta)
     if p.thermal:
         dth1 = (p.Rth1 * p_cu1 - (th1 - p.theta_amb)) / p.tau1
         dth2 = (p.Rth2 * p_cu2 - (th2 - p.theta_amb)) / p.tau2
@@ -443,15 +241,15 @@ def _rates(p, psa, psb, pra, prb, w_m, th1, th2, v_a, v_b, R1_base, R2_base, TL0
         dth1 = 0.0
         dth2 = 0.0
     return (
-        v_a - R1 * i_s_a,
-        v_b - R1 * i_s_b,
-        -R2 * i_r_a - w_r * prb,
-        -R2 * i_r_b + w_r * pra,
+        v_alpha - R1 * i_s_alpha,
+        v_beta - R1 * i_s_beta,
+        -R2 * i_r_alpha - w_r * prb,
+        -R2 * i_r_beta + w_r * pra,
         dw,
         w_m,
         dth1,
         dth2,
-        1.5 * (v_a * i_s_a + v_b * i_s_b),
+        1.5 * (v_alpha * i_s_alpha + v_beta * i_s_beta),
         p_cu1 + p_cu2,
         T_e * w_m,
         (T_L + p.B * w_m) * w_m,
@@ -475,14 +273,14 @@ def _store(x, y):
 
 
 @njit(cache=True)
-def machine_derivative(p, x, v_a, v_b, R1_base, R2_base, TL0, dx):
+def machine_derivative(p, x, v_alpha, v_beta, R1_base, R2_base, TL0, dx):
     """Time derivative of the plant state (writes the record ``dx``).
 
     Parameters
     ----------
     p : PLANT_PARAMS record
     x : PLANT_STATE record
-    v_a, v_b : float
+    v_alpha, v_beta : float
         Stator voltage space vector applied by the inverter, V.
     R1_base, R2_base : float
         Resistances at the reference temperature, already scaled by their time profiles, ohm.
@@ -500,8 +298,8 @@ def machine_derivative(p, x, v_a, v_b, R1_base, R2_base, TL0, dx):
         x.w_m,
         x.theta1,
         x.theta2,
-        v_a,
-        v_b,
+        v_alpha,
+        v_beta,
         R1_base,
         R2_base,
         TL0,
@@ -535,7 +333,7 @@ def _rk4_sum(x0, x1, x2, x3, h6):
 
 
 @njit(cache=True)
-def integrate_segment(p, x, v_a, v_b, R1b, R2b, TL0, dt, nsub, work, m0=-1.0):
+def integrate_segment(p, x, v_alpha, v_beta, R1b, R2b, TL0, dt, nsub, work, m0=-1.0):
     """Integrate the plant over ``dt`` with ``nsub`` RK4 steps at constant voltage (in place).
 
     The stages live in local 12-tuples (registers), the state record is read once and written
@@ -560,14 +358,20 @@ def integrate_segment(p, x, v_a, v_b, R1b, R2b, TL0, dt, nsub, work, m0=-1.0):
     )
     m = m0
     for _ in range(nsub):
-        k1 = _rates(p, y[0], y[1], y[2], y[3], y[4], y[6], y[7], v_a, v_b, R1b, R2b, TL0, m)
+        k1 = _rates(p, y[0], y[1], y[2], y[3], y[4], y[6], y[7], v_alpha, v_beta, R1b, R2b, TL0, m)
         yt = _axpy12(y, 0.5 * h, k1)
         m = k1[12]
-        k2 = _rates(p, yt[0], yt[1], yt[2], yt[3], yt[4], yt[6], yt[7], v_a, v_b, R1b, R2b, TL0, m)
+        k2 = _rates(
+            p, yt[0], yt[1], yt[2], yt[3], yt[4], yt[6], yt[7], v_alpha, v_beta, R1b, R2b, TL0, m
+        )
         yt = _axpy12(y, 0.5 * h, k2)
-        k3 = _rates(p, yt[0], yt[1], yt[2], yt[3], yt[4], yt[6], yt[7], v_a, v_b, R1b, R2b, TL0, m)
+        k3 = _rates(
+            p, yt[0], yt[1], yt[2], yt[3], yt[4], yt[6], yt[7], v_alpha, v_beta, R1b, R2b, TL0, m
+        )
         yt = _axpy12(y, h, k3)
-        k4 = _rates(p, yt[0], yt[1], yt[2], yt[3], yt[4], yt[6], yt[7], v_a, v_b, R1b, R2b, TL0, m)
+        k4 = _rates(
+            p, yt[0], yt[1], yt[2], yt[3], yt[4], yt[6], yt[7], v_alpha, v_beta, R1b, R2b, TL0, m
+        )
         m = k4[12]
         h6 = h / 6.0
         y = (
@@ -589,7 +393,7 @@ def integrate_segment(p, x, v_a, v_b, R1b, R2b, TL0, dt, nsub, work, m0=-1.0):
 
 
 @njit(cache=True)
-def integrate_short(p, x, v_a, v_b, R1b, R2b, TL0, dt, m0=-1.0):
+def integrate_short(p, x, v_alpha, v_beta, R1b, R2b, TL0, dt, m0=-1.0):
     """One midpoint (RK2) step over a short interval (a dead time, a narrow pulse; in place).
 
     Its local error, ``~(lambda dt)^3/6`` with ``|lambda| ~ 500 1/s`` the fastest electrical
@@ -600,7 +404,7 @@ def integrate_short(p, x, v_a, v_b, R1b, R2b, TL0, dt, m0=-1.0):
     y1 = x.psi_s_ab.imag
     y2 = x.psi_r_ab.real
     y3 = x.psi_r_ab.imag
-    k1 = _rates(p, y0, y1, y2, y3, x.w_m, x.theta1, x.theta2, v_a, v_b, R1b, R2b, TL0, m0)
+    k1 = _rates(p, y0, y1, y2, y3, x.w_m, x.theta1, x.theta2, v_alpha, v_beta, R1b, R2b, TL0, m0)
     a = 0.5 * dt
     k2 = _rates(
         p,
@@ -611,8 +415,8 @@ def integrate_short(p, x, v_a, v_b, R1b, R2b, TL0, dt, m0=-1.0):
         x.w_m + a * k1[4],
         x.theta1 + a * k1[6],
         x.theta2 + a * k1[7],
-        v_a,
-        v_b,
+        v_alpha,
+        v_beta,
         R1b,
         R2b,
         TL0,
@@ -723,31 +527,40 @@ def magnetic_energy(p, x):
     Linear: ``1.5 * 0.5 * (psi_s.i_s + psi_r.i_r)``. Saturated: the leakage energies
     ``1.5 * 0.5 (Ll1 |i_s|^2 + Ll2 |i_r|^2)`` plus ``1.5 int i_m dpsi_m`` along the curve.
     """
-    psi_s_a = x.psi_s_ab.real
-    psi_s_b = x.psi_s_ab.imag
-    psi_r_a = x.psi_r_ab.real
-    psi_r_b = x.psi_r_ab.imag
+    psi_s_alpha = x.psi_s_ab.real
+    psi_s_beta = x.psi_s_ab.imag
+    psi_r_alpha = x.psi_r_ab.real
+    psi_r_beta = x.psi_r_ab.imag
     if p.saturation:
-        i_s_a, i_s_b, i_r_a, i_r_b, m = saturated_currents(p, psi_s_a, psi_s_b, psi_r_a, psi_r_b)
-        leak = p.Ll1 * (i_s_a**2 + i_s_b**2) + p.Ll2 * (i_r_a**2 + i_r_b**2)
+        i_s_alpha, i_s_beta, i_r_alpha, i_r_beta, m = saturated_currents(
+            p, psi_s_alpha, psi_s_beta, psi_r_alpha, psi_r_beta
+        )
+        leak = p.Ll1 * (i_s_alpha**2 + i_s_beta**2) + p.Ll2 * (i_r_alpha**2 + i_r_beta**2)
         return 0.75 * leak + 1.5 * magnetising_energy(m, p.Lm0, p.psi_sat, p.S)
     L1 = p.Ll1 + p.M
     L2 = p.Ll2 + p.M
-    i_s_a, i_s_b, i_r_a, i_r_b = currents_from_fluxes(
-        psi_s_a, psi_s_b, psi_r_a, psi_r_b, L1, L2, p.M
+    i_s_alpha, i_s_beta, i_r_alpha, i_r_beta = currents_from_fluxes(
+        psi_s_alpha, psi_s_beta, psi_r_alpha, psi_r_beta, L1, L2, p.M
     )
-    return 0.75 * (psi_s_a * i_s_a + psi_s_b * i_s_b + psi_r_a * i_r_a + psi_r_b * i_r_b)
+    return 0.75 * (
+        psi_s_alpha * i_s_alpha
+        + psi_s_beta * i_s_beta
+        + psi_r_alpha * i_r_alpha
+        + psi_r_beta * i_r_beta
+    )
 
 
 @njit(cache=True)
-def log_plant(row, p, x, i_s_a, i_s_b, TL0, R1b, R2b):
+def log_plant(row, p, x, i_s_alpha, i_s_beta, TL0, R1b, R2b):
     """Write this block's :data:`LOG_FIELDS` of the sample into the log record ``row``."""
     R1, R2 = winding_resistances(p, x, R1b, R2b)
     row.speed = x.w_m
-    row.torque = electromagnetic_torque(x.psi_s_ab.real, x.psi_s_ab.imag, i_s_a, i_s_b, p.n_p)
+    row.torque = electromagnetic_torque(
+        x.psi_s_ab.real, x.psi_s_ab.imag, i_s_alpha, i_s_beta, p.n_p
+    )
     row.load_torque = load_torque(p, TL0, x.w_m)
-    row.i_alpha = i_s_a
-    row.i_beta = i_s_b
+    row.i_alpha = i_s_alpha
+    row.i_beta = i_s_beta
     row.psi_r_alpha = x.psi_r_ab.real
     row.psi_r_beta = x.psi_r_ab.imag
     row.R1 = R1

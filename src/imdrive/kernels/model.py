@@ -24,8 +24,8 @@ MODEL_STATE = record_dtype(
 
 #: Log fields of this block.
 LOG_FIELDS = (
-    "R2_est",  # the rotor-resistance estimate, ohm
-    "R1_est",  # the stator-resistance estimate, ohm
+    "R2_hat",  # the rotor-resistance estimate, ohm
+    "R1_hat",  # the stator-resistance estimate, ohm
 )
 
 

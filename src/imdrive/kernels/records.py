@@ -3,10 +3,10 @@
 Every block declares its parameters and state as a numpy record dtype (complex fields for space
 vectors). A drive holds each record as an array of shape ``(N,)``: ``N = 1`` for one drive, one
 row per drive in a batch. Numba compiles field access to a load at a fixed offset (as fast as
-the flat arrays of 0.1), caches functions that take records (``cache=True``), and a record taken
+a flat float array), caches functions that take records (``cache=True``), and a record taken
 from an array (``state[i]``) is a view, so a block updates its state in place.
 
-One pitfall, found the hard way: inside a kernel, a record taken from an array the kernel
+One pitfall: inside a kernel, a record taken from an array the kernel
 allocated itself does not keep that array alive, and numba frees an array after its last use.
 Keep using the array (``acc_arr[0].peak``, or pass ``acc_arr``) for as long as its records are
 used; records of arrays passed in as arguments are safe.

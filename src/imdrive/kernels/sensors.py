@@ -1,7 +1,7 @@
 """Sensors: what the controller measures of the plant.
 
 Current sensors
-    The 0.1 model (``phase_model`` off, the default) adds a constant offset to the stator current
+    The vector model (``phase_model`` off, the default) adds a constant offset to the stator current
     space vector. The per-phase model measures phases a and b (two sensors, ``i_c = -i_a - i_b``
     as in most drives), each with its own gain and offset, Gaussian noise (seeded, reproducible:
     a counter-based generator keyed by seed, drive sample and phase, so a run, a continued run
@@ -26,7 +26,7 @@ from imdrive.kernels.records import b1, c16, f8, i8, record_dtype
 #: Parameters of the sensors.
 SENSOR_PARAMS = record_dtype(
     [
-        ("i_offset_ab", c16),  # offset added to the measured stator current vector, A (0.1)
+        ("i_offset_ab", c16),  # offset added to the measured stator current vector, A
         ("phase_model", b1),  # per-phase current sensors below are active
         ("gain_a", f8),  # gain of the phase-a current sensor
         ("gain_b", f8),
@@ -83,12 +83,12 @@ def quantise(u, bits, full_scale):
 
 
 @njit(cache=True)
-def measure_current(p, i_s_a, i_s_b, k):
+def measure_current(p, i_s_alpha, i_s_beta, k):
     """Measured stator current ``(i_alpha, i_beta)`` at sample ``k``, A."""
     if not p.phase_model:
-        return i_s_a + p.i_offset_ab.real, i_s_b + p.i_offset_ab.imag
-    ia = i_s_a
-    ib = -0.5 * i_s_a + 0.5 * math.sqrt(3.0) * i_s_b
+        return i_s_alpha + p.i_offset_ab.real, i_s_beta + p.i_offset_ab.imag
+    ia = i_s_alpha
+    ib = -0.5 * i_s_alpha + 0.5 * math.sqrt(3.0) * i_s_beta
     ma = p.gain_a * ia + p.offset_a
     mb = p.gain_b * ib + p.offset_b
     if p.noise_rms > 0.0:

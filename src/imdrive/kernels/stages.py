@@ -254,7 +254,7 @@ def modulate(pinv, pc, smp, pr, switching, Vdc_meas, seg_dt, seg_va, seg_vb, Ts)
         v_cmd_alpha, v_cmd_beta = limit_magnitude(
             v_ref_alpha, v_ref_beta, pinv.Vdc / math.sqrt(3.0)
         )
-        v_cmd_alpha = (Ts * v_cmd_alpha) / Ts  # the 0.1 rounding of a one-segment average
+        v_cmd_alpha = (Ts * v_cmd_alpha) / Ts  # rounded as a one-segment average (bit-identical)
         v_cmd_beta = (Ts * v_cmd_beta) / Ts
         if k_dc != 1.0:
             v_cmd_alpha /= k_dc
@@ -288,8 +288,8 @@ def log_row(row, pp, pe, x, mdl, ctl, est, cmp, pr):
     row.e_d0 = pr.e_dq0.real
     row.e_q0 = pr.e_dq0.imag
     estimator_log(row, pe, est, pp.n_p)
-    row.R2_est = mdl.R2_hat
-    row.R1_est = mdl.R1_hat
+    row.R2_hat = mdl.R2_hat
+    row.R1_hat = mdl.R1_hat
     log_compensator(row, cmp)
 
 

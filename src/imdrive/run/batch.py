@@ -205,6 +205,79 @@ def _stack(items, log_every: int, n_rows: int, window_s: float, parallel: bool):
     return params, state, log, out, wall
 
 
+def _run_block(block, offset, logs, log_every, window_s, parallel, errors):
+    """Build and run one block of drives (see :func:`simulate_batch` for the arguments).
+
+    Returns
+    -------
+    tuple
+        ``(metrics, status, k_end, Ts, error, results, kernel wall time)``, one entry per
+        drive of the block in its order (``results`` entries are None without ``logs``).
+    """
+    from imdrive.config.scenario import Scenario
+    from imdrive.errors import ConfigError
+    from imdrive.run.build import build_arrays
+    from imdrive.run.result import SimulationResult
+    from imdrive.run.simulate import logged_rows
+
+    B = len(block)
+    m_blk = np.empty(B, dtype=BATCH_METRICS)
+    s_blk = np.empty(B, dtype=np.int64)
+    k_blk = np.empty(B, dtype=np.int64)
+    ts_blk = np.empty(B)
+    res_blk: list = [None] * B
+    e_blk = np.full(B, "", dtype=object)
+    kernel_wall = 0.0
+    groups: dict[tuple, list] = {}
+    for i, sc in enumerate(block):
+        try:
+            if isinstance(sc, FailedRun):
+                raise ConfigError("scenario", sc.message)
+            if not isinstance(sc, Scenario):
+                raise ConfigError(
+                    f"scenarios[{offset + i}]",
+                    f"must be a Scenario, got {type(sc).__name__} (Scenario.read or "
+                    "Scenario.from_dict make one)",
+                )
+            a = build_arrays(sc)
+        except ConfigError as exc:
+            if errors == "raise":
+                raise
+            for name in METRICS:
+                m_blk[name][i] = np.nan
+            s_blk[i], k_blk[i], ts_blk[i] = S_FAILED, 0, 0.0
+            e_blk[i] = sc.message if isinstance(sc, FailedRun) else str(exc)
+            continue
+        le = (log_every or a.log_every) if logs else 1
+        # one kernel call per number of periods, decimation and estimator (its records)
+        key = (a.n_steps, int(le), a.params.est.dtype)
+        groups.setdefault(key, []).append((i, sc, a))
+    for (n_steps, le, _), items in groups.items():
+        n_rows = n_steps // le + 1 if logs else 0
+        params, state, log, out, wall = _stack(items, le, n_rows, window_s, parallel)
+        kernel_wall += wall
+        for g, (i, sc, a) in enumerate(items):
+            m_blk[i] = out.metrics[g]
+            s_blk[i] = out.status[g]
+            k_blk[i] = out.k_end[g]
+            ts_blk[i] = a.Ts
+            if logs:
+                lg = logged_rows(log[g], out.status[g], out.k_end[g], le)
+                final = DriveState(*(f[g : g + 1].copy() for f in state))
+                res_blk[i] = SimulationResult.from_log(
+                    sc,
+                    lg,
+                    a.state0,
+                    final,
+                    a.params,
+                    int(out.status[g]),
+                    int(out.k_end[g]),
+                    0.0,
+                    a.derived,
+                )
+    return m_blk, s_blk, k_blk, ts_blk, e_blk, res_blk, kernel_wall
+
+
 def simulate_batch(
     scenarios: Iterable,
     *,
@@ -247,9 +320,6 @@ def simulate_batch(
 
     from imdrive.config.scenario import Scenario
     from imdrive.errors import ConfigError
-    from imdrive.run.build import build_arrays
-    from imdrive.run.result import SimulationResult
-    from imdrive.run.simulate import logged_rows
 
     if log_every is not None and (isinstance(log_every, bool) or int(log_every) < 1):
         raise ConfigError("log_every", f"must be >= 1 (got {log_every})")
@@ -277,60 +347,10 @@ def simulate_batch(
                 break
         if not block:
             break
-        B = len(block)
-        m_blk = np.empty(B, dtype=BATCH_METRICS)
-        s_blk = np.empty(B, dtype=np.int64)
-        k_blk = np.empty(B, dtype=np.int64)
-        ts_blk = np.empty(B)
-        res_blk: list = [None] * B
-        e_blk = np.full(B, "", dtype=object)
-        groups: dict[tuple, list] = {}
-        for i, sc in enumerate(block):
-            try:
-                if isinstance(sc, FailedRun):
-                    raise ConfigError("scenario", sc.message)
-                if not isinstance(sc, Scenario):
-                    raise ConfigError(
-                        f"scenarios[{offset + i}]",
-                        f"must be a Scenario, got {type(sc).__name__} (Scenario.read or "
-                        "Scenario.from_dict make one)",
-                    )
-                a = build_arrays(sc)
-            except ConfigError as exc:
-                if errors == "raise":
-                    raise
-                for name in METRICS:
-                    m_blk[name][i] = np.nan
-                s_blk[i], k_blk[i], ts_blk[i] = S_FAILED, 0, 0.0
-                e_blk[i] = sc.message if isinstance(sc, FailedRun) else str(exc)
-                continue
-            le = (log_every or a.log_every) if logs else 1
-            # one kernel call per number of periods, decimation and estimator (its records)
-            key = (a.n_steps, int(le), a.params.est.dtype)
-            groups.setdefault(key, []).append((i, sc, a))
-        for (n_steps, le, _), items in groups.items():
-            n_rows = n_steps // le + 1 if logs else 0
-            params, state, log, out, wall = _stack(items, le, n_rows, window_s, parallel)
-            kernel_wall += wall
-            for g, (i, sc, a) in enumerate(items):
-                m_blk[i] = out.metrics[g]
-                s_blk[i] = out.status[g]
-                k_blk[i] = out.k_end[g]
-                ts_blk[i] = a.Ts
-                if logs:
-                    lg = logged_rows(log[g], out.status[g], out.k_end[g], le)
-                    final = DriveState(*(f[g : g + 1].copy() for f in state))
-                    res_blk[i] = SimulationResult.from_log(
-                        sc,
-                        lg,
-                        a.state0,
-                        final,
-                        a.params,
-                        int(out.status[g]),
-                        int(out.k_end[g]),
-                        0.0,
-                        a.derived,
-                    )
+        m_blk, s_blk, k_blk, ts_blk, e_blk, res_blk, wall = _run_block(
+            block, offset, logs, log_every, window_s, parallel, errors
+        )
+        kernel_wall += wall
         chunks_m.append(m_blk)
         chunks_s.append(s_blk)
         chunks_k.append(k_blk)
@@ -338,7 +358,7 @@ def simulate_batch(
         chunks_e.append(e_blk)
         if logs:
             results.extend(res_blk)
-        offset += B
+        offset += len(block)
     if offset:
         met = np.concatenate(chunks_m)
         status = np.concatenate(chunks_s)

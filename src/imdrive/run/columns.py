@@ -8,6 +8,7 @@ The exported column is ``f"{field}_{unit}"`` holding ``log[field] * scale`` (``s
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 
@@ -53,8 +54,8 @@ LOG_UNITS = {
     "lam_v_beta": ("Wb", 1.0),
     "lam_i_alpha": ("Wb", 1.0),
     "lam_i_beta": ("Wb", 1.0),
-    "R2_est": ("ohm", 1.0),
-    "R1_est": ("ohm", 1.0),
+    "R2_hat": ("ohm", 1.0),
+    "R1_hat": ("ohm", 1.0),
     "e_d0_demod": ("Wb", 1.0),
     "comp_frozen": ("flags", 1.0),
     "inj_freq": ("Hz", 1.0),
@@ -71,11 +72,118 @@ OPEN_LOOP_COLUMNS = (
 VECTOR_COLUMNS = (
     OPEN_LOOP_COLUMNS
     + (
-        "speed_ref_rpm speed_est_rpm id_ref_A iq_ref_A i_d_A i_q_A R2_est_ohm e_d0_Wb e_q0_Wb "
+        "speed_ref_rpm speed_est_rpm id_ref_A iq_ref_A i_d_A i_q_A R2_hat_ohm e_d0_Wb e_q0_Wb "
         "theta_e_rad lam_v_alpha_Wb lam_v_beta_Wb lam_i_alpha_Wb lam_i_beta_Wb e_d0_demod_Wb "
-        "comp_frozen_flags inj_freq_Hz R1_est_ohm"
+        "comp_frozen_flags inj_freq_Hz R1_hat_ohm"
     ).split()
 )
+
+
+#: Exported columns renamed to follow the naming glossary (docs/architecture.md: ``_hat`` is
+#: an estimate): old name -> new name. The old name keeps answering, with a
+#: ``DeprecationWarning``, for one release (until 0.3) wherever a column is read by name
+#: (:class:`Columns`: ``SimulationResult.signals``, ``res[name]``, ``res.window(...)``).
+RENAMED_COLUMNS = {"R2_est_ohm": "R2_hat_ohm", "R1_est_ohm": "R1_hat_ohm"}
+
+#: Keys of :func:`imdrive.run.metrics.compensation_metrics` renamed the same way.
+RENAMED_METRICS = {
+    "R2_est_initial_ohm": "R2_hat_initial_ohm",
+    "R2_est_final_ohm": "R2_hat_final_ohm",
+    "R2_est_final_error_pct": "R2_hat_final_error_pct",
+}
+
+
+def current_name(name: str, renamed: dict[str, str] = RENAMED_COLUMNS, stacklevel: int = 3):
+    """The present name of a column (or metric) ``name``, warning when it is a renamed one.
+
+    Parameters
+    ----------
+    name : str
+        A column name, old or new.
+    renamed : dict, optional
+        Old name -> new name (:data:`RENAMED_COLUMNS` or :data:`RENAMED_METRICS`).
+    stacklevel : int, optional
+        Passed to :func:`warnings.warn`, so the warning points at the caller's line.
+
+    Returns
+    -------
+    str
+        ``renamed[name]`` for an old name (after a ``DeprecationWarning``), else ``name``.
+    """
+    new = renamed.get(name)
+    if new is None:
+        return name
+    warnings.warn(
+        f"{name!r} is renamed {new!r} (the estimate is '_hat'); the old name stops working in 0.3",
+        DeprecationWarning,
+        stacklevel=stacklevel,
+    )
+    return new
+
+
+def with_current_names(mapping, stacklevel: int = 3) -> dict:
+    """``mapping`` (column -> values) with renamed columns' old names replaced by the new ones.
+
+    Parameters
+    ----------
+    mapping : Mapping
+        Columns read from the user, possibly under an old name (:data:`RENAMED_COLUMNS`).
+    stacklevel : int, optional
+        Passed to :func:`warnings.warn` for each old name found.
+
+    Returns
+    -------
+    dict
+        The same values under the present names; a ``DeprecationWarning`` per old name.
+    """
+    if not any(isinstance(k, str) and k in RENAMED_COLUMNS for k in mapping):
+        return mapping
+    return {current_name(k, stacklevel=stacklevel + 1): v for k, v in mapping.items()}
+
+
+class Columns(dict):
+    """Named columns (a ``dict``) that also answer a renamed column's old name.
+
+    Reading an old name (``cols["R2_est_ohm"]``, ``.get``, ``in``) gives the column under its
+    new name (:data:`RENAMED_COLUMNS`) with a ``DeprecationWarning``; iteration, ``keys()``
+    and every export carry the new names only.
+    """
+
+    __slots__ = ()
+    _renamed: dict[str, str] = RENAMED_COLUMNS
+
+    def _new_name(self, key):
+        """The new name of an old ``key`` present here, else None."""
+        new = self._renamed.get(key) if isinstance(key, str) else None
+        return new if new is not None and dict.__contains__(self, new) else None
+
+    def __missing__(self, key):
+        if self._new_name(key) is None:
+            raise KeyError(key)
+        return dict.__getitem__(self, current_name(key, self._renamed, stacklevel=3))
+
+    def __contains__(self, key) -> bool:
+        if dict.__contains__(self, key):
+            return True
+        if self._new_name(key) is None:
+            return False
+        current_name(key, self._renamed, stacklevel=3)
+        return True
+
+    def get(self, key, default=None):
+        """The column ``key`` (an old name warns), or ``default`` when there is none."""
+        if dict.__contains__(self, key):
+            return dict.__getitem__(self, key)
+        if self._new_name(key) is None:
+            return default
+        return dict.__getitem__(self, current_name(key, self._renamed, stacklevel=3))
+
+
+class Metrics(Columns):
+    """A metrics table (``dict``) that answers the old names of :data:`RENAMED_METRICS`."""
+
+    __slots__ = ()
+    _renamed = RENAMED_METRICS
 
 
 def columns_from_log(
@@ -96,8 +204,9 @@ def columns_from_log(
 
     Returns
     -------
-    dict
-        ``{column: values}``, the standard columns in their order, with the estimator's own
+    Columns
+        ``{column: values}`` (a ``dict`` that answers renamed columns' old names with a
+        ``DeprecationWarning``), the standard columns in their order, with the estimator's own
         before ``e_d0_demod_Wb``.
     """
     out = {}
@@ -119,7 +228,7 @@ def columns_from_log(
     out["i_a_A"] = ia.copy()
     out["i_b_A"] = -0.5 * ia + SQ3_2 * ib
     out["i_c_A"] = -0.5 * ia - SQ3_2 * ib
-    return {n: out[n] for n in names if n in out}
+    return Columns((n, out[n]) for n in names if n in out)
 
 
 #: unit suffixes of the exported columns, longest first so ``_rad_s`` wins over ``_s``

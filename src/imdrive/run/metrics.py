@@ -56,6 +56,7 @@ import numpy as np
 
 from imdrive.config.perunit import lost_control_rpm
 from imdrive.kernels.batch import CONVERGENCE_BAND, METRICS
+from imdrive.run.columns import Metrics
 
 DEFAULT_WINDOW_S = 0.5
 
@@ -131,7 +132,7 @@ def drive_metrics(res, window_s: float = DEFAULT_WINDOW_S) -> dict:
     speed = s["speed_rpm"]
     speed_ref = s.get("speed_ref_rpm", zeros)
     speed_est = s.get("speed_est_rpm", zeros)
-    R2_hat = s.get("R2_est_ohm", s["R2_ohm"])
+    R2_hat = s.get("R2_hat_ohm", s["R2_ohm"])
     win = k >= max(n_steps - int(round(window_s / Ts)), 0)
     rel = np.abs(R2_hat - s["R2_ohm"]) / s["R2_ohm"]
     bad = np.flatnonzero(~(rel <= CONVERGENCE_BAND))
@@ -176,7 +177,9 @@ def compensation_metrics(
     ``|R2_hat/R2 - 1| <= tol`` holds to the end of the run (None if it never settles
     there). Speed errors (actual minus reference, rpm) are means over ``window_s`` just
     before the enable instant and at the end of the run; the ripple is the peak-to-peak
-    actual speed over the final window.
+    actual speed over the final window. The ``R2_hat_*`` keys were ``R2_est_*`` before the
+    naming glossary; the old keys still answer, with a ``DeprecationWarning``
+    (:class:`~imdrive.run.columns.Metrics`).
     """
     comp = res.scenario.compensator
     if not comp.enabled or res.scenario.drive.mode != "vector" or len(res.time_s) < 2:
@@ -184,7 +187,7 @@ def compensation_metrics(
     s = res.signals
     t = s["time_s"]
     t_on = comp.t_on_s
-    ratio_err = np.abs(s["R2_est_ohm"] / s["R2_ohm"] - 1.0)
+    ratio_err = np.abs(s["R2_hat_ohm"] / s["R2_ohm"] - 1.0)
     outside = np.nonzero((ratio_err > tol) | (t < t_on))[0]
     if len(outside) == 0:
         t_tol = 0.0
@@ -195,18 +198,20 @@ def compensation_metrics(
     before = (t >= t_on - window_s) & (t < t_on)
     after = t >= t[-1] - window_s
     err = s["speed_rpm"] - s["speed_ref_rpm"]
-    return {
-        "R2_ohm": float(s["R2_ohm"][-1]),
-        "R2_est_initial_ohm": float(s["R2_est_ohm"][0]),
-        "R2_est_final_ohm": float(s["R2_est_ohm"][-1]),
-        "R2_est_final_error_pct": float(100.0 * (s["R2_est_ohm"][-1] / s["R2_ohm"][-1] - 1)),
-        "tolerance_pct": 100.0 * tol,
-        "time_to_tolerance_s": t_tol,
-        "speed_error_before_rpm": float(np.mean(err[before])) if before.any() else None,
-        "speed_error_after_rpm": float(np.mean(err[after])),
-        "speed_ripple_after_rpm": float(np.ptp(s["speed_rpm"][after])),
-        "e_d0_mean_after_Wb": float(np.mean(s["e_d0_Wb"][after])),
-    }
+    return Metrics(
+        {
+            "R2_ohm": float(s["R2_ohm"][-1]),
+            "R2_hat_initial_ohm": float(s["R2_hat_ohm"][0]),
+            "R2_hat_final_ohm": float(s["R2_hat_ohm"][-1]),
+            "R2_hat_final_error_pct": float(100.0 * (s["R2_hat_ohm"][-1] / s["R2_ohm"][-1] - 1)),
+            "tolerance_pct": 100.0 * tol,
+            "time_to_tolerance_s": t_tol,
+            "speed_error_before_rpm": float(np.mean(err[before])) if before.any() else None,
+            "speed_error_after_rpm": float(np.mean(err[after])),
+            "speed_ripple_after_rpm": float(np.ptp(s["speed_rpm"][after])),
+            "e_d0_mean_after_Wb": float(np.mean(s["e_d0_Wb"][after])),
+        }
+    )
 
 
 def steady_means(res, window_s: float = DEFAULT_WINDOW_S) -> dict:

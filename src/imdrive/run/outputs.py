@@ -12,7 +12,7 @@ import sys
 from pathlib import Path
 
 from imdrive.config.output import OutputSettings
-from imdrive.run.columns import OPEN_LOOP_COLUMNS, VECTOR_COLUMNS, unit_of
+from imdrive.run.columns import OPEN_LOOP_COLUMNS, RENAMED_COLUMNS, VECTOR_COLUMNS, unit_of
 from imdrive.run.formats import output_formats
 
 #: meaning of each exported column (frame, sign convention); the unit is the name's suffix
@@ -49,8 +49,8 @@ COLUMN_DOCS = {
     "iq_ref_A": "torque-current reference iq*",
     "i_d_A": "measured current in the controller's synchronous frame, d",
     "i_q_A": "measured current in the controller's synchronous frame, q",
-    "R2_est_ohm": "the controller's rotor-resistance estimate R2_hat",
-    "R1_est_ohm": "the controller's stator-resistance estimate R1_hat (constant unless "
+    "R2_hat_ohm": "the controller's rotor-resistance estimate R2_hat",
+    "R1_hat_ohm": "the controller's stator-resistance estimate R1_hat (constant unless "
     "mras.R1_rate_per_s > 0 or the AFO adapts it)",
     "e_d0_Wb": "MRAS flux error (reference minus adjustable model) in the controller's frame, d "
     "(the paper's e_d0; negative when R2_hat > R2 by the paper's reading)",
@@ -146,6 +146,21 @@ def markdown() -> str:
     lines += ["", "Vector control adds:", "", "| column | unit | meaning |", "|---|---|---|"]
     for name in VECTOR_COLUMNS[len(OPEN_LOOP_COLUMNS) :]:
         lines.append(f"| `{name}` | {unit_of(name)} | {COLUMN_DOCS[name]} |")
+    lines += [
+        "",
+        "### Renamed columns",
+        "",
+        "Names follow the glossary of docs/architecture.md (`_hat`: an estimate). A renamed"
+        " column's old name still answers where a column is read by name"
+        " (`SimulationResult.signals`, `res[name]`, `res.window(...)`, `res.plot([...])`), with a"
+        " `DeprecationWarning`, until 0.3; the files carry the new name only. The compensation"
+        " metrics (`summary.json` `compensation`, `compensation_metrics`) were renamed the"
+        " same way (`R2_est_final_ohm` -> `R2_hat_final_ohm`).",
+        "",
+        "| old column | new column |",
+        "|---|---|",
+        *(f"| `{old}` | `{new}` |" for old, new in RENAMED_COLUMNS.items()),
+    ]
     lines += ["", "## summary.json", "", "| key | meaning |", "|---|---|"]
     lines += [f"| `{k}` | {v} |" for k, v in SUMMARY_DOCS.items()]
     lines += [

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from imdrive.run.columns import current_name
 from imdrive.run.export import unit_of
 
 if TYPE_CHECKING:  # matplotlib is loaded by the first figure, not by the tables below
@@ -89,9 +90,9 @@ SIGNALS = {
     "lam_i_alpha_Wb": "current-model rotor flux, α axis",
     "lam_i_beta_Wb": "current-model rotor flux, β axis",
     "R2_ohm": "actual R2 (plant)",
-    "R2_est_ohm": "rotor-resistance estimate R̂2",
+    "R2_hat_ohm": "rotor-resistance estimate R̂2",
     "R1_ohm": "actual R1 (plant)",
-    "R1_est_ohm": "stator-resistance estimate R̂1",
+    "R1_hat_ohm": "stator-resistance estimate R̂1",
     "v_alpha_V": "applied voltage, α axis",
     "v_beta_V": "applied voltage, β axis",
     "v_ref_alpha_V": "voltage reference, α axis",
@@ -163,7 +164,7 @@ def steady_start(res) -> float:
     90 % of the run."""
     sc = res.scenario
     t_end = float(res.time_s[-1])
-    if "R2_est_ohm" in res.signals and sc.compensator.enabled and sc.compensator.t_on_s < t_end:
+    if "R2_hat_ohm" in res.signals and sc.compensator.enabled and sc.compensator.t_on_s < t_end:
         return float(sc.compensator.t_on_s)
     last = max(sc.control.speed_ref_rpm.points[-1][0], sc.load.torque_Nm.points[-1][0])
     return min(max(last + 1.0, 0.5 * t_end), 0.9 * t_end)
@@ -295,7 +296,7 @@ def estimator_figure(res) -> Figure:
     _zoom_panel(axes[2], res, errors, steady_start(res))
     _ylabel(axes[2], "flux error, zoom", "e_d0_Wb")
     _plot(axes[3], res, "R2_ohm")
-    _plot(axes[3], res, "R2_est_ohm", "--")
+    _plot(axes[3], res, "R2_hat_ohm", "--")
     _ylabel(axes[3], "rotor resistance", "R2_ohm")
     axes[3].legend(loc="best")
     _mark_switch_on(axes, res)
@@ -322,7 +323,7 @@ def compensation_figure(res) -> Figure:
     _ylabel(axes[1], "flux error, zoom", "e_d0_Wb")
     axes[1].legend(loc="upper right", fontsize=8)
     _plot(axes[2], res, "R2_ohm")
-    _plot(axes[2], res, "R2_est_ohm", "--")
+    _plot(axes[2], res, "R2_hat_ohm", "--")
     _ylabel(axes[2], "rotor resistance", "R2_ohm")
     axes[2].legend(loc="best")
     _plot(axes[3], res, "speed_rpm")
@@ -362,7 +363,7 @@ def _default_groups(res) -> list[list[str]]:
     groups.append([c for c in ("i_alpha_A", "i_beta_A") if c in cols])
     if "e_d0_Wb" in cols:
         groups.append(["e_d0_Wb"])
-        groups.append(["R2_est_ohm", "R2_ohm"])
+        groups.append(["R2_hat_ohm", "R2_ohm"])
     return [g for g in groups if g]
 
 
@@ -370,6 +371,7 @@ def result_figure(res, signals=None, t0: float = 0.0, t1=None) -> Figure:
     """Figure of a result: given columns one panel each, or the default groups (see
     :meth:`imdrive.run.result.SimulationResult.plot`); each column in its display unit
     (:func:`display_unit`: flux in mWb) and labelled with what it is."""
+    signals = [current_name(s, stacklevel=3) for s in signals] if signals else None
     unknown = [s for s in (signals or []) if s not in res.signals]
     if unknown:
         raise KeyError(f"no such column(s) {unknown}; see res.columns")

@@ -60,7 +60,7 @@ PANELS = [
     (
         "rotor resistance: estimate against the plant",
         "ohm",
-        [("R2_ohm", "solid"), ("R2_est_ohm", "dash")],
+        [("R2_ohm", "solid"), ("R2_hat_ohm", "dash")],
     ),
     ("terminal voltages", "V", [("v_alpha_V", "solid"), ("v_beta_V", "solid")]),
     ("rotor flux", "Wb", [("flux_Wb", "solid")]),

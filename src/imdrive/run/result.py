@@ -25,7 +25,9 @@ from imdrive.run.columns import (  # noqa: F401  (re-exports)
     RPM,
     SQ3_2,
     VECTOR_COLUMNS,
+    Columns,
     columns_from_log,
+    current_name,
 )
 from imdrive.run.files import (  # noqa: F401  (re-exports)
     NULL_NOTE,
@@ -133,6 +135,11 @@ class SimulationResult:
     #: number of periods); None: the last logged row is the final state
     end_values: dict | None = None
 
+    def __post_init__(self):
+        # renamed columns' old names keep answering (with a DeprecationWarning) for a release
+        if not isinstance(self.signals, Columns):
+            self.signals = Columns(self.signals)
+
     @classmethod
     def from_log(cls, scenario, log, state0, state, params, status, k_end, wall, derived):
         """Build a result from the kernel's outputs.
@@ -198,7 +205,7 @@ class SimulationResult:
 
     # -- access ----------------------------------------------------------------------------
     def __getitem__(self, name: str) -> np.ndarray:
-        return self.signals[name]
+        return self.signals[current_name(name, stacklevel=3)]
 
     @property
     def columns(self) -> list[str]:
@@ -338,12 +345,13 @@ class SimulationResult:
 
         Returns
         -------
-        dict of str to ndarray
-            Column name -> the values in the window, in the column's unit.
+        Columns
+            Column name -> the values in the window, in the column's unit (a ``dict``; a
+            renamed column's old name answers with a ``DeprecationWarning``).
         """
         t = self.time_s
         sel = (t >= t0) & (t <= (t1 if t1 is not None else t[-1]))
-        return {k: v[sel] for k, v in self.signals.items()}
+        return Columns((k, v[sel]) for k, v in self.signals.items())
 
     def mean(self, name: str, t0: float, t1: float | None = None) -> float:
         """Mean of a signal over a time window.
@@ -362,7 +370,7 @@ class SimulationResult:
         float
             The mean, in the column's unit.
         """
-        return float(np.mean(self.window(t0, t1)[name]))
+        return float(np.mean(self.window(t0, t1)[current_name(name, stacklevel=3)]))
 
     # -- energy ------------------------------------------------------------------------------
     def energy_balance(self) -> dict[str, float]:

@@ -96,7 +96,7 @@ def compensation_table(out: Path | None = None, progress=None) -> pd.DataFrame:
                 "preset": name,
                 "compensator": "injection" if sc.compensator.input == "demodulated" else "paper",
                 "speed_rpm": float(sc.control.speed_ref_rpm.final),
-                "R2_ratio_initial": m["R2_est_initial_ohm"] / R2,
+                "R2_ratio_initial": m["R2_hat_initial_ohm"] / R2,
                 **m,
             }
         )
@@ -336,7 +336,7 @@ def figure_thermal(res) -> Figure:
     fig, axes = _figure(2, 1)
     ax, ax2 = axes[:, 0]
     ax.plot(s["time_s"], s["R2_ohm"], label="actual R2 (plant, heating)")
-    ax.plot(s["time_s"], s["R2_est_ohm"], "--", label=f"{SIGNALS['R2_est_ohm']} (injection)")
+    ax.plot(s["time_s"], s["R2_hat_ohm"], "--", label=f"{SIGNALS['R2_hat_ohm']} (injection)")
     ax.set_ylabel("rotor resistance (Ω)")
     ax.legend(fontsize=8)
     ax.set_title("Tracking a 30 % rise of R2 over 20 s, 1000 rpm, rated load")
@@ -423,9 +423,9 @@ def _run_all(out: Path, progress: Callable[[str], None]) -> dict:
     ramp = res.window(8.0, 26.0)
     results["thermal_tracking"] = {
         "R2_final_ohm": float(res["R2_ohm"][-1]),
-        "R2_est_final_ohm": float(res["R2_est_ohm"][-1]),
+        "R2_hat_final_ohm": float(res["R2_hat_ohm"][-1]),
         "max_R2_error_pct_during_ramp": float(
-            100 * np.max(np.abs(ramp["R2_est_ohm"] / ramp["R2_ohm"] - 1))
+            100 * np.max(np.abs(ramp["R2_hat_ohm"] / ramp["R2_ohm"] - 1))
         ),
         "max_speed_error_during_ramp_rpm": float(
             np.max(np.abs(ramp["speed_rpm"] - ramp["speed_ref_rpm"]))

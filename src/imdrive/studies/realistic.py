@@ -88,7 +88,7 @@ def compensation_runs(speeds=(1000.0, 150.0, 50.0), drives=None) -> pd.DataFrame
                 "R2_error_initial_pct": err0,
                 "speed_rpm": rpm,
                 "diverged": res.diverged,
-                "R2_error_final_pct": m.get("R2_est_final_error_pct", np.nan),
+                "R2_error_final_pct": m.get("R2_hat_final_error_pct", np.nan),
                 "time_to_2pct_s": m.get("time_to_tolerance_s"),
                 "speed_error_after_rpm": m.get("speed_error_after_rpm", np.nan),
                 "speed_ripple_after_rpm": m.get("speed_ripple_after_rpm", np.nan),

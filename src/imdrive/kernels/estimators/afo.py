@@ -115,7 +115,7 @@ def afo_gain(p, m):
 
 
 @njit(cache=True)
-def afo_step(p, m, s, v_prev_a, v_prev_b, i_a, i_b, Ts):
+def afo_step(p, m, s, v_prev_alpha, v_prev_beta, i_alpha, i_beta, Ts):
     """Advance the observer over the period that just ended to this sample, and adapt.
 
     The state holds the observer at the previous sample and its current error there; the
@@ -130,9 +130,9 @@ def afo_step(p, m, s, v_prev_a, v_prev_b, i_a, i_b, Ts):
         Read (``R1_hat``, ``R2_hat``, inductances) and, with adaptation on, written.
     s : AFO_STATE record
         Updated in place; ``w_r_hat`` electrical rad/s.
-    v_prev_a, v_prev_b : float
+    v_prev_alpha, v_prev_beta : float
         Voltage applied over the period that just ended, V.
-    i_a, i_b : float
+    i_alpha, i_beta : float
         Stator current at this sample, A.
     Ts : float
         Control period, s.
@@ -142,7 +142,7 @@ def afo_step(p, m, s, v_prev_a, v_prev_b, i_a, i_b, Ts):
         s.R2_0 = m.R2_hat
     M, L1, L2, sigma_L1 = model_inductances(m)
     g1, g2 = afo_gain(p, m)
-    v = complex(v_prev_a, v_prev_b)
+    v = complex(v_prev_alpha, v_prev_beta)
     i0 = s.i_hat_ab
     l0 = s.lam_ab
     w = s.w_r_hat
@@ -158,7 +158,7 @@ def afo_step(p, m, s, v_prev_a, v_prev_b, i_a, i_b, Ts):
     i1 = i0 + (Ts / 6.0) * (k1i + 2.0 * k2i + 2.0 * k3i + k4i)
     l1 = l0 + (Ts / 6.0) * (k1l + 2.0 * k2l + 2.0 * k3l + k4l)
     # the current error at this sample, and the adaptation laws
-    e = complex(i_a, i_b) - i1
+    e = complex(i_alpha, i_beta) - i1
     eps = e.real * l1.imag - e.imag * l1.real
     s.int_e += Ts * eps
     s.w_r_hat = p.Kp * eps + p.Ki * s.int_e

@@ -64,58 +64,21 @@ EKF_STATE = record_dtype(
 
 
 @njit(cache=True)
-def _f(v_a, v_b, ia, ib, la, lb, w, R2, R1, M, L2, sL1):
+def _f(v_alpha, v_beta, ia, ib, la, lb, w, R2, R1, M, L2, sL1):
     k = M / L2
     Rs = R1 + k * k * R2
     a = R2 / L2
-    dia = (v_a - Rs * ia + k * a * la + k * w * lb) / sL1
-    dib = (v_b - Rs * ib + k * a * lb - k * w * la) / sL1
+    dia = (v_alpha - Rs * ia + k * a * la + k * w * lb) / sL1
+    dib = (v_beta - Rs * ib + k * a * lb - k * w * la) / sL1
     dla = M * a * ia - a * la - w * lb
     dlb = M * a * ib - a * lb + w * la
     return dia, dib, dla, dlb
 
 
 @njit(cache=True)
-def ekf_step(p, m, s, v_prev_a, v_prev_b, i_a, i_b, Ts):
-    """Predict over the period that ended, update with the current sample (updates ``s``).
-
-    Parameters
-    ----------
-    p : EKF_PARAMS record
-    m : MODEL_STATE record
-        The controller's model: ``R1_hat``, inductances, and ``R2_hat`` (the initial R2 state).
-    s : EKF_STATE record
-        Updated in place; ``w_r_hat`` electrical rad/s, ``x[5]`` the R2 estimate, ohm.
-    v_prev_a, v_prev_b : float
-        Voltage applied over the period that just ended, V.
-    i_a, i_b : float
-        Stator current at this sample, A.
-    Ts : float
-        Control period, s.
-    """
-    x = s.x
-    P = s.P
-    F = s.F
-    W = s.W
-    if not s.started:
-        x[:] = 0.0
-        x[0] = i_a
-        x[1] = i_b
-        x[5] = m.R2_hat
-        P[:, :] = 0.0
-        for j in range(N_X):
-            P[j, j] = p.p0[j]
-        if not p.estimate_R2:
-            P[5, 5] = 0.0
-        s.started = True
-        s.w_r_hat = x[4]
-        return
-    M, L1, L2, sL1 = model_inductances(m)
-    R1 = m.R1_hat
-    if not p.estimate_R2:
-        x[5] = m.R2_hat
-    ia, ib, la, lb, w, R2 = x[0], x[1], x[2], x[3], x[4], x[5]
-    # Jacobian at the last estimate -> F = I + Ts A
+def _transition(F, ia, ib, la, lb, w, R2, R1, M, L2, sL1, Ts):
+    """``F = I + Ts A`` with ``A`` the process model's Jacobian at ``(ia, ib, la, lb, w, R2)``
+    (the alpha/beta current and rotor flux, the speed and R2 of the last estimate)."""
     k = M / L2
     a = R2 / L2
     Rs = R1 + k * k * R2
@@ -144,19 +107,24 @@ def ekf_step(p, m, s, v_prev_a, v_prev_b, i_a, i_b, Ts):
         for c in range(N_X):
             F[r, c] *= Ts
         F[r, r] += 1.0
-    # mean: RK4 over the period
+
+
+@njit(cache=True)
+def _predict_mean(x, v_prev_alpha, v_prev_beta, R1, M, L2, sL1, Ts):
+    """The mean's current and flux after one RK4 step over the period (the voltage held)."""
+    ia, ib, la, lb, w, R2 = x[0], x[1], x[2], x[3], x[4], x[5]
     h = 0.5 * Ts
-    k1 = _f(v_prev_a, v_prev_b, ia, ib, la, lb, w, R2, R1, M, L2, sL1)
+    k1 = _f(v_prev_alpha, v_prev_beta, ia, ib, la, lb, w, R2, R1, M, L2, sL1)
     k2 = _f(
-        v_prev_a, v_prev_b, ia + h * k1[0], ib + h * k1[1], la + h * k1[2], lb + h * k1[3],
+        v_prev_alpha, v_prev_beta, ia + h * k1[0], ib + h * k1[1], la + h * k1[2], lb + h * k1[3],
         w, R2, R1, M, L2, sL1,
     )  # fmt: skip
     k3 = _f(
-        v_prev_a, v_prev_b, ia + h * k2[0], ib + h * k2[1], la + h * k2[2], lb + h * k2[3],
+        v_prev_alpha, v_prev_beta, ia + h * k2[0], ib + h * k2[1], la + h * k2[2], lb + h * k2[3],
         w, R2, R1, M, L2, sL1,
     )  # fmt: skip
     k4 = _f(
-        v_prev_a, v_prev_b, ia + Ts * k3[0], ib + Ts * k3[1], la + Ts * k3[2],
+        v_prev_alpha, v_prev_beta, ia + Ts * k3[0], ib + Ts * k3[1], la + Ts * k3[2],
         lb + Ts * k3[3], w, R2, R1, M, L2, sL1,
     )  # fmt: skip
     c6 = Ts / 6.0
@@ -164,7 +132,11 @@ def ekf_step(p, m, s, v_prev_a, v_prev_b, i_a, i_b, Ts):
     x[1] = ib + c6 * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1])
     x[2] = la + c6 * (k1[2] + 2.0 * k2[2] + 2.0 * k3[2] + k4[2])
     x[3] = lb + c6 * (k1[3] + 2.0 * k2[3] + 2.0 * k3[3] + k4[3])
-    # covariance: P <- F P F' + Q
+
+
+@njit(cache=True)
+def _predict_covariance(p, P, F, W):
+    """``P <- F P F' + Q`` (``W`` scratch); R2's row and column stay zero unless estimated."""
     for r in range(N_X):
         for c in range(N_X):
             acc = 0.0
@@ -184,7 +156,13 @@ def ekf_step(p, m, s, v_prev_a, v_prev_b, i_a, i_b, Ts):
         for j in range(N_X):
             P[5, j] = 0.0
             P[j, 5] = 0.0
-    # update with z = (i_a, i_b), H = [I2 0]
+
+
+@njit(cache=True)
+def _update(p, x, P, F, W, i_alpha, i_beta):
+    """The measurement update with ``z = (i_alpha, i_beta)``, ``H = [I2 0]`` (``F``, ``W``
+    scratch): ``K = P H' (H P H' + R)^-1``, ``x += K (z - H x)``, ``P <- P - K H P``,
+    symmetrised."""
     s00 = P[0, 0] + p.r
     s01 = P[0, 1]
     s11 = P[1, 1] + p.r
@@ -192,8 +170,8 @@ def ekf_step(p, m, s, v_prev_a, v_prev_b, i_a, i_b, Ts):
     i00 = s11 / det
     i01 = -s01 / det
     i11 = s00 / det
-    y0 = i_a - x[0]
-    y1 = i_b - x[1]
+    y0 = i_alpha - x[0]
+    y1 = i_beta - x[1]
     for r in range(N_X):  # K = P[:, 0:2] S^-1, in W[:, 0:2]
         W[r, 0] = P[r, 0] * i00 + P[r, 1] * i01
         W[r, 1] = P[r, 0] * i01 + P[r, 1] * i11
@@ -207,6 +185,49 @@ def ekf_step(p, m, s, v_prev_a, v_prev_b, i_a, i_b, Ts):
             v = P[r, c] - 0.5 * (F[r, c] + F[c, r])
             P[r, c] = v
             P[c, r] = v
+
+
+@njit(cache=True)
+def ekf_step(p, m, s, v_prev_alpha, v_prev_beta, i_alpha, i_beta, Ts):
+    """Predict over the period that ended, update with the current sample (updates ``s``).
+
+    Parameters
+    ----------
+    p : EKF_PARAMS record
+    m : MODEL_STATE record
+        The controller's model: ``R1_hat``, inductances, and ``R2_hat`` (the initial R2 state).
+    s : EKF_STATE record
+        Updated in place; ``w_r_hat`` electrical rad/s, ``x[5]`` the R2 estimate, ohm.
+    v_prev_alpha, v_prev_beta : float
+        Voltage applied over the period that just ended, V.
+    i_alpha, i_beta : float
+        Stator current at this sample, A.
+    Ts : float
+        Control period, s.
+    """
+    x = s.x
+    P = s.P
+    if not s.started:
+        x[:] = 0.0
+        x[0] = i_alpha
+        x[1] = i_beta
+        x[5] = m.R2_hat
+        P[:, :] = 0.0
+        for j in range(N_X):
+            P[j, j] = p.p0[j]
+        if not p.estimate_R2:
+            P[5, 5] = 0.0
+        s.started = True
+        s.w_r_hat = x[4]
+        return
+    M, L1, L2, sL1 = model_inductances(m)
+    R1 = m.R1_hat
+    if not p.estimate_R2:
+        x[5] = m.R2_hat
+    _transition(s.F, x[0], x[1], x[2], x[3], x[4], x[5], R1, M, L2, sL1, Ts)
+    _predict_mean(x, v_prev_alpha, v_prev_beta, R1, M, L2, sL1, Ts)
+    _predict_covariance(p, P, s.F, s.W)
+    _update(p, x, P, s.F, s.W, i_alpha, i_beta)
     if p.estimate_R2:
         x[5] = min(max(x[5], p.R2_min), p.R2_max)
         if p.write_R2:

@@ -33,7 +33,7 @@ quarter of the design flux). Measured on a 1000 -> 2500 rpm ramp in 2 s at 6 N m
 weakening: without it the estimate fell 570 rpm behind and the drive ran away (lost control
 at 5.8 s); see docs/stability.md.
 
-Online R1 estimation (issue 10, opt-in ``k_R1 > 0``; this project's law, in the spirit of the
+Online R1 estimation (opt-in ``k_R1 > 0``; this project's law, in the spirit of the
 paper's reference [5], which estimates R1 by an MRAS, and of Kubota et al.'s R1 adaptation,
 IEEE Trans. Ind. Appl. 29(2), 1993). An error ``dR1 = R1_hat - R1`` enters only the reference
 model: in steady state at the stator frequency ``w_e`` it shifts the filtered voltage-model
@@ -131,7 +131,9 @@ LOG_FIELDS = (
 
 
 @njit(cache=True)
-def mras_step(p, m, s, v_prev_a, v_prev_b, i_prev_a, i_prev_b, i_a, i_b, theta_e, Ts):
+def mras_step(
+    p, m, s, v_prev_alpha, v_prev_beta, i_prev_alpha, i_prev_beta, i_alpha, i_beta, theta_e, Ts
+):
     """Advance the MRAS by one control period to the new current sample (updates ``s``).
 
     Parameters
@@ -141,11 +143,11 @@ def mras_step(p, m, s, v_prev_a, v_prev_b, i_prev_a, i_prev_b, i_a, i_b, theta_e
         The controller's machine model (``R1_hat``, ``R2_hat``, inductances).
     s : MRAS_STATE record
         Updated in place: model fluxes, speed estimate ``w_r_hat`` (electrical rad/s), ``e_dq0``.
-    v_prev_a, v_prev_b : float
+    v_prev_alpha, v_prev_beta : float
         Voltage applied over the period that just ended, V.
-    i_prev_a, i_prev_b : float
+    i_prev_alpha, i_prev_beta : float
         Measured stator current at the previous sample, A.
-    i_a, i_b : float
+    i_alpha, i_beta : float
         Measured stator current at this sample, A.
     theta_e : float
         The controller's field angle at this sample (frame of ``e_dq0``), rad.
@@ -165,28 +167,28 @@ def mras_step(p, m, s, v_prev_a, v_prev_b, i_prev_a, i_prev_b, i_a, i_b, theta_e
         g = 1.0
         k_in = 1.0
 
-    i_mean_a = 0.5 * (i_a + i_prev_a)
-    i_mean_b = 0.5 * (i_b + i_prev_b)
+    i_mean_alpha = 0.5 * (i_alpha + i_prev_alpha)
+    i_mean_beta = 0.5 * (i_beta + i_prev_beta)
 
     # reference (voltage) model, eq. (1)
     kv = L2 / M
-    d_a = kv * (Ts * (v_prev_a - R1 * i_mean_a) - sigma_L1 * (i_a - i_prev_a))
-    d_b = kv * (Ts * (v_prev_b - R1 * i_mean_b) - sigma_L1 * (i_b - i_prev_b))
-    lam_v_a = g * s.lam_v_ab.real + k_in * d_a
-    lam_v_b = g * s.lam_v_ab.imag + k_in * d_b
+    d_alpha = kv * (Ts * (v_prev_alpha - R1 * i_mean_alpha) - sigma_L1 * (i_alpha - i_prev_alpha))
+    d_beta = kv * (Ts * (v_prev_beta - R1 * i_mean_beta) - sigma_L1 * (i_beta - i_prev_beta))
+    lam_v_alpha = g * s.lam_v_ab.real + k_in * d_alpha
+    lam_v_beta = g * s.lam_v_ab.imag + k_in * d_beta
 
     # adjustable (current) model, eq. (2): exact over Ts for constant w_hat and a current
     # varying linearly between its two samples (first-order hold)
     lam_old = s.lam_i_ab
-    i0 = complex(i_prev_a, i_prev_b)
-    i1 = complex(i_a, i_b)
+    i0 = complex(i_prev_alpha, i_prev_beta)
+    i1 = complex(i_alpha, i_beta)
     lam_new = current_model_step(lam_old, s.w_r_hat, R2, L2, M, i0, i1, Ts)
     dlam = lam_new - lam_old
-    lam_f_a = g * s.lam_f_ab.real + k_in * dlam.real
-    lam_f_b = g * s.lam_f_ab.imag + k_in * dlam.imag
+    lam_f_alpha = g * s.lam_f_ab.real + k_in * dlam.real
+    lam_f_beta = g * s.lam_f_ab.imag + k_in * dlam.imag
 
     # adaptation, eqs. (4), (8), (9)
-    e = lam_v_b * lam_f_a - lam_v_a * lam_f_b
+    e = lam_v_beta * lam_f_alpha - lam_v_alpha * lam_f_beta
     if p.psi2_norm > 0.0:
         # the loop's bandwidth is K1 |lam|^2 (imdrive.design.gains.default_mras_gains): hold
         # it at its design value when the flux is weakened (the current model's own
@@ -199,14 +201,14 @@ def mras_step(p, m, s, v_prev_a, v_prev_b, i_prev_a, i_prev_b, i_a, i_b, theta_e
     # flux error (reference minus adjustable) in the controller's synchronous frame
     cs = math.cos(theta_e)
     sn = math.sin(theta_e)
-    err_a = lam_v_a - lam_f_a
-    err_b = lam_v_b - lam_f_b
-    s.e_dq0 = complex(cs * err_a + sn * err_b, -sn * err_a + cs * err_b)
+    err_alpha = lam_v_alpha - lam_f_alpha
+    err_beta = lam_v_beta - lam_f_beta
+    s.e_dq0 = complex(cs * err_alpha + sn * err_beta, -sn * err_alpha + cs * err_beta)
 
-    s.lam_v_ab = complex(lam_v_a, lam_v_b)
+    s.lam_v_ab = complex(lam_v_alpha, lam_v_beta)
     s.lam_i_ab = lam_new
     s.dlam_i_ab = dlam
-    s.lam_f_ab = complex(lam_f_a, lam_f_b)
+    s.lam_f_ab = complex(lam_f_alpha, lam_f_beta)
 
 
 @njit(cache=True)
@@ -222,23 +224,23 @@ def log_mras(row, s, n_p):
 
 
 @njit(cache=True)
-def mras_r1_step(p, m, s, i_a, i_b, w_e, iq_ref, Ts):
+def mras_r1_step(p, m, s, i_alpha, i_beta, w_e, iq_ref, Ts):
     """Online R1 estimation beside the MRAS (module docstring; updates ``m.R1_hat``).
 
-    ``i_a``, ``i_b``: measured current at this sample less the injected sinusoid, A;
+    ``i_alpha``, ``i_beta``: measured current at this sample less the injected sinusoid, A;
     ``w_e``: the controller's stator frequency, electrical rad/s; ``Ts``: control period, s.
     ``iq_ref``: the controller's torque current, A (R1_hat is held in regeneration,
     ``w_e iq_ref < 0``). Call after :func:`mras_step`.
     """
     if abs(w_e) > 2.0 * math.pi * p.R1_fmax or w_e * iq_ref < 0.0:
         return
-    i2 = i_a * i_a + i_b * i_b
+    i2 = i_alpha * i_alpha + i_beta * i_beta
     if i2 < 1e-2:
         return
     M, L1, L2, sigma_L1 = model_inductances(m)
     wc = max(p.wc, 1.0)
     err = s.lam_v_ab - s.lam_f_ab
-    dot = err.real * i_a + err.imag * i_b
+    dot = err.real * i_alpha + err.imag * i_beta
     sens = (L2 / M) * i2 * wc / (wc * wc + w_e * w_e)
     r1 = m.R1_hat + Ts * p.k_R1 * dot / sens
     m.R1_hat = min(max(r1, p.R1_min), p.R1_max)
@@ -249,7 +251,9 @@ R1_DC_MIN_WINDOW = 0.05
 
 
 @njit(cache=True)
-def mras_r1_standstill(p, m, s, v_a, v_b, i_prev_a, i_prev_b, i_a, i_b, w_ref, w_e, Ts):
+def mras_r1_standstill(
+    p, m, s, v_alpha, v_beta, i_prev_alpha, i_prev_beta, i_alpha, i_beta, w_ref, w_e, Ts
+):
     """Standstill R1 identification while the flux builds up (``p.R1_dc``; updates ``m.R1_hat``).
 
     With the speed reference at zero and a DC flux current, the stator equation in steady
@@ -280,20 +284,22 @@ def mras_r1_standstill(p, m, s, v_a, v_b, i_prev_a, i_prev_b, i_a, i_b, w_ref, w
     levels (not implemented), and should stay off.
     """
     still = w_ref == 0.0 and abs(w_e) < math.pi
-    i_m_a = 0.5 * (i_a + i_prev_a)
-    i_m_b = 0.5 * (i_b + i_prev_b)
-    i2 = i_m_a * i_m_a + i_m_b * i_m_b
+    i_m_alpha = 0.5 * (i_alpha + i_prev_alpha)
+    i_m_beta = 0.5 * (i_beta + i_prev_beta)
+    i2 = i_m_alpha * i_m_alpha + i_m_beta * i_m_beta
     if still and i2 > 1.0:
         s.dc_t += Ts
         if s.dc_t > p.R1_dc_settle:
             M, L1, L2, sigma_L1 = model_inductances(m)
-            u_a = v_a - sigma_L1 * (i_a - i_prev_a) / Ts
-            u_b = v_b - sigma_L1 * (i_b - i_prev_b) / Ts
-            g_a = (M / L2) * s.dlam_i_ab.real / Ts
-            g_b = (M / L2) * s.dlam_i_ab.imag / Ts
-            y = u_a * i_m_a + u_b * i_m_b
+            u_alpha = v_alpha - sigma_L1 * (i_alpha - i_prev_alpha) / Ts
+            u_beta = v_beta - sigma_L1 * (i_beta - i_prev_beta) / Ts
+            g_alpha = (M / L2) * s.dlam_i_ab.real / Ts
+            g_beta = (M / L2) * s.dlam_i_ab.imag / Ts
+            y = u_alpha * i_m_alpha + u_beta * i_m_beta
             x1 = i2  # |i|^2, the regressor of R1
-            x2 = g_a * i_m_a + g_b * i_m_b  # the flux build-up's power (regressor of k)
+            x2 = (
+                g_alpha * i_m_alpha + g_beta * i_m_beta
+            )  # the flux build-up's power (regressor of k)
             s.dc_vi += x1 * y
             s.dc_ii += x1 * x1
             s.dc_gi += x1 * x2

@@ -55,7 +55,9 @@ REACTIVE_MRAS_STATE = record_dtype(
 
 
 @njit(cache=True)
-def reactive_mras_step(p, m, s, v_prev_a, v_prev_b, i_prev_a, i_prev_b, i_a, i_b, Ts):
+def reactive_mras_step(
+    p, m, s, v_prev_alpha, v_prev_beta, i_prev_alpha, i_prev_beta, i_alpha, i_beta, Ts
+):
     """Advance the reactive-power MRAS by one control period (updates ``s``).
 
     Parameters
@@ -65,27 +67,34 @@ def reactive_mras_step(p, m, s, v_prev_a, v_prev_b, i_prev_a, i_prev_b, i_a, i_b
         The controller's machine model (``R2_hat``, inductances; ``R1_hat`` is not used).
     s : REACTIVE_MRAS_STATE record
         Updated in place; ``w_r_hat`` is the electrical speed estimate, rad/s.
-    v_prev_a, v_prev_b : float
+    v_prev_alpha, v_prev_beta : float
         Voltage applied over the period that just ended, V.
-    i_prev_a, i_prev_b, i_a, i_b : float
+    i_prev_alpha, i_prev_beta, i_alpha, i_beta : float
         Stator current at the previous and at this sample, A.
     Ts : float
         Control period, s.
     """
     M, L1, L2, sigma_L1 = model_inductances(m)
     R2 = m.R2_hat
-    i_m_a = 0.5 * (i_a + i_prev_a)
-    i_m_b = 0.5 * (i_b + i_prev_b)
+    i_m_alpha = 0.5 * (i_alpha + i_prev_alpha)
+    i_m_beta = 0.5 * (i_beta + i_prev_beta)
     # reference model: i x v - sigma L1 (i x p i); i_mean x (i1 - i0) = i0 x i1
-    q_ref = i_m_a * v_prev_b - i_m_b * v_prev_a
-    q_ref -= sigma_L1 * (i_prev_a * i_b - i_prev_b * i_a) / Ts
+    q_ref = i_m_alpha * v_prev_beta - i_m_beta * v_prev_alpha
+    q_ref -= sigma_L1 * (i_prev_alpha * i_beta - i_prev_beta * i_alpha) / Ts
     # adjustable model
     lam_old = s.lam_ab
     lam_new = current_model_step(
-        lam_old, s.w_r_hat, R2, L2, M, complex(i_prev_a, i_prev_b), complex(i_a, i_b), Ts
+        lam_old,
+        s.w_r_hat,
+        R2,
+        L2,
+        M,
+        complex(i_prev_alpha, i_prev_beta),
+        complex(i_alpha, i_beta),
+        Ts,
     )
     de = (M / L2) * (lam_new - lam_old) / Ts
-    q_hat = i_m_a * de.imag - i_m_b * de.real
+    q_hat = i_m_alpha * de.imag - i_m_beta * de.real
     # adaptation
     e = q_ref - q_hat
     s.int_e += Ts * e
