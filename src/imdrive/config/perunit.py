@@ -112,6 +112,18 @@ def resolve(sc) -> Resolved:
     ConfigError
         An absolute value and its per-unit twin both set (naming the per-unit key).
     """
+    memo = getattr(sc, "_perunit_resolved", None)  # a scenario is frozen: resolve it once
+    if memo is not None:
+        return memo
+    out = _resolve(sc)
+    try:
+        object.__setattr__(sc, "_perunit_resolved", out)
+    except (AttributeError, TypeError):  # not a Scenario (a stand-in in a test): no memo
+        pass
+    return out
+
+
+def _resolve(sc) -> Resolved:
     m = sc.machine
     est = sc.estimator
     R1 = _one_of(est.R1_ohm, est.R1_ratio, m.R1_ohm, ("estimator.R1_ohm", "estimator.R1_ratio"))

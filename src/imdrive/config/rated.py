@@ -191,6 +191,9 @@ class RatedPoint:
 def rated_point(m: MachineParams) -> RatedPoint:
     """The rated operating point: the nameplate where given, derived where not.
 
+    Computed once per distinct machine (a solve of the circuit; the per-unit defaults of
+    every drive of a batch ask for it).
+
     Parameters
     ----------
     m : MachineParams
@@ -492,3 +495,32 @@ def rated_point_comment(m: MachineParams) -> str:
         how = rp.sources.get(k, "")
         lines.append(f"#   {k} = {v:.6g}" + (f"  ({how})" if how else ""))
     return "\n".join(lines) + "\n"
+
+
+_rated_point_uncached = rated_point
+
+
+@functools.lru_cache(maxsize=256)
+def _rated_point_cached(m: MachineParams) -> RatedPoint:
+    return _rated_point_uncached(m)
+
+
+def rated_point(m: MachineParams) -> RatedPoint:  # noqa: F811  (the cached entry point)
+    """The rated operating point: the nameplate where given, derived where not (computed once
+    per distinct machine; see :func:`_rated_point_uncached` for the method).
+
+    Parameters
+    ----------
+    m : MachineParams
+        The machine (circuit and nameplate).
+
+    Returns
+    -------
+    RatedPoint
+        As :func:`_rated_point_uncached`; a ``ConfigError`` it raises is raised again each
+        time (errors are not cached).
+    """
+    try:
+        return _rated_point_cached(m)
+    except TypeError:  # an unhashable machine (never for MachineParams): no cache
+        return _rated_point_uncached(m)

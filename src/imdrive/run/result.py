@@ -440,7 +440,10 @@ class SimulationResult:
     @property
     def extra_units(self) -> dict:
         """``{log field: (unit, scale)}`` of the estimator's own log fields."""
-        return _estimator_units(self.scenario)
+        units = self.__dict__.get("_extra_units")
+        if units is None:
+            units = self.__dict__["_extra_units"] = _estimator_units(self.scenario)
+        return units
 
     def final_values(self) -> dict[str, float]:
         """Every signal at the end of the run.
