@@ -43,7 +43,9 @@ import json, sys, time
 from imdrive.config.scenario import Scenario
 from imdrive.kernels.engine import run_drive
 from imdrive.run.build import build_arrays, copy_state
-from imdrive.run import simulate as _s
+import importlib
+
+_s = importlib.import_module("imdrive.run.simulate")
 
 preset, repeat = sys.argv[1], int(sys.argv[2])
 sc = Scenario.read(preset)
