@@ -42,6 +42,7 @@ from imdrive.kernels.stages import (
     measure,
     modulate,
     plant,
+    profiles,
 )
 
 DRIVE_OPEN_LOOP = 0
@@ -222,9 +223,7 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
     n_rows = log.shape[0]
 
     work = np.empty(5, dtype=PLANT_STATE)  # RK4 scratch
-    seg_dt = np.empty(MAX_SEGMENTS)
-    seg_va = np.empty(MAX_SEGMENTS)
-    seg_vb = np.empty(MAX_SEGMENTS)
+    seg = np.empty((3, MAX_SEGMENTS))  # the average model's segments: dt, v_alpha, v_beta
     ev = np.empty((3, MAX_EVENTS))
     no_trace = np.empty((0, 3))
     # the period's signals and the estimator's input; the arrays stay in use in the loop
@@ -236,17 +235,18 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
         pr = period[0]
         pr.t = (k0 + k) * Ts
         pr.k = k0 + k
-        measure(sim, pp, psen, pt, pv, pn, x, pr)
+        profiles(pp, pt, pv, pn, pr)
+        measure(pp, psen, x, pr)
         pr.theta_k = ctl.theta_e  # the controller's d-axis angle at this sample
         pr.w_r_hat = 0.0
         pr.e_dq0 = 0j
         if foc:
             estimate(
-                sim, pp, pe, pk, pt, pv, pn, table, x, mdl, ctl, est, cmp, smp, est_in[0], pr,
+                sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, est_in[0], pr,
                 Vdc_meas,
             )  # fmt: skip
-        control(sim, pc, pt, pv, pn, x, mdl, ctl, smp, pr, foc)
-        modulate(pinv, pc, smp, pr, switching, Vdc_meas, seg_dt, seg_va, seg_vb, Ts)
+        control(sim, pc, x, mdl, ctl, smp, pr, foc)
+        modulate(pinv, pc, smp, pr, switching, Vdc_meas, seg, Ts)
 
         logged = log_every > 0 and k % log_every == 0 and k // log_every < n_rows
         if logged:
@@ -255,8 +255,7 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
             break
 
         plant(
-            pinv, sinv, pp, x, pr, switching, Vdc_meas, nsub, work, ev, no_trace, seg_dt,
-            seg_va, seg_vb, Ts,
+            pinv, sinv, pp, x, pr, switching, Vdc_meas, nsub, work, ev, no_trace, seg, Ts,
         )  # fmt: skip
         if switching and logged:  # the true average, known only now
             log[k // log_every].v_alpha = pr.v_app_ab.real

@@ -74,6 +74,11 @@ PERIOD = record_dtype(
         ("R1_base", f8),  # the plant's resistances before temperature, ohm
         ("R2_base", f8),
         ("T_L0", f8),  # load torque profile, N m
+        ("w_imposed", f8),  # the imposed speed profile, mechanical rad/s
+        ("w_ref_prof", f8),  # the speed reference profile, mechanical rad/s
+        ("psi_ref_prof", f8),  # the rotor-flux reference profile, Wb
+        ("v_amp_prof", f8),  # the open-loop voltage amplitude profile, V
+        ("f_prof", f8),  # the open-loop frequency profile, Hz
         ("i_s_ab", c16),  # the plant's stator current at the sample, A
         ("i_meas_ab", c16),  # the measured current, A
         ("w_ref", f8),  # speed reference, mechanical rad/s
@@ -94,15 +99,26 @@ PERIOD = record_dtype(
 )
 
 
-@njit(cache=True)
-def measure(sim, pp, psen, pt, pv, pn, x, pr):
-    """Profiles at ``pr.t``, the plant's current and the current sensors (fills ``pr``)."""
+@njit(cache=True, inline="always")
+def profiles(pp, pt, pv, pn, pr):
+    """Every profile at ``pr.t`` into ``pr`` (the stages after it read no profile array)."""
     t = pr.t
     if pp.speed_imposed:
-        x.w_m = profile_at(pt, pv, pn, PR_SPEED_IMPOSED, t)
+        pr.w_imposed = profile_at(pt, pv, pn, PR_SPEED_IMPOSED, t)
     pr.R1_base = pp.R1 * profile_at(pt, pv, pn, PR_R1_SCALE, t)
     pr.R2_base = pp.R2 * profile_at(pt, pv, pn, PR_R2_SCALE, t)
     pr.T_L0 = profile_at(pt, pv, pn, PR_LOAD, t)
+    pr.w_ref_prof = profile_at(pt, pv, pn, PR_SPEED_REF, t)
+    pr.psi_ref_prof = profile_at(pt, pv, pn, PR_FLUX_REF, t)
+    pr.v_amp_prof = profile_at(pt, pv, pn, PR_V_AMP, t)
+    pr.f_prof = profile_at(pt, pv, pn, PR_FREQ, t)
+
+
+@njit(cache=True, inline="always")
+def measure(pp, psen, x, pr):
+    """The plant's current and the current sensors at ``pr.t`` (fills ``pr``)."""
+    if pp.speed_imposed:
+        x.w_m = pr.w_imposed
     if pr.have_next:  # the current the last check computed from this same state
         i_s_alpha = pr.i_next_ab.real
         i_s_beta = pr.i_next_ab.imag
@@ -114,7 +130,7 @@ def measure(sim, pp, psen, pt, pv, pn, x, pr):
 
 
 @njit(cache=True)
-def estimate(sim, pp, pe, pk, pt, pv, pn, table, x, mdl, ctl, est, cmp, smp, inp, pr, Vdc_meas):
+def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, inp, pr, Vdc_meas):
     """The injection, the selected estimator, the detection and the R2 compensator.
 
     Writes ``pr.w_r_hat``, ``pr.e_dq0``, ``pr.i_inj``, ``pr.v_use``; the estimator's state
@@ -138,7 +154,7 @@ def estimate(sim, pp, pe, pk, pt, pv, pn, table, x, mdl, ctl, est, cmp, smp, inp
             a_inj = injection_headroom(pk, cmp, pr.v_use, ctl.fw_cut > 1e-3, wrapped)
         i_inj = a_inj * pk.inj_amp * sine
     pr.i_inj = i_inj
-    w_ref = profile_at(pt, pv, pn, PR_SPEED_REF, t)
+    w_ref = pr.w_ref_prof
 
     inp.v_ab = smp.v_prev_ab
     inp.i_prev_ab = smp.i_prev_ab
@@ -167,7 +183,7 @@ def estimate(sim, pp, pe, pk, pt, pv, pn, table, x, mdl, ctl, est, cmp, smp, inp
 
 
 @njit(cache=True)
-def control(sim, pc, pt, pv, pn, x, mdl, ctl, smp, pr, foc):
+def control(sim, pc, x, mdl, ctl, smp, pr, foc):
     """Field-oriented control (or the open-loop voltage), dead-time feed-forward, delay.
 
     Writes ``pr.w_ref``, ``pr.v_log_ab`` (the reference of this sample), ``pr.v_ref_ab`` (the
@@ -180,8 +196,8 @@ def control(sim, pc, pt, pv, pn, x, mdl, ctl, smp, pr, foc):
     i_meas_alpha = pr.i_meas_ab.real
     i_meas_beta = pr.i_meas_ab.imag
     if foc:
-        w_ref = profile_at(pt, pv, pn, PR_SPEED_REF, t)
-        psi_ref = profile_at(pt, pv, pn, PR_FLUX_REF, t)
+        w_ref = pr.w_ref_prof
+        psi_ref = pr.psi_ref_prof
         if pc.fw:  # field weakening above base speed (voltage feedback)
             psi_ref *= field_weakening(pc, ctl, pr.v_use, Ts)
         if sim.flux_inj_amp != 0.0:  # excitation for R2 adaptation (Kubota & Matsuse 1994)
@@ -191,8 +207,8 @@ def control(sim, pc, pt, pv, pn, x, mdl, ctl, smp, pr, foc):
             pc, mdl, ctl, i_meas_alpha, i_meas_beta, w_fb, w_ref, psi_ref, pr.i_inj, Ts
         )
     else:
-        v_amp = profile_at(pt, pv, pn, PR_V_AMP, t)
-        f_Hz = profile_at(pt, pv, pn, PR_FREQ, t)
+        v_amp = pr.v_amp_prof
+        f_Hz = pr.f_prof
         v_ref_alpha, v_ref_beta = open_loop_voltage(ctl, v_amp, f_Hz, Ts)
     pr.w_ref = w_ref
 
@@ -217,13 +233,14 @@ def control(sim, pc, pt, pv, pn, x, mdl, ctl, smp, pr, foc):
 
 
 @njit(cache=True)
-def modulate(pinv, pc, smp, pr, switching, Vdc_meas, seg_dt, seg_va, seg_vb, Ts):
+def modulate(pinv, pc, smp, pr, switching, Vdc_meas, seg, Ts):
     """The inverter's part at the sample: commanded voltage, average-model segments.
 
     Writes ``pr.v_cmd_ab`` (what the controller commands and believes it applies),
     ``pr.v_app_ab`` (the average model's true period average; for the switching bridge the
     command, replaced by :func:`plant` once the period is integrated), ``pr.n_seg`` and the
-    segments; stores the commanded voltage less the dead-time compensation and the measured
+    segments (``seg``: float64[3, MAX_SEGMENTS], durations and alpha, beta voltages); stores
+    the commanded voltage less the dead-time compensation and the measured
     current in ``smp`` for the next estimator step.
     """
     v_ref_alpha = pr.v_ref_ab.real
@@ -241,6 +258,9 @@ def modulate(pinv, pc, smp, pr, switching, Vdc_meas, seg_dt, seg_va, seg_vb, Ts)
             v_ref_alpha *= k_dc
             v_ref_beta *= k_dc
         i_s = pr.i_s_ab
+        seg_dt = seg[0]
+        seg_va = seg[1]
+        seg_vb = seg[2]
         n_seg = inverter_segments(
             pinv, v_ref_alpha, v_ref_beta, i_s.real, i_s.imag, Ts, seg_dt, seg_va, seg_vb
         )
@@ -294,9 +314,7 @@ def log_row(row, pp, pe, x, mdl, ctl, est, cmp, pr):
 
 
 @njit(cache=True)
-def plant(
-    pinv, sinv, pp, x, pr, switching, Vdc_meas, nsub, work, ev, no_trace, seg_dt, seg_va, seg_vb, Ts
-):
+def plant(pinv, sinv, pp, x, pr, switching, Vdc_meas, nsub, work, ev, no_trace, seg, Ts):
     """Integrate the plant over the period: the average model's segments, or the switching
     bridge between its gate events (then ``pr.v_app_ab`` becomes the true average)."""
     if switching:
@@ -322,11 +340,11 @@ def plant(
     else:
         for s in range(pr.n_seg):
             integrate_segment(
-                pp, x, seg_va[s], seg_vb[s], pr.R1_base, pr.R2_base, pr.T_L0, seg_dt[s], nsub, work
+                pp, x, seg[1, s], seg[2, s], pr.R1_base, pr.R2_base, pr.T_L0, seg[0, s], nsub, work
             )
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _controller_finite(smp, mdl, ctl, cmp):
     """Whether every controller-side state is finite (a NaN there means divergence)."""
     f = math.isfinite
@@ -340,7 +358,7 @@ def _controller_finite(smp, mdl, ctl, cmp):
     return ok and f(cmp.demod)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def check(sim, pp, x, smp, mdl, ctl, est, cmp, pr):
     """Divergence after the period: ``S_OK`` or ``S_NAN``, ``S_CURRENT``, ``S_SPEED``.
 
