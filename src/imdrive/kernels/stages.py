@@ -129,7 +129,7 @@ def measure(pp, psen, x, pr):
     pr.i_meas_ab = complex(i_meas_alpha, i_meas_beta)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, inp, pr, Vdc_meas):
     """The injection, the selected estimator, the detection and the R2 compensator.
 
@@ -182,7 +182,7 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, inp, pr, Vdc_me
         compensator_step(pk, cmp, mdl, table, e_dq0.real, t, pr.k, ctl.w_e)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def control(sim, pc, x, mdl, ctl, smp, pr, foc):
     """Field-oriented control (or the open-loop voltage), dead-time feed-forward, delay.
 
@@ -232,7 +232,7 @@ def control(sim, pc, x, mdl, ctl, smp, pr, foc):
     pr.dv_ab = complex(dv_alpha, dv_beta)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def modulate(pinv, pc, smp, pr, switching, Vdc_meas, seg, Ts):
     """The inverter's part at the sample: commanded voltage, average-model segments.
 
@@ -291,7 +291,7 @@ def modulate(pinv, pc, smp, pr, switching, Vdc_meas, seg, Ts):
     smp.i_prev_ab = pr.i_meas_ab
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def log_row(row, pp, pe, x, mdl, ctl, est, cmp, pr):
     """Write one log row: every block's fields at this sample."""
     row.time = pr.t
@@ -313,7 +313,7 @@ def log_row(row, pp, pe, x, mdl, ctl, est, cmp, pr):
     log_compensator(row, cmp)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def plant(pinv, sinv, pp, x, pr, switching, Vdc_meas, nsub, work, ev, no_trace, seg, Ts):
     """Integrate the plant over the period: the average model's segments, or the switching
     bridge between its gate events (then ``pr.v_app_ab`` becomes the true average)."""

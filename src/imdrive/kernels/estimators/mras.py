@@ -329,7 +329,7 @@ def mras_r1_standstill(
 OWN_LOG_FIELDS = LOG_FIELDS[3:]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def mras_estimate(p, m, s, inp):
     """The MRAS in the estimator contract (:mod:`imdrive.kernels.estimators.registry`).
 
@@ -365,7 +365,7 @@ def log_mras_own(row, p, s, n_p):
     row.lam_i_beta = s.lam_f_ab.imag
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def mras_finite(s):
     """Whether every state of the MRAS is finite."""
     c = cmath.isfinite

@@ -226,7 +226,7 @@ def estimator_finite(s):
     raise NotImplementedError("estimator_finite is called from compiled code only")
 
 
-@overload(estimator_step, jit_options={"cache": True})
+@overload(estimator_step, inline="always", jit_options={"cache": True})
 def _estimator_step(p, model, s, inp):
     k = _lookup(s)
     if k is None:
@@ -239,7 +239,7 @@ def _estimator_step(p, model, s, inp):
     return impl
 
 
-@overload(estimator_log, jit_options={"cache": True})
+@overload(estimator_log, inline="always", jit_options={"cache": True})
 def _estimator_log(row, p, s, n_p):
     k = _lookup(s)
     if k is None:
@@ -258,7 +258,7 @@ def _estimator_log(row, p, s, n_p):
     return impl
 
 
-@overload(estimator_finite, jit_options={"cache": True})
+@overload(estimator_finite, inline="always", jit_options={"cache": True})
 def _estimator_finite(s):
     k = _lookup(s)
     if k is None:
