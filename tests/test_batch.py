@@ -100,6 +100,7 @@ def test_batch_logs_are_bit_identical_to_single_runs(singles, batch):
         assert np.array_equal(many.c_final, one.c_final)
 
 
+@pytest.mark.slow  # end to end: closed-loop runs of seconds
 def test_batch_metrics_match_the_definitions_on_single_runs(singles, batch):
     df = batch.metrics
     for i, one in enumerate(singles):

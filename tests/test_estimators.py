@@ -57,6 +57,7 @@ def steady_runs():
     return dict(zip(cases, res.metrics.itertuples(), strict=True))
 
 
+@pytest.mark.slow  # end to end: closed-loop runs of seconds
 @pytest.mark.parametrize("est", ESTIMATORS)
 @pytest.mark.parametrize("rpm", (1000, 150))
 def test_estimate_within_0p1_rpm_in_steady_state(steady_runs, est, rpm):

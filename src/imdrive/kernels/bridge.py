@@ -47,7 +47,7 @@ from imdrive.kernels.machine import (
 )
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _held(k, g1, g2, R1, R2):
     """The current coefficients (:func:`imdrive.kernels.machine.current_coefficients`, saturated)
     and the flux equations' ``a = -R c`` at a held magnetising ratio ``k``."""
@@ -57,7 +57,7 @@ def _held(k, g1, g2, R1, R2):
     return c_ss, c_sr, c_rr, -R1 * c_ss, -R1 * c_sr, -R2 * c_sr, -R2 * c_rr
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _currents(c_ss, c_sr, c_rr, sa, sb, ra, rb):
     """Stator and rotor currents ``(i_s_alpha, i_s_beta, i_r_alpha, i_r_beta)`` of the fluxes."""
     return (
@@ -68,7 +68,7 @@ def _currents(c_ss, c_sr, c_rr, sa, sb, ra, rb):
     )
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _next_event(sinv, ev_t, ev_leg, j, n, Ts):
     """``(t, kind, leg)`` of the next event: kind 0 the period's end, 1 gate command ``j``,
     2 a pending dead-time transition (which comes first at equal times)."""
@@ -87,7 +87,7 @@ def _next_event(sinv, ev_t, ev_leg, j, n, Ts):
     return t_next, kind, leg
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _ratio_series(pp, sa, sb, ra, rb, g1, g2):
     """``(k, dk/du, d2k/du2, u0, x_alpha, x_beta)``: the magnetising ratio as a quadratic in
     ``u = |psi_x|^2`` about the period's start (zeros without saturation)."""
@@ -105,7 +105,7 @@ def _ratio_series(pp, sa, sb, ra, rb, g1, g2):
     return k, k_u, k_uu, u0, xa, xb
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _apply_event(pinv, sinv, kind, leg, ev_state, j, isa, isb, t):
     """Apply event ``kind`` (1: gate command ``j``, its dead time decided by the leg's current
     from the stator current ``(isa, isb)``, alpha/beta; 2: a dead time's end) at ``t``;
@@ -121,7 +121,7 @@ def _apply_event(pinv, sinv, kind, leg, ev_state, j, isa, isb, t):
     return j
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _close_period(pp, x, TL0, Ts, R1, R2, w0, dw0, sa, sb, ra, rb, int_Te, int_W, int_is2,
                   int_ir2, e_in):  # fmt: skip
     """The state at the period's end from the fluxes and the period's integrals (the speed

@@ -75,7 +75,7 @@ def _f(v_alpha, v_beta, ia, ib, la, lb, w, R2, R1, M, L2, sL1):
     return dia, dib, dla, dlb
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _transition(F, ia, ib, la, lb, w, R2, R1, M, L2, sL1, Ts):
     """``F = I + Ts A`` with ``A`` the process model's Jacobian at ``(ia, ib, la, lb, w, R2)``
     (the alpha/beta current and rotor flux, the speed and R2 of the last estimate)."""
@@ -109,7 +109,7 @@ def _transition(F, ia, ib, la, lb, w, R2, R1, M, L2, sL1, Ts):
         F[r, r] += 1.0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _predict_mean(x, v_prev_alpha, v_prev_beta, R1, M, L2, sL1, Ts):
     """The mean's current and flux after one RK4 step over the period (the voltage held)."""
     ia, ib, la, lb, w, R2 = x[0], x[1], x[2], x[3], x[4], x[5]
@@ -134,7 +134,7 @@ def _predict_mean(x, v_prev_alpha, v_prev_beta, R1, M, L2, sL1, Ts):
     x[3] = lb + c6 * (k1[3] + 2.0 * k2[3] + 2.0 * k3[3] + k4[3])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _predict_covariance(p, P, F, W):
     """``P <- F P F' + Q`` (``W`` scratch); R2's row and column stay zero unless estimated."""
     for r in range(N_X):
@@ -158,7 +158,7 @@ def _predict_covariance(p, P, F, W):
             P[j, 5] = 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _update(p, x, P, F, W, i_alpha, i_beta):
     """The measurement update with ``z = (i_alpha, i_beta)``, ``H = [I2 0]`` (``F``, ``W``
     scratch): ``K = P H' (H P H' + R)^-1``, ``x += K (z - H x)``, ``P <- P - K H P``,
