@@ -233,3 +233,69 @@ class InjectionSettings:
             "optional low-pass of the detected product, for display (0: none)", "rad/s", ge=0.0
         ),
     ] = 0.0
+
+
+def decision_period_steps(comp: CompensatorSettings, inj: InjectionSettings, Ts: float) -> int:
+    """The compensator's decision period in control periods (at least one).
+
+    ``compensator.period_s`` if given, else one injection period with ``input =
+    "demodulated"``, else 10 ms; rounded to whole control periods of ``Ts`` s.
+    """
+    if comp.period_s is not None:
+        period = comp.period_s
+    elif comp.input == "demodulated":
+        period = 1.0 / inj.frequency_Hz
+    else:
+        period = 0.01
+    return max(int(round(period / Ts)), 1)
+
+
+def injection_frequencies_in_use(
+    comp: CompensatorSettings, inj: InjectionSettings
+) -> list[tuple[str, float]]:
+    """``(key, Hz)`` of each injection frequency the compensator's decision period must hold
+    whole periods of, so that the synchronous detection averages over whole periods.
+
+    The injection frequency with the demodulated input; with the gating's frequency schedule
+    (``compensator.gate_band_Hz`` > 0) its alternative ``frequency2_Hz`` (default twice the
+    frequency); a ``frequency3_Hz`` whenever it is given. None without injection or without
+    the compensator.
+    """
+    if not (comp.enabled and inj.amplitude_A > 0.0):
+        return []
+    out = []
+    demodulated = comp.input == "demodulated"
+    if demodulated:
+        out.append(("injection.frequency_Hz", inj.frequency_Hz))
+    gating = comp.gating if comp.gating is not None else demodulated
+    if gating and comp.gate_band_Hz > 0.0:
+        f2 = inj.frequency2_Hz if inj.frequency2_Hz is not None else 2.0 * inj.frequency_Hz
+        out.append(("injection.frequency2_Hz", f2))
+    if inj.frequency3_Hz is not None:
+        out.append(("injection.frequency3_Hz", inj.frequency3_Hz))
+    return out
+
+
+def check_whole_injection_periods(
+    comp: CompensatorSettings, inj: InjectionSettings, Ts: float
+) -> None:
+    """Refuse a decision period that does not hold a whole number (>= 1) of periods of every
+    injection frequency in use (:func:`injection_frequencies_in_use`): the detected e_d0 would
+    carry a ripple at the injection frequency instead of its mean.
+
+    Raises
+    ------
+    ConfigError
+        Naming the frequency (``compensator.period_s`` when it is the period that was set).
+    """
+    n_comp = decision_period_steps(comp, inj, Ts)
+    T = n_comp * Ts
+    for key, f in injection_frequencies_in_use(comp, inj):
+        cycles = T * f
+        if cycles < 1.0 - 1e-6 or abs(cycles - round(cycles)) > 1e-6 * max(cycles, 1.0):
+            field = "compensator.period_s" if comp.period_s is not None else key
+            raise ConfigError(
+                field,
+                f"the compensator period ({T:g} s, {n_comp} control periods) must hold a whole "
+                f"number of periods of {key} = {f:g} Hz (got {cycles:g})",
+            )

@@ -391,11 +391,15 @@ def machine_file_values(file, preset: str = "paper-table-iv") -> dict:
     if not path.is_file():
         raise ConfigError("machine.file", f"no such file: {file}")
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8-sig"))
+        text = path.read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as exc:
         raise ConfigError("machine.file", f"cannot read {file}: {exc}") from None
+    try:
+        data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError("machine.file", f"{file} is not valid TOML: {exc}") from None
+    except RecursionError:
+        raise ConfigError("machine.file", f"{file}: TOML nested too deeply to read") from None
     if "machine" in data:
         extra = sorted(set(data) - {"machine"})
         if extra or not isinstance(data["machine"], dict):

@@ -251,12 +251,20 @@ def simulate_batch(
     from imdrive.run.result import SimulationResult
     from imdrive.run.simulate import logged_rows
 
-    if log_every is not None and (isinstance(log_every, bool) or int(log_every) < 1):
-        raise ConfigError("log_every", f"must be >= 1 (got {log_every})")
-    if not (math.isfinite(window_s) and window_s >= 0):
-        raise ConfigError("window_s", f"must be >= 0 (got {window_s})")
-    if block_size < 1:
-        raise ConfigError("block_size", f"must be >= 1 (got {block_size})")
+    def _is_int(v) -> bool:
+        return isinstance(v, int | np.integer) and not isinstance(v, bool)
+
+    if log_every is not None and not (_is_int(log_every) and log_every >= 1):
+        raise ConfigError("log_every", f"must be an integer >= 1 (got {log_every!r})")
+    if not (
+        isinstance(window_s, int | float | np.floating)
+        and not isinstance(window_s, bool)
+        and math.isfinite(window_s)
+        and window_s >= 0
+    ):
+        raise ConfigError("window_s", f"must be a finite number >= 0 (got {window_s!r})")
+    if not (_is_int(block_size) and block_size >= 1):
+        raise ConfigError("block_size", f"must be an integer >= 1 (got {block_size!r})")
     if errors not in ("raise", "record"):
         raise ConfigError("errors", f'must be "raise" or "record" (got {errors!r})')
     t_start = time.perf_counter()
@@ -267,7 +275,14 @@ def simulate_batch(
         raise ConfigError(
             "scenarios", "must be an iterable of Scenario objects (a list, a generator)"
         )
-    it = iter(scenarios)
+    try:
+        it = iter(scenarios)
+    except TypeError:
+        raise ConfigError(
+            "scenarios",
+            f"must be an iterable of Scenario objects (a list, a generator), got "
+            f"{type(scenarios).__name__}",
+        ) from None
     offset = 0
     while True:
         block = []

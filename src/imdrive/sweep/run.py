@@ -20,7 +20,7 @@ import uuid
 from pathlib import Path
 
 from imdrive._progress import Progress, _isatty
-from imdrive.errors import ConfigError, EnvironmentFailure
+from imdrive.errors import ConfigError, EnvironmentFailure, check_argument
 from imdrive.sweep.figures import save_heatmaps
 from imdrive.sweep.spec import Sweep, _int
 from imdrive.sweep.store import lock_store, open_store
@@ -122,6 +122,10 @@ def run_sweep(
     pandas.DataFrame
         The consolidated table, one row per run, sorted by run.
     """
+    import os
+
+    check_argument(sweep, Sweep, "sweep", "a Sweep (load_sweep(...))")
+    check_argument(out, (str, os.PathLike), "out", "a folder path (str or os.PathLike)")
     out = Path(out)
     if chunk_size is not None:
         chunk_size = _int(chunk_size, "--chunk-size")
