@@ -79,6 +79,23 @@ COLUMNS = (
     "error",
 )
 
+
+def metrics_dtypes() -> dict[str, np.dtype]:
+    """The numpy dtype of each column of the metrics table (:data:`COLUMNS`), as
+    :func:`simulate_batch` builds it and as it reads back from Parquet."""
+    out = {
+        "drive": np.dtype(np.int64),
+        "status": np.dtype(np.int64),
+        "diverged": np.dtype(bool),
+        "diverged_at_s": np.dtype(np.float64),
+        "simulated_s": np.dtype(np.float64),
+        "lost_control": np.dtype(bool),
+    }
+    out.update((name, BATCH_METRICS[name]) for name in METRICS)
+    out["error"] = np.dtype(object)
+    return out
+
+
 #: ``status`` of a drive that could not be run (its derived parameters could not be computed,
 #: or its scenario was refused when built): recorded with its message in ``error``, metrics NaN.
 #: The kernel's own codes (``S_OK`` = 0, divergence 1-3) are never negative.
