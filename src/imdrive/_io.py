@@ -19,7 +19,7 @@ replace_folder
     staging folder in its place: the old folder's files are all gone, the new ones all there.
 remove_partials
     Delete what killed writers left behind (temporary files and staging folders).
-check_output_folder
+output_folder_problem
     The one rule for every folder a command writes: not the current folder or a parent, not
     under a file, a symbolic link kept (written through), other files refused unless forced.
 
@@ -37,7 +37,7 @@ FolderLock
     writers of one store cannot both work. The kernel releases it when the process dies, so a
     killed writer never leaves a stale lock.
 
-This module imports nothing of imdrive but :mod:`imdrive.errors` (rank 0).
+This module imports nothing of imdrive.
 """
 
 from __future__ import annotations
@@ -50,8 +50,6 @@ import uuid
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
-
-from imdrive.errors import ConfigError
 
 PARTIAL_FOLDER_PREFIX = ".partial-"
 _TMP_MARK = ".tmp-"
@@ -372,64 +370,55 @@ def real_folder(folder) -> Path:
     return Path(os.path.realpath(folder)) if folder.is_symlink() else folder
 
 
-def _refuse(folder, rule: str, field: str) -> ConfigError:
-    return ConfigError(field, f"{folder} {rule}")
+def folder_path_problem(folder) -> str | None:
+    """What makes ``folder`` a path no command may write a folder at, or None.
 
-
-def check_folder_path(folder, field: str = "--out") -> Path:
-    """Refuse a path no command may write a folder at: the current folder, one of its parents,
-    the root (a folder replaced or filled there takes the user's files with it); a path
-    under a file (``file/sub``); a file; a symbolic link to nothing.
+    The current folder, one of its parents, the root (a folder replaced or filled there takes
+    the user's files with it); a path under a file (``file/sub``); a file; a symbolic link to
+    nothing; a path the system refuses (too long, a loop of links).
 
     Parameters
     ----------
     folder : str or os.PathLike
         The output folder.
-    field : str
-        What the error names.
 
     Returns
     -------
-    pathlib.Path
-        ``folder``.
-
-    Raises
-    ------
-    ConfigError
-        Naming ``field`` and what is wrong with the path.
+    str or None
+        One line starting with the path, e.g. ``"f/sub is inside /tmp/f, which is a file"``.
     """
     folder = Path(folder)
     try:
         resolved = Path(os.path.realpath(folder))
         cwd = Path.cwd().resolve()
         if resolved == cwd or resolved in cwd.parents or resolved == Path(resolved.anchor):
-            raise _refuse(
-                folder,
-                "is the current folder or one of its parents: name a folder for the results",
-                field,
+            return (
+                f"{folder} is the current folder or one of its parents: name a folder for the "
+                "results"
             )
         if folder.is_symlink() and not folder.exists():
-            raise _refuse(folder, "is a symbolic link to nothing", field)
+            return f"{folder} is a symbolic link to nothing"
         if folder.exists() and not folder.is_dir():
-            raise _refuse(folder, "exists and is not a folder", field)
+            return f"{folder} exists and is not a folder"
         for parent in folder.absolute().parents:
             if parent.exists():
                 if not parent.is_dir():
-                    raise _refuse(folder, f"is inside {parent}, which is a file", field)
+                    return f"{folder} is inside {parent}, which is a file"
                 break
-    except OSError as exc:  # a name too long for the file system, a loop of links
-        raise _refuse(folder, f"is not a usable path ({exc.strerror or exc})", field) from None
-    return folder
+    except (OSError, ValueError) as exc:  # too long for the file system, a NUL byte, a loop
+        return f"{folder} is not a usable path ({getattr(exc, 'strerror', None) or exc})"
+    return None
 
 
-def check_output_folder(folder, owns, force: bool = False, what: str = "", field="--out"):
-    """The rule every command that writes a folder follows (run, sweep, stability,
-    bench-estimators, paper).
+def output_folder_problem(folder, owns, force: bool = False, what: str = "") -> str | None:
+    """What forbids a command to write the folder ``folder``, or None: the rule every command
+    that writes a folder follows (run, sweep, stability, bench-estimators, paper).
 
-    The path must be usable (:func:`check_folder_path`). An existing folder must be empty or
+    The path must be usable (:func:`folder_path_problem`). An existing folder must be empty or
     hold only what the command itself writes (``owns(name)`` true, regular files), besides
     staging leftovers and the lock, unless ``force``: other files are someone else's and
-    would be overwritten or deleted. A symbolic link to a folder is kept and written through.
+    would be overwritten or deleted. A symbolic link to a folder is kept and written through
+    (:func:`real_folder`).
 
     Parameters
     ----------
@@ -441,27 +430,24 @@ def check_output_folder(folder, owns, force: bool = False, what: str = "", field
         Write into (or replace) a folder that holds other files.
     what : str
         What the command writes, for the message (``"an imdrive result"``).
-    field : str
-        What the error names.
 
-    Raises
-    ------
-    ConfigError
-        Naming ``field``: a path that cannot be written, or a folder of other files.
+    Returns
+    -------
+    str or None
+        One line naming the path and the problem; callers raise it as bad input on ``--out``.
     """
-    folder = check_folder_path(folder, field)
-    if force or not folder.is_dir():
-        return folder
+    problem = folder_path_problem(folder)
+    folder = Path(folder)
+    if problem is not None or force or not folder.is_dir():
+        return problem
     for p in sorted(folder.iterdir()):
         n = p.name
         if is_partial(n) or n == LOCK_NAME:
             continue
         if p.is_file() and not p.is_symlink() and owns(n):
             continue
-        raise _refuse(
-            folder,
-            f"holds files that are not {what or 'what this command writes'} (e.g. {n!r}) and "
-            "would be overwritten or deleted: choose another folder, or add --force",
-            field,
+        return (
+            f"{folder} holds files that are not {what or 'what this command writes'} (e.g. "
+            f"{n!r}) and would be overwritten or deleted: choose another folder, or add --force"
         )
-    return folder
+    return None

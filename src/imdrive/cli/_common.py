@@ -65,7 +65,7 @@ def output_folder(
     """The folder a command writes, checked by the one rule every command follows.
 
     ``--out`` if given, else ``out/PREFIX+NAME`` (a safe name, :func:`_out_path`); then
-    :func:`imdrive._io.check_output_folder`: not the current folder or a parent, not under a
+    :func:`imdrive._io.output_folder_problem`: not the current folder or a parent, not under a
     file, a symbolic link kept and written through, and (with ``owns``) an existing folder
     holding only files the command writes unless ``force``.
 
@@ -88,12 +88,16 @@ def output_folder(
     pathlib.Path
         The folder (not created).
     """
-    from imdrive._io import check_folder_path, check_output_folder
+    from imdrive._io import folder_path_problem, output_folder_problem
 
     out = _out_path(given, name, prefix)
     if owns is None:
-        return check_folder_path(out)
-    return check_output_folder(out, owns, force, what)
+        problem = folder_path_problem(out)
+    else:
+        problem = output_folder_problem(out, owns, force, what)
+    if problem is not None:
+        raise ConfigError("--out", problem)
+    return out
 
 
 def add_force(parser, what: str) -> None:

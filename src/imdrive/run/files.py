@@ -78,8 +78,11 @@ def check_result_folder(folder, force: bool = False) -> None:
     """Refuse (:class:`~imdrive.errors.ConfigError` on ``--out``) to replace a folder that is
     not an imdrive result, unless ``force``; and a path no result may be written at (the
     current folder, under a file): the rule of every command
-    (:func:`imdrive._io.check_output_folder`).
+    (:func:`imdrive._io.output_folder_problem`).
     """
-    from imdrive._io import check_output_folder
+    from imdrive._io import output_folder_problem
+    from imdrive.errors import ConfigError
 
-    check_output_folder(folder, owns_result_file, force, "an imdrive result")
+    problem = output_folder_problem(folder, owns_result_file, force, "an imdrive result")
+    if problem is not None:
+        raise ConfigError("--out", problem)
