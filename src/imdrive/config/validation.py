@@ -54,10 +54,11 @@ def _integral(value):
 
 
 #: Magnitudes a float setting may have (besides 0): every setting is a physical quantity in SI
-#: units, far inside this range, and a product or quotient of a few such values stays a normal
-#: finite float (a subnormal 5e-324 times a period of 1e-4 s is 0, a divisor).
-FLOAT_MIN_MAGNITUDE = 1e-100
-FLOAT_MAX_MAGNITUDE = 1e100
+#: units, far inside this range, and a product or quotient of two such values stays a normal
+#: finite float (a subnormal 5e-324 times a period of 1e-4 s is 0, a divisor). Longer products
+#: (a gain from several settings) are checked where they are derived.
+FLOAT_MIN_MAGNITUDE = 1e-150
+FLOAT_MAX_MAGNITUDE = 1e150
 #: Largest magnitude of an integer setting: exact as a float, far inside a 64-bit record field.
 INT_MAX_MAGNITUDE = 2**53
 
@@ -83,7 +84,7 @@ def _well_scaled_int(value: int) -> int:
 
 
 Float = Annotated[float, Strict(), BeforeValidator(_scalar), AfterValidator(_well_scaled_float)]
-"""A finite number, 0 or of magnitude 1e-100 .. 1e100 (an int is accepted and stored as a
+"""A finite number, 0 or of magnitude 1e-150 .. 1e150 (an int is accepted and stored as a
 float; a bool or a string is not)."""
 Int = Annotated[int, Strict(), BeforeValidator(_integral), AfterValidator(_well_scaled_int)]
 """An integer of magnitude <= 2^53 (``2.0`` is accepted as 2; ``1.5``, ``"2"`` and ``true``

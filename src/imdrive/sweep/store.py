@@ -301,14 +301,22 @@ def open_store(sweep: Sweep, out: Path, resume: bool, chunk_size: int | None) ->
     store = Store(out)
     if out.exists() and not out.is_dir():
         raise ConfigError("--out", f"{out} exists and is not a folder")
-    nonempty = out.is_dir() and any(_is_store_entry(p.name) for p in out.iterdir())
+    entries = (
+        sorted(p.name for p in out.iterdir() if _is_store_entry(p.name)) if out.is_dir() else []
+    )
+    nonempty = bool(entries)
     if nonempty and not resume:
         raise ConfigError(
-            "--out", f"{out} exists and is not empty: add --resume to continue the sweep in it"
+            "--out",
+            f"{out} exists and is not empty (e.g. {entries[0]!r}): add --resume to continue "
+            "the sweep in it, or choose another folder",
         )
     man = store.read_manifest() if nonempty else None
     if nonempty and man is None:
-        raise ConfigError("--resume", f"{out} holds no {Store.MANIFEST}: not a sweep store")
+        raise ConfigError(
+            "--resume",
+            f"{out} holds no {Store.MANIFEST} (e.g. {entries[0]!r}): not a sweep store",
+        )
     if man is not None:
         if man.get("fingerprint") != sweep.fingerprint():
             raise ConfigError(
