@@ -25,6 +25,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import shutil
 import socket
 import subprocess
 import sys
@@ -90,6 +91,12 @@ def _names_a_field(message: str) -> str:
     return field
 
 
+def _fresh(out: Path) -> Path:
+    """``out`` removed (one run's folder, used again by the next example)."""
+    shutil.rmtree(out, ignore_errors=True)
+    return out
+
+
 def _check_outcome(rc: int, err: str, out: Path) -> None:
     """The invariant of a CLI run on hostile input."""
     assert rc in (0, 1, 2, 3), (rc, err)
@@ -146,6 +153,18 @@ def test_products_of_in_range_values_still_checked_where_derived():
     )
     with pytest.raises(ConfigError, match="control.speed_bandwidth_Hz.*speed_ki"):
         build_arrays(sc)
+
+
+@pytest.mark.parametrize(
+    "setting",
+    ["machine.M_H=9223372036854775808", "machine.M_H=1e30", "estimator.M_H=1e30"],
+)  # fmt: skip
+def test_a_leakage_factor_lost_in_rounding_is_refused_naming_the_inductance(setting):
+    """M far above the leakages: L1 = Ll1 + M rounds to M, sigma to 0, a divisor of the
+    kernels (a ZeroDivisionError, exit 5, before)."""
+    with pytest.raises(ConfigError, match="leakage factor") as exc:
+        im.Scenario.read("sensorless", [setting])
+    assert exc.value.field == setting.split("=")[0]
 
 
 # ------------------------------------------------------------------------------------------
@@ -600,7 +619,7 @@ _KEY = st.sampled_from([k for k in KEYS if not k.startswith("simulation.t_end")]
 )
 @hypothesis.given(sets=st.lists(st.tuples(_KEY, _VALUE), min_size=1, max_size=2))
 def test_property_set_any_key_to_a_hostile_value(tmp_path, capsys, sets):
-    out = tmp_path / "o"
+    out = _fresh(tmp_path / "o")
     argv = ["run", "sensorless", "--out", str(out), "--force", *QUICK]
     for key, value in sets:
         argv += ["--set", f"{key}={value}"]
@@ -616,6 +635,7 @@ def test_every_key_with_every_hostile_value(tmp_path, capsys):
         if key == "simulation.t_end_s":
             continue
         for value in HOSTILE_VALUES:
+            _fresh(out)
             argv = ["run", "sensorless", "--out", str(out), "--force", *QUICK]
             rc, err = _run(capsys, *argv, "--set", f"{key}={value}")
             try:
@@ -689,6 +709,6 @@ def _hostile_file(draw):
 def test_property_hostile_scenario_files(tmp_path, capsys, text):
     f = tmp_path / "hostile.toml"
     f.write_text(text, encoding="utf-8")
-    out = tmp_path / "o"
+    out = _fresh(tmp_path / "o")
     rc, err = _run(capsys, "run", str(f), "--out", str(out), "--force", *QUICK)
     _check_outcome(rc, err, out)

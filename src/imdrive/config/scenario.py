@@ -48,6 +48,7 @@ from imdrive.config.estimators import (
 from imdrive.config.inverter import InverterParams
 from imdrive.config.machine import (  # noqa: F401  (preset_table: re-export)
     MachineParams,
+    check_leakage_factor,
     machine_preset,
     machine_table,
     preset_table,
@@ -291,6 +292,15 @@ class Scenario:
             ) from None
 
     def _rules_between_sections(self):
+        est, m = self.estimator, self.machine
+        if (est.Ll1_H, est.Ll2_H, est.M_H) != (None, None, None):  # the controller's model
+            given = [k for k in ("M_H", "Ll1_H", "Ll2_H") if getattr(est, k) is not None]
+            check_leakage_factor(
+                est.Ll1_H if est.Ll1_H is not None else m.Ll1_H,
+                est.Ll2_H if est.Ll2_H is not None else m.Ll2_H,
+                est.M_H if est.M_H is not None else m.M_H,
+                f"estimator.{given[0]}",
+            )
         inv = self.inverter
         if inv.model == "switching":
             f_Ts = inv.switching_frequency_Hz * self.simulation.Ts_s
