@@ -174,8 +174,9 @@ class InjectionSettings:
     Ind. Appl. 30(5), 1994); feeding its demodulated flux error to the paper's table is ours.
 
     ``amplitude_A`` = 0 switches it off. The compensator's ``input = "demodulated"`` feeds on
-    e_d0 detected synchronously with this sinusoid; its period should be a whole number of
-    injection periods (the default compensator period for that input is one).
+    e_d0 detected synchronously with this sinusoid; its period must be a whole number of
+    periods of every injection frequency it uses (the default compensator period for that
+    input is one; :func:`check_whole_injection_periods`).
     """
 
     amplitude_A: Annotated[
