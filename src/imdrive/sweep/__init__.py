@@ -82,8 +82,9 @@ written to a temporary name and renamed into place (atomic), then ``STORE/manife
 rewritten the same way; every file is fsynced before its rename and its folder after. A
 writer holds ``STORE/.lock`` (``flock``): a second process on the same store fails at once.
 ``--resume`` reads every chunk back and recomputes those missing or damaged (unreadable,
-other columns or column types, not exactly its runs, axis values that are not the sweep's), saying so, so an interrupted sweep loses at most the
-chunks in progress and duplicates nothing; without it, a non-empty STORE is an error. At the
+other columns or column types, not exactly its runs, axis values that are not the
+sweep's), saying so, so an interrupted sweep loses at most the chunks in progress and
+duplicates nothing; without it, a non-empty STORE is an error. At the
 end the chunks are read back, sorted by run and written as ``STORE/runs.parquet``; the
 figures go to ``STORE/figures/``; only then does the manifest say ``"complete": true``. A
 run's results do not depend on which chunk, process or machine computed it, so a resumed or
