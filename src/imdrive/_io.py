@@ -19,6 +19,9 @@ replace_folder
     staging folder in its place: the old folder's files are all gone, the new ones all there.
 remove_partials
     Delete what killed writers left behind (temporary files and staging folders).
+output_folder_problem
+    The one rule for every folder a command writes: not the current folder or a parent, not
+    under a file, a symbolic link kept (written through), other files refused unless forced.
 
 Notes
 -----
@@ -197,6 +200,18 @@ class AtomicFolder:
         fsync_folder(self.folder)
 
 
+def _remove(p: Path) -> None:
+    """Delete ``p``: a symbolic link or a file is unlinked (never followed), a folder removed
+    with its content. ``shutil.rmtree`` refuses a link, which used to leave it behind."""
+    try:
+        if p.is_symlink() or not p.is_dir():
+            p.unlink(missing_ok=True)
+        else:
+            shutil.rmtree(p, ignore_errors=True)
+    except OSError:
+        pass
+
+
 def remove_partials(folder) -> None:
     """Delete the temporary files and staging folders that killed writers left in ``folder``.
 
@@ -206,12 +221,8 @@ def remove_partials(folder) -> None:
     if not folder.is_dir():
         return
     for p in folder.iterdir():
-        if not is_partial(p.name):
-            continue
-        if p.is_dir() and not p.is_symlink():
-            shutil.rmtree(p, ignore_errors=True)
-        else:
-            p.unlink(missing_ok=True)
+        if is_partial(p.name):
+            _remove(p)
 
 
 LOCK_NAME = ".lock"
@@ -300,7 +311,7 @@ def remove_stale_staging(folder) -> None:
                 continue
             pid = p.name[len(prefix) :].split("-", 1)[0]
             if pid.isdigit() and not _pid_alive(int(pid)):
-                shutil.rmtree(p, ignore_errors=True)
+                _remove(p)
     if folder.is_dir():
         remove_partials(folder)
 
@@ -316,6 +327,9 @@ def replace_folder(folder) -> Iterator[Path]:
     killed in between leaves only ``.partial-NAME-*`` folders, which the next
     :func:`replace_folder` of the same folder removes (:func:`remove_stale_staging`).
 
+    A ``folder`` that is a symbolic link stays one: the folder it points to is replaced
+    (:func:`real_folder`), and the staging folder is made beside that one.
+
     Parameters
     ----------
     folder : str or os.PathLike
@@ -326,7 +340,7 @@ def replace_folder(folder) -> Iterator[Path]:
     pathlib.Path
         The staging folder to write into.
     """
-    folder = Path(folder)
+    folder = real_folder(folder)
     folder.parent.mkdir(parents=True, exist_ok=True)
     remove_stale_staging(folder)
     token = f"{os.getpid()}-{uuid.uuid4().hex[:8]}"
@@ -344,5 +358,96 @@ def replace_folder(folder) -> Iterator[Path]:
         os.replace(staging, folder)
         fsync_folder(folder.parent)
     finally:
-        shutil.rmtree(staging, ignore_errors=True)
-        shutil.rmtree(old, ignore_errors=True)
+        _remove(staging)
+        _remove(old)
+
+
+def real_folder(folder) -> Path:
+    """``folder`` with its symbolic links resolved: where a writer that replaces the folder
+    as a whole must work, so that a link the user made (``out -> /data/out``) is kept and
+    written through instead of being replaced by a real folder."""
+    folder = Path(folder)
+    return Path(os.path.realpath(folder)) if folder.is_symlink() else folder
+
+
+def folder_path_problem(folder) -> str | None:
+    """What makes ``folder`` a path no command may write a folder at, or None.
+
+    The current folder, one of its parents, the root (a folder replaced or filled there takes
+    the user's files with it); a path under a file (``file/sub``); a file; a symbolic link to
+    nothing; a path the system refuses (too long, a loop of links).
+
+    Parameters
+    ----------
+    folder : str or os.PathLike
+        The output folder.
+
+    Returns
+    -------
+    str or None
+        One line starting with the path, e.g. ``"f/sub is inside /tmp/f, which is a file"``.
+    """
+    folder = Path(folder)
+    try:
+        resolved = Path(os.path.realpath(folder))
+        cwd = Path.cwd().resolve()
+        if resolved == cwd or resolved in cwd.parents or resolved == Path(resolved.anchor):
+            return (
+                f"{folder} is the current folder or one of its parents: name a folder for the "
+                "results"
+            )
+        if folder.is_symlink() and not folder.exists():
+            return f"{folder} is a symbolic link to nothing"
+        if folder.exists() and not folder.is_dir():
+            return f"{folder} exists and is not a folder"
+        for parent in folder.absolute().parents:
+            if parent.exists():
+                if not parent.is_dir():
+                    return f"{folder} is inside {parent}, which is a file"
+                break
+    except (OSError, ValueError) as exc:  # too long for the file system, a NUL byte, a loop
+        return f"{folder} is not a usable path ({getattr(exc, 'strerror', None) or exc})"
+    return None
+
+
+def output_folder_problem(folder, owns, force: bool = False, what: str = "") -> str | None:
+    """What forbids a command to write the folder ``folder``, or None: the rule every command
+    that writes a folder follows (run, sweep, stability, bench-estimators, paper).
+
+    The path must be usable (:func:`folder_path_problem`). An existing folder must be empty or
+    hold only what the command itself writes (``owns(name)`` true, regular files), besides
+    staging leftovers and the lock, unless ``force``: other files are someone else's and
+    would be overwritten or deleted. A symbolic link to a folder is kept and written through
+    (:func:`real_folder`).
+
+    Parameters
+    ----------
+    folder : str or os.PathLike
+        The output folder.
+    owns : callable
+        ``owns(name) -> bool``: whether a file of that name is one the command writes.
+    force : bool
+        Write into (or replace) a folder that holds other files.
+    what : str
+        What the command writes, for the message (``"an imdrive result"``).
+
+    Returns
+    -------
+    str or None
+        One line naming the path and the problem; callers raise it as bad input on ``--out``.
+    """
+    problem = folder_path_problem(folder)
+    folder = Path(folder)
+    if problem is not None or force or not folder.is_dir():
+        return problem
+    for p in sorted(folder.iterdir()):
+        n = p.name
+        if is_partial(n) or n == LOCK_NAME:
+            continue
+        if p.is_file() and not p.is_symlink() and owns(n):
+            continue
+        return (
+            f"{folder} holds files that are not {what or 'what this command writes'} (e.g. "
+            f"{n!r}) and would be overwritten or deleted: choose another folder, or add --force"
+        )
+    return None

@@ -107,3 +107,33 @@ def describe_os_error(exc: OSError, doing: str = "") -> str:
     if exc.filename is None:
         return f"{doing or 'I/O error'}: {reason}"
     return f"{doing or 'I/O error on'} {exc.filename}: {reason}"
+
+
+def check_argument(value, types, name: str, what: str):
+    """``value`` if it is an instance of ``types``, else a :class:`ConfigError` naming the
+    argument: a public entry point refuses a wrong argument at once, in the package's own
+    error, instead of failing later with a ``TypeError`` or ``AttributeError``.
+
+    Parameters
+    ----------
+    value : object
+        The argument.
+    types : type or tuple of type
+        What it must be (a bool is never taken for an int).
+    name : str
+        The argument's name, e.g. ``"scenario"``.
+    what : str
+        What to give, e.g. ``"a Scenario (Scenario.read(...))"``.
+
+    Returns
+    -------
+    object
+        ``value``.
+    """
+    if not isinstance(value, types) or (isinstance(value, bool) and bool not in _tuple(types)):
+        raise ConfigError(name, f"must be {what}, got {type(value).__name__}")
+    return value
+
+
+def _tuple(types) -> tuple:
+    return types if isinstance(types, tuple) else (types,)

@@ -424,7 +424,14 @@ def machine_from_nameplate_command(args) -> int:
             file=sys.stderr,
         )
     if args.out:
-        Path(args.out).write_text(text, encoding="utf-8")
+        from imdrive._io import atomic_write_text
+
+        out = Path(args.out)
+        if out.is_dir() or out.name in ("", ".", ".."):
+            raise ConfigError("--out", f"{out} is a folder: name the TOML file to write")
+        if not out.absolute().parent.is_dir():
+            raise ConfigError("--out", f"{out.parent} is not an existing folder")
+        atomic_write_text(out, text)
         print(f"imdrive: wrote {args.out}", file=sys.stderr)
     else:
         sys.stdout.write(text)

@@ -5,18 +5,21 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-from pathlib import Path
 
-from imdrive.cli._common import EXIT_OK, _examples
-from imdrive.errors import ConfigError
+from imdrive.cli._common import EXIT_OK, _examples, add_force, output_folder
+
+
+def _owns_bench_file(name: str) -> bool:
+    """The files ``imdrive bench-estimators`` writes: estimators.csv, estimators.md, PNGs."""
+    return name in ("estimators.csv", "estimators.md") or name.endswith(".png")
 
 
 def _cmd_bench_estimators(args) -> int:
     from imdrive.bench.report import bench_estimators
 
-    out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise ConfigError("--out", f"{out} exists and is not a folder")
+    out = output_folder(
+        args.out, owns=_owns_bench_file, force=args.force, what="an estimator benchmark"
+    )
     t0 = time.perf_counter()
     s = bench_estimators(out, quick=args.quick)
     if not args.quiet:
@@ -47,5 +50,6 @@ def add_parser(sub) -> None:
     )
     be.add_argument("--quick", action="store_true", help="a small subset (CI)")
     be.add_argument("--out", metavar="DIR", required=True)
+    add_force(be, "an estimator benchmark")
     be.add_argument("-q", "--quiet", action="store_true")
     be.set_defaults(func=_cmd_bench_estimators)

@@ -5,18 +5,21 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-from pathlib import Path
 
-from imdrive.cli._common import EXIT_OK, _examples
-from imdrive.errors import ConfigError
+from imdrive.cli._common import EXIT_OK, _examples, add_force, output_folder
+
+
+def _owns_paper_file(name: str) -> bool:
+    """The files ``imdrive paper`` writes: figures, tables (CSV) and results.json."""
+    return name == "results.json" or name.endswith((".png", ".csv"))
 
 
 def _cmd_paper(args) -> int:
     from imdrive.studies.paper import run_all
 
-    out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise ConfigError("--out", f"{out} exists and is not a folder")
+    out = output_folder(
+        args.out, owns=_owns_paper_file, force=args.force, what="the paper's reproduction"
+    )
     t0 = time.perf_counter()
     res = run_all(out)
     n_png = len(list(out.glob("*.png")))
@@ -54,4 +57,5 @@ def add_parser(sub) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     pp.add_argument("--out", metavar="DIR", default="out/paper")
+    add_force(pp, "the paper's reproduction")
     pp.set_defaults(func=_cmd_paper)

@@ -7,7 +7,13 @@ import sys
 import time
 from pathlib import Path
 
-from imdrive.cli._common import EXIT_DIVERGED, EXIT_LOST_CONTROL, EXIT_OK, _examples, _out_path
+from imdrive.cli._common import (
+    EXIT_DIVERGED,
+    EXIT_LOST_CONTROL,
+    EXIT_OK,
+    _examples,
+    output_folder,
+)
 
 
 def _run_folder_name(preset_or_file: str) -> str:
@@ -28,12 +34,17 @@ def _run_folder_name(preset_or_file: str) -> str:
 def _cmd_run(args) -> int:
     from imdrive.config.scenario import Scenario
     from imdrive.run.build import build_arrays
-    from imdrive.run.result import check_result_folder
+    from imdrive.run.files import owns_result_file
     from imdrive.run.simulate import kernels_cached, simulate
 
     scenario = Scenario.read(args.scenario, args.set or [])
-    out = _out_path(args.out, _run_folder_name(args.scenario))
-    check_result_folder(out, args.force)
+    out = output_folder(
+        args.out,
+        _run_folder_name(args.scenario),
+        owns=owns_result_file,
+        force=args.force,
+        what="an imdrive result",
+    )
     arrays = build_arrays(scenario)  # every derived quantity checked before anything runs
     if not args.quiet:
         if not kernels_cached():

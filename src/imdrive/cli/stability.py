@@ -5,9 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-from pathlib import Path
 
-from imdrive.cli._common import EXIT_OK, _examples
+from imdrive.cli._common import EXIT_OK, _examples, add_force, output_folder
 from imdrive.errors import ConfigError
 
 
@@ -57,9 +56,15 @@ def _default_grid(scenario) -> tuple[str, str]:
     return f"0:{n:.6g}:50", f"{-t:.6g}:{t:.6g}:41"
 
 
+def _owns_stability_file(name: str) -> bool:
+    """The files ``imdrive stability`` writes: stability.csv, stability*.png."""
+    return name == "stability.csv" or (name.startswith("stability") and name.endswith(".png"))
+
+
 def _cmd_stability(args) -> int:
     import pandas as pd
 
+    from imdrive._io import atomic_path
     from imdrive.config.scenario import Scenario
 
     r1 = _parse_ratios(args.R1_ratios, "--r1-ratios")
@@ -68,9 +73,9 @@ def _cmd_stability(args) -> int:
     speed_range, torque_range = _default_grid(scenario)
     speeds = _parse_range(args.speeds or speed_range, "--speeds")
     torques = _parse_range(args.torques or torque_range, "--torques")
-    out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise ConfigError("--out", f"{out} exists and is not a folder")
+    out = output_folder(
+        args.out, owns=_owns_stability_file, force=args.force, what="a stability map"
+    )
 
     from imdrive.stability.maps import stability_map
     from imdrive.stability.plots import plot_map, plot_overlay
@@ -88,12 +93,14 @@ def _cmd_stability(args) -> int:
         frames.append(df.assign(map=label))
     wall = time.perf_counter() - t0
     out.mkdir(parents=True, exist_ok=True)
-    pd.concat(frames, ignore_index=True).to_csv(out / "stability.csv", index=False)
-    plot_map(base, out / "stability.png", title=f"{scenario.name}: small-signal stability")
-    if over_r1:
-        plot_overlay({"as configured": base, **over_r1}, out / "stability_R1.png")
-    if over_r2:
-        plot_overlay({"as configured": base, **over_r2}, out / "stability_R2.png")
+    with atomic_path(out / "stability.csv") as tmp:
+        pd.concat(frames, ignore_index=True).to_csv(tmp, index=False)
+    with atomic_path(out / "stability.png") as tmp:
+        plot_map(base, tmp, title=f"{scenario.name}: small-signal stability")
+    for name, over in (("stability_R1.png", over_r1), ("stability_R2.png", over_r2)):
+        if over:
+            with atomic_path(out / name) as tmp:
+                plot_overlay({"as configured": base, **over}, tmp)
     if not args.quiet:
         ok = base["status"] == "ok"
         print(
@@ -147,5 +154,6 @@ def add_parser(sub) -> None:
         "--r2-ratios", dest="R2_ratios", metavar="A,B,...", help="overlay maps for R2_hat/R2"
     )
     st.add_argument("--out", metavar="DIR", required=True)
+    add_force(st, "a stability map")
     st.add_argument("-q", "--quiet", action="store_true")
     st.set_defaults(func=_cmd_stability)

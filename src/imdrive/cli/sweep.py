@@ -7,7 +7,7 @@ import sys
 import time
 import tomllib
 
-from imdrive.cli._common import EXIT_OK, _examples, _out_path
+from imdrive.cli._common import EXIT_OK, _examples, output_folder
 from imdrive.errors import ConfigError
 
 
@@ -28,7 +28,7 @@ def _cmd_sweep(args) -> int:
     if args.chunk_size is not None and args.chunk_size < 1:
         raise ConfigError("--chunk-size", f"must be >= 1 (got {args.chunk_size})")
     sweep = load_sweep(args.sweep, max_runs=args.max_runs)
-    out = _out_path(args.out, sweep.name, "sweep-")
+    out = output_folder(args.out, sweep.name, "sweep-")  # the store: a manifest of this sweep
     cs = args.chunk_size or sweep.chunk_size
     val = sweep.validation
     if args.dry_run:

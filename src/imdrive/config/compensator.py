@@ -244,8 +244,9 @@ class InjectionSettings:
     Ind. Appl. 30(5), 1994); feeding its demodulated flux error to the paper's table is ours.
 
     ``amplitude_A`` = 0 switches it off. The compensator's ``input = "demodulated"`` feeds on
-    e_d0 detected synchronously with this sinusoid; its period should be a whole number of
-    injection periods (the default compensator period for that input is one).
+    e_d0 detected synchronously with this sinusoid; its period must be a whole number of
+    periods of every injection frequency it uses (the default compensator period for that
+    input is one; :func:`check_whole_injection_periods`).
     """
 
     amplitude_A: Annotated[
@@ -340,3 +341,81 @@ class InjectionSettings:
             "optional low-pass of the detected product, for display (0: none)", "rad/s", ge=0.0
         ),
     ] = 0.0
+
+
+def decision_period_steps(
+    comp: CompensatorSettings, inj: InjectionSettings, Ts: float, r=None
+) -> int:
+    """The compensator's decision period in control periods (at least one).
+
+    ``compensator.period_s`` if given, else one injection period with ``input =
+    "demodulated"``, else 10 ms; rounded to whole control periods of ``Ts`` s. ``r``: the
+    scenario's per-unit values resolved (:func:`imdrive.config.perunit.resolve`), whose
+    injection frequency is used when given.
+    """
+    if comp.period_s is not None:
+        period = comp.period_s
+    elif comp.input == "demodulated":
+        period = 1.0 / (inj.frequency_Hz if r is None else r.inj_f1)
+    else:
+        period = 0.01
+    return max(int(round(period / Ts)), 1)
+
+
+def injection_frequencies_in_use(
+    comp: CompensatorSettings, inj: InjectionSettings, r=None
+) -> list[tuple[str, float]]:
+    """``(key, Hz)`` of each injection frequency the compensator's decision period must hold
+    whole periods of, so that the synchronous detection averages over whole periods.
+
+    The injection frequency with the demodulated input; with the gating's frequency schedule
+    (``compensator.gate_band_Hz`` > 0) its alternative ``frequency2_Hz`` (default twice the
+    frequency); a ``frequency3_Hz`` whenever it is given. None without injection or without
+    the compensator. ``r``: the resolved per-unit values (their frequencies and amplitude
+    replace the absolute keys, named ``..._pu`` then).
+    """
+    amp = inj.amplitude_A if r is None else r.inj_amp
+    if not (comp.enabled and amp > 0.0):
+        return []
+    pu = r is not None and inj.frequency_pu is not None
+    f1 = inj.frequency_Hz if r is None else r.inj_f1
+    f2 = inj.frequency2_Hz if inj.frequency2_Hz is not None else 2.0 * inj.frequency_Hz
+    f3 = inj.frequency3_Hz
+    band = comp.gate_band_Hz
+    if r is not None:
+        f2, f3, band = r.inj_f2, r.inj_f3, r.gate_band
+    out = []
+    demodulated = comp.input == "demodulated"
+    if demodulated:
+        out.append(("injection.frequency_pu" if pu else "injection.frequency_Hz", f1))
+    gating = comp.gating if comp.gating is not None else demodulated
+    if gating and band > 0.0:
+        out.append(("injection.frequency2_pu" if pu else "injection.frequency2_Hz", f2))
+    if f3 is not None:
+        out.append(("injection.frequency3_pu" if pu else "injection.frequency3_Hz", f3))
+    return out
+
+
+def check_whole_injection_periods(
+    comp: CompensatorSettings, inj: InjectionSettings, Ts: float, r=None
+) -> None:
+    """Refuse a decision period that does not hold a whole number (>= 1) of periods of every
+    injection frequency in use (:func:`injection_frequencies_in_use`): the detected e_d0 would
+    carry a ripple at the injection frequency instead of its mean.
+
+    Raises
+    ------
+    ConfigError
+        Naming the frequency (``compensator.period_s`` when it is the period that was set).
+    """
+    n_comp = decision_period_steps(comp, inj, Ts, r)
+    T = n_comp * Ts
+    for key, f in injection_frequencies_in_use(comp, inj, r):
+        cycles = T * f
+        if cycles < 1.0 - 1e-6 or abs(cycles - round(cycles)) > 1e-6 * max(cycles, 1.0):
+            field = "compensator.period_s" if comp.period_s is not None else key
+            raise ConfigError(
+                field,
+                f"the compensator period ({T:g} s, {n_comp} control periods) must hold a whole "
+                f"number of periods of {key} = {f:g} Hz (got {cycles:g})",
+            )

@@ -45,12 +45,16 @@ example; `imdrive run FILE --set key.path=value` overrides any value from the co
 Every key is optional. Unknown keys, wrong types and values that break a rule are rejected
 before anything runs, with one line naming the field (`{example_error}`)
 and exit code 2. Units are in the key names; speeds are in rpm at this edge and SI inside.
+A number is finite and 0 or of magnitude 1e-150 to 1e150 (an integer at most 2^53): a
+subnormal such as 5e-324 or a 1e300 makes derived quantities vanish or overflow. A `--set`
+value is one line (a line break or another control character is refused).
 
 ## Profiles
 
 Keys of type *profile* are functions of time: a number (constant), explicit points
-(piecewise linear; two points at the same time make a step), or an initial value and changes
-(a step when `over` is absent, else a ramp lasting `over` seconds):
+(piecewise linear; two points at the same time make a step; times >= 0, non-decreasing), or
+an initial value and changes (a step when `over` is absent, else a ramp lasting `over`
+seconds):
 
 ```toml
 speed_ref_rpm = 1000

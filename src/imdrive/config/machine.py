@@ -167,6 +167,13 @@ class MachineParams:
     description: Annotated[Str, setting("free text")] = ""
 
     @model_validator(mode="after")
+    def _leakage_resolved(self):
+        """The leakage factor must survive the sums that make L1 and L2 (see
+        :func:`check_leakage_factor`)."""
+        check_leakage_factor(self.Ll1_H, self.Ll2_H, self.M_H, "M_H")
+        return self
+
+    @model_validator(mode="after")
     def _nameplate_rules(self):
         """The nameplate against the circuit: contradictions refused, oddities warned (once
         per distinct circuit and nameplate: a sweep that varies the load costs nothing)."""
@@ -241,6 +248,39 @@ class MachineParams:
             Field name -> value, in the fields' units.
         """
         return asdict(self)
+
+
+#: Smallest leakage factor a machine may have. Real machines have 0.02 to 0.2; below 1e-9 the
+#: leakage inductances are lost in L1 = Ll1 + M (a float carries 16 digits) and sigma L1, a
+#: divisor of the current model and of the controller, comes out 0.
+SIGMA_MIN = 1e-9
+
+
+def check_leakage_factor(Ll1: float, Ll2: float, M: float, field: str) -> float:
+    """The leakage factor ``sigma = 1 - M^2 / (L1 L2)`` of ``Ll1``, ``Ll2``, ``M`` (H),
+    refused below :data:`SIGMA_MIN` with a :class:`ConfigError` naming ``field``.
+
+    Parameters
+    ----------
+    Ll1, Ll2, M : float
+        Stator and rotor leakage inductances and the magnetising inductance, H.
+    field : str
+        The field the error names (relative to the table being validated).
+
+    Returns
+    -------
+    float
+        sigma.
+    """
+    L1, L2 = Ll1 + M, Ll2 + M
+    sigma = 1.0 - (M / L1) * (M / L2)  # no M**2: it overflows before M does
+    if not sigma >= SIGMA_MIN:
+        raise ConfigError(
+            field,
+            f"the leakage factor sigma = 1 - M^2/(L1 L2) is {sigma:.3g} (below {SIGMA_MIN:g}): "
+            "the leakage inductances vanish against M",
+        )
+    return sigma
 
 
 @functools.cache
@@ -388,11 +428,15 @@ def machine_file_values(file, preset: str = "paper-table-iv") -> dict:
     if not path.is_file():
         raise ConfigError("machine.file", f"no such file: {file}")
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8-sig"))
+        text = path.read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as exc:
         raise ConfigError("machine.file", f"cannot read {file}: {exc}") from None
+    try:
+        data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError("machine.file", f"{file} is not valid TOML: {exc}") from None
+    except RecursionError:
+        raise ConfigError("machine.file", f"{file}: TOML nested too deeply to read") from None
     if "machine" in data:
         extra = sorted(set(data) - {"machine"})
         if extra or not isinstance(data["machine"], dict):

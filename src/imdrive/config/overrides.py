@@ -30,6 +30,7 @@ __all__ = [
     "is_setting",
     "is_table_class",
     "parse_override",
+    "parse_toml",
     "scenario_keys",
     "scenario_root",
     "set_path",
@@ -67,13 +68,23 @@ def _root() -> type:
 
 
 def _check_override_list(overrides) -> None:
-    """A single string in place of the list of overrides is refused (it would be read one
-    character at a time)."""
+    """The overrides must be a list or tuple of ``key=value`` strings: a single string would
+    be read one character at a time, None or a number is not a list, and bytes are not text."""
     if isinstance(overrides, str):
         raise ConfigError(
             "overrides",
             f"must be a list of 'key=value' strings, not a string (write [{overrides!r}])",
         )
+    if not isinstance(overrides, list | tuple):
+        raise ConfigError(
+            "overrides",
+            f"must be a list of 'key=value' strings, got {type(overrides).__name__}",
+        )
+    for k, ov in enumerate(overrides):
+        if not isinstance(ov, str):
+            raise ConfigError(
+                f"overrides[{k}]", f"must be a 'key=value' string, got {type(ov).__name__}"
+            )
 
 
 def _to_plain(obj):
@@ -198,12 +209,50 @@ def is_setting(parts) -> bool:
     return bool(parts) and all(parts) and _schema_allows(list(parts))
 
 
+def parse_toml(text: str, field: str, what: str = "") -> dict:
+    """Parse TOML text from the user (a scenario, sweep or machine file, an override's value).
+
+    Every way it can be bad is a :class:`ConfigError` naming ``field``: invalid TOML, and
+    arrays or inline tables nested so deeply that the parser runs out of stack (a
+    ``RecursionError`` is bad input here, not a bug). A UTF-8 byte-order mark is skipped.
+
+    Parameters
+    ----------
+    text : str
+        The TOML text.
+    field : str
+        What the error names (``"scenario"``, ``"sweep"``, ``"machine.file"``).
+    what : str
+        Where the text comes from, for the message (a file name), or ``""``.
+    """
+    where = f" in {what}" if what else ""
+    try:
+        return tomllib.loads(text.removeprefix("\ufeff"))
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(field, f"invalid TOML{where}: {exc}") from None
+    except RecursionError:
+        raise ConfigError(
+            field, f"invalid TOML{where}: arrays or tables nested too deeply to read"
+        ) from None
+
+
 def parse_override(spec: str) -> tuple[tuple[str, ...], object]:
     """Split ``key.path=value`` into the path and the value (parsed as a TOML value).
 
     A value that is not valid TOML is taken as a string, so ``control.speed_feedback=mras``
     needs no quotes.
     """
+    if not isinstance(spec, str):
+        raise ConfigError(
+            "overrides", f"each override must be a 'key=value' string, got {type(spec).__name__}"
+        )
+    if not spec.isprintable():
+        # a line break would start a second TOML line that the value's parse drops
+        raise ConfigError(
+            "--set",
+            f"{spec[:60]!r} holds a line break or another control character: give one "
+            "key=value per --set (in a string value write \\n)",
+        )
     if "=" not in spec:
         raise ConfigError(spec, "override must look like key.path=value")
     key, raw = spec.split("=", 1)
@@ -217,6 +266,8 @@ def parse_override(spec: str) -> tuple[tuple[str, ...], object]:
         value = tomllib.loads(f"v = {raw.strip()}")["v"]
     except tomllib.TOMLDecodeError:
         value = raw.strip()
+    except RecursionError:
+        raise ConfigError(key, "the value is nested too deeply") from None
     return parts, value
 
 

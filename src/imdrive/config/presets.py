@@ -26,7 +26,11 @@ def scenario_text(preset_or_path: str) -> str:
     if preset_or_path in preset_names():
         return preset_text(preset_or_path)
     p = Path(preset_or_path)
-    if p.is_file():
+    try:
+        is_file = p.is_file()
+    except (OSError, ValueError) as exc:  # a name too long, a NUL byte: not a usable path
+        raise ConfigError("scenario", f"not a usable file path: {exc}") from None
+    if is_file:
         try:
             return p.read_text(encoding="utf-8-sig")  # a byte-order mark is not part of TOML
         except (OSError, UnicodeDecodeError) as exc:

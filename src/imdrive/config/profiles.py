@@ -43,7 +43,13 @@ PROFILE_JSON_SCHEMA = {
                 "points": {
                     "type": "array",
                     "minItems": 1,
-                    "items": {"type": "array", "items": _NUMBER, "minItems": 2, "maxItems": 2},
+                    "items": {
+                        "type": "array",
+                        "prefixItems": [{"type": "number", "minimum": 0}, _NUMBER],
+                        "items": _NUMBER,
+                        "minItems": 2,
+                        "maxItems": 2,
+                    },
                 }
             },
             "required": ["points"],
@@ -181,11 +187,41 @@ def _validate(value) -> Profile:
 
 
 def _number(field: str, value) -> float:
+    from imdrive.config.validation import _well_scaled_float
+
+    if isinstance(value, np.generic):
+        value = value.item()
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise ConfigError(field, f"must be a number, got {type(value).__name__}")
+    try:
+        value = float(value)
+    except OverflowError:  # an int beyond a float
+        raise ConfigError(field, "must be finite") from None
     if not math.isfinite(value):
         raise ConfigError(field, "must be finite")
-    return float(value)
+    try:
+        return _well_scaled_float(value)
+    except ConfigError as exc:
+        raise ConfigError(field, exc.rule) from None
+
+
+def _checked_points(field: str, pts) -> Profile:
+    """The breakpoints as a :class:`Profile`: each a ``[t, value]`` pair of numbers, times
+    >= 0 (a profile starts with the run, as a change's ``at`` does) and non-decreasing."""
+    if not isinstance(pts, list | tuple) or not pts:
+        raise ConfigError(f"{field}.points", "must be a non-empty list of [t, value] pairs")
+    out = []
+    for k, p in enumerate(pts):
+        f = f"{field}.points[{k}]"
+        if not isinstance(p, list | tuple) or len(p) != 2:
+            raise ConfigError(f, "must be a [t, value] pair")
+        t, v = _number(f, p[0]), _number(f, p[1])
+        if t < 0:
+            raise ConfigError(f, f"times must be >= 0 (got {t:g} s)")
+        if out and t < out[-1][0]:
+            raise ConfigError(f, "times must be non-decreasing")
+        out.append((t, v))
+    return Profile(tuple(out))
 
 
 def parse_profile(field: str, value) -> Profile:
@@ -196,28 +232,17 @@ def parse_profile(field: str, value) -> Profile:
     ConfigError
         Naming ``field`` and the broken rule.
     """
-    if isinstance(value, Profile):
-        return value
+    if isinstance(value, Profile):  # built in Python: held to the file's rules
+        return _checked_points(field, value.points)
     if not isinstance(value, dict):
         return Profile.constant(_number(field, value))
     keys = set(value)
     if "points" in keys:
         if keys - {"points"}:
             raise ConfigError(f"{field}.{sorted(keys - {'points'})[0]}", "unknown key")
-        pts = value["points"]
-        if not isinstance(pts, list) or not pts:
+        if not isinstance(value["points"], list):
             raise ConfigError(f"{field}.points", "must be a non-empty list of [t, value] pairs")
-        out = []
-        for k, p in enumerate(pts):
-            if not isinstance(p, list | tuple) or len(p) != 2:
-                raise ConfigError(f"{field}.points[{k}]", "must be a [t, value] pair")
-            out.append(
-                (_number(f"{field}.points[{k}]", p[0]), _number(f"{field}.points[{k}]", p[1]))
-            )
-        for k in range(1, len(out)):
-            if out[k][0] < out[k - 1][0]:
-                raise ConfigError(f"{field}.points[{k}]", "times must be non-decreasing")
-        return Profile(tuple(out))
+        return _checked_points(field, value["points"])
     unknown = keys - {"initial", "changes"}
     if unknown:
         raise ConfigError(f"{field}.{sorted(unknown)[0]}", "unknown key")

@@ -19,7 +19,6 @@ constructors, ``dataclasses.replace``).
 from __future__ import annotations
 
 import math
-import tomllib
 import warnings
 from dataclasses import replace
 from pathlib import Path
@@ -27,7 +26,11 @@ from typing import Annotated
 
 from pydantic import model_validator
 
-from imdrive.config.compensator import CompensatorSettings, InjectionSettings
+from imdrive.config.compensator import (
+    CompensatorSettings,
+    InjectionSettings,
+    check_whole_injection_periods,
+)
 from imdrive.config.control import (  # noqa: F401  (NonNegativeProfile: re-export)
     ControlSettings,
     DriveSettings,
@@ -47,6 +50,7 @@ from imdrive.config.estimators import (
 from imdrive.config.inverter import InverterParams
 from imdrive.config.machine import (  # noqa: F401  (preset_table: re-export)
     MachineParams,
+    check_leakage_factor,
     machine_preset,
     machine_table,
     preset_table,
@@ -67,6 +71,7 @@ from imdrive.config.overrides import (  # noqa: F401  (the private ones: re-expo
     is_setting,
     is_table_class,
     parse_override,
+    parse_toml,
     scenario_keys,
     scenario_root,
     set_path,
@@ -273,8 +278,33 @@ class Scenario:
 
     @model_validator(mode="after")
     def _joint_rules(self):
-        """Rules between sections, checked on the final scenario."""
+        """Rules between sections, checked on the final scenario.
+
+        Their arithmetic is on values each in range, but a quotient or product of extreme
+        ones may still overflow: that is bad input (a :class:`ConfigError`), not a crash.
+        """
+        try:
+            return self._rules_between_sections()
+        except (ArithmeticError, ValueError) as exc:
+            if isinstance(exc, ConfigError):
+                raise
+            raise ConfigError(
+                "scenario",
+                f"the rules between its sections cannot be evaluated ({type(exc).__name__}: "
+                f"{exc}): some values are far outside a physical range",
+            ) from None
+
+    def _rules_between_sections(self):
         self._machine_defaults()
+        est, m = self.estimator, self.machine
+        if (est.Ll1_H, est.Ll2_H, est.M_H) != (None, None, None):  # the controller's model
+            given = [k for k in ("M_H", "Ll1_H", "Ll2_H") if getattr(est, k) is not None]
+            check_leakage_factor(
+                est.Ll1_H if est.Ll1_H is not None else m.Ll1_H,
+                est.Ll2_H if est.Ll2_H is not None else m.Ll2_H,
+                est.M_H if est.M_H is not None else m.M_H,
+                f"estimator.{given[0]}",
+            )
         inv = self.inverter
         if inv.model == "switching":
             f_Ts = inv.switching_frequency_Hz * self.simulation.Ts_s
@@ -405,8 +435,9 @@ class Scenario:
         if comp.period_s is not None and comp.period_s / Ts > 2e9:
             raise ConfigError("compensator.period_s", "is more than 2e9 control periods")
         inj = self.injection
-        if 1.0 / (inj.frequency_Hz * Ts) > 2e9:
+        if inj.frequency_Hz * Ts < 0.5e-9:  # no division: a tiny product must not divide
             raise ConfigError("injection.frequency_Hz", "has a period of more than 2e9 periods")
+        check_whole_injection_periods(comp, inj, Ts, r)
         i_rated = self.machine.rated_current_A
         if r.inj_amp > i_rated:
             raise ConfigError(
@@ -508,10 +539,9 @@ class Scenario:
             The validated scenario.
         """
         _check_override_list(overrides)
-        try:
-            data = tomllib.loads(text.removeprefix("\ufeff"))  # a UTF-8 byte-order mark
-        except tomllib.TOMLDecodeError as exc:
-            raise ConfigError("scenario", f"invalid TOML: {exc}") from None
+        if not isinstance(text, str):
+            raise ConfigError("text", f"must be the TOML text (a str), got {type(text).__name__}")
+        data = parse_toml(text, "scenario")
         resolve_machine_file(data, base_dir)
         for ov in overrides:
             apply_override(data, ov)
@@ -534,8 +564,19 @@ class Scenario:
         Scenario
             The validated scenario.
         """
+        import os
+
         from imdrive.config.presets import preset_names, scenario_text
 
+        if isinstance(preset_or_path, os.PathLike):
+            preset_or_path = os.fspath(preset_or_path)
+        if not isinstance(preset_or_path, str) or not preset_or_path:
+            raise ConfigError(
+                "preset_or_path",
+                "must be a preset name or a file path (a non-empty str or os.PathLike), got "
+                f"{type(preset_or_path).__name__}",
+            )
+        _check_override_list(overrides)
         if str(preset_or_path).endswith(".json") and preset_or_path not in preset_names():
             return cls._from_summary(preset_or_path, overrides)
         base_dir = None if preset_or_path in preset_names() else Path(preset_or_path).parent
@@ -552,6 +593,8 @@ class Scenario:
             raise ConfigError("scenario", f"cannot read {path}: {exc}") from None
         except ValueError as exc:
             raise ConfigError("scenario", f"{path} is not valid JSON: {exc}") from None
+        except RecursionError:
+            raise ConfigError("scenario", f"{path}: JSON nested too deeply to read") from None
         if not isinstance(data, dict) or not isinstance(data.get("scenario"), dict):
             raise ConfigError("scenario", f'{path} holds no "scenario" table (a summary.json)')
         data = data["scenario"]
@@ -593,13 +636,17 @@ class Scenario:
         ConfigError
             Naming the key for an unknown setting or a value that breaks a rule.
         """
-        if isinstance(overrides, str):
+        if not isinstance(overrides, dict):
             _check_override_list(overrides)
         data = self.to_dict()
         if isinstance(overrides, dict):
             items = []
             for key, value in overrides.items():
-                parts = tuple(str(key).split("."))
+                if not isinstance(key, str):
+                    raise ConfigError(
+                        "overrides", f"a key must be a dotted str, got {type(key).__name__}"
+                    )
+                parts = tuple(key.split("."))
                 if not is_setting(parts):
                     raise ConfigError(str(key), "no such setting")
                 items.append((parts, value))

@@ -53,10 +53,42 @@ def _integral(value):
     return _scalar(value)
 
 
-Float = Annotated[float, Strict(), BeforeValidator(_scalar)]
-"""A finite number (an int is accepted and stored as a float; a bool or a string is not)."""
-Int = Annotated[int, Strict(), BeforeValidator(_integral)]
-"""An integer (``2.0`` is accepted as 2; ``1.5``, ``"2"`` and ``true`` are not)."""
+#: Magnitudes a float setting may have (besides 0): every setting is a physical quantity in SI
+#: units, far inside this range, and a product or quotient of two such values stays a normal
+#: finite float (a subnormal 5e-324 times a period of 1e-4 s is 0, a divisor). Longer products
+#: (a gain from several settings) are checked where they are derived.
+FLOAT_MIN_MAGNITUDE = 1e-150
+FLOAT_MAX_MAGNITUDE = 1e150
+#: Largest magnitude of an integer setting: exact as a float, far inside a 64-bit record field.
+INT_MAX_MAGNITUDE = 2**53
+
+
+def _well_scaled_float(value: float) -> float:
+    """Refuse a nonzero float outside :data:`FLOAT_MIN_MAGNITUDE` .. :data:`FLOAT_MAX_MAGNITUDE`
+    in magnitude: derived quantities computed from it would overflow or vanish."""
+    if value != 0.0 and not FLOAT_MIN_MAGNITUDE <= abs(value) <= FLOAT_MAX_MAGNITUDE:
+        raise ConfigError(
+            "",
+            f"must be 0 or between {FLOAT_MIN_MAGNITUDE:g} and {FLOAT_MAX_MAGNITUDE:g} in "
+            f"magnitude (got {value!r}): derived quantities would overflow or vanish",
+        )
+    return value
+
+
+def _well_scaled_int(value: int) -> int:
+    """Refuse an integer beyond :data:`INT_MAX_MAGNITUDE` in magnitude (a 64-bit record field
+    and a float must hold it exactly)."""
+    if abs(value) > INT_MAX_MAGNITUDE:
+        raise ConfigError("", f"must be at most 2^53 in magnitude (got {value})")
+    return value
+
+
+Float = Annotated[float, Strict(), BeforeValidator(_scalar), AfterValidator(_well_scaled_float)]
+"""A finite number, 0 or of magnitude 1e-150 .. 1e150 (an int is accepted and stored as a
+float; a bool or a string is not)."""
+Int = Annotated[int, Strict(), BeforeValidator(_integral), AfterValidator(_well_scaled_int)]
+"""An integer of magnitude <= 2^53 (``2.0`` is accepted as 2; ``1.5``, ``"2"`` and ``true``
+are not)."""
 Bool = Annotated[bool, Strict(), BeforeValidator(_scalar)]
 """``true`` or ``false`` (not 0/1)."""
 Str = Annotated[str, Strict()]

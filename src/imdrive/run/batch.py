@@ -79,6 +79,23 @@ COLUMNS = (
     "error",
 )
 
+
+def metrics_dtypes() -> dict[str, np.dtype]:
+    """The numpy dtype of each column of the metrics table (:data:`COLUMNS`), as
+    :func:`simulate_batch` builds it and as it reads back from Parquet."""
+    out = {
+        "drive": np.dtype(np.int64),
+        "status": np.dtype(np.int64),
+        "diverged": np.dtype(bool),
+        "diverged_at_s": np.dtype(np.float64),
+        "simulated_s": np.dtype(np.float64),
+        "lost_control": np.dtype(bool),
+    }
+    out.update((name, BATCH_METRICS[name]) for name in METRICS)
+    out["error"] = np.dtype(object)
+    return out
+
+
 #: ``status`` of a drive that could not be run (its derived parameters could not be computed,
 #: or its scenario was refused when built): recorded with its message in ``error``, metrics NaN.
 #: The kernel's own codes (``S_OK`` = 0, divergence 1-3) are never negative.
@@ -321,12 +338,20 @@ def simulate_batch(
     from imdrive.config.scenario import Scenario
     from imdrive.errors import ConfigError
 
-    if log_every is not None and (isinstance(log_every, bool) or int(log_every) < 1):
-        raise ConfigError("log_every", f"must be >= 1 (got {log_every})")
-    if not (math.isfinite(window_s) and window_s >= 0):
-        raise ConfigError("window_s", f"must be >= 0 (got {window_s})")
-    if block_size < 1:
-        raise ConfigError("block_size", f"must be >= 1 (got {block_size})")
+    def _is_int(v) -> bool:
+        return isinstance(v, int | np.integer) and not isinstance(v, bool)
+
+    if log_every is not None and not (_is_int(log_every) and log_every >= 1):
+        raise ConfigError("log_every", f"must be an integer >= 1 (got {log_every!r})")
+    if not (
+        isinstance(window_s, int | float | np.floating)
+        and not isinstance(window_s, bool)
+        and math.isfinite(window_s)
+        and window_s >= 0
+    ):
+        raise ConfigError("window_s", f"must be a finite number >= 0 (got {window_s!r})")
+    if not (_is_int(block_size) and block_size >= 1):
+        raise ConfigError("block_size", f"must be an integer >= 1 (got {block_size!r})")
     if errors not in ("raise", "record"):
         raise ConfigError("errors", f'must be "raise" or "record" (got {errors!r})')
     t_start = time.perf_counter()
@@ -337,7 +362,14 @@ def simulate_batch(
         raise ConfigError(
             "scenarios", "must be an iterable of Scenario objects (a list, a generator)"
         )
-    it = iter(scenarios)
+    try:
+        it = iter(scenarios)
+    except TypeError:
+        raise ConfigError(
+            "scenarios",
+            f"must be an iterable of Scenario objects (a list, a generator), got "
+            f"{type(scenarios).__name__}",
+        ) from None
     offset = 0
     while True:
         block = []

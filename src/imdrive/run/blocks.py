@@ -12,6 +12,7 @@ import math
 
 import numpy as np
 
+from imdrive.config.compensator import decision_period_steps
 from imdrive.config.perunit import divergence_speed_rpm, resolve, speed_bandwidth_Hz
 from imdrive.config.profiles import Profile
 from imdrive.config.scenario import Scenario
@@ -208,28 +209,9 @@ def current_limit(sc: Scenario) -> float:
 
 
 def compensator_period(sc: Scenario) -> int:
-    """The compensator's decision period in control periods (whole injection periods)."""
-    comp = sc.compensator
-    inj = sc.injection
-    Ts = sc.simulation.Ts_s
-    if comp.period_s is not None:
-        comp_period = comp.period_s
-    elif comp.input == "demodulated":
-        comp_period = 1.0 / resolve(sc).inj_f1
-    else:
-        comp_period = 0.01
-    n_comp = max(int(round(comp_period / Ts)), 1)
-    r = resolve(sc)
-    f3 = r.inj_f3
-    if f3 is not None and comp.enabled and r.inj_amp > 0.0:
-        cycles = n_comp * Ts * f3
-        if abs(cycles - round(cycles)) > 1e-6 * max(cycles, 1.0):
-            raise ConfigError(
-                "injection.frequency3_pu" if inj.frequency3_pu else "injection.frequency3_Hz",
-                f"the compensator period ({n_comp * Ts:g} s) must hold a whole number of its "
-                f"periods (got {cycles:g})",
-            )
-    return n_comp
+    """The compensator's decision period in control periods (whole injection periods, checked
+    by the scenario: :func:`~imdrive.config.compensator.check_whole_injection_periods`)."""
+    return decision_period_steps(sc.compensator, sc.injection, sc.simulation.Ts_s, resolve(sc))
 
 
 def compensator_record(sc: Scenario) -> tuple[np.ndarray, dict]:

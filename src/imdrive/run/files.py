@@ -58,28 +58,31 @@ def is_result_folder(folder) -> bool:
         return True
     if not folder.is_dir():
         return False
-    formats = output_formats()
     for p in folder.iterdir():
         n = p.name
         if is_partial(n) or n == LOCK_NAME:
             continue
-        if p.is_file() and (n == "summary.json" or any(f.owns(n) for f in formats)):
+        if p.is_file() and not p.is_symlink() and owns_result_file(n):
             continue
         return False
     return True
 
 
+def owns_result_file(name: str) -> bool:
+    """Whether a file of that name is one :meth:`~imdrive.run.result.SimulationResult.save`
+    writes (``summary.json``, a file of a registered output format)."""
+    return name == "summary.json" or any(f.owns(name) for f in output_formats())
+
+
 def check_result_folder(folder, force: bool = False) -> None:
     """Refuse (:class:`~imdrive.errors.ConfigError` on ``--out``) to replace a folder that is
-    not an imdrive result, unless ``force``."""
+    not an imdrive result, unless ``force``; and a path no result may be written at (the
+    current folder, under a file): the rule of every command
+    (:func:`imdrive._io.output_folder_problem`).
+    """
+    from imdrive._io import output_folder_problem
     from imdrive.errors import ConfigError
 
-    folder = Path(folder)
-    if folder.exists() and not folder.is_dir():
-        raise ConfigError("--out", f"{folder} exists and is not a folder")
-    if not force and not is_result_folder(folder):
-        raise ConfigError(
-            "--out",
-            f"{folder} holds files that are not an imdrive result and would be deleted: choose "
-            "another folder, or add --force to replace it as a whole",
-        )
+    problem = output_folder_problem(folder, owns_result_file, force, "an imdrive result")
+    if problem is not None:
+        raise ConfigError("--out", problem)

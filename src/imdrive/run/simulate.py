@@ -80,6 +80,12 @@ def simulate(scenario: Scenario, arrays: DriveArrays | None = None) -> Simulatio
             f"simulate() needs a Scenario, got {type(scenario).__name__} (use "
             "Scenario.read('preset or file.toml') or Scenario.from_dict(table))",
         )
+    if arrays is not None and not isinstance(arrays, DriveArrays):
+        raise ConfigError(
+            "arrays",
+            f"must be the scenario's DriveArrays (build_arrays(scenario)) or None, got "
+            f"{type(arrays).__name__}",
+        )
     a = arrays if arrays is not None else build_arrays(scenario)
     n_rows = a.n_steps // a.log_every + 1
     log = new_log(n_rows, a.log)

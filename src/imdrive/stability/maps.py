@@ -13,7 +13,7 @@ import math
 import numpy as np
 
 from imdrive.config.scenario import Scenario
-from imdrive.errors import ConfigError
+from imdrive.errors import ConfigError, check_argument
 from imdrive.run import linear as rl
 from imdrive.stability.linear import (
     RPM,
@@ -105,6 +105,7 @@ def stability_map(
     """
     import pandas as pd
 
+    check_argument(scenario, Scenario, "scenario", "a Scenario (Scenario.read(...))")
     sp = _check_axis(speeds_rpm, "speeds_rpm")
     tq = _check_axis(torques_Nm, "torques_Nm")
     sc = map_scenario(scenario, R1_ratio=R1_ratio, R2_ratio=R2_ratio, M_ratio=M_ratio)

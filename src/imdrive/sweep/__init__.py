@@ -62,7 +62,9 @@ Axes
 
     For each run, a set axis's overrides are applied first, then the key-path axes (set on the
     base's TOML dictionary and validated once, as ``imdrive run --set`` does), then
-    ``R2_ratio``, ``R1_ratio``, ``speed_rpm``, ``load_Nm``. Two axes may not set the same key.
+    ``R2_ratio``, ``R1_ratio``, ``speed_rpm``, ``load_Nm``. Two axes may not set the same key
+    (nor a table and a key inside it), whichever their kinds: a set axis's keys are those any
+    of its sets overrides.
 
 Bad input (an unknown key or parameter, an empty axis, ``min > max``, a value a scenario
 rejects, an unsafe ``name``, more runs than ``max_runs``) raises
@@ -83,8 +85,9 @@ written to a temporary name and renamed into place (atomic), then ``STORE/manife
 rewritten the same way; every file is fsynced before its rename and its folder after. A
 writer holds ``STORE/.lock`` (``flock``): a second process on the same store fails at once.
 ``--resume`` reads every chunk back and recomputes those missing or damaged (unreadable,
-other columns, not exactly its runs), saying so, so an interrupted sweep loses at most the
-chunks in progress and duplicates nothing; without it, a non-empty STORE is an error. At the
+other columns or column types, not exactly its runs, axis values that are not the
+sweep's), saying so, so an interrupted sweep loses at most the chunks in progress and
+duplicates nothing; without it, a non-empty STORE is an error. At the
 end the chunks are read back, sorted by run and written as ``STORE/runs.parquet``; the
 figures go to ``STORE/figures/``; only then does the manifest say ``"complete": true``. A
 run's results do not depend on which chunk, process or machine computed it, so a resumed or
@@ -93,7 +96,9 @@ distributed sweep gives the same table as a local, uninterrupted one.
 Execution: locally (default) each chunk is one call of the batch engine over all cores. With
 ``--scheduler ADDRESS`` (needs ``pip install 'imdrive[dask]'``) every chunk is a task on that
 dask.distributed cluster (``Client(ADDRESS)``), run on one worker thread without the GIL; the
-workers return the chunk's table and this process writes the store.
+workers return the chunk's table and this process writes the store. The address is checked
+first (its form, its protocol, for TCP a port that answers within 5 s): a bad one is bad input
+at once.
 
 Modules
 -------

@@ -303,15 +303,40 @@ def _axes(
                 )
         axes_list.append(a)
     axes = tuple(axes_list)
-    targets: dict[str, str] = {}
-    for a in axes:
-        if a.kind == "path":
-            key = ".".join(a.path)
-        elif a.kind in CONVENIENCE:
-            key = CONVENIENCE_TARGET[a.kind]
-        else:
-            continue
-        if key in targets:
-            raise ConfigError(f"axes.{a.name}", f"sets {key}, as axis {targets[key]} does")
-        targets[key] = a.name
+    _check_disjoint(axes)
     return axes
+
+
+def _axis_keys(a: Axis) -> set[tuple[str, ...]]:
+    """The scenario keys axis ``a`` sets: its key path, a convenience axis's target, or every
+    key any of a set axis's sets overrides."""
+    if a.kind == "path":
+        return {tuple(a.path)}
+    if a.kind in CONVENIENCE:
+        return {tuple(CONVENIENCE_TARGET[a.kind].split("."))}
+    return {tuple(parts) for overrides in a.sets.values() for parts, _ in overrides}
+
+
+def _overlap(k1: tuple[str, ...], k2: tuple[str, ...]) -> bool:
+    """Whether two key paths set the same value: equal, or one a table holding the other."""
+    n = min(len(k1), len(k2))
+    return k1[:n] == k2[:n]
+
+
+def _check_disjoint(axes: tuple[Axis, ...]) -> None:
+    """Refuse two axes that set the same key (a key-path or convenience axis and a set axis,
+    two set axes, or a table and a key inside it): one value would silently win, and rows
+    with different labels would be the same drive."""
+    seen: list[tuple[Axis, set]] = []
+    for a in axes:
+        keys = _axis_keys(a)
+        for b, other in seen:
+            for k in sorted(keys):
+                hit = next((o for o in sorted(other) if _overlap(k, o)), None)
+                if hit is not None:
+                    both = ".".join(k) if k == hit else f"{'.'.join(k)} / {'.'.join(hit)}"
+                    raise ConfigError(
+                        f"axes.{a.name}",
+                        f"sets {both}, as axis {b.name} does: two axes may not set the same key",
+                    )
+        seen.append((a, keys))

@@ -24,18 +24,17 @@ from __future__ import annotations
 
 import itertools
 import math
-import tomllib
 from dataclasses import replace
 from importlib import resources
 from pathlib import Path
 
 import numpy as np
 
-from imdrive.config.overrides import set_path
+from imdrive.config.overrides import parse_toml, set_path
 from imdrive.config.presets import scenario_text
 from imdrive.config.scenario import Scenario
 from imdrive.config.validation import check_name, slug
-from imdrive.errors import ConfigError
+from imdrive.errors import ConfigError, check_argument
 from imdrive.sweep.axes import _axes, _flatten, _heatmaps, _int
 from imdrive.sweep.model import (  # noqa: F401  (re-exports: the public names of the sweep file)
     AGGREGATES,
@@ -176,10 +175,7 @@ def parse_sweep(
 
 def _read_toml(text: str) -> dict:
     """The sweep file as a dictionary, with only known top-level keys."""
-    try:
-        data = tomllib.loads(text.removeprefix("\ufeff"))
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError("sweep", f"invalid TOML: {exc}") from None
+    data = parse_toml(text, "sweep")
     for key in data:
         if key not in TOP_KEYS:
             raise ConfigError(key, f"unknown key (a sweep file has {', '.join(TOP_KEYS)})")
@@ -209,11 +205,9 @@ def _base_data(data: dict, folder: Path | None) -> dict:
     if folder is not None and not Path(base_ref).is_absolute() and (folder / base_ref).is_file():
         base_ref = str(folder / base_ref)
     try:
-        base_data = tomllib.loads(scenario_text(base_ref).removeprefix("\ufeff"))
+        base_data = parse_toml(scenario_text(base_ref), "base", base_ref)
     except ConfigError as exc:
         raise ConfigError("base", exc.rule) from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError("base", f"invalid TOML in {base_ref}: {exc}") from None
     sets = data.get("set", {})
     if not isinstance(sets, dict):
         raise ConfigError("set", "must be a table of scenario keys")
@@ -332,6 +326,12 @@ def load_sweep(ref: str, max_runs: int | None = None) -> Sweep:
     Sweep
         The resolved, validated sweep.
     """
+    import os
+
+    check_argument(ref, (str, os.PathLike), "ref", "a built-in sweep's name or a file path")
+    ref = os.fspath(ref)
+    if max_runs is not None:
+        check_argument(max_runs, int, "max_runs", "an integer")
     text, folder = sweep_text(ref)
     default = ref if folder is None else slug(Path(ref).stem)
     return parse_sweep(text, folder, default, DEFAULT_MAX_RUNS if max_runs is None else max_runs)

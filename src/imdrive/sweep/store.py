@@ -153,8 +153,10 @@ class Store:
     def verify_chunks(self, sweep: Sweep, chunk_size: int) -> list[str]:
         """Check every chunk file; remove the damaged ones so they are recomputed.
 
-        A chunk is good when it can be read, has the table's columns and holds exactly the runs
-        of its index, each once.
+        A chunk is good when it can be read, has the table's columns with their types (a
+        chunk written now has: :func:`chunk_dtypes`), holds exactly the runs of its index,
+        each once, and each run's axis values are the sweep's for that run (bit for bit: a
+        value off the grid would put a wrong row in the table, or none in its heatmap).
 
         Parameters
         ----------
@@ -168,9 +170,9 @@ class Store:
         list of str
             One line per removed file, saying why.
         """
-        import pyarrow.parquet as pq
+        import pandas as pd
 
-        expected = set(chunk_columns(sweep))
+        dtypes = chunk_dtypes(sweep)
         n_chunks = sweep.n_chunks(chunk_size)
         notes = []
         for j in sorted(self.completed()):
@@ -179,18 +181,12 @@ class Store:
                 why = f"index beyond the sweep's {n_chunks} chunks"
             else:
                 try:
-                    table = pq.read_table(path)
-                    names = set(table.column_names)
-                    runs = table.column("run").to_numpy() if "run" in names else None
+                    df = pd.read_parquet(path)
                 except Exception as exc:  # any unreadable file: pyarrow raises several kinds
                     why = f"unreadable ({type(exc).__name__}: {str(exc).splitlines()[0][:120]})"
                 else:
-                    want = np.arange(*_bounds(sweep.chunk_runs(j, chunk_size)))
-                    if names != expected:
-                        why = "other columns than this sweep's table (a foreign file)"
-                    elif not np.array_equal(np.sort(runs), want):
-                        why = f"does not hold exactly runs {want[0]}..{want[-1]} once each"
-                    else:
+                    why = _chunk_fault(sweep, df, sweep.chunk_runs(j, chunk_size), dtypes)
+                    if why is None:
                         continue
             path.unlink(missing_ok=True)
             notes.append(f"chunk {j} ({path.name}): {why}; removed, it will be recomputed")
@@ -236,8 +232,43 @@ class Store:
         return df
 
 
-def _bounds(r: range) -> tuple[int, int]:
-    return r.start, r.stop
+def _chunk_fault(sweep: Sweep, df, runs: range, dtypes: dict) -> str | None:
+    """Why the chunk table ``df`` is not chunk ``runs`` of ``sweep`` as a run would write it
+    (columns, their types, the runs once each, the axis values), or None when it is."""
+    if set(df.columns) != set(dtypes):
+        return "other columns than this sweep's table (a foreign file)"
+    for name, want in dtypes.items():
+        if df[name].dtype.kind != want.kind or (
+            want.kind != "O" and df[name].dtype.itemsize != want.itemsize
+        ):
+            return f"column {name!r} is {df[name].dtype}, not {want}"
+    want_runs = np.arange(runs.start, runs.stop)
+    df = df.sort_values("run", kind="stable")
+    if not np.array_equal(df["run"].to_numpy(), want_runs):
+        return f"does not hold exactly runs {want_runs[0]}..{want_runs[-1]} once each"
+    expected = sweep.inputs(runs)
+    for axis in sweep.axes:
+        got, want = df[axis.name].to_numpy(), expected[axis.name].to_numpy()
+        same = (
+            np.array_equal(got, want)
+            if axis.numeric
+            else [str(v) for v in got] == [str(v) for v in want]
+        )
+        if not same:
+            return f"its {axis.name!r} values are not the sweep's for runs {runs.start}.."
+    return None
+
+
+def chunk_dtypes(sweep: Sweep) -> dict:
+    """Each column of a chunk of ``sweep`` and the numpy dtype a chunk read back has: ``run``
+    int64, a numeric axis float64, another axis object (strings), then the batch table's."""
+    from imdrive.run.batch import metrics_dtypes
+
+    out = {"run": np.dtype(np.int64)}
+    for a in sweep.axes:
+        out[a.name] = np.dtype(np.float64) if a.numeric else np.dtype(object)
+    out.update((k, v) for k, v in metrics_dtypes().items() if k != "drive")
+    return out
 
 
 def chunk_columns(sweep: Sweep) -> list[str]:
@@ -270,14 +301,22 @@ def open_store(sweep: Sweep, out: Path, resume: bool, chunk_size: int | None) ->
     store = Store(out)
     if out.exists() and not out.is_dir():
         raise ConfigError("--out", f"{out} exists and is not a folder")
-    nonempty = out.is_dir() and any(_is_store_entry(p.name) for p in out.iterdir())
+    entries = (
+        sorted(p.name for p in out.iterdir() if _is_store_entry(p.name)) if out.is_dir() else []
+    )
+    nonempty = bool(entries)
     if nonempty and not resume:
         raise ConfigError(
-            "--out", f"{out} exists and is not empty: add --resume to continue the sweep in it"
+            "--out",
+            f"{out} exists and is not empty (e.g. {entries[0]!r}): add --resume to continue "
+            "the sweep in it, or choose another folder",
         )
     man = store.read_manifest() if nonempty else None
     if nonempty and man is None:
-        raise ConfigError("--resume", f"{out} holds no {Store.MANIFEST}: not a sweep store")
+        raise ConfigError(
+            "--resume",
+            f"{out} holds no {Store.MANIFEST} (e.g. {entries[0]!r}): not a sweep store",
+        )
     if man is not None:
         if man.get("fingerprint") != sweep.fingerprint():
             raise ConfigError(
