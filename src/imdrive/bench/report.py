@@ -124,16 +124,14 @@ def figures(table, out: Path) -> list[Path]:
     list of pathlib.Path
         The PNG files written.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from imdrive._figure import new_figure
 
     ests = [e for e in ESTIMATORS if e in set(table["estimator"])]
     drives = list(dict.fromkeys(table["drive"]))
     paths = []
     for met in METRICS:
-        fig, axes = plt.subplots(len(drives), 1, figsize=(11, 3.2 * len(drives)), squeeze=False)
+        fig = new_figure(figsize=(11, 3.2 * len(drives)), layout="constrained")
+        axes = fig.subplots(len(drives), 1, squeeze=False)
         for ax, drive in zip(axes[:, 0], drives, strict=True):
             sub = table[table["drive"] == drive]
             cases = list(dict.fromkeys(sub["case"]))
@@ -152,10 +150,8 @@ def figures(table, out: Path) -> list[Path]:
             if met not in ("lost_control", "peak_current_A", "R2_time_to_2pct_s"):
                 ax.set_yscale("symlog", linthresh=0.1)
         axes[0, 0].legend(fontsize=7, ncol=len(ests))
-        fig.tight_layout()
         p = out / f"{met}.png"
         fig.savefig(p, dpi=90)
-        plt.close(fig)
         paths.append(p)
     return paths
 

@@ -23,7 +23,7 @@ import numpy as np
 from imdrive.run.export import unit_of
 
 if TYPE_CHECKING:  # matplotlib is loaded by the first figure, not by the tables below
-    from matplotlib.figure import Figure
+    from imdrive._figure import DisplayFigure as Figure
 
 #: flux linkages are drawn in mWb: the start-up transient (tens of mWb), the rotor flux
 #: (hundreds) and the steady e_d0 bias (a few µWb to a few mWb) all read without a multiplier
@@ -170,7 +170,7 @@ def steady_start(res) -> float:
 
 
 def _fig(nrows: int, title: str, heights=None) -> tuple[Figure, list]:
-    from matplotlib.figure import Figure
+    from imdrive._figure import DisplayFigure as Figure
 
     fig = Figure(figsize=(8, 2.4 * nrows + 0.6), layout="constrained")
     axes = fig.subplots(
@@ -179,6 +179,7 @@ def _fig(nrows: int, title: str, heights=None) -> tuple[Figure, list]:
     fig.suptitle(title)
     for ax in axes:
         ax.grid(True, alpha=0.3)
+        ax.tick_params(labelbottom=True)  # every panel its time axis, not only the last
     axes[-1].set_xlabel("time (s)")
     return fig, list(axes)
 

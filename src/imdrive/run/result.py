@@ -306,7 +306,8 @@ class SimulationResult:
         Returns
         -------
         matplotlib.figure.Figure
-            The figure (not shown; ``fig.savefig`` or ``plt.show()``).
+            The figure: shown as an image when it is the last expression of a notebook cell
+            (:class:`imdrive._figure.DisplayFigure`); ``fig.savefig(path)`` writes it.
         """
         from imdrive.run.plots import result_figure
 

@@ -44,7 +44,7 @@ def heatmap_figure(sweep: Sweep, df, h: Heatmap):
     matplotlib.figure.Figure
         The figure (not attached to pyplot).
     """
-    from matplotlib.figure import Figure
+    from imdrive._figure import DisplayFigure as Figure
 
     rows = _levels(sweep, h.rows) if h.rows else [None]
     cols = _levels(sweep, h.cols) if h.cols else [None]
