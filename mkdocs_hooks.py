@@ -125,8 +125,17 @@ def execute_notebook(notebook: Path, timeout: int = 300):
     try:
         nb = nbformat.read(notebook, as_version=4)
         with tempfile.TemporaryDirectory() as tmp:
+            km = None
+            if os.name == "posix":  # local sockets: no kernel on TCP (and no warning about it)
+                from jupyter_client.manager import KernelManager
+
+                km = KernelManager(kernel_name="python3", transport="ipc", ip=f"{tmp}/kernel")
             client = nbclient.NotebookClient(
-                nb, timeout=timeout, kernel_name="python3", resources={"metadata": {"path": tmp}}
+                nb,
+                km=km,
+                timeout=timeout,
+                kernel_name="python3",
+                resources={"metadata": {"path": tmp}},
             )
             client.execute()
     finally:
