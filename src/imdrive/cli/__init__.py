@@ -42,7 +42,7 @@ import sys
 import time
 import warnings
 
-from imdrive.cli import bench, info, machine, paper, run, stability, sweep
+from imdrive.cli import bench, compare, info, machine, paper, run, stability, sweep
 from imdrive.cli._common import (
     EXIT_BAD_INPUT,
     EXIT_DIVERGED,
@@ -99,7 +99,7 @@ EXIT_CODES_HELP = """exit codes:
 a sweep records its diverged and lost runs in its table and exits 0."""
 
 #: the command groups, in the order ``imdrive --help`` lists them
-COMMANDS = (run, info, paper, sweep, stability, bench, machine)
+COMMANDS = (run, compare, info, paper, sweep, stability, bench, machine)
 
 
 def build_parser() -> argparse.ArgumentParser:
