@@ -53,6 +53,10 @@ def _cmd_run(args) -> int:
     from imdrive.run.simulate import kernels_cached, simulate
 
     scenario = Scenario.read(args.scenario, args.set or [])
+    if args.format:  # an unknown format is bad input before anything runs
+        from imdrive.run.result import formats_wanted
+
+        formats_wanted([f.strip() for s in args.format for f in s.split(",") if f.strip()])
     out = _out_path(args.out, _run_folder_name(args.scenario))
     check_result_folder(out, args.force)
     arrays = build_arrays(scenario)  # every derived quantity checked before anything runs
@@ -65,7 +69,10 @@ def _cmd_run(args) -> int:
             file=sys.stderr,
         )
     res = simulate(scenario, arrays)
-    res.save(out, force=args.force)
+    formats = None
+    if args.format:
+        formats = [f.strip() for spec in args.format for f in spec.split(",") if f.strip()]
+    res.save(out, force=args.force, formats=formats)
     s = res.summary()
     if res.diverged or res.lost_control:
         from imdrive.run.diagnosis import closing_line
@@ -105,6 +112,7 @@ def add_parser(sub) -> None:
             "imdrive run sensorless --set simulation.t_end_s=2 --set load.torque_Nm=6",
             "imdrive run my.toml --out results/my-run",
             "imdrive run out/sensorless/summary.json",
+            "imdrive run sensorless --format parquet,mat,report",
         ),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
@@ -117,6 +125,13 @@ def add_parser(sub) -> None:
         action="append",
         metavar="KEY.PATH=VALUE",
         help="override a scenario value, e.g. --set simulation.t_end_s=2 (repeatable)",
+    )
+    r.add_argument(
+        "--format",
+        action="append",
+        metavar="NAME[,NAME]",
+        help="write exactly these outputs besides summary.json, whatever [output] says: "
+        "csv, mat, parquet, figures, report (repeatable)",
     )
     r.add_argument(
         "--force",
