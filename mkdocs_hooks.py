@@ -12,6 +12,15 @@ The docstrings cross-reference with Sphinx roles (``:func:`~imdrive.run.simulate
 which Markdown renders as the role's name before the code. After a page is rendered, each such
 reference becomes an optional mkdocs-autorefs cross-reference: a link where the target is on
 the site's API reference, the plain name (``simulate``, for ``~``) where it is not.
+
+The gallery (:func:`on_files`): each example notebook ``docs/examples/*.ipynb`` is executed
+(nbclient, a fresh kernel with the inline backend) and added to the site as a Markdown page
+``examples/<name>.md`` with its outputs, its figures as PNG files beside it. This is plain
+Markdown through MkDocs' own pipeline, so ``--strict`` checks the pages like any other, and
+nothing is fetched from the network (mkdocs-jupyter would add nbconvert, a JupyterLab theme and
+its own HTML to the build). An executed notebook is kept in ``.cache/gallery`` under a hash of
+the notebook and of the package's source, so the site is rebuilt without executing again until
+one of them changes; ``tests/test_notebooks.py`` fills the same cache.
 """
 
 from __future__ import annotations
@@ -44,8 +53,9 @@ def _outside_link(match: re.Match, page_dir: Path, docs: Path, root: Path, repo_
 
 def on_page_markdown(markdown: str, page, config, files) -> str:
     """Rewrite the page's links to repository files outside ``docs/`` (see the module)."""
-    page_dir = Path(page.file.abs_src_path).parent
     docs = Path(config["docs_dir"]).resolve()
+    # a generated page (the gallery) sits where its source would
+    page_dir = Path(page.file.abs_src_path or docs / page.file.src_uri).parent
     root = Path(config["config_file_path"]).resolve().parent
     repo_url = config.get("repo_url") or ""
     out, fenced = [], False
@@ -72,3 +82,153 @@ def on_page_content(html: str, page, config, files) -> str:
     """
     html = html.replace("<p>::</p>", "").replace("::</p>", ":</p>")
     return _ROLE.sub(_role, html)
+
+
+# --------------------------------------------------------------------------------------------
+# the gallery: the example notebooks, executed, as pages with their figures
+
+#: the example notebooks (each becomes ``examples/<stem>.md`` on the site, with its figures)
+EXAMPLES = "examples"
+#: executed notebooks, keyed by a hash of the notebook and of the package's source
+GALLERY_CACHE = Path(__file__).resolve().parent / ".cache" / "gallery"
+_ANSI = re.compile(r"\x1b\[[0-9;]*[A-Za-z]")
+
+
+def _source_hash(notebook: Path) -> str:
+    import hashlib
+
+    root = Path(__file__).resolve().parent
+    h = hashlib.sha256(notebook.read_bytes())
+    for p in sorted((root / "src" / "imdrive").rglob("*")):
+        if p.suffix in (".py", ".toml") and "__pycache__" not in p.parts:
+            h.update(p.relative_to(root).as_posix().encode())
+            h.update(p.read_bytes())
+    return h.hexdigest()[:20]
+
+
+def execute_notebook(notebook: Path, timeout: int = 300):
+    """The notebook executed in a fresh kernel (``nbclient``), in a temporary folder.
+
+    The kernel imports this checkout's package (``src`` first on ``PYTHONPATH``) and uses the
+    inline matplotlib backend, as Jupyter does.
+    """
+    import os
+    import tempfile
+
+    import nbclient
+    import nbformat
+
+    src = str(Path(__file__).resolve().parent / "src")
+    env_path = os.environ.get("PYTHONPATH")
+    os.environ["PYTHONPATH"] = os.pathsep.join(filter(None, [src, env_path]))
+    saved_backend = os.environ.pop("MPLBACKEND", None)  # the kernel picks the inline backend
+    try:
+        nb = nbformat.read(notebook, as_version=4)
+        with tempfile.TemporaryDirectory() as tmp:
+            km = None
+            if os.name == "posix":  # local sockets: no kernel on TCP (and no warning about it)
+                from jupyter_client.manager import KernelManager
+
+                km = KernelManager(kernel_name="python3", transport="ipc", ip=f"{tmp}/kernel")
+            client = nbclient.NotebookClient(
+                nb,
+                km=km,
+                timeout=timeout,
+                kernel_name="python3",
+                resources={"metadata": {"path": tmp}},
+            )
+            client.execute()
+    finally:
+        if env_path is None:
+            os.environ.pop("PYTHONPATH", None)
+        else:
+            os.environ["PYTHONPATH"] = env_path
+        if saved_backend is not None:
+            os.environ["MPLBACKEND"] = saved_backend
+    return nb
+
+
+def cache_executed(notebook: Path, nb) -> Path:
+    """Store an executed notebook where :func:`executed_notebook` finds it."""
+    import nbformat
+
+    GALLERY_CACHE.mkdir(parents=True, exist_ok=True)
+    path = GALLERY_CACHE / f"{notebook.stem}-{_source_hash(notebook)}.ipynb"
+    for old in GALLERY_CACHE.glob(f"{notebook.stem}-*.ipynb"):
+        old.unlink()
+    nbformat.write(nb, path)
+    return path
+
+
+def executed_notebook(notebook: Path):
+    """The executed notebook: from the cache when neither it nor the package changed."""
+    import nbformat
+
+    cached = GALLERY_CACHE / f"{notebook.stem}-{_source_hash(notebook)}.ipynb"
+    if cached.exists():
+        return nbformat.read(cached, as_version=4)
+    nb = execute_notebook(notebook)
+    cache_executed(notebook, nb)
+    return nb
+
+
+def _fence(text: str, lang: str = "text") -> list[str]:
+    text = _ANSI.sub("", text).rstrip("\n")
+    return [f"```{lang}", text, "```", ""]
+
+
+def notebook_markdown(notebook: Path, nb) -> tuple[str, dict[str, bytes]]:
+    """An executed notebook as a Markdown page and its images (name -> PNG bytes).
+
+    Markdown cells as they are, code cells as Python blocks, then their outputs: images as
+    PNG files beside the page, HTML (tables) as it is, text in a plain block.
+    """
+    import base64
+
+    stem = notebook.stem
+    lines: list[str] = []
+    images: dict[str, bytes] = {}
+    for k, cell in enumerate(nb.cells):
+        if cell.cell_type == "markdown":
+            lines += [cell.source, ""]
+            if k == 0:
+                lines += [
+                    f"*Executed when the site was built; download "
+                    f"[{notebook.name}]({notebook.name}) to run it yourself.*",
+                    "",
+                ]
+            continue
+        if cell.cell_type != "code":
+            continue
+        lines += _fence(cell.source, "python")
+        for out in cell.get("outputs", []):
+            kind = out.get("output_type")
+            if kind == "stream":
+                lines += _fence(out.get("text", ""))
+            elif kind == "error":
+                lines += _fence("\n".join(out.get("traceback", [])))
+            elif kind in ("execute_result", "display_data"):
+                data = out.get("data", {})
+                if "image/png" in data:
+                    name = f"{stem}-{len(images) + 1}.png"
+                    images[name] = base64.b64decode(data["image/png"])
+                    lines += [f"![figure {len(images)} of {stem}]({name})", ""]
+                elif "text/html" in data:
+                    html = data["text/html"]
+                    lines += ['<div class="nb-output" markdown="0">', html, "</div>", ""]
+                elif "text/plain" in data:
+                    lines += _fence(data["text/plain"])
+    return "\n".join(lines), images
+
+
+def on_files(files, config):
+    """Add the gallery: each example notebook executed, as a page with its figures."""
+    from mkdocs.structure.files import File
+
+    docs = Path(config["docs_dir"])
+    for notebook in sorted((docs / EXAMPLES).glob("*.ipynb")):
+        text, images = notebook_markdown(notebook, executed_notebook(notebook))
+        files.append(File.generated(config, f"{EXAMPLES}/{notebook.stem}.md", content=text))
+        for name, data in images.items():
+            files.append(File.generated(config, f"{EXAMPLES}/{name}", content=data))
+    return files

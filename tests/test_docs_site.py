@@ -47,6 +47,14 @@ def test_site_builds_strict_with_every_page_and_the_api_reference(tmp_path):
     # the notebooks are published beside the page that links them
     for nb in (ROOT / "docs" / "examples").glob("*.ipynb"):
         assert (site / "examples" / nb.name).is_file()
+    # the gallery: each notebook executed as a page of the site, with its figures
+    for nb in (ROOT / "docs" / "examples").glob("*.ipynb"):
+        page = site / "examples" / f"{nb.stem}.html"
+        assert page.is_file(), f"no gallery page for {nb.name}"
+        images = re.findall(rf'<img[^>]+src="({re.escape(nb.stem)}-\d+\.png)"', page.read_text())
+        assert images, f"the gallery page of {nb.name} shows no figure"
+        for name in images:
+            assert (site / "examples" / name).stat().st_size > 5000, name
     # the API reference is generated from the docstrings, with the numpydoc sections
     api = (site / "api" / "simulate.html").read_text()
     assert 'id="imdrive.run.simulate.simulate"' in api

@@ -13,8 +13,7 @@ A module belongs to the layer of its first name under ``imdrive`` (``imdrive.run
 ==== ============================================ ===============================================
 rank layer                                        why it sits there
 ==== ============================================ ===============================================
-0    ``errors``, ``_cache``, ``_io``,             leaf utilities every layer may use; they import
-     ``_progress``, ``_deprecated``               nothing of imdrive above rank 0
+     ``_progress``, ``_deprecated``, ``_figure``  nothing of imdrive above rank 0
 1    ``config``, ``design``                       what a run *is* (machine, inverter, profiles,
                                                   scenario, presets) and the gain formulas an
                                                   estimator's settings design its gains with:
@@ -84,6 +83,7 @@ RANK = {
     "_io": 0,
     "_progress": 0,
     "_deprecated": 0,
+    "_figure": 0,
     "config": 1,
     "kernels": 2,
     "design": 1,

@@ -53,6 +53,49 @@ def render(path) -> str:
     return out.stdout
 
 
+def screenshot(path, out_png, width: int = 1200, height: int = 2400):
+    """A PNG of ``path`` as headless Chromium draws it (no network); returns its pixels
+    (height x width x channels, floats in 0..1)."""
+    import matplotlib.image
+
+    browser = find_chromium()
+    if browser is None:
+        pytest.skip("no Chromium found: install Debian's chromium package")
+    cmd = [
+        browser, "--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
+        "--proxy-server=127.0.0.1:9", "--hide-scrollbars", "--virtual-time-budget=30000",
+        f"--window-size={width},{height}", f"--screenshot={out_png}", path.resolve().as_uri(),
+    ]  # fmt: skip
+    out = subprocess.run(cmd, capture_output=True, text=True, timeout=120, check=False)
+    assert out.returncode == 0 and out_png.is_file(), out.stderr[-2000:]
+    return matplotlib.image.imread(out_png)
+
+
+def assert_nonblank(pixels, min_colours: int = 50) -> None:
+    """The image shows something: many distinct colours, not one flat page."""
+    rgb = (pixels[..., :3] * 255).astype(int)
+    colours = np.unique(rgb.reshape(-1, 3) // 8, axis=0)
+    assert len(colours) >= min_colours, f"a near-blank image: {len(colours)} colours"
+    assert (rgb.std(axis=(0, 1)) > 5).all()
+
+
+#: a tick label with float noise (0.7999999999999999, 1.2999999999999998)
+FLOAT_NOISE = re.compile(r"\d\.\d*(?:9{6,}|0{6,})\d")
+
+
+def tick_labels(dom: str, axis: str) -> list[list[str]]:
+    """The tick labels plotly drew, per axis element (``axis`` ``x`` or ``y``)."""
+    groups = re.findall(rf'<g class="{axis}tick">(.*?)</g>', dom, re.S)
+    labels = [re.sub(r"<[^>]+>", "", g).strip() for g in groups]
+    # one list per drawn axis: plotly puts each axis' ticks in its own <g class="xaxislayer-above">
+    layers = re.findall(rf'<g class="{axis}axislayer-above">(.*?)</g></g>', dom, re.S)
+    per_axis = [
+        [re.sub(r"<[^>]+>", "", x).strip() for x in re.findall(r"<text[^>]*>(.*?)</text>", layer)]
+        for layer in layers
+    ]
+    return per_axis or [labels]
+
+
 def assert_rendered(dom: str, divs: list[str]) -> None:
     """Every plot div holds plotly's SVG, the page says ``rendered``, no script error."""
     errors = re.search(r'<pre id="report-errors"[^>]*>(.*?)</pre>', dom, re.S)
@@ -130,6 +173,26 @@ def test_run_report_renders_in_a_browser(tmp_path, short_run):
     assert_rendered(dom, ["signals"])
 
 
+@pytest.mark.slow
+def test_run_report_every_panel_has_a_time_axis_and_a_flux_zoom(tmp_path):
+    sc = im.Scenario.read("injection-fig5").with_overrides({"simulation.t_end_s": 6.0})
+    res = im.simulate(sc)
+    path = tmp_path / "report.html"
+    path.write_text(run_report(res), encoding="utf-8")
+    html = path.read_text()
+    assert "flux error, steady-state zoom" in html
+    dom = render(path)
+    assert_rendered(dom, ["signals"])
+    n_panels = len([labels for labels in tick_labels(dom, "y") if labels])
+    x_axes = [labels for labels in tick_labels(dom, "x") if labels]
+    assert n_panels >= 8 and len(x_axes) == n_panels, (n_panels, len(x_axes))
+    for labels in x_axes:  # each panel's time axis runs over the run, in round numbers
+        assert labels[0] == "0" and not any(FLOAT_NOISE.search(x) for x in labels), labels
+    assert dom.count(">time (s)<") == n_panels
+    pixels = screenshot(path, tmp_path / "run.png")
+    assert_nonblank(pixels)
+
+
 SWEEP = """
 name = "tiny"
 description = "report test: 2 x 2 short runs, one variant diverging"
@@ -168,4 +231,54 @@ def test_sweep_report_renders_in_a_browser(tmp_path):
     html = page.read_text(encoding="utf-8")
     assert "variant = stable" in html and "variant = unstable" in html
     assert "speed_error_rpm = %{z:.4g}" in html  # the value on hover
-    assert_rendered(render(page), ["heatmap-0-0", "heatmap-0-1"])
+    assert_rendered(render(page), ["heatmap-0"])
+
+
+NOISY_SWEEP = """
+name = "noisy-axes"
+base = "sensorless"
+window_s = 0.1
+
+[set]
+simulation.t_end_s = 0.3
+control.speed_ref_rpm = { initial = 0, changes = [{ at = 0.05, to = 600, over = 0.15 }] }
+
+[axes]
+R2_ratio = { min = 0.7, max = 1.3, num = 7 }
+speed_rpm = [300, 900]
+R1_ratio = [0.9, 1.1]
+variant = { plain = {}, fast = { control.speed_bandwidth_Hz = 10 } }
+
+[[heatmap]]
+x = "R2_ratio"
+y = "speed_rpm"
+value = "speed_error_rpm"
+cols = "variant"
+"""
+
+
+@pytest.mark.slow
+def test_sweep_report_is_a_facet_grid_with_values_and_round_labels(tmp_path):
+    from imdrive.sweep import load_sweep, run_sweep
+
+    f = tmp_path / "noisy.toml"
+    f.write_text(NOISY_SWEEP)
+    store = tmp_path / "store"
+    sweep = load_sweep(str(f))
+    assert any("99999" in repr(v) for v in sweep.axes[0].points())  # linspace float noise
+    run_sweep(sweep, store, progress=False, figures=False)
+    page = store / "report.html"
+    html = page.read_text(encoding="utf-8")
+    # the title says what a cell is: the mean over the axis not drawn, not "the other axes"
+    assert "speed_error_rpm: mean over R1_ratio (2 runs per cell)" in html
+    assert "over the other axes" not in html
+    dom = render(page)
+    assert_rendered(dom, ["heatmap-0"])
+    assert dom.count('class="heatmaplayer') == 2  # the two panels of one figure
+    labels = [x for axis in tick_labels(dom, "x") for x in axis]
+    assert "0.8" in labels and "1.3" in labels
+    assert not any(FLOAT_NOISE.search(x) for x in labels), labels
+    # a value written in every cell of both panels (2 panels x 7 x 2 cells)
+    cells = re.findall(r'<text[^>]*data-notex="1"[^>]*>(-?[\d.]+k?)</text>', dom)
+    assert len(cells) == 28, cells
+    assert_nonblank(screenshot(page, tmp_path / "sweep.png", height=1400))

@@ -33,7 +33,7 @@ def plot_speed_error_vs_R2(machine: MachineParams, speed_rpm: float, loads_Nm, r
     -------
     matplotlib.figure.Figure
     """
-    from matplotlib.figure import Figure
+    from imdrive._figure import DisplayFigure as Figure
 
     if ax is None:
         fig = Figure(figsize=(6.0, 4.0), layout="constrained")

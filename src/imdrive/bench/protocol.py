@@ -28,8 +28,9 @@ _COMP_ON = [
     "compensator.gain_E_per_Wb=1e6",
     "compensator.gain_DE_per_Wb=1e6",
     "compensator.G_CR_ohm=0.001",
-    "compensator.R2_min_ohm=0.408",
-    "compensator.R2_max_ohm=1.224",
+    # the clamps at 0.5 and 1.5 times the machine's R2 (0.408 and 1.224 ohm for Table IV)
+    "compensator.R2_min_ohm={R2_half}",
+    "compensator.R2_max_ohm={R2_1p5}",
 ]
 
 #: estimator configuration -> overrides
@@ -85,37 +86,83 @@ class Case:
     t_eval_s: float
 
 
-L = RATED_LOAD_NM
-#: case name -> Case
-CASES: dict[str, Case] = {
-    "steady-1000": Case((_ramp(1000), _load((2.0, L))), 4.0, 2.0),
-    "steady-150": Case((_ramp(150), _load((2.0, L))), 4.0, 2.0),
-    "steady-30": Case((_ramp(30), _load((2.0, L))), 4.0, 2.0),
-    "load-steps": Case((_ramp(500), _load((2.0, L), (3.0, 0.0), (4.0, L))), 5.0, 2.0),
-    "reversal": Case(
-        (
-            "control.speed_ref_rpm={initial=0, changes=[{at=0.5, to=300, over=0.5}, "
-            "{at=2.0, to=-300, over=1.0}]}",
-            _load((1.5, 0.25 * L)),
+def protocol_cases(load_Nm: float = RATED_LOAD_NM) -> dict[str, Case]:
+    """The protocol's cases for a rated load.
+
+    The parameter errors are written relative to the drive's machine (``{R2_80}``: 0.8 R2,
+    ``{R1_130}``: 1.3 R1, ``{M_90}``: 0.9 M; filled in by :func:`scenario`), so the cases apply
+    to any machine; the load steps are ``load_Nm``.
+
+    Parameters
+    ----------
+    load_Nm : float
+        The rated load of the cases, N m (:data:`RATED_LOAD_NM` for Table IV's machine).
+
+    Returns
+    -------
+    dict
+        Case name -> :class:`Case`.
+    """
+    L = float(load_Nm)
+    return {
+        "steady-1000": Case((_ramp(1000), _load((2.0, L))), 4.0, 2.0),
+        "steady-150": Case((_ramp(150), _load((2.0, L))), 4.0, 2.0),
+        "steady-30": Case((_ramp(30), _load((2.0, L))), 4.0, 2.0),
+        "load-steps": Case((_ramp(500), _load((2.0, L), (3.0, 0.0), (4.0, L))), 5.0, 2.0),
+        "reversal": Case(
+            (
+                "control.speed_ref_rpm={initial=0, changes=[{at=0.5, to=300, over=0.5}, "
+                "{at=2.0, to=-300, over=1.0}]}",
+                _load((1.5, 0.25 * L)),
+            ),
+            4.5,
+            2.0,
         ),
-        4.5,
-        2.0,
-    ),
-    "regeneration-40": Case((_ramp(40), _load((2.0, -L))), 5.0, 2.0),
-    "thermal-drift": Case(
-        (
-            _ramp(500),
-            _load((2.0, L)),
-            "plant.R1_scale={initial=1, changes=[{at=4.0, to=1.3, over=4.0}]}",
-            "plant.R2_scale={initial=1, changes=[{at=4.0, to=1.3, over=4.0}]}",
+        "regeneration-40": Case((_ramp(40), _load((2.0, -L))), 5.0, 2.0),
+        "thermal-drift": Case(
+            (
+                _ramp(500),
+                _load((2.0, L)),
+                "plant.R1_scale={initial=1, changes=[{at=4.0, to=1.3, over=4.0}]}",
+                "plant.R2_scale={initial=1, changes=[{at=4.0, to=1.3, over=4.0}]}",
+            ),
+            10.0,
+            2.0,
         ),
-        10.0,
-        2.0,
-    ),
-    "R2-error": Case((_ramp(500), _load((2.0, L)), "estimator.R2_ohm=0.6528"), 8.0, 2.0),
-    "R1-error": Case((_ramp(150), _load((2.0, L)), "estimator.R1_ohm=0.5655"), 4.0, 2.0),
-    "M-error": Case((_ramp(150), _load((2.0, L)), "estimator.M_H=0.06237"), 4.0, 2.0),
-}
+        "R2-error": Case((_ramp(500), _load((2.0, L)), "estimator.R2_ohm={R2_80}"), 8.0, 2.0),
+        "R1-error": Case((_ramp(150), _load((2.0, L)), "estimator.R1_ohm={R1_130}"), 4.0, 2.0),
+        "M-error": Case((_ramp(150), _load((2.0, L)), "estimator.M_H={M_90}"), 4.0, 2.0),
+    }
+
+
+#: case name -> Case (Table IV's machine, rated load :data:`RATED_LOAD_NM`)
+CASES: dict[str, Case] = protocol_cases()
+
+
+def steady_cases(speeds_rpm, loads_Nm) -> dict[str, Case]:
+    """Steady-state cases on a grid: each speed with each load (``--speeds``, ``--loads``).
+
+    As the protocol's ``steady-*`` cases: the flux is built for 0.5 s, the reference ramps
+    over 1 s, the load steps at 2 s, 4 s in all; the metrics' window starts at the load step.
+
+    Parameters
+    ----------
+    speeds_rpm : iterable of float
+        Speed references, rpm.
+    loads_Nm : iterable of float
+        Load torques, N m (negative: regenerating).
+
+    Returns
+    -------
+    dict
+        ``"steady-<speed>rpm-<load>Nm"`` -> :class:`Case`.
+    """
+    return {
+        f"steady-{n:g}rpm-{tl:g}Nm": Case((_ramp(n), _load((2.0, tl))), 4.0, 2.0)
+        for n in speeds_rpm
+        for tl in loads_Nm
+    }
+
 
 QUICK_ESTIMATORS = ("mras", "reactive-mras", "afo", "ekf")
 QUICK_CASES = ("steady-1000", "steady-150", "R1-error")
@@ -140,7 +187,7 @@ class Run:
     drive: str
 
 
-def protocol(quick: bool = False, estimators=None) -> list[Run]:
+def protocol(quick: bool = False, estimators=None, cases=None, drives=None) -> list[Run]:
     """Every run of the protocol.
 
     Parameters
@@ -150,21 +197,54 @@ def protocol(quick: bool = False, estimators=None) -> list[Run]:
     estimators : iterable of str, optional
         The estimator configurations to compare (default: every key of :data:`ESTIMATORS`;
         a configuration of your own: :func:`scenario`'s ``estimators``).
+    cases : iterable of str, optional
+        The cases (default: every key of :data:`CASES`, or the quick subset).
+    drives : iterable of str, optional
+        The drives (default: both of :data:`DRIVES`, or ``average`` for the quick subset).
 
     Returns
     -------
     list of Run
         Drives, then cases, then estimators (the last varying fastest).
     """
-    if quick:
-        names = QUICK_ESTIMATORS if estimators is None else tuple(estimators)
-        return [Run(e, c, "average") for c in QUICK_CASES for e in names]
-    names = ESTIMATORS if estimators is None else tuple(estimators)
-    return [Run(e, c, d) for d in DRIVES for c in CASES for e in names]
+    if estimators is None:
+        estimators = QUICK_ESTIMATORS if quick else tuple(ESTIMATORS)
+    if cases is None:
+        cases = QUICK_CASES if quick else tuple(CASES)
+    if drives is None:
+        drives = ("average",) if quick else tuple(DRIVES)
+    return [Run(e, c, d) for d in drives for c in cases for e in estimators]
 
 
-def scenario(run: Run, estimators: dict | None = None):
+def machine_values(machine) -> dict[str, str]:
+    """The machine-relative values of the protocol's overrides (``{R2_80}`` -> ``0.8 R2``...).
+
+    Parameters
+    ----------
+    machine : MachineParams
+        The drive's machine (``scenario.machine``).
+
+    Returns
+    -------
+    dict
+        Placeholder -> the value as written in an override (6 significant digits).
+    """
+    m = machine
+    vals = {
+        "R2_half": 0.5 * m.R2_ohm,
+        "R2_1p5": 1.5 * m.R2_ohm,
+        "R2_80": 0.8 * m.R2_ohm,
+        "R1_130": 1.3 * m.R1_ohm,
+        "M_90": 0.9 * m.M_H,
+    }
+    return {"{" + k + "}": f"{v:.6g}" for k, v in vals.items()}
+
+
+def scenario(run: Run, estimators: dict | None = None, cases=None, drives=None, overrides=()):
     """The scenario of one run.
+
+    The drive's scenario, with the user's ``overrides``, then the estimator configuration's,
+    then the case's (machine-relative values from :func:`machine_values`).
 
     Parameters
     ----------
@@ -174,6 +254,12 @@ def scenario(run: Run, estimators: dict | None = None):
         Estimator configurations beside :data:`ESTIMATORS`: name -> overrides (e.g. a
         plug-in estimator: ``{"mine": ['control.speed_feedback="mine"',
         'plugins.modules=["my_module.py"]']}``).
+    cases : dict, optional
+        Cases beside :data:`CASES`: name -> :class:`Case` (e.g. :func:`steady_cases`).
+    drives : dict, optional
+        Drives beside :data:`DRIVES`: name -> a preset name or a scenario file (``--base``).
+    overrides : iterable of str
+        ``key=value`` overrides of the drive (``--set``), applied first.
 
     Returns
     -------
@@ -181,18 +267,30 @@ def scenario(run: Run, estimators: dict | None = None):
         The validated :class:`~imdrive.config.scenario.Scenario`.
     """
     from imdrive.config.scenario import Scenario
+    from imdrive.errors import ConfigError
 
-    case = CASES[run.case]
     configs = {**ESTIMATORS, **(estimators or {})}
-    if run.estimator not in configs:
-        from imdrive.errors import ConfigError
-
-        raise ConfigError("estimators", f"no estimator configuration {run.estimator!r}")
-    ov = [
-        *configs[run.estimator],
-        *case.overrides,
+    all_cases = {**CASES, **(cases or {})}
+    all_drives = {**DRIVES, **(drives or {})}
+    for what, name, known in (
+        ("estimators", run.estimator, configs),
+        ("cases", run.case, all_cases),
+        ("drives", run.drive, all_drives),
+    ):
+        if name not in known:
+            raise ConfigError(what, f"no {what[:-1]} {name!r}; known: {', '.join(known)}")
+    case = all_cases[run.case]
+    base = all_drives[run.drive]
+    user = list(overrides)
+    values = machine_values(Scenario.read(base, user).machine)
+    ov = []
+    for o in (*user, *configs[run.estimator], *case.overrides):
+        for key, v in values.items():
+            o = o.replace(key, v)
+        ov.append(o)
+    ov += [
         f"simulation.t_end_s={case.t_end_s}",
         "simulation.log_every=10",
         f'name="{run.estimator}.{run.case}.{run.drive}"',  # a safe folder name
     ]
-    return Scenario.read(DRIVES[run.drive], ov)
+    return Scenario.read(base, ov)

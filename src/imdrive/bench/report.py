@@ -11,6 +11,7 @@ import numpy as np
 
 from imdrive.bench.metrics import METRICS, run_metrics
 from imdrive.bench.protocol import CASES, ESTIMATORS, protocol, scenario
+from imdrive.errors import ConfigError
 
 UNITS = {
     "steady_speed_error_rpm": "rpm",
@@ -24,7 +25,15 @@ UNITS = {
 }
 
 
-def run_protocol(quick: bool = False, parallel: bool = True, runs=None, estimators=None):
+def run_protocol(
+    quick: bool = False,
+    parallel: bool = True,
+    runs=None,
+    estimators=None,
+    cases=None,
+    drives=None,
+    overrides=(),
+):
     """Simulate every run of the protocol.
 
     Parameters
@@ -39,6 +48,15 @@ def run_protocol(quick: bool = False, parallel: bool = True, runs=None, estimato
         Estimator configurations beside the protocol's (name -> overrides; see
         :func:`~imdrive.bench.protocol.scenario`); without ``runs``, the protocol compares
         exactly these.
+    cases : dict, optional
+        Cases beside the protocol's (name -> :class:`~imdrive.bench.protocol.Case`); without
+        ``runs``, exactly these.
+    drives : dict, optional
+        Drives beside the protocol's (name -> preset or scenario file); without ``runs``,
+        exactly these.
+    overrides : iterable of str
+        Overrides of every drive (``key=value``), applied before the estimator's and the
+        case's.
 
     Returns
     -------
@@ -54,16 +72,20 @@ def run_protocol(quick: bool = False, parallel: bool = True, runs=None, estimato
 
     from imdrive.run.batch import simulate_batch
 
+    def names(d):
+        return None if d is None else list(d)
+
     if runs is None:
-        runs = protocol(quick, None if estimators is None else list(estimators))
+        runs = protocol(quick, names(estimators), names(cases), names(drives))
     runs = list(runs)
+    all_cases = {**CASES, **(cases or {})}
     t0 = time.perf_counter()
-    scenarios = [scenario(r, estimators) for r in runs]
+    scenarios = [scenario(r, estimators, cases, drives, overrides) for r in runs]
     res = simulate_batch(scenarios, logs=True, parallel=parallel)
     wall = time.perf_counter() - t0
     rows = []
     for r, sim in zip(runs, res.results, strict=True):
-        m = run_metrics(sim.signals, CASES[r.case].t_eval_s, sim.diverged)
+        m = run_metrics(sim.signals, all_cases[r.case].t_eval_s, sim.diverged)
         rows.append({"estimator": r.estimator, "case": r.case, "drive": r.drive,
                      "diverged": bool(sim.diverged), **m})  # fmt: skip
     return pd.DataFrame(rows), res.results, wall
@@ -75,6 +97,12 @@ def _fmt(v) -> str:
     if v is None or (isinstance(v, float) and math.isnan(v)):
         return "–"
     return f"{v:.3g}"
+
+
+def _estimators_of(table) -> list[str]:
+    """The table's estimator configurations: the protocol's in its order, then the others."""
+    present = list(dict.fromkeys(table["estimator"]))
+    return [e for e in ESTIMATORS if e in present] + [e for e in present if e not in ESTIMATORS]
 
 
 def markdown(table) -> str:
@@ -90,7 +118,7 @@ def markdown(table) -> str:
     str
         The Markdown text.
     """
-    ests = [e for e in ESTIMATORS if e in set(table["estimator"])]
+    ests = _estimators_of(table)
     out = ["# Estimator bench", ""]
     for drive in dict.fromkeys(table["drive"]):
         sub = table[table["drive"] == drive]
@@ -124,16 +152,14 @@ def figures(table, out: Path) -> list[Path]:
     list of pathlib.Path
         The PNG files written.
     """
-    import matplotlib
+    from imdrive._figure import new_figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    ests = [e for e in ESTIMATORS if e in set(table["estimator"])]
+    ests = _estimators_of(table)
     drives = list(dict.fromkeys(table["drive"]))
     paths = []
     for met in METRICS:
-        fig, axes = plt.subplots(len(drives), 1, figsize=(11, 3.2 * len(drives)), squeeze=False)
+        fig = new_figure(figsize=(11, 3.2 * len(drives)), layout="constrained")
+        axes = fig.subplots(len(drives), 1, squeeze=False)
         for ax, drive in zip(axes[:, 0], drives, strict=True):
             sub = table[table["drive"] == drive]
             cases = list(dict.fromkeys(sub["case"]))
@@ -152,15 +178,21 @@ def figures(table, out: Path) -> list[Path]:
             if met not in ("lost_control", "peak_current_A", "R2_time_to_2pct_s"):
                 ax.set_yscale("symlog", linthresh=0.1)
         axes[0, 0].legend(fontsize=7, ncol=len(ests))
-        fig.tight_layout()
         p = out / f"{met}.png"
         fig.savefig(p, dpi=90)
-        plt.close(fig)
         paths.append(p)
     return paths
 
 
-def bench_estimators(out_dir, quick: bool = False) -> dict:
+def bench_estimators(
+    out_dir,
+    quick: bool = False,
+    estimators=None,
+    cases=None,
+    drives=None,
+    overrides=(),
+    parallel: bool = True,
+) -> dict:
     """Run the protocol and write ``estimators.csv``, ``<metric>.png``, ``estimators.md``.
 
     Parameters
@@ -169,6 +201,12 @@ def bench_estimators(out_dir, quick: bool = False) -> dict:
         Folder to write into (created).
     quick : bool
         The quick subset of the protocol.
+    estimators, cases, drives, overrides
+        As :func:`run_protocol` (``imdrive bench-estimators --estimators``, ``--speeds`` and
+        ``--loads``, ``--base``, ``--set``); ``estimators`` may also be a list of the
+        protocol's configuration names.
+    parallel : bool
+        Run the batch on all cores.
 
     Returns
     -------
@@ -177,7 +215,16 @@ def bench_estimators(out_dir, quick: bool = False) -> dict:
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    table, _, wall = run_protocol(quick)
+    if estimators is not None and not isinstance(estimators, dict):
+        unknown = [e for e in estimators if e not in ESTIMATORS]
+        if unknown:
+            raise ConfigError(
+                "estimators", f"no configuration {unknown[0]!r}; known: {', '.join(ESTIMATORS)}"
+            )
+        estimators = {e: ESTIMATORS[e] for e in estimators}
+    table, _, wall = run_protocol(
+        quick, parallel, estimators=estimators, cases=cases, drives=drives, overrides=overrides
+    )
     csv = out / "estimators.csv"
     table.to_csv(csv, index=False)
     figs = figures(table, out)

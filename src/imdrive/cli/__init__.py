@@ -42,7 +42,7 @@ import sys
 import time
 import warnings
 
-from imdrive.cli import bench, info, machine, paper, run, stability, sweep
+from imdrive.cli import bench, compare, info, machine, paper, run, stability, sweep
 from imdrive.cli._common import (
     EXIT_BAD_INPUT,
     EXIT_DIVERGED,
@@ -87,8 +87,19 @@ __all__ = [
     "main",
 ]
 
+#: the exit-code table of ``imdrive --help`` (the module docstring says more)
+EXIT_CODES_HELP = """exit codes:
+  0    done
+  1    the run diverged (partial results written, "diverged": true in summary.json)
+  2    bad input: one line 'imdrive: error: field: rule', nothing written
+  3    the run lost control of the speed (results written, "lost_control": true)
+  4    the environment failed (I/O, disk full, permission, memory, dask, a locked store)
+  5    internal error (a bug); IMDRIVE_DEBUG=1 shows the traceback
+  130  interrupted (Ctrl-C)
+a sweep records its diverged and lost runs in its table and exits 0."""
+
 #: the command groups, in the order ``imdrive --help`` lists them
-COMMANDS = (run, info, paper, sweep, stability, bench, machine)
+COMMANDS = (run, compare, info, paper, sweep, stability, bench, machine)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -100,8 +111,11 @@ def build_parser() -> argparse.ArgumentParser:
             "imdrive run sensorless",
             "imdrive show sensorless > my.toml; imdrive run my.toml",
             "imdrive sweep detuning-map",
+            "imdrive compare out/sensorless out/sensorless-realistic --out out/cmp",
             "imdrive <command> --help",
-        ),
+        )
+        + "\n\n"
+        + EXIT_CODES_HELP,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("--version", action="version", version=_version())

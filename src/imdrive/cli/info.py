@@ -12,15 +12,33 @@ def _cmd_presets(args) -> int:
     from imdrive.config.machine import machine_presets
     from imdrive.config.presets import preset_names
     from imdrive.config.scenario import Scenario
+    from imdrive.sweep import load_sweep, sweep_names
 
-    print("scenario presets:")
-    for name in preset_names():
-        sc = Scenario.read(name)
-        print(f"  {name:<22} {sc.description}")
-    print("machine parameter sets ([machine] preset = ...):")
-    for name, desc in machine_presets().items():
-        print(f"  {name:<22} {desc}")
+    groups = {
+        "scenario presets (imdrive run NAME):": {
+            name: (Scenario.read(name).description or "") for name in preset_names()
+        },
+        "sweep presets (imdrive sweep NAME):": {
+            name: (load_sweep(name).description or "") for name in sweep_names()
+        },
+        "machine parameter sets ([machine] preset = NAME):": dict(machine_presets()),
+    }
+    width = max(len(n) for g in groups.values() for n in g) + 2
+    for title, items in groups.items():
+        print(title)
+        for name, desc in items.items():
+            print(f"  {name:<{width}}{' '.join(str(desc).split())}")
     return EXIT_OK
+
+
+def _mode_comment(scenario) -> str:
+    """The first line of ``imdrive show``: how the scenario drives the machine."""
+    if scenario.drive.mode == "vector":
+        return f"# drive mode: vector (speed feedback {scenario.control.speed_feedback})\n"
+    return (
+        '# drive mode: open-loop (no [drive] mode = "vector": the machine runs on the\n'
+        "# [open_loop] voltage; [control], [estimator] and [compensator] are not used)\n"
+    )
 
 
 def _cmd_show(args) -> int:
@@ -41,13 +59,18 @@ def _cmd_show(args) -> int:
             + rated_point_comment(m)
         )
         return EXIT_OK
-    if args.all:
-        from imdrive.config.scenario import Scenario
+    from imdrive.config.scenario import Scenario
 
-        scenario = Scenario.read(args.preset)
-        sys.stdout.write(scenario.to_toml() + "\n" + rated_point_comment(scenario.machine))
-    else:
-        sys.stdout.write(preset_text(args.preset))
+    scenario = Scenario.read(args.preset)
+    if args.all:
+        text = scenario.to_toml() + "\n" + rated_point_comment(scenario.machine)
+    elif args.preset in preset_names():
+        text = preset_text(args.preset)
+    else:  # a scenario file of one's own: as it is
+        from imdrive.config.presets import scenario_text
+
+        text = scenario_text(args.preset)
+    sys.stdout.write(_mode_comment(scenario) + text)
     return EXIT_OK
 
 
@@ -94,14 +117,15 @@ def add_parser(sub) -> None:
     sh = sub.add_parser(
         "show",
         help="print a preset's TOML, to copy and edit",
-        description="Print a preset's TOML file, or with --all every key of the scenario with "
-        "its value (the defaults filled in).",
+        description="Print a preset's (or a scenario file's) TOML, after a first comment line "
+        "saying its drive mode (vector or open-loop), or with --all every key of the scenario "
+        "with its value (the defaults filled in).",
         epilog=_examples(
             "imdrive show sensorless > my.toml", "imdrive show sensorless --all | less"
         ),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    sh.add_argument("preset")
+    sh.add_argument("preset", metavar="PRESET_OR_FILE")
     sh.add_argument(
         "--all", action="store_true", help="every key with its value, defaults included"
     )

@@ -31,6 +31,27 @@ def _run_folder_name(preset_or_file: str) -> str:
     return path.stem
 
 
+def mode_text(scenario) -> str:
+    """How the scenario drives the machine, in a few words (the console's running line)."""
+    if scenario.drive.mode == "vector":
+        return f"vector control, speed feedback {scenario.control.speed_feedback}"
+    ol = scenario.open_loop
+    how = f"V/f ramp {ol.vf_ramp_s:g} s" if ol.vf_ramp_s > 0 else "direct on line"
+    return f"open loop, {how}"
+
+
+def open_loop_note(scenario) -> str:
+    """``"; open loop: ..."`` for a scenario that runs open-loop, else ``""``: a file without
+    ``[drive] mode = "vector"`` runs the machine on the ``[open_loop]`` voltage and ignores
+    ``[control]``, ``[estimator]`` and ``[compensator]``."""
+    if scenario.drive.mode == "vector":
+        return ""
+    return (
+        '; open loop ([drive] mode is not "vector": the machine on the [open_loop] voltage, '
+        "[control] and the estimator unused)"
+    )
+
+
 def _cmd_run(args) -> int:
     from imdrive.config.scenario import Scenario
     from imdrive.run.build import build_arrays
@@ -38,6 +59,10 @@ def _cmd_run(args) -> int:
     from imdrive.run.simulate import kernels_cached, simulate
 
     scenario = Scenario.read(args.scenario, args.set or [])
+    if args.format:  # an unknown format is bad input before anything runs
+        from imdrive.run.result import formats_wanted
+
+        formats_wanted([f.strip() for s in args.format for f in s.split(",") if f.strip()])
     out = output_folder(
         args.out,
         _run_folder_name(args.scenario),
@@ -50,26 +75,29 @@ def _cmd_run(args) -> int:
         if not kernels_cached():
             print("imdrive: compiling the kernels (first run only) ...", file=sys.stderr)
         print(
-            f"imdrive: running {scenario.name} ({scenario.simulation.t_end_s:g} s) ...",
+            f"imdrive: running {scenario.name} ({scenario.simulation.t_end_s:g} s, "
+            f"{mode_text(scenario)}) ...",
             file=sys.stderr,
         )
     res = simulate(scenario, arrays)
-    res.save(out, force=args.force)
+    formats = None
+    if args.format:
+        formats = [f.strip() for spec in args.format for f in spec.split(",") if f.strip()]
+    res.save(out, force=args.force, formats=formats)
     s = res.summary()
-    if res.diverged:
-        print(
-            f"imdrive: error: {res.divergence_message}; partial results in {out}", file=sys.stderr
-        )
-        return EXIT_DIVERGED
-    if res.lost_control:
-        print(f"imdrive: error: {res.lost_control_message}; results in {out}", file=sys.stderr)
-        return EXIT_LOST_CONTROL
+    if res.diverged or res.lost_control:
+        from imdrive.run.diagnosis import closing_line
+
+        done = "partial results" if res.diverged else "results"
+        print(f"imdrive: error: {closing_line(res, out)} ({done} in {out})", file=sys.stderr)
+        return EXIT_DIVERGED if res.diverged else EXIT_LOST_CONTROL
     if not args.quiet:
         fin = s["final"]
         print(
             f"imdrive: done in {time.perf_counter() - args.t0:.1f} s (simulation "
             f"{res.wall_time_s:.3f} s, {s['real_time_factor']:.0f}x real time); final speed "
-            f"{fin['speed_rpm']:.2f} rpm, torque {fin['torque_Nm']:.3f} N m -> {out}",
+            f"{fin['speed_rpm']:.2f} rpm, torque {fin['torque_Nm']:.3f} N m"
+            f"{open_loop_note(scenario)} -> {out}",
             file=sys.stderr,
         )
     return EXIT_OK
@@ -95,6 +123,7 @@ def add_parser(sub) -> None:
             "imdrive run sensorless --set simulation.t_end_s=2 --set load.torque_Nm=6",
             "imdrive run my.toml --out results/my-run",
             "imdrive run out/sensorless/summary.json",
+            "imdrive run sensorless --format parquet,mat,report",
         ),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
@@ -107,6 +136,13 @@ def add_parser(sub) -> None:
         action="append",
         metavar="KEY.PATH=VALUE",
         help="override a scenario value, e.g. --set simulation.t_end_s=2 (repeatable)",
+    )
+    r.add_argument(
+        "--format",
+        action="append",
+        metavar="NAME[,NAME]",
+        help="write exactly these outputs besides summary.json, whatever [output] says: "
+        "csv, mat, parquet, figures, report (repeatable)",
     )
     r.add_argument(
         "--force",

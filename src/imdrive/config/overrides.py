@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import re
 import tomllib
 import typing
 from dataclasses import dataclass, fields, is_dataclass
@@ -236,11 +237,48 @@ def parse_toml(text: str, field: str, what: str = "") -> dict:
         ) from None
 
 
-def parse_override(spec: str) -> tuple[tuple[str, ...], object]:
+_INDEXED = re.compile(r"^([A-Za-z_][\w-]*)((?:\[\d+\])*)$")
+#: the keys inside a profile written as a table (``{initial, changes = [{at, to, over}]}``
+#: or ``{points = [[t, v], ...]}``) an override may reach into
+PROFILE_PARTS = ("initial", "changes", "at", "to", "over", "points")
+
+
+def _split_key(key: str) -> tuple:
+    """``"a.changes[0].to"`` -> ``("a", "changes", 0, "to")``."""
+    parts: list = []
+    for token in key.split("."):
+        m = _INDEXED.match(token)
+        if m is None:
+            if "[" in token:
+                raise ConfigError(key, f"{token!r}: an index is written name[0]")
+            parts.append(token)
+            continue
+        parts.append(m.group(1))
+        parts.extend(int(i) for i in re.findall(r"\[(\d+)\]", m.group(2)))
+    return tuple(parts)
+
+
+def _is_profile_key(parts) -> bool:
+    key = next((k for k in scenario_keys() if k.path == tuple(parts)), None)
+    return key is not None and "Profile" in str(key.hint)
+
+
+def _profile_element(parts) -> bool:
+    """Whether ``parts`` reaches into a profile: a profile key, then its table's keys and
+    list indices (``control.speed_ref_rpm.changes[0].to``)."""
+    for n in range(len(parts) - 1, 0, -1):
+        head, rest = parts[:n], parts[n:]
+        if all(isinstance(p, str) for p in head) and _is_profile_key(head):
+            return all(isinstance(p, int) or p in PROFILE_PARTS for p in rest)
+    return False
+
+
+def parse_override(spec: str) -> tuple[tuple, object]:
     """Split ``key.path=value`` into the path and the value (parsed as a TOML value).
 
     A value that is not valid TOML is taken as a string, so ``control.speed_feedback=mras``
-    needs no quotes.
+    needs no quotes. The path may reach into one element of a profile written as a table:
+    ``control.speed_ref_rpm.changes[0].to=300`` (indices from 0; the path then holds ints).
     """
     if not isinstance(spec, str):
         raise ConfigError(
@@ -259,8 +297,10 @@ def parse_override(spec: str) -> tuple[tuple[str, ...], object]:
     key = key.strip()
     if not key:
         raise ConfigError("--set", f"{spec!r}: the key before '=' is empty")
-    parts = tuple(key.split("."))
-    if not is_setting(parts):
+    parts = _split_key(key)
+    if not (all(isinstance(p, str) for p in parts) and is_setting(parts)) and not (
+        _profile_element(parts)
+    ):
         raise ConfigError(key, "no such setting (see 'imdrive show PRESET' for the keys)")
     try:
         value = tomllib.loads(f"v = {raw.strip()}")["v"]
@@ -277,7 +317,10 @@ def set_path(data: dict, parts, value) -> None:
     The one override mechanism: ``--set`` and every sweep axis go through it, and the
     scenario is validated once afterwards (:meth:`Scenario.from_dict`).
     """
-    key = ".".join(parts)
+    key = _dotted(parts)
+    if any(isinstance(p, int) for p in parts):
+        _set_element(data, parts, value, key)
+        return
     node = data
     for p in parts[:-1]:
         nxt = node.setdefault(p, {})
@@ -285,6 +328,65 @@ def set_path(data: dict, parts, value) -> None:
             raise ConfigError(key, f"{p} is not a table")
         node = nxt
     node[parts[-1]] = value
+
+
+def _dotted(parts) -> str:
+    out = ""
+    for p in parts:
+        out += f"[{p}]" if isinstance(p, int) else (f".{p}" if out else p)
+    return out
+
+
+def _changes_form(profile):
+    """A profile in the file's ``{initial, changes}`` form: a number or ``{points = ...}`` is
+    rewritten (a step where two points share a time, a ramp between two values, a hold
+    dropped), a profile already in that form is returned as it is."""
+    if isinstance(profile, int | float) and not isinstance(profile, bool):
+        return {"initial": profile, "changes": []}
+    if not (isinstance(profile, dict) and "points" in profile):
+        return profile
+    pts = [tuple(p) for p in profile["points"]]
+    changes = []
+    for (t0, v0), (t1, v1) in zip(pts, pts[1:], strict=False):
+        if v1 == v0:
+            continue
+        changes.append({"at": t1, "to": v1} if t1 == t0 else {"at": t0, "to": v1, "over": t1 - t0})
+    return {"initial": pts[0][1], "changes": changes}
+
+
+def _set_element(data: dict, parts, value, key: str) -> None:
+    """Set one element inside a profile the file writes as a table; every step must exist
+    (an element is changed, never created)."""
+    node = data
+    for n, p in enumerate(parts[:-1]):
+        here = _dotted(parts[: n + 1])
+        if isinstance(p, int):
+            if not isinstance(node, list) or p >= len(node):
+                size = len(node) if isinstance(node, list) else 0
+                raise ConfigError(key, f"{here}: no such element (the list has {size})")
+            node = node[p]
+        else:
+            nxt = parts[n + 1]
+            if isinstance(node, dict) and nxt in ("initial", "changes") and p in node:
+                node[p] = _changes_form(node[p])  # a profile as points or a number
+            if not isinstance(node, dict) or p not in node:
+                raise ConfigError(
+                    key,
+                    f"{here} is not in the scenario as a table: set the whole profile "
+                    "(e.g. {initial = 0, changes = [{at = 0.5, to = 1000, over = 1}]})",
+                )
+            node = node[p]
+    last = parts[-1]
+    if isinstance(last, int):
+        if not isinstance(node, list) or last >= len(node):
+            raise ConfigError(key, "no such element")
+        node[last] = value
+    elif isinstance(node, dict) and last in node:
+        node[last] = value
+    elif isinstance(node, dict) and last == "over":  # a step becomes a ramp
+        node[last] = value
+    else:
+        raise ConfigError(key, f"{last!r} is not set in that element")
 
 
 def apply_override(data: dict, spec: str) -> None:

@@ -24,7 +24,7 @@ from imdrive.run.columns import current_name
 from imdrive.run.export import unit_of
 
 if TYPE_CHECKING:  # matplotlib is loaded by the first figure, not by the tables below
-    from matplotlib.figure import Figure
+    from imdrive._figure import DisplayFigure as Figure
 
 #: flux linkages are drawn in mWb: the start-up transient (tens of mWb), the rotor flux
 #: (hundreds) and the steady e_d0 bias (a few µWb to a few mWb) all read without a multiplier
@@ -170,16 +170,17 @@ def steady_start(res) -> float:
     return min(max(last + 1.0, 0.5 * t_end), 0.9 * t_end)
 
 
-def _fig(nrows: int, title: str, heights=None) -> tuple[Figure, list]:
-    from matplotlib.figure import Figure
+def _fig(nrows: int, title: str, heights=None, sharex: bool = True) -> tuple[Figure, list]:
+    from imdrive._figure import DisplayFigure as Figure
 
     fig = Figure(figsize=(8, 2.4 * nrows + 0.6), layout="constrained")
     axes = fig.subplots(
-        nrows, 1, sharex=True, squeeze=False, gridspec_kw={"height_ratios": heights}
+        nrows, 1, sharex=sharex, squeeze=False, gridspec_kw={"height_ratios": heights}
     )[:, 0]
     fig.suptitle(title)
     for ax in axes:
         ax.grid(True, alpha=0.3)
+        ax.tick_params(labelbottom=True)  # every panel its time axis, not only the last
     axes[-1].set_xlabel("time (s)")
     return fig, list(axes)
 
@@ -267,18 +268,65 @@ def torque_figure(res) -> Figure:
     return fig
 
 
+#: a run with more electrical periods than this gets the envelope of its phase currents and a
+#: zoom window on its last periods in ``currents.png`` (three lines of hundreds of periods are a
+#: solid block)
+LONG_RUN_PERIODS = 40
+#: electrical periods in the zoom window of a long run
+ZOOM_PERIODS = 4
+
+
+def electrical_periods(res) -> float:
+    """Electrical periods of the stator currents over the run: ∫|ω_e| dt / 2π, with ω_e from
+    the angle of the stator current vector."""
+    s = res.signals
+    if "i_alpha_A" not in s or len(s["time_s"]) < 2:
+        return 0.0
+    angle = np.unwrap(np.angle(np.asarray(s["i_alpha_A"]) + 1j * np.asarray(s["i_beta_A"])))
+    return float(np.sum(np.abs(np.diff(angle))) / (2 * np.pi))
+
+
 def currents_figure(res) -> Figure:
+    """Phase currents (a long run: their envelope ±|i_s| and a zoom on the last periods) and,
+    for a vector drive, the synchronous-frame currents against their references; the legends
+    beside the panels, not over the data."""
     vector = "i_d_A" in res.signals
-    fig, axes = _fig(2 if vector else 1, f"{res.scenario.name}: stator currents")
-    for ph in "abc":
-        _plot(axes[0], res, f"i_{ph}_A", lw=0.8)
+    periods = electrical_periods(res)
+    long_run = periods > LONG_RUN_PERIODS
+    n = (2 if vector else 1) + long_run
+    fig, axes = _fig(n, f"{res.scenario.name}: stator currents", sharex=not long_run)
+    if long_run and vector:  # the whole-run panels share the time axis, the zoom has its own
+        axes[-1].sharex(axes[0])
+    s = res.signals
+    t = np.asarray(s["time_s"])
+    if long_run:
+        mag = np.hypot(s["i_alpha_A"], s["i_beta_A"])
+        axes[0].fill_between(t, -mag, mag, color="tab:blue", alpha=0.25, lw=0,
+                             label="phase currents (envelope ±|i_s|)")  # fmt: skip
+        axes[0].plot(t, mag, color="tab:blue", lw=0.8, label="stator current magnitude |i_s|")
+        t1 = float(t[-1])
+        t0 = max(t1 - ZOOM_PERIODS * t1 / periods, float(t[0]))
+        axes[0].axvspan(t0, t1, color="tab:orange", alpha=0.15, lw=0, label="zoom below")
+        w = t >= t0
+        for ph in "abc":
+            _plot(axes[1], res, f"i_{ph}_A", lw=0.9)
+        axes[1].set_xlim(t0, t1)
+        lo, hi = zoom_limits(np.concatenate([np.asarray(s[f"i_{ph}_A"])[w] for ph in "abc"]))
+        axes[1].set_ylim(lo, hi)
+        axes[1].set_title(f"zoom: the last {t1 - t0:.3g} s (shaded above)", fontsize=8, loc="left")
+        _ylabel(axes[1], "phase current", "i_a_A")
+        axes[1].legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
+    else:
+        for ph in "abc":
+            _plot(axes[0], res, f"i_{ph}_A", lw=0.8)
     _ylabel(axes[0], "phase current", "i_a_A")
-    axes[0].legend(loc="best")
+    axes[0].legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
     if vector:
+        axes = [axes[0], axes[-1]]
         for col, style in (("i_d_A", "-"), ("id_ref_A", "--"), ("i_q_A", "-"), ("iq_ref_A", "--")):
             _plot(axes[1], res, col, style)
         _ylabel(axes[1], "synchronous-frame current", "i_d_A")
-        axes[1].legend(loc="best")
+        axes[1].legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
     return fig
 
 

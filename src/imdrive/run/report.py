@@ -321,16 +321,37 @@ def html_page(
     )
 
 
+#: trace colours (plotly's default sequence), assigned per signal in order of appearance
+TRACE_COLOURS = (
+    "#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd",
+    "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf",
+)  # fmt: skip
+
+ZOOM_TITLE = "flux error, steady-state zoom (y-range from the samples after {t0:g} s)"
+
+
 def _run_figure(res, max_points: int) -> tuple[dict, dict, int]:
-    """The stacked time plots of a run: one x axis shared by every panel (linked zoom)."""
-    from imdrive.run.plots import display_unit, signal_label
+    """The stacked time plots of a run: each panel with its own time axis, all linked (zooming
+    one zooms all); after the flux-error panel, the same errors with the y-range of the
+    steady state (:func:`imdrive.run.plots.steady_start`), where the start-up transient would
+    hide them (as ``estimator.png``)."""
+    from imdrive.run.plots import display_unit, signal_label, steady_start, zoom_limits
 
     s = res.signals
-    panels = [
-        (t, display_unit(cols[0][0])[0], [(c, signal_label(c, res), d) for c, d in cols if c in s])
-        for t, _, cols in PANELS
-    ]
-    panels = [p for p in panels if p[2]]
+    panels = []
+    for title, _, cols in PANELS:
+        present = [(c, signal_label(c, res), d) for c, d in cols if c in s]
+        if not present:
+            continue
+        panels.append((title, display_unit(cols[0][0])[0], present, None))
+        if cols[0][0] == "e_d0_Wb":
+            t0 = steady_start(res)
+            win = np.asarray(s["time_s"]) >= t0
+            vals = np.concatenate(
+                [np.asarray(s[c])[win] * display_unit(c)[1] for c, _, _ in present]
+            )
+            if vals.size:
+                panels.append((ZOOM_TITLE.format(t0=t0), panels[-1][1], present, zoom_limits(vals)))
     t_dec, dec, b = minmax_decimate(
         s["time_s"],
         {c[0]: np.asarray(s[c[0]]) * display_unit(c[0])[1] for p in panels for c in p[2]},
@@ -338,21 +359,30 @@ def _run_figure(res, max_points: int) -> tuple[dict, dict, int]:
     )
     arrays = {"t": t_dec, **dec}
     n = len(panels)
-    gap = 0.04 if n > 1 else 0.0
+    gap = 0.3 / n if n > 1 else 0.0  # room for each panel's time axis
     h = (1.0 - gap * (n - 1)) / n
     layout: dict = {
         "hovermode": "x unified",
         "margin": {"l": 70, "r": 20, "t": 30, "b": 40},
         "legend": {"orientation": "v"},
-        "xaxis": {"title": {"text": "time (s)"}, "anchor": f"y{n if n > 1 else ''}"},
         "annotations": [],
         "showlegend": True,
     }
     data = []
-    for i, (title, unit, cols) in enumerate(panels):
+    colour: dict[str, str] = {}  # one colour per signal, the same in the zoom panel
+    for i, (title, unit, cols, y_range) in enumerate(panels):
         ax = "" if i == 0 else str(i + 1)
         top = 1.0 - i * (h + gap)
-        layout[f"yaxis{ax}"] = {"domain": [top - h, top], "title": {"text": unit}}
+        layout[f"xaxis{ax}"] = {
+            "anchor": f"y{ax}",
+            "showticklabels": True,
+            "title": {"text": "time (s)", "standoff": 2},
+            **({"matches": "x"} if i else {}),
+        }
+        yaxis = {"domain": [top - h, top], "title": {"text": unit}}
+        if y_range is not None:
+            yaxis["range"] = list(y_range)
+        layout[f"yaxis{ax}"] = yaxis
         layout["annotations"].append(
             {
                 "text": f"<b>{html.escape(title)}</b>",
@@ -365,7 +395,9 @@ def _run_figure(res, max_points: int) -> tuple[dict, dict, int]:
                 "showarrow": False,
             }
         )
+        zoom = y_range is not None
         for col, label, dash in cols:
+            colour.setdefault(col, TRACE_COLOURS[len(colour) % len(TRACE_COLOURS)])
             data.append(
                 {
                     "type": "scatter",
@@ -373,18 +405,19 @@ def _run_figure(res, max_points: int) -> tuple[dict, dict, int]:
                     "name": label,
                     "legendgroup": title,
                     "legendgrouptitle": {"text": title} if col == cols[0][0] else None,
+                    "showlegend": not zoom,
                     "x": {"$array": "t"},
                     "y": {"$array": col},
-                    "xaxis": "x",
+                    "xaxis": f"x{ax}",
                     "yaxis": f"y{ax}",
-                    "line": {"dash": dash, "width": 1.2},
+                    "line": {"dash": dash, "width": 1.2, "color": colour[col]},
                     "hovertemplate": f"%{{y:.5g}} {unit}",
                 }
             )
     for d in data:
         if d["legendgrouptitle"] is None:
             del d["legendgrouptitle"]
-    fig = {"div": "signals", "data": data, "layout": layout, "height": 230 * n + 80}
+    fig = {"div": "signals", "data": data, "layout": layout, "height": 260 * n + 80}
     return fig, arrays, b
 
 

@@ -315,7 +315,8 @@ class SimulationResult:
         Returns
         -------
         matplotlib.figure.Figure
-            The figure (not shown; ``fig.savefig`` or ``plt.show()``).
+            The figure: shown as an image when it is the last expression of a notebook cell
+            (:class:`imdrive._figure.DisplayFigure`); ``fig.savefig(path)`` writes it.
         """
         from imdrive.run.plots import result_figure
 
@@ -507,6 +508,7 @@ class SimulationResult:
         csv: bool | None = None,
         force: bool = False,
         report: bool | None = None,
+        formats=None,
     ) -> list[Path]:
         """Write ``summary.json`` and every output format the scenario's ``[output]`` turns on
         (:mod:`imdrive.run.formats`: ``timeseries.csv``, PNG figures, ``report.html``, the MAT
@@ -529,6 +531,10 @@ class SimulationResult:
             scenario's ``[output]`` says.
         force : bool
             Replace a folder that holds other files.
+        formats : iterable of str, optional
+            Exactly these output formats (names of :func:`imdrive.run.formats.output_formats`:
+            ``"csv"``, ``"mat"``, ``"parquet"``, ``"figures"``, ``"report"``), whatever
+            ``[output]`` says; ``summary.json`` is always written.
 
         Returns
         -------
@@ -538,7 +544,8 @@ class SimulationResult:
         Raises
         ------
         ConfigError
-            ``out_dir`` holds other files and ``force`` is False (nothing written).
+            ``out_dir`` holds other files and ``force`` is False, or an unknown format
+            (nothing written).
         """
         from imdrive._io import replace_folder
 
@@ -546,6 +553,8 @@ class SimulationResult:
         check_result_folder(out_dir, force)
         output = self.scenario.output
         wanted = {f.key: getattr(output, f.key) for f in output_formats()}
+        if formats is not None:
+            wanted = formats_wanted(formats)
         for key, given in (("figures", figures), ("csv", csv), ("report", report)):
             if given is not None:
                 wanted[key] = given
@@ -556,6 +565,37 @@ class SimulationResult:
             (staging / "summary.json").write_text(summary_json(self.summary()))
             names = sorted(p.name for p in staging.iterdir())
         return [out_dir / n for n in names if n != "summary.json"] + [out_dir / "summary.json"]
+
+
+def formats_wanted(names) -> dict[str, bool]:
+    """``[output]`` key -> on, with exactly the formats ``names`` on (``res.save(formats=)``,
+    ``imdrive run --format``).
+
+    Parameters
+    ----------
+    names : iterable of str
+        Format names (:func:`imdrive.run.formats.output_formats`).
+
+    Returns
+    -------
+    dict
+        The ``[output]`` key of every format -> whether it is written.
+
+    Raises
+    ------
+    ConfigError
+        An unknown name (the known ones listed).
+    """
+    from imdrive.errors import ConfigError
+
+    if isinstance(names, str):
+        names = [names]
+    known = {f.name: f.key for f in output_formats()}
+    names = list(names)
+    for n in names:
+        if n not in known:
+            raise ConfigError("formats", f"no output format {n!r}; known: {', '.join(known)}")
+    return {key: name in names for name, key in known.items()}
 
 
 #: The files :meth:`SimulationResult.save` may write besides PNG figures

@@ -1,4 +1,5 @@
-"""Figures of the stability maps (matplotlib, Agg): heatmap and boundary overlays."""
+"""Figures of the stability maps: heatmap and boundary overlays (``Figure`` objects, no pyplot:
+they show in a notebook and leave the caller's matplotlib backend alone)."""
 
 from __future__ import annotations
 
@@ -16,22 +17,34 @@ def _grid(df, column):
     return sp, tq, g.reindex(index=sp, columns=tq).to_numpy(dtype=float)
 
 
-def plot_map(df, path: Path, title: str = "", clip: float = 20.0) -> Path:
+def map_figure(df, title: str = "", clip: float = 20.0):
     """Heatmap of the least stable mode's real part over speed x torque, boundary in black.
 
     Points without a usable steady state (current or voltage limit, none) are grey.
-    """
-    import matplotlib
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        A stability map (:func:`imdrive.stability.maps.stability_map`).
+    title : str
+        The figure's title (default: the count of unstable points).
+    clip : float
+        Colour range of the real part, 1/s (clipped to ±clip).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (shows itself in a notebook).
+    """
+    from imdrive._figure import new_figure
 
     d = df.copy()
     d["_re"] = np.where(d["status"] == STATUS_OK, d["max_real_1_per_s"], np.nan)
     d["_st"] = np.where(d["status"] == STATUS_OK, d["stable"].astype(float), np.nan)
     sp, tq, re = _grid(d, "_re")
     _, _, st = _grid(d, "_st")
-    fig, ax = plt.subplots(figsize=(7.5, 5.0), dpi=120)
+    fig = new_figure(figsize=(7.5, 5.0), dpi=120, layout="constrained")
+    ax = fig.add_subplot()
     ax.set_facecolor("0.8")
     mesh = ax.pcolormesh(
         tq, sp, np.clip(re, -clip, clip), cmap="RdBu_r", vmin=-clip, vmax=clip, shading="nearest"
@@ -45,22 +58,26 @@ def plot_map(df, path: Path, title: str = "", clip: float = 20.0) -> Path:
     ax.set_ylabel("speed reference, rpm")
     n_un = int((d["status"] == STATUS_OK).sum() - d["stable"].sum())
     ax.set_title(title or f"small-signal stability: {n_un} unstable points, grey = no steady state")
-    fig.tight_layout()
+    return fig
+
+
+def plot_map(df, path: Path, title: str = "", clip: float = 20.0) -> Path:
+    """Write :func:`map_figure` as ``path`` (PNG); returns the path."""
     path = Path(path)
-    fig.savefig(path)
-    plt.close(fig)
+    map_figure(df, title, clip).savefig(path)
     return path
 
 
 def plot_overlay(frames: dict, path: Path, title: str = "") -> Path:
     """Stable-region boundaries of several maps (label -> table) over speed x torque."""
-    import matplotlib
+    from matplotlib import colormaps
+    from matplotlib.lines import Line2D
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from imdrive._figure import new_figure
 
-    fig, ax = plt.subplots(figsize=(7.5, 5.0), dpi=120)
-    colors = plt.cm.viridis(np.linspace(0.0, 0.9, max(len(frames), 1)))
+    fig = new_figure(figsize=(7.5, 5.0), dpi=120, layout="constrained")
+    ax = fig.add_subplot()
+    colors = colormaps["viridis"](np.linspace(0.0, 0.9, max(len(frames), 1)))
     handles = []
     for (label, df), col in zip(frames.items(), colors, strict=False):
         d = df.copy()
@@ -69,14 +86,12 @@ def plot_overlay(frames: dict, path: Path, title: str = "") -> Path:
         if np.nanmin(st) < 0.5 < np.nanmax(st):
             ax.contourf(tq, sp, st, levels=[-0.5, 0.5], colors=[col], alpha=0.18)
             ax.contour(tq, sp, st, levels=[0.5], colors=[col], linewidths=1.8)
-        handles.append(plt.Line2D([], [], color=col, lw=2, label=label))
+        handles.append(Line2D([], [], color=col, lw=2, label=label))
     ax.axvline(0.0, color="0.3", lw=0.6, ls=":")
     ax.set_xlabel("load torque, N m  (< 0: regenerating)")
     ax.set_ylabel("speed reference, rpm")
     ax.legend(handles=handles, title="unstable or no steady state (shaded)", fontsize=8)
     ax.set_title(title or "boundary of the stable region")
-    fig.tight_layout()
     path = Path(path)
     fig.savefig(path)
-    plt.close(fig)
     return path

@@ -23,9 +23,9 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from matplotlib.figure import Figure
 
 from imdrive import analysis
+from imdrive._figure import DisplayFigure as Figure
 from imdrive._progress import Progress
 from imdrive.config.machine import machine_preset
 from imdrive.config.scenario import Scenario

@@ -44,7 +44,7 @@ def heatmap_figure(sweep: Sweep, df, h: Heatmap):
     matplotlib.figure.Figure
         The figure (not attached to pyplot).
     """
-    from matplotlib.figure import Figure
+    from imdrive._figure import DisplayFigure as Figure
 
     rows = _levels(sweep, h.rows) if h.rows else [None]
     cols = _levels(sweep, h.cols) if h.cols else [None]
@@ -83,7 +83,7 @@ def heatmap_figure(sweep: Sweep, df, h: Heatmap):
                 ax.set_title(title, fontsize=9)
     if mappable is not None:
         fig.colorbar(mappable, ax=axs, label=h.value, shrink=0.9)
-    agg = "" if sweep.random else f" ({h.agg} over the other axes; grey: none finite)"
+    agg = f" ({aggregation_text(sweep, h)}; grey: none finite)"
     fig.suptitle(f"{sweep.name}: {h.value}{agg}", fontsize=10)
     if annotate:
         fig.draw_without_rendering()  # the final layout gives the cells' size
@@ -98,6 +98,40 @@ def heatmap_figure(sweep: Sweep, df, h: Heatmap):
             for ax, Z in annotate:
                 annotate_cells(ax, Z, mappable, tiny, min(sizes))
     return fig
+
+
+def aggregation_text(sweep: Sweep, h: Heatmap) -> str:
+    """What a cell of the heatmap is: one run, or ``h.agg`` over the axes not drawn (named).
+
+    Parameters
+    ----------
+    sweep : Sweep
+        The sweep.
+    h : Heatmap
+        The heatmap.
+
+    Returns
+    -------
+    str
+        ``"one dot per run"`` (a random sweep), ``"one run per cell"``, or e.g. ``"mean over
+        load_Nm, R1_ratio (6 runs per cell)"``.
+    """
+    if sweep.random:
+        return "one dot per run"
+    drawn = {h.x, h.y, h.rows, h.cols}
+    other = [a for a in sweep.axes if a.name not in drawn]
+    if not other:
+        return "one run per cell"
+    n = int(np.prod([len(a.points()) for a in other]))
+    if n == 1:
+        return "one run per cell"
+    names = ", ".join(a.name for a in other)
+    return f"{h.agg} over {names} ({n} runs per cell)"
+
+
+def axis_label(v) -> str:
+    """An axis value as a tick label: 6 significant digits (``0.8``, not ``0.7999999999999999``)."""
+    return f"{v:.6g}" if isinstance(v, float) else str(v)
 
 
 def _levels(sweep: Sweep, name: str) -> list:
@@ -253,7 +287,7 @@ def annotate_cells(ax, Z, mappable, tiny: float = 0.0, fontsize: float | None = 
 
 
 def _fmt(v) -> str:
-    return f"{v:g}" if isinstance(v, float) else str(v)
+    return axis_label(v)
 
 
 def save_heatmaps(sweep: Sweep, df, folder: Path) -> list[Path]:

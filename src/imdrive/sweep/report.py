@@ -1,9 +1,10 @@
 """The interactive HTML report of a sweep store (``report.html`` beside ``runs.parquet``).
 
-The sweep's heatmaps (the same ones as the PNGs of :mod:`imdrive.sweep.figures`, one plot per
-panel) with the axis values and the metric on hover, the outcome counts, each metric's range
-over the runs, the axes and the sweep file, on the page of :func:`imdrive.run.report.html_page`
-(one self-contained file, offline).
+The sweep's heatmaps (the same ones as the PNGs of :mod:`imdrive.sweep.figures`: one figure
+per heatmap, its panels in the same rows x cols grid, each cell's value written in it, tick
+labels at the axis values, the title saying what a cell aggregates) with the values on hover,
+the outcome counts, each metric's range over the runs, the axes and the sweep file, on the
+page of :func:`imdrive.run.report.html_page` (one self-contained file, offline).
 """
 
 from __future__ import annotations
@@ -15,7 +16,17 @@ import numpy as np
 
 from imdrive._io import atomic_path
 from imdrive.run.report import html_page, html_table
-from imdrive.sweep.figures import SIGNED_METRICS, colour_range, heat_grid, panel_selections
+from imdrive.sweep.figures import (
+    SIGNED_METRICS,
+    _levels,
+    _tiny,
+    aggregation_text,
+    axis_label,
+    cell_text,
+    colour_range,
+    heat_grid,
+    panel_selections,
+)
 from imdrive.sweep.spec import Heatmap, Sweep
 
 #: Diverging scale for signed errors (plotly's RdBu: blue below zero, red above, as the PNGs'
@@ -24,45 +35,123 @@ SIGNED_SCALE = "RdBu"
 PLAIN_SCALE = "Viridis"
 
 
-def _panel_figure(sweep: Sweep, sel, h: Heatmap, div: str, title: str, zr) -> dict:
+def heatmap_plot(sweep: Sweep, df, h: Heatmap, div: str) -> dict:
+    """One heatmap as a plotly.js figure: a grid of panels (``rows`` x ``cols``, as the PNG),
+    the value written in each cell, tick labels at the axis values, a shared colour scale.
+
+    Parameters
+    ----------
+    sweep : Sweep
+        The sweep (its axes give the levels).
+    df : pandas.DataFrame
+        Its table.
+    h : Heatmap
+        Which axes, metric, panels and aggregation.
+    div : str
+        The id of the figure's element.
+
+    Returns
+    -------
+    dict
+        ``{"div", "data", "layout", "height"}`` for :func:`imdrive.run.report.html_page`.
+    """
     signed = h.value in SIGNED_METRICS
-    colour = {
-        "colorscale": SIGNED_SCALE if signed else PLAIN_SCALE,
-        "cmin" if sweep.random else "zmin": zr[0],
-        "cmax" if sweep.random else "zmax": zr[1],
-        "colorbar": {"title": {"text": h.value}},
-    }
-    hover = f"{h.x} = %{{x}}<br>{h.y} = %{{y}}<br>{h.value} = %{{{{V}}:.4g}}<extra></extra>"
-    if sweep.random:
-        trace = {
-            "type": "scatter",
-            "mode": "markers",
-            "x": sel[h.x].tolist(),
-            "y": sel[h.y].tolist(),
-            "marker": {"color": sel[h.value].astype(float).tolist(), "size": 8, **colour},
-            "hovertemplate": hover.replace("{V}", "marker.color"),
-        }
-    else:
-        xs, ys, Z = heat_grid(sweep, sel, h)
-        trace = {
-            "type": "heatmap",
-            "x": [str(v) for v in xs],
-            "y": [str(v) for v in ys],
-            "z": Z.tolist(),
-            "hoverongaps": False,
-            "hovertemplate": hover.replace("{V}", "z"),
-            **colour,
-        }
-    agg = "" if sweep.random else f" ({h.agg} over the other axes)"
-    head = f"{h.value}{agg}" + (f": {title}" if title else "")
-    layout = {
-        "title": {"text": html.escape(head), "font": {"size": 14}},
-        "xaxis": {"title": {"text": h.x}, "type": "linear" if sweep.random else "category"},
-        "yaxis": {"title": {"text": h.y}, "type": "linear" if sweep.random else "category"},
-        "margin": {"l": 80, "r": 20, "t": 50, "b": 60},
+    zr = colour_range(df[h.value], signed)
+    scale = SIGNED_SCALE if signed else PLAIN_SCALE
+    rows = [axis_label(v) for v in _levels(sweep, h.rows)] if h.rows else [None]
+    cols = [axis_label(v) for v in _levels(sweep, h.cols)] if h.cols else [None]
+    nr, nc = len(rows), len(cols)
+    panels = panel_selections(sweep, df, h)
+    tiny = _tiny(df[h.value].to_numpy(dtype=float))
+    digits = _digits(df[h.value].to_numpy(dtype=float), tiny)
+    gx, gy = 0.06, 0.12 if nr > 1 else 0.0
+    w, ht = (0.9 - gx * (nc - 1)) / nc, (1.0 - gy * (nr - 1)) / nr
+    data, annotations = [], []
+    layout: dict = {
+        "title": {
+            "text": html.escape(f"{h.value}: {aggregation_text(sweep, h)}; grey: none finite"),
+            "font": {"size": 14},
+        },
+        "margin": {"l": 80, "r": 20, "t": 60, "b": 60},
         "plot_bgcolor": "#d9d9d9",
     }
-    return {"div": div, "data": [trace], "layout": layout, "height": 420}
+    hover = f"{h.x} = %{{x}}<br>{h.y} = %{{y}}<br>{h.value} = %{{{{V}}:.4g}}<extra></extra>"
+    for k, (title, sel) in enumerate(panels):
+        r, c = divmod(k, nc)
+        ax = "" if k == 0 else str(k + 1)
+        x0 = c * (w + gx)
+        top = 1.0 - r * (ht + gy)
+        kind = "linear" if sweep.random else "category"
+        layout[f"xaxis{ax}"] = {
+            "domain": [x0, x0 + w], "anchor": f"y{ax}", "type": kind,
+            "title": {"text": h.x if r == nr - 1 else ""}, "automargin": True,
+        }  # fmt: skip
+        layout[f"yaxis{ax}"] = {
+            "domain": [top - ht, top], "anchor": f"x{ax}", "type": kind,
+            "title": {"text": h.y if c == 0 else ""}, "automargin": True,
+        }  # fmt: skip
+        colour = {
+            "colorscale": scale,
+            "showscale": k == 0,
+            "colorbar": {"title": {"text": h.value}, "x": 0.92},
+        }
+        if sweep.random:
+            trace = {
+                "type": "scatter", "mode": "markers",
+                "x": sel[h.x].tolist(), "y": sel[h.y].tolist(),
+                "marker": {"color": sel[h.value].astype(float).tolist(), "size": 8,
+                           "cmin": zr[0], "cmax": zr[1], **colour},
+                "hovertemplate": hover.replace("{V}", "marker.color"),
+            }  # fmt: skip
+        else:
+            xs, ys, Z = heat_grid(sweep, sel, h)
+            trace = {
+                "type": "heatmap",
+                "x": [axis_label(v) for v in xs],
+                "y": [axis_label(v) for v in ys],
+                "z": Z.tolist(),
+                "text": cell_texts(Z, tiny, digits),
+                "texttemplate": "%{text}",
+                "hoverongaps": False,
+                "hovertemplate": hover.replace("{V}", "z"),
+                "zmin": zr[0],
+                "zmax": zr[1],
+                **colour,
+            }
+        trace.update({"xaxis": f"x{ax}", "yaxis": f"y{ax}"})
+        data.append(trace)
+        if title:
+            annotations.append({
+                "text": html.escape(title), "xref": "paper", "yref": "paper",
+                "x": x0 + w / 2, "y": top, "xanchor": "center", "yanchor": "bottom",
+                "showarrow": False,
+            })  # fmt: skip
+    layout["annotations"] = annotations
+    ny = 1 if sweep.random else len(_levels(sweep, h.y))
+    row_px = max(260, 26 * ny + 110)
+    return {"div": div, "data": data, "layout": layout, "height": row_px * nr + 90}
+
+
+def _digits(values, tiny: float) -> int:
+    """Significant digits of the cell texts: two (:func:`cell_text`, as the PNGs), more (up to
+    four) when two would print distinct values as the same number."""
+    v = values[np.isfinite(values)]
+    distinct = len(np.unique(v))
+    for d in (2, 3, 4):
+        if len({_text(x, tiny, d) for x in v}) >= min(distinct, 4):
+            return d
+    return 4
+
+
+def _text(v: float, tiny: float, digits: int) -> str:
+    if digits == 2 or not np.isfinite(v) or abs(v) < tiny or abs(v) >= 1e4:
+        return cell_text(v, tiny)
+    return f"{v:.{digits}g}"
+
+
+def cell_texts(Z, tiny: float, digits: int = 2) -> list[list[str]]:
+    """The text of each cell of ``Z`` (:func:`_digits` significant digits; ``""``: no value)."""
+    return [[_text(float(v), tiny, digits) for v in row] for row in Z]
 
 
 def _metric_rows(df) -> list[tuple[str, object]]:
@@ -89,7 +178,7 @@ def _metric_rows(df) -> list[tuple[str, object]]:
 def _axis_text(sweep: Sweep, axis) -> str:
     """An axis's values; for a random sweep their range or distinct values (not every draw)."""
     if not sweep.random:
-        return ", ".join(f"{v:g}" if isinstance(v, float) else str(v) for v in axis.points())
+        return ", ".join(axis_label(v) for v in axis.points())
     vals = list(axis.values)
     distinct = sorted(set(vals), key=str)
     if len(distinct) <= 12:
@@ -124,11 +213,7 @@ def sweep_report(sweep: Sweep, df) -> str:
             "not be built. Hover a cell for its values; drag to zoom, double-click to reset."
         )
     )
-    figures = []
-    for i, h in enumerate(sweep.heatmaps):
-        zr = colour_range(df[h.value], h.value in SIGNED_METRICS)
-        for j, (title, sel) in enumerate(panel_selections(sweep, df, h)):
-            figures.append(_panel_figure(sweep, sel, h, f"heatmap-{i}-{j}", title, zr))
+    figures = [heatmap_plot(sweep, df, h, f"heatmap-{i}") for i, h in enumerate(sweep.heatmaps)]
     if not figures:
         notes.append("The sweep declares no heatmaps.")
     tables = [

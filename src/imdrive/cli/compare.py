@@ -1,0 +1,51 @@
+"""``imdrive compare``: several result folders side by side."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from imdrive.cli._common import EXIT_OK, _examples, _out_path
+
+
+def _cmd_compare(args) -> int:
+    from imdrive.run.compare import compare
+
+    signals = [s.strip() for s in args.signals.split(",") if s.strip()] if args.signals else None
+    cmp = compare(args.runs, signals=signals)
+    out = _out_path(args.out, "compare")
+    paths = cmp.save(out)
+    if not args.quiet:
+        print(
+            f"imdrive: compared {len(cmp.runs)} runs -> " + ", ".join(str(p) for p in paths),
+            file=sys.stderr,
+        )
+    return EXIT_OK
+
+
+def add_parser(sub) -> None:
+    """Register ``imdrive compare``.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The ``imdrive`` parser's sub-commands.
+    """
+    c = sub.add_parser(
+        "compare",
+        help="several runs side by side: overlaid signals, metrics, an HTML report",
+        description="Overlay the signals of result folders (written by imdrive run) and put "
+        "their metrics side by side: compare.png, metrics.csv and report.html (linked zoomable "
+        "panels, each with its time axis) in DIR (default out/compare).",
+        epilog=_examples(
+            "imdrive run sensorless; imdrive run sensorless-realistic",
+            "imdrive compare out/sensorless out/sensorless-realistic --out out/cmp",
+            "imdrive compare out/a out/b --signals speed_rpm,speed_est_rpm,e_d0_Wb",
+        ),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    c.add_argument("runs", nargs="+", metavar="RUN_DIR")
+    c.add_argument("--out", metavar="DIR")
+    c.add_argument("--signals", metavar="COL,...", help="columns to overlay, a panel each")
+    c.add_argument("-q", "--quiet", action="store_true")
+    c.set_defaults(func=_cmd_compare)

@@ -1,0 +1,108 @@
+"""What the console says: the closing line of a run that lost control names the first cause
+and where to look (and a setting when the scenario's own numbers explain it), ``imdrive
+--help`` has the exit-code table, ``imdrive presets`` is aligned and lists the sweeps, an
+open-loop scenario says so."""
+
+from __future__ import annotations
+
+import math
+import re
+
+import pytest
+
+import imdrive as im
+from imdrive.cli import main
+from imdrive.run.diagnosis import closing_line, load_step_dip_rpm
+
+LOW_SPEED = [
+    "control.speed_ref_rpm={initial=0, changes=[{at=0.5, to=30, over=1.0}]}",
+    "load.torque_Nm={initial=0, changes=[{at=2.0, to=12}]}",
+    "simulation.t_end_s=4",
+]
+
+
+def test_load_step_dip_matches_the_closed_form_for_the_default_gains():
+    # kp = J a / k_t, ki = kp a / 4: double pole at -a/2, peak 2 dT / (e J a)
+    J, k_t, a, dT = 0.069, 1.35, 2 * math.pi * 5.0, 12.0
+    kp = J * a / k_t
+    got = load_step_dip_rpm(J, k_t, kp, kp * a / 4, dT)
+    assert got == pytest.approx(2 * dT / (math.e * J * a) * 30 / math.pi, rel=1e-3)
+    # a stiffer loop moves less
+    assert load_step_dip_rpm(J, k_t, 4 * kp, 4 * kp * 4 * a / 4, dT) < got / 3
+
+
+def test_low_speed_loss_names_the_estimator_and_where_to_look(tmp_path, capsys):
+    code = main(["run", "sensorless", *[a for s in LOW_SPEED for a in ("--set", s)],
+                 "--out", str(tmp_path / "r")])  # fmt: skip
+    assert code == 3
+    line = capsys.readouterr().err.strip().splitlines()[-1]
+    assert line.startswith("imdrive: error: lost control at t = 2.36")
+    assert "first: the speed estimate left the actual speed" in line
+    assert "look at speed.png" in line and str(tmp_path / "r") in line
+
+
+def test_slow_speed_loop_is_named_as_the_likely_cause():
+    res = im.simulate(
+        im.Scenario.read("sensorless", ["control.speed_bandwidth_Hz=0.3", "simulation.t_end_s=4"])
+    )
+    assert res.lost_control
+    line = closing_line(res)
+    assert "first: the speed left its reference" in line
+    assert "likely cause: the speed loop (control.speed_bandwidth_Hz = 0.3 Hz)" in line
+
+
+def test_ramp_beyond_the_current_limit_is_named():
+    res = im.simulate(
+        im.Scenario.read("sensorless", ["machine.J_kgm2=0.5", "simulation.t_end_s=3"])
+    )
+    assert res.lost_control
+    assert "the current limit allows" in closing_line(res)
+
+
+class _Stub:
+    """A result that lost control at 2.03 s and diverged at 4.28 s (no signals)."""
+
+    lost_control, diverged = True, True
+    lost_control_at_s, end_time_s = 2.03, 4.28
+    lost_control_message = "lost control at t = 2.03 s: ..."
+    divergence_message = "diverged at t = 4.28 s: current"
+    signals: dict = {}
+    scenario = im.Scenario.read("free-acceleration")
+    derived: dict = {}
+
+
+def test_loss_before_divergence_is_named_first():
+    line = closing_line(_Stub(), "out/x")
+    assert line.index("lost control at t = 2.03") < line.index("diverged at t = 4.28")
+    assert line.endswith("around t = 2.03 s")
+
+
+def test_help_lists_the_exit_codes(capsys):
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    out = capsys.readouterr().out
+    assert "exit codes:" in out
+    for code in ("0", "1", "2", "3", "4", "5", "130"):
+        assert re.search(rf"^  {code}\s+\S", out, re.M), code
+
+
+def test_presets_are_aligned_and_list_the_sweeps(capsys):
+    assert main(["presets"]) == 0
+    out = capsys.readouterr().out
+    assert "sweep presets" in out and "detuning-map" in out
+    rows = [r for r in out.splitlines() if r.startswith("  ")]
+    starts = {len(r) - len(r[2:].split(" ", 1)[1].lstrip()) for r in rows}
+    assert len(starts) == 1, starts  # every description starts in the same column
+
+
+def test_open_loop_scenario_says_so(tmp_path, capsys):
+    f = tmp_path / "scratch.toml"
+    f.write_text('[machine]\npreset = "paper-table-iv"\n[simulation]\nt_end_s = 0.2\n')
+    assert main(["run", str(f), "--out", str(tmp_path / "r")]) == 0
+    err = capsys.readouterr().err
+    assert "open loop, direct on line" in err
+    assert 'open loop ([drive] mode is not "vector"' in err
+    assert main(["show", str(f)]) == 0
+    assert capsys.readouterr().out.startswith("# drive mode: open-loop")
+    assert main(["show", "sensorless"]) == 0
+    assert capsys.readouterr().out.startswith("# drive mode: vector")
