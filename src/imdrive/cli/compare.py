@@ -5,7 +5,12 @@ from __future__ import annotations
 import argparse
 import sys
 
-from imdrive.cli._common import EXIT_OK, _examples, _out_path
+from imdrive.cli._common import EXIT_OK, _examples, add_force, output_folder
+
+
+def _owns_compare_file(name: str) -> bool:
+    """The files ``imdrive compare`` writes: compare.png, metrics.csv, report.html."""
+    return name in ("compare.png", "metrics.csv", "report.html")
 
 
 def _cmd_compare(args) -> int:
@@ -13,7 +18,9 @@ def _cmd_compare(args) -> int:
 
     signals = [s.strip() for s in args.signals.split(",") if s.strip()] if args.signals else None
     cmp = compare(args.runs, signals=signals)
-    out = _out_path(args.out, "compare")
+    out = output_folder(
+        args.out, "compare", owns=_owns_compare_file, force=args.force, what="a comparison"
+    )
     paths = cmp.save(out)
     if not args.quiet:
         print(
@@ -46,6 +53,7 @@ def add_parser(sub) -> None:
     )
     c.add_argument("runs", nargs="+", metavar="RUN_DIR")
     c.add_argument("--out", metavar="DIR")
+    add_force(c, "a comparison")
     c.add_argument("--signals", metavar="COL,...", help="columns to overlay, a panel each")
     c.add_argument("-q", "--quiet", action="store_true")
     c.set_defaults(func=_cmd_compare)
