@@ -1,9 +1,9 @@
 """MkDocs hook for the docs site (``mkdocs.yml``, ``hooks:``).
 
 The pages in ``docs/`` link to the repository's own files outside ``docs/``
-(``../src/imdrive/kernels/engine.py``, ``../tests/test_layers.py``): such a link works where the
-Markdown is read in the repository, but the site holds only ``docs/``, so MkDocs would report it
-as a broken link. Before MkDocs reads a page, each such link whose target exists in the
+(``../src/imdrive/kernels/engine.py``, ``../tests/package/test_layers.py``): such a link works
+where the Markdown is read in the repository, but the site holds only ``docs/``, so MkDocs would
+report it as a broken link. Before MkDocs reads a page, each such link whose target exists in the
 repository becomes a link to that file on ``repo_url`` when one is configured, else the link
 text followed by the path in the repository. A link whose target does not exist is left alone,
 so ``mkdocs build --strict`` still fails on it; links inside ``docs/`` are MkDocs' own to check.

@@ -10,7 +10,7 @@ of the preset (default ``sensorless``, cut to one control period, since the comp
 not Python and is not traced) runs under :func:`sys.setprofile`. The walk is the sequence of
 the files of every Python function called inside ``imdrive``, in call order. A *file switch*
 is a call into another file than the previous call's. A *climb* is a switch into a file of a
-higher layer than the previous call's (ranks as in ``tests/test_layers.py``: config 1,
+higher layer than the previous call's (ranks as in ``tests/package/test_layers.py``: config 1,
 kernels 2, design 3, fuzzy/analysis 4, run 5, sweep/studies/stability/bench 6, cli 7): the
 walk went down and has to come back up. Prints the counts and the files visited.
 """

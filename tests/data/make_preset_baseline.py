@@ -5,7 +5,7 @@ commit message)::
 
     python tests/data/make_preset_baseline.py
 
-``tests/test_preset_baseline.py`` compares every preset against this file bit for bit: a
+``tests/drive/test_preset_baseline.py`` compares every preset against this file bit for bit: a
 change that is not meant to alter the numerics (a refactor, a rename) must not change a single
 bit of any result.
 

@@ -8,7 +8,7 @@ markers are the rendering of ``docs/data/estimators.csv``, the ``estimators.csv`
     python -m imdrive.bench.docs           # rewrite the tables from the stored CSV
     python -m imdrive.bench.docs --check   # exit 1 if the tables are not the CSV's rendering
 
-``tests/test_bench_docs.py`` checks that the page is the rendering of the CSV, and that the
+``tests/bench/test_bench_docs.py`` checks that the page is the rendering of the CSV, and that the
 CSV is still what the code computes: it reruns the protocol's quick subset (12 of the 160 runs,
 a documented subset: :data:`~imdrive.bench.protocol.QUICK_ESTIMATORS` x
 :data:`~imdrive.bench.protocol.QUICK_CASES` on the average drive) and compares those rows.

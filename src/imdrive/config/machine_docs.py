@@ -56,7 +56,7 @@ imdrive machine-from-nameplate --power-kw 2.2 --voltage 400 --frequency 50 --pol
 
 The method, its sources and its assumptions are in `imdrive.analysis.nameplate`; on the
 library's machines it reproduces rated torque, current and breakdown torque
-(`tests/test_machines.py`).
+(`tests/config/test_machines.py`).
 
 **Rated point.** A nameplate field left out (`rated_speed_rpm`, `rated_torque_Nm`,
 `rated_current_rms_A`, `rated_power_factor`, `rated_efficiency`) is derived from the circuit

@@ -4,7 +4,7 @@ compose them. Nothing here sees a Python object.
 Every module of this package is compiled under the package's hashed cache folder
 (:mod:`imdrive._cache`) *by construction*: importing any ``imdrive.kernels.*`` module runs this
 file first, and it imports every module found below it inside :func:`kernel_cache`. A new kernel
-module needs no registration; ``tests/test_layers.py`` checks that none escapes.
+module needs no registration; ``tests/package/test_layers.py`` checks that none escapes.
 """
 
 import importlib

@@ -20,8 +20,9 @@ Main-flux saturation: the currents are linear in the fluxes when the magnetising
 ``k = |psi_m|/|psi_x|`` is held (:func:`imdrive.kernels.machine.current_coefficients`), so
 each interval holds ``k`` at its value predicted for the interval's middle (first order in
 ``|psi_x|`` from the start's slope) and the currents at its end come from the run's table of
-the curve (:func:`imdrive.kernels.machine.magnetising_ratio`). ``tests/test_realistic_drive.py``
-measures the result against solve_ivp with the switching instants as breakpoints.
+the curve (:func:`imdrive.kernels.machine.magnetising_ratio`).
+``tests/drive/test_realistic_drive.py`` measures the result against solve_ivp with the switching
+instants as breakpoints.
 """
 
 from __future__ import annotations

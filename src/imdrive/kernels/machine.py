@@ -37,8 +37,8 @@ alone between its edges (:func:`flux_taylor`, see :mod:`imdrive.kernels.bridge`)
 RK4 rather than an exact discretisation: the plant is
 nonlinear (speed multiplies flux, the thermal model makes R depend on state); the fastest
 electrical mode has ``|lambda| ~ 400 1/s`` so ``|lambda| h ~ 0.04`` at the default 100 us, where
-RK4's local error is ~1e-9 relative; tests/test_machine_physics.py measures it against scipy's
-solve_ivp.
+RK4's local error is ~1e-9 relative; tests/kernels/test_machine_physics.py measures it against
+scipy's solve_ivp.
 """
 
 from __future__ import annotations
@@ -398,7 +398,8 @@ def integrate_short(p, x, v_alpha, v_beta, R1b, R2b, TL0, dt, m0=-1.0):
 
     Its local error, ``~(lambda dt)^3/6`` with ``|lambda| ~ 500 1/s`` the fastest electrical
     mode, is below RK4's over a whole period for ``dt <= Ts/40`` (2.5 us at 10 kHz), at half
-    the cost; ``tests/test_realistic_drive.py`` measures the switching model against solve_ivp.
+    the cost; ``tests/drive/test_realistic_drive.py`` measures the switching model against
+    solve_ivp.
     """
     y0 = x.psi_s_ab.real
     y1 = x.psi_s_ab.imag

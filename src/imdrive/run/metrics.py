@@ -4,7 +4,7 @@ Three families, each used by the CLI, the batch, the sweeps and the paper's stud
 
 * :func:`drive_metrics` — one row per drive, the columns of the batch and sweep tables. The
   batch kernel (:mod:`imdrive.kernels.batch`) computes the same quantities while the samples
-  stream past; ``tests/test_batch.py`` checks the two agree to 1e-12.
+  stream past; ``tests/run/test_batch.py`` checks the two agree to 1e-12.
 * :func:`compensation_metrics` — how the R2 compensator did (``summary.json``, the paper's
   compensation table).
 * :func:`steady_means` — means of the main signals over the last part of a run (the paper's

@@ -2,7 +2,7 @@
 column of the batch and sweep tables, with its meaning, frame, sign and unit.
 
 Generated into ``docs/outputs.md`` (``python -m imdrive.run.outputs [--check]``) from the same
-tables the results are built from, so it cannot go stale: ``tests/test_exports.py`` fails when
+tables the results are built from, so it cannot go stale: ``tests/run/test_exports.py`` fails when
 the file differs or when a written column has no entry here.
 """
 

@@ -21,7 +21,7 @@ Notes
 The page records every script error (``window.onerror``, unhandled promise rejections,
 ``console.error``) into a hidden ``<pre id="report-errors">`` and sets ``data-status`` on
 ``<body>`` to ``rendered`` once every plot is drawn (``failed`` otherwise), so a headless
-browser's ``--dump-dom`` shows whether the page worked (``tests/test_report.py``).
+browser's ``--dump-dom`` shows whether the page worked (``tests/run/test_report.py``).
 """
 
 from __future__ import annotations

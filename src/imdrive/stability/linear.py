@@ -36,7 +36,7 @@ reference, load torque) are the exact small-signal model of the discrete closed 
 control period Ts: the controller is discrete, so a discrete model represents its sampling and
 one-period computation delay without a Padé or delay approximation; the continuous-time
 eigenvalues reported are ``s = ln(lambda) / Ts``. Why discrete, measured: the linear model
-matches the nonlinear loop's response to 1e-3 relative (tests/test_stability.py).
+matches the nonlinear loop's response to 1e-3 relative (tests/stability/test_stability.py).
 """
 
 from __future__ import annotations

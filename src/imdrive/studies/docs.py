@@ -7,7 +7,7 @@ markers and is the rendering of the CSV's rows of its compensator. Usage::
     python -m imdrive.studies.docs           # rewrite the tables from the CSV
     python -m imdrive.studies.docs --check   # exit 1 if they are stale
 
-``tests/test_generated_docs.py`` checks that the page is the rendering of the CSV and that
+``tests/docs/test_generated_docs.py`` checks that the page is the rendering of the CSV and that
 the CSV is what :func:`imdrive.studies.paper.compensation_table` computes today.
 """
 

@@ -21,7 +21,7 @@ from imdrive.run.simulate import simulate
 
 pytestmark = pytest.mark.slow  # each test compiles or loads the loop for a new estimator
 
-MODULE = Path(__file__).parent / "data" / "own_estimator.py"
+MODULE = Path(__file__).parents[1] / "data" / "own_estimator.py"
 BASE = [
     f'plugins.modules=["{MODULE}"]',
     'control.speed_feedback="flux-angle"',

@@ -20,7 +20,7 @@ from imdrive.sweep import figures as sweep_figures
 from imdrive.sweep import load_sweep, parse_sweep
 from imdrive.sweep.spec import Heatmap
 
-FIGURES = Path(__file__).parent.parent / "docs" / "figures"
+FIGURES = Path(__file__).parents[2] / "docs" / "figures"
 
 
 @pytest.fixture(scope="module")

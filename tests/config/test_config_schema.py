@@ -40,7 +40,7 @@ from imdrive.config.scenario import (
 from imdrive.config.schema import scenario_keys
 from imdrive.errors import ConfigError
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 CONFIG_DIR = Path(imdrive.config.__file__).parent
 
 

@@ -18,7 +18,7 @@ nbformat = pytest.importorskip("nbformat", reason="the test extra installs nbfor
 nbclient = pytest.importorskip("nbclient", reason="the test extra installs nbclient")
 pytest.importorskip("ipykernel", reason="the test extra installs ipykernel")
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 NOTEBOOKS = sorted((ROOT / "docs" / "examples").glob("*.ipynb"))
 
 #: a cell draws a figure when it calls one of these (the package's figures, pyplot's show)

@@ -34,7 +34,7 @@ from numpydoc.docscrape import NumpyDocString
 
 import imdrive
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 #: the public modules besides ``imdrive.__all__``: each is rendered by the API reference
 PUBLIC_MODULES = (

@@ -23,7 +23,7 @@ from imdrive.config import machine_docs
 from imdrive.config.machine import preset_source, rated_point
 from imdrive.errors import ConfigError, ConfigWarning
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 LIBRARY = list(machine_presets())
 
 # The reactances (ohm at the rated frequency) and inertias as the sources print them, typed in

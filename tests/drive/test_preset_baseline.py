@@ -23,7 +23,7 @@ from imdrive.config.presets import preset_names, preset_text
 from imdrive.config.scenario import Scenario
 from imdrive.run.simulate import simulate
 
-BASELINE = json.loads((Path(__file__).parent / "data" / "preset_baseline.json").read_text())
+BASELINE = json.loads((Path(__file__).parents[1] / "data" / "preset_baseline.json").read_text())
 
 
 def baseline_overrides(name: str) -> list[str]:

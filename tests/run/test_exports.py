@@ -14,7 +14,7 @@ from imdrive.errors import ConfigError
 from imdrive.run import outputs
 from imdrive.run.export import read_parquet_units, unit_of
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture(scope="module")

@@ -74,7 +74,7 @@ from pathlib import Path
 
 import pytest
 
-SRC = Path(__file__).resolve().parents[1] / "src"
+SRC = Path(__file__).resolve().parents[2] / "src"
 PKG = SRC / "imdrive"
 
 RANK = {
@@ -292,7 +292,7 @@ def rank_violations():
 
 def test_every_module_has_a_layer():
     missing = sorted({layer(m) for m in graph().modules if layer(m) and layer(m) not in RANK})
-    assert not missing, f"give these a rank in RANK of tests/test_layers.py: {missing}"
+    assert not missing, f"give these a rank in RANK of tests/package/test_layers.py: {missing}"
 
 
 def test_old_paths_are_detected():
@@ -372,7 +372,7 @@ def test_order_inside_packages():
                 if e.target in names[i:]:
                     found.append((e, f"intra: imdrive.{pkg} is ordered {' <- '.join(order)}"))
         extra = {m for m in g.modules if m.startswith(f"imdrive.{pkg}.")} - set(names)
-        assert not extra, f"add {sorted(extra)} to INTRA['{pkg}'] in tests/test_layers.py"
+        assert not extra, f"add {sorted(extra)} to INTRA['{pkg}'] in tests/package/test_layers.py"
     found = _new(found)
     assert not found, _report(found, "a package's modules import only earlier siblings")
 
@@ -498,7 +498,9 @@ def test_known_violations_still_occur():
     occurring |= {("numba", e.importer, "numba") for e in g.edges if e.target == "numba"}
     occurring |= {("cycle", a, b) for a, b in _cut_edges() if b in g.internal(a)}
     stale = sorted(KNOWN - occurring)
-    assert not stale, f"fixed, remove from KNOWN_VIOLATIONS in tests/test_layers.py: {stale}"
+    assert not stale, (
+        f"fixed, remove from KNOWN_VIOLATIONS in tests/package/test_layers.py: {stale}"
+    )
 
 
 # --------------------------------------------------------------------------------------------

@@ -250,7 +250,7 @@ def test_sweep_file_name_is_slugified_for_the_default_name(tmp_path):
 def test_exit_codes_are_documented():
     assert (cli.EXIT_OK, cli.EXIT_DIVERGED, cli.EXIT_BAD_INPUT) == (0, 1, 2)
     assert (cli.EXIT_LOST_CONTROL, cli.EXIT_ENVIRONMENT, cli.EXIT_INTERNAL) == (3, 4, 5)
-    readme = (Path(__file__).parents[1] / "README.md").read_text()
+    readme = (Path(__file__).parents[2] / "README.md").read_text()
     for code in range(6):
         assert f"| {code} |" in readme, code
         assert f"\n{code} (``EXIT_" in cli.__doc__

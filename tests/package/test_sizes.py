@@ -9,7 +9,7 @@ first decorator) to its last line.
 import ast
 from pathlib import Path
 
-SRC = Path(__file__).resolve().parents[1] / "src" / "imdrive"
+SRC = Path(__file__).resolve().parents[2] / "src" / "imdrive"
 MAX_FUNCTION_LINES = 120
 MAX_MODULE_LINES = 600
 
