@@ -188,11 +188,9 @@ class RatedPoint:
         return {k: float(v) for k, v in asdict(self).items() if k != "sources"}
 
 
-def rated_point(m: MachineParams) -> RatedPoint:
+def _rated_point_uncached(m: MachineParams) -> RatedPoint:
     """The rated operating point: the nameplate where given, derived where not.
 
-    Computed once per distinct machine (a solve of the circuit; the per-unit defaults of
-    every drive of a batch ask for it).
 
     Parameters
     ----------
@@ -497,15 +495,12 @@ def rated_point_comment(m: MachineParams) -> str:
     return "\n".join(lines) + "\n"
 
 
-_rated_point_uncached = rated_point
-
-
 @functools.lru_cache(maxsize=256)
 def _rated_point_cached(m: MachineParams) -> RatedPoint:
     return _rated_point_uncached(m)
 
 
-def rated_point(m: MachineParams) -> RatedPoint:  # noqa: F811  (the cached entry point)
+def rated_point(m: MachineParams) -> RatedPoint:
     """The rated operating point: the nameplate where given, derived where not (computed once
     per distinct machine; see :func:`_rated_point_uncached` for the method).
 
