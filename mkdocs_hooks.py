@@ -58,14 +58,32 @@ def on_page_markdown(markdown: str, page, config, files) -> str:
     page_dir = Path(page.file.abs_src_path or docs / page.file.src_uri).parent
     root = Path(config["config_file_path"]).resolve().parent
     repo_url = config.get("repo_url") or ""
+    gallery = page.file.abs_src_path is not None  # a written page, not a gallery page
+
+    def link(m: re.Match) -> str:
+        return _gallery_link(m, page_dir, docs) if gallery else m.group(0)
+
     out, fenced = [], False
     for line in markdown.split("\n"):
         if _FENCE.match(line):
             fenced = not fenced
         elif not fenced:
             line = _LINK.sub(lambda m: _outside_link(m, page_dir, docs, root, repo_url), line)
+            line = _LINK.sub(link, line)
         out.append(line)
     return "\n".join(out)
+
+
+def _gallery_link(match: re.Match, page_dir: Path, docs: Path) -> str:
+    """A link to an example notebook leads to its gallery page on the site (the page links
+    the notebook itself); in the repository it leads to the notebook."""
+    text, target = match.groups()
+    path, _, anchor = target.partition("#")
+    file = (page_dir / path).resolve()
+    if not path.endswith(".ipynb") or file.parent != (docs / EXAMPLES).resolve():
+        return match.group(0)
+    page = path[: -len(".ipynb")] + ".md"
+    return f"[{text}]({page}{'#' + anchor if anchor else ''})"
 
 
 def _role(match: re.Match) -> str:
@@ -113,6 +131,7 @@ def execute_notebook(notebook: Path, timeout: int = 300):
     inline matplotlib backend, as Jupyter does.
     """
     import os
+    import subprocess
     import tempfile
 
     import nbclient
@@ -137,7 +156,9 @@ def execute_notebook(notebook: Path, timeout: int = 300):
                 kernel_name="python3",
                 resources={"metadata": {"path": tmp}},
             )
-            client.execute()
+            # the kernel's own log (on shutdown: "Parent appears to have exited") is not the
+            # notebook's output, and would read as a warning of the site's build
+            client.execute(stderr=subprocess.DEVNULL)
     finally:
         if env_path is None:
             os.environ.pop("PYTHONPATH", None)

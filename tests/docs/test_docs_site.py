@@ -55,6 +55,13 @@ def test_site_builds_strict_with_every_page_and_the_api_reference(tmp_path):
         assert images, f"the gallery page of {nb.name} shows no figure"
         for name in images:
             assert (site / "examples" / name).stat().st_size > 5000, name
+    # a gallery page as a browser draws it: the page and its figure, not a blank page
+    from test_report import assert_nonblank, find_chromium, screenshot
+
+    if find_chromium() is not None:
+        page = site / "examples" / "01-quick-start.html"
+        pixels = screenshot(page, tmp_path / "gallery.png", width=1200, height=2400)
+        assert_nonblank(pixels, min_colours=200)  # a figure has many more colours than text
     # the API reference is generated from the docstrings, with the numpydoc sections
     api = (site / "api" / "simulate.html").read_text()
     assert 'id="imdrive.run.simulate.simulate"' in api
