@@ -27,7 +27,7 @@ DEFAULT_PANELS = (
     ("torque", ("torque_Nm",)),
     ("stator current magnitude", ("i_s_mag_A",)),
     ("MRAS flux error e_d0", ("e_d0_Wb",)),
-    ("rotor resistance estimate", ("R2_est_ohm",)),
+    ("rotor resistance estimate", ("R2_hat_ohm", "R2_est_ohm")),
 )
 
 

@@ -41,7 +41,7 @@ def _paper_rows(df) -> list[str]:
         "|---|---|---|---|---|",
     ]
     for _, r in df.iterrows():
-        ratio = r["R2_est_final_ohm"] / r["R2_ohm"]
+        ratio = r["R2_hat_final_ohm"] / r["R2_ohm"]
         clamp = " (clamp)" if math.isclose(ratio, 0.5, abs_tol=1e-9) else ""
         t = r["time_to_tolerance_s"]
         within = "never" if math.isnan(t) else f"{t:.1f} s"
@@ -63,7 +63,7 @@ def _injection_rows(df) -> list[str]:
         within = "never" if math.isnan(t) else f"{t:.1f} s"
         out.append(
             f"| {_label(r)} | {r['R2_ratio_initial']:.1f} | "
-            f"{_signed(r['R2_est_final_error_pct'])} % | {within} | "
+            f"{_signed(r['R2_hat_final_error_pct'])} % | {within} | "
             f"{_signed(r['speed_error_before_rpm'])} → {_signed(r['speed_error_after_rpm'])} | "
             f"{r['speed_ripple_after_rpm']:.2f} |"
         )
