@@ -22,6 +22,8 @@ import math
 
 import numpy as np
 
+from imdrive.config.perunit import lost_control_rpm, speed_bandwidth_Hz
+
 
 def load_step_dip_rpm(J: float, k_t: float, kp: float, ki: float, step_Nm: float) -> float:
     """Peak speed deviation after a load-torque step, rpm (mechanical; current not limited).
@@ -97,31 +99,21 @@ def tuning_hint(res) -> str | None:
     if step <= 0.0:
         return None
     dip = load_step_dip_rpm(J, k_t, d["speed_kp"], d["speed_ki"], step)
-    bound = sc.simulation.lost_control_rpm
+    bound = lost_control_rpm(sc)
     if dip <= 0.5 * bound:
         return None
     ctl = sc.control
     if ctl.speed_kp is None:
-        gains = f"control.speed_bandwidth_Hz = {ctl.speed_bandwidth_Hz:g} Hz"
-        if ctl.speed_bandwidth_Hz == _default_speed_bandwidth(ctl):
-            gains += ", the default"
+        gains = f"control.speed_bandwidth_Hz = {speed_bandwidth_Hz(sc):.3g} Hz"
+        if ctl.speed_bandwidth_Hz is None:
+            gains += ", derived from the machine"
     else:
         gains = f"control.speed_kp = {ctl.speed_kp:g}"
     return (
         f"likely cause: the speed loop ({gains}) is slow for J = {J:g} kg m2: the "
         f"{step:g} N m load step moves the speed by about {dip:.0f} rpm "
-        f"(simulation.lost_control_rpm = {bound:g}); raise control.speed_bandwidth_Hz"
+        f"(loss-of-control bound {bound:.3g} rpm); raise control.speed_bandwidth_Hz"
     )
-
-
-def _default_speed_bandwidth(control) -> float | None:
-    """The default of ``control.speed_bandwidth_Hz`` (None if it cannot be had)."""
-    import dataclasses
-
-    for f in dataclasses.fields(control):
-        if f.name == "speed_bandwidth_Hz" and f.default is not dataclasses.MISSING:
-            return f.default
-    return None
 
 
 def _what_moved(res, t0: float) -> str:
