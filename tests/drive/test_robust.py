@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from imdrive.cli import EXIT_LOST_CONTROL, main
+from imdrive.config.perunit import resolve
 from imdrive.config.scenario import Scenario
 from imdrive.run.batch import simulate_batch
 from imdrive.run.metrics import drive_metrics, lost_control_time
@@ -325,7 +326,7 @@ def test_envelope_sweep_preset():
     assert inj.compensator.step_law == "adaptive" and inj.mras.R1_rate_per_s > 0
     assert inj.mras.R1_standstill and inj.compensator.fine_gain == 1.0
     assert inj.injection.frequency3_Hz == 6.0 and inj.compensator.gate_band_Hz == 1.5
-    assert inj.estimator.R1_ohm == pytest.approx(0.9 * inj.machine.R1_ohm)
-    assert inj.estimator.R2_ohm == pytest.approx(1.2 * inj.machine.R2_ohm)
+    assert resolve(inj).R1_hat == pytest.approx(0.9 * inj.machine.R1_ohm)
+    assert resolve(inj).R2_hat == pytest.approx(1.2 * inj.machine.R2_ohm)
     plain = sw.scenario_for((150, -6, 1.0, 1.0, "uncompensated"))
     assert not plain.compensator.enabled and plain.mras.R1_rate_per_s == 0

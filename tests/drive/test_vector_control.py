@@ -16,6 +16,7 @@ import pytest
 from imdrive import analysis
 from imdrive.cli import main
 from imdrive.config.machine import machine_preset
+from imdrive.config.perunit import speed_bandwidth_Hz
 from imdrive.config.scenario import Scenario
 from imdrive.errors import SimulationDiverged
 from imdrive.run.simulate import simulate
@@ -213,6 +214,6 @@ def test_controller_gain_formulas():
     assert d["current_kp"] == pytest.approx(sigma_L1 * a_c)
     assert d["current_ki"] == pytest.approx((m.R1_ohm + (m.M_H / m.L2_H) ** 2 * m.R2_ohm) * a_c)
     k_t = 1.5 * m.pole_pairs * m.M_H / m.L2_H * m.rated_flux_Wb
-    a_s = 2 * math.pi * sc.control.speed_bandwidth_Hz
+    a_s = 2 * math.pi * speed_bandwidth_Hz(sc)  # derived from the machine (5 Hz here)
     assert d["speed_kp"] == pytest.approx(m.J_kgm2 * a_s / k_t)
     assert d["mras_K2"] / d["mras_K1"] == pytest.approx(m.R2_ohm / m.L2_H)
