@@ -519,3 +519,23 @@ def rated_point(m: MachineParams) -> RatedPoint:
         return _rated_point_cached(m)
     except TypeError:  # an unhashable machine (never for MachineParams): no cache
         return _rated_point_uncached(m)
+
+
+def rated_point_dict(m: MachineParams) -> dict | None:
+    """The machine's rated point as numbers (``summary.json`` ``machine_rated``), or ``None``
+    when its circuit has none (it cannot deliver the rated power).
+
+    Parameters
+    ----------
+    m : MachineParams
+        The machine.
+
+    Returns
+    -------
+    dict or None
+        :meth:`RatedPoint.to_dict`.
+    """
+    try:
+        return rated_point(m).to_dict()
+    except ConfigError:
+        return None

@@ -18,18 +18,21 @@ constructors, ``dataclasses.replace``).
 
 from __future__ import annotations
 
-import math
-import warnings
 from dataclasses import replace
 from pathlib import Path
 from typing import Annotated
 
 from pydantic import model_validator
 
+from imdrive.config.checks import (
+    compensator_rules,
+    machine_defaults,
+    per_unit_warnings,
+    plugin_rules,
+)
 from imdrive.config.compensator import (
     CompensatorSettings,
     InjectionSettings,
-    check_whole_injection_periods,
 )
 from imdrive.config.control import (  # noqa: F401  (NonNegativeProfile: re-export)
     ControlSettings,
@@ -87,7 +90,7 @@ from imdrive.config.plant import (  # noqa: F401  (C and the profile types: re-e
     SaturationSettings,
     ThermalSettings,
 )
-from imdrive.config.plugins import PluginSettings, import_plugins, module_spec_of
+from imdrive.config.plugins import PluginSettings, import_plugins
 from imdrive.config.profiles import Profile  # noqa: F401  (re-export)
 from imdrive.config.sensors import SensorSettings
 from imdrive.config.simulation import DEFAULT_LOG_RATE_HZ, SimulationSettings, default_log_every
@@ -102,7 +105,7 @@ from imdrive.config.validation import (  # noqa: F401  (re-exports)
     settings,
     validate,
 )
-from imdrive.errors import ConfigError, ConfigWarning
+from imdrive.errors import ConfigError
 
 __all__ = [
     "DEFAULT_LOG_RATE_HZ",
@@ -343,29 +346,8 @@ class Scenario:
         return self
 
     def _plugin_rules(self) -> None:
-        """Each ``[plugins.settings.NAME]`` table valid for its estimator's settings class
-        (stored back with its defaults filled in); the module of a plug-in estimator in use
-        listed in ``plugins.modules``, so a rerun or a worker process imports it again."""
-        tables = {}
-        for name, table in self.plugins.settings.items():
-            cls = ESTIMATOR_SETTINGS.get(name)
-            if cls is None or cls.estimator_section is not None:
-                known = [n for n, c in ESTIMATOR_SETTINGS.items() if c.estimator_section is None]
-                raise ConfigError(
-                    f"plugins.settings.{name}",
-                    f"no plug-in estimator of that name is registered (plug-ins: {known})",
-                )
-            tables[name] = _to_plain(validate(cls, table, f"plugins.settings.{name}"))
-        modules = list(self.plugins.modules)
-        cls = ESTIMATOR_SETTINGS.get(self.control.speed_feedback)
-        if cls is not None and cls.estimator_section is None:
-            spec = module_spec_of(cls)
-            if spec is not None and spec not in modules:
-                modules.append(spec)
-        if tables != self.plugins.settings or modules != list(self.plugins.modules):
-            object.__setattr__(
-                self, "plugins", PluginSettings(modules=tuple(modules), settings=tables)
-            )
+        """``[plugins]`` checked and completed (:func:`imdrive.config.checks.plugin_rules`)."""
+        plugin_rules(self)
 
     def estimator_settings(self):
         """The settings object of the estimator ``control.speed_feedback`` selects.
@@ -384,119 +366,16 @@ class Scenario:
         return validate(cls, self.plugins.settings.get(name, {}), f"plugins.settings.{name}")
 
     def _machine_defaults(self) -> None:
-        """Defaults that follow the machine, filled in (and derived again when the machine
-        changes): the DC link from the rated voltage. An explicit DC link that cannot reach
-        the rated voltage is refused below half of it, else warned about."""
-        inv = self.inverter
-        V_rated = self.machine.rated_voltage_V
-        if inv.Vdc_V is None or getattr(inv, "_Vdc_auto", False):
-            inv = replace(inv, Vdc_V=V_rated * math.sqrt(2.0))
-            object.__setattr__(inv, "_Vdc_auto", True)
-            object.__setattr__(self, "inverter", inv)
-            return
-        reach = inv.Vdc_V / math.sqrt(2.0)  # the line voltage the SVM's linear range reaches
-        if reach < 0.5 * V_rated:
-            raise ConfigError(
-                "inverter.Vdc_V",
-                f"{inv.Vdc_V:g} V reaches {reach:.0f} V line-to-line, less than half of "
-                f"machine.rated_voltage_V = {V_rated:g} V: leave Vdc_V unset (√2 × the rated "
-                "voltage) or raise it",
-            )
-        if reach < 0.98 * V_rated:
-            warnings.warn(
-                ConfigWarning(
-                    "inverter.Vdc_V",
-                    f"{inv.Vdc_V:g} V reaches {reach:.0f} V line-to-line, below "
-                    f"machine.rated_voltage_V = {V_rated:g} V: the drive is voltage-limited "
-                    f"from about {100 * reach / V_rated:.0f} % of base speed",
-                ),
-                stacklevel=2,
-            )
+        """The defaults that follow the machine (:func:`imdrive.config.checks.machine_defaults`)."""
+        machine_defaults(self)
 
     def _compensator_rules(self) -> None:
-        """The R̂2 clamps in order, given or default (one given clamp against the other's
-        default: ``R2_min_ohm`` above the default ``R2_max_ohm`` made R̂2 jump); the decision
-        period and the injection against the run and the machine."""
-        comp = self.compensator
-        r = resolve(self)
-        R2h, lo, hi = r.R2_hat, r.R2_min, r.R2_max
-        if not lo < hi:
-            field = (
-                "compensator.R2_min_ohm"
-                if comp.R2_min_ohm is not None
-                else ("compensator.R2_max_ohm")
-            )
-            raise ConfigError(
-                field,
-                f"the clamps of R̂2 must satisfy R2_min_ohm < R2_max_ohm (got {lo:g} >= {hi:g}; "
-                f"an unset clamp is 0.5 or 2 × the initial R̂2 = {R2h:g} ohm)",
-            )
-        Ts = self.simulation.Ts_s
-        if comp.period_s is not None and comp.period_s / Ts > 2e9:
-            raise ConfigError("compensator.period_s", "is more than 2e9 control periods")
-        inj = self.injection
-        if inj.frequency_Hz * Ts < 0.5e-9:  # no division: a tiny product must not divide
-            raise ConfigError("injection.frequency_Hz", "has a period of more than 2e9 periods")
-        check_whole_injection_periods(comp, inj, Ts, r)
-        i_rated = self.machine.rated_current_A
-        if r.inj_amp > i_rated:
-            raise ConfigError(
-                "injection.amplitude_pu"
-                if inj.amplitude_pu is not None
-                else "injection.amplitude_A",
-                f"must be <= the machine's rated peak current {i_rated:.3g} A (a persistent "
-                f"excitation is a small perturbation of the flux current; got {r.inj_amp:g} A)",
-            )
-        self._per_unit_warnings(r)
+        """The compensator against the run (:func:`imdrive.config.checks.compensator_rules`)."""
+        compensator_rules(self)
 
     def _per_unit_warnings(self, r) -> None:
-        """A machine-dependent setting given as an absolute value far from what suits this
-        machine (typically a value tuned for another machine) is warned about, one line each."""
-        comp, inj, m = self.compensator, self.injection, self.machine
-        notes = []
-        if comp.enabled and comp.G_CR_pu is None and not 1e-4 <= r.G_CR / r.R2_hat <= 0.2:
-            notes.append(
-                (
-                    "compensator.G_CR_ohm",
-                    f"{r.G_CR:g} ohm is {100 * r.G_CR / r.R2_hat:.3g} % of the initial R̂2 "
-                    f"({r.R2_hat:.3g} ohm) per step: set compensator.G_CR_pu instead",
-                )
-            )
-        absolute = comp.R2_min_ohm is not None or comp.R2_max_ohm is not None
-        if comp.enabled and absolute and not r.R2_min <= m.R2_ohm <= r.R2_max:
-            notes.append(
-                (
-                    "compensator.R2_min_ohm",
-                    f"the clamps [{r.R2_min:.3g}, {r.R2_max:.3g}] ohm exclude the machine's R2 = "
-                    f"{m.R2_ohm:.3g} ohm, so R̂2 cannot reach it: set R2_min_ratio/R2_max_ratio",
-                )
-            )
-        i_m = m.rated_flux_Wb / m.M_H
-        if inj.amplitude_pu is None and r.inj_amp > 0.0 and not 0.01 <= r.inj_amp / i_m <= 0.3:
-            notes.append(
-                (
-                    "injection.amplitude_A",
-                    f"{r.inj_amp:g} A is {100 * r.inj_amp / i_m:.3g} % of the rated magnetising "
-                    f"current {i_m:.3g} A: set injection.amplitude_pu instead",
-                )
-            )
-        est = self.estimator
-        for key, value, plant in (
-            ("R1_ohm", est.R1_ohm, m.R1_ohm),
-            ("R2_ohm", est.R2_ohm, m.R2_ohm),
-            ("M_H", est.M_H, m.M_H),
-        ):
-            if value is not None and not 0.5 <= value / plant <= 2.0:
-                notes.append(
-                    (
-                        f"estimator.{key}",
-                        f"{value:g} is {value / plant:.3g} x the machine's {plant:.4g}: a "
-                        f"starting value for another machine? set estimator.{key.split('_')[0]}"
-                        "_ratio instead",
-                    )
-                )
-        for field_, rule in notes:
-            warnings.warn(ConfigWarning(field_, rule), stacklevel=3)
+        """Absolute values far from the machine (:func:`.checks.per_unit_warnings`)."""
+        per_unit_warnings(self, r)
 
     # -- construction ----------------------------------------------------------------------
     @classmethod

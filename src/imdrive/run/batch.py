@@ -295,6 +295,29 @@ def _run_block(block, offset, logs, log_every, window_s, parallel, errors):
     return m_blk, s_blk, k_blk, ts_blk, e_blk, res_blk, kernel_wall
 
 
+def _is_int(v) -> bool:
+    return isinstance(v, int | np.integer) and not isinstance(v, bool)
+
+
+def _check_batch_arguments(log_every, window_s, block_size, errors) -> None:
+    """:func:`simulate_batch`'s options checked, each refused by name."""
+    from imdrive.errors import ConfigError
+
+    if log_every is not None and not (_is_int(log_every) and log_every >= 1):
+        raise ConfigError("log_every", f"must be an integer >= 1 (got {log_every!r})")
+    if not (
+        isinstance(window_s, int | float | np.floating)
+        and not isinstance(window_s, bool)
+        and math.isfinite(window_s)
+        and window_s >= 0
+    ):
+        raise ConfigError("window_s", f"must be a finite number >= 0 (got {window_s!r})")
+    if not (_is_int(block_size) and block_size >= 1):
+        raise ConfigError("block_size", f"must be an integer >= 1 (got {block_size!r})")
+    if errors not in ("raise", "record"):
+        raise ConfigError("errors", f'must be "raise" or "record" (got {errors!r})')
+
+
 def simulate_batch(
     scenarios: Iterable,
     *,
@@ -338,22 +361,7 @@ def simulate_batch(
     from imdrive.config.scenario import Scenario
     from imdrive.errors import ConfigError
 
-    def _is_int(v) -> bool:
-        return isinstance(v, int | np.integer) and not isinstance(v, bool)
-
-    if log_every is not None and not (_is_int(log_every) and log_every >= 1):
-        raise ConfigError("log_every", f"must be an integer >= 1 (got {log_every!r})")
-    if not (
-        isinstance(window_s, int | float | np.floating)
-        and not isinstance(window_s, bool)
-        and math.isfinite(window_s)
-        and window_s >= 0
-    ):
-        raise ConfigError("window_s", f"must be a finite number >= 0 (got {window_s!r})")
-    if not (_is_int(block_size) and block_size >= 1):
-        raise ConfigError("block_size", f"must be an integer >= 1 (got {block_size!r})")
-    if errors not in ("raise", "record"):
-        raise ConfigError("errors", f'must be "raise" or "record" (got {errors!r})')
+    _check_batch_arguments(log_every, window_s, block_size, errors)
     t_start = time.perf_counter()
     chunks_m, chunks_s, chunks_k, chunks_ts, chunks_e = [], [], [], [], []
     results: list = []

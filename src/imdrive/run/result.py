@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from imdrive.config.perunit import lost_control_rpm
+from imdrive.config.rated import rated_point_dict
 from imdrive.kernels.engine import S_CURRENT, S_NAN, S_OK, S_SPEED, DriveParams, DriveState
 from imdrive.kernels.machine import magnetic_energy
 from imdrive.kernels.records import record_bytes
@@ -54,18 +55,6 @@ STATUS_TEXT = {
     S_SPEED: "speed |w_m| exceeded simulation.divergence_speed_rpm",
 }
 STATUS_SIGNAL = {S_NAN: "state", S_CURRENT: "i_s_A", S_SPEED: "speed_rpm"}
-
-
-def _machine_rated(machine) -> dict | None:
-    """The machine's rated point (:func:`imdrive.config.machine.rated_point`), or ``None`` when
-    its circuit has none (it cannot deliver the rated power)."""
-    from imdrive.config.machine import rated_point
-    from imdrive.errors import ConfigError
-
-    try:
-        return rated_point(machine).to_dict()
-    except ConfigError:
-        return None
 
 
 def _estimator_units(scenario) -> dict:
@@ -486,7 +475,7 @@ class SimulationResult:
             "final": self.final_values(),
             "energy_J": {k: float(v) for k, v in self.energy_balance().items()},
             "compensation": self.compensation_metrics(),
-            "machine_rated": _machine_rated(self.scenario.machine),
+            "machine_rated": rated_point_dict(self.scenario.machine),
         }
 
     def to_csv(self, path) -> None:
