@@ -8,7 +8,8 @@ with :func:`imdrive.config.estimators.estimator_settings`, its compiled half wit
 is checked. The estimator's settings are the table ``[plugins.settings.NAME]``. A scenario
 built in Python after the module was imported gets the module added to ``modules``
 automatically, so the scenario file it writes (``summary.json``), a sweep's worker process
-and a rerun find the estimator again.
+and a rerun find the estimator again. Importing a module runs its code: a scenario file
+that lists modules is as trustworthy as those modules.
 """
 
 from __future__ import annotations
@@ -33,7 +34,8 @@ class PluginSettings:
         tuple[Str, ...],
         setting(
             "Python modules imported before the scenario is read, so the estimators they "
-            "define are registered: dotted names on sys.path, or paths of .py files"
+            "define are registered: dotted names on sys.path, or paths of .py files (importing "
+            "runs the module's code: list only modules you trust)"
         ),
     ] = ()
     settings: Annotated[
