@@ -235,7 +235,7 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
         pr = period[0]
         pr.t = (k0 + k) * Ts
         pr.k = k0 + k
-        profiles(pp, pt, pv, pn, pr)
+        profiles(pp, pt, pv, pn, pr, foc)
         measure(pp, psen, x, pr)
         pr.theta_k = ctl.theta_e  # the controller's d-axis angle at this sample
         pr.w_r_hat = 0.0

@@ -100,18 +100,21 @@ PERIOD = record_dtype(
 
 
 @njit(cache=True, inline="always")
-def profiles(pp, pt, pv, pn, pr):
-    """Every profile at ``pr.t`` into ``pr`` (the stages after it read no profile array)."""
+def profiles(pp, pt, pv, pn, pr, foc):
+    """The profiles the drive reads at ``pr.t`` into ``pr`` (the stages after it read no
+    profile array): the references of field-oriented control, or the open-loop voltage."""
     t = pr.t
     if pp.speed_imposed:
         pr.w_imposed = profile_at(pt, pv, pn, PR_SPEED_IMPOSED, t)
     pr.R1_base = pp.R1 * profile_at(pt, pv, pn, PR_R1_SCALE, t)
     pr.R2_base = pp.R2 * profile_at(pt, pv, pn, PR_R2_SCALE, t)
     pr.T_L0 = profile_at(pt, pv, pn, PR_LOAD, t)
-    pr.w_ref_prof = profile_at(pt, pv, pn, PR_SPEED_REF, t)
-    pr.psi_ref_prof = profile_at(pt, pv, pn, PR_FLUX_REF, t)
-    pr.v_amp_prof = profile_at(pt, pv, pn, PR_V_AMP, t)
-    pr.f_prof = profile_at(pt, pv, pn, PR_FREQ, t)
+    if foc:
+        pr.w_ref_prof = profile_at(pt, pv, pn, PR_SPEED_REF, t)
+        pr.psi_ref_prof = profile_at(pt, pv, pn, PR_FLUX_REF, t)
+    else:
+        pr.v_amp_prof = profile_at(pt, pv, pn, PR_V_AMP, t)
+        pr.f_prof = profile_at(pt, pv, pn, PR_FREQ, t)
 
 
 @njit(cache=True, inline="always")
