@@ -28,6 +28,7 @@ checks and the drive's records both use it.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -60,6 +61,21 @@ class Resolved:
         The gating's band around the stator frequency, Hz.
     gate_speed_rpm, gate_iq_A : float
         The gating's speed (rpm) and iq* (A) thresholds of a transient.
+    psi_rated : float
+        The machine's rated rotor flux, Wb (``machine.rated_flux_Wb``).
+    I_rated : float
+        The machine's rated current that scales the limits, A (``machine.rated_current_A``).
+    speed_bandwidth_Hz : float
+        The speed loop's bandwidth, Hz (:func:`speed_bandwidth_Hz`).
+    divergence_speed_rpm : float
+        The speed that stops a diverging run, rpm (:func:`divergence_speed_rpm`).
+    n_comp : int
+        The compensator's decision period, control periods
+        (:func:`~imdrive.config.compensator.decision_period_steps`).
+    sigma, T2_s : float
+        The machine's leakage factor and rotor time constant, s.
+    v_max_V : float
+        The largest phase voltage the inverter can apply, V (``inverter.v_max_V``).
     """
 
     R1_hat: float
@@ -79,6 +95,14 @@ class Resolved:
     gate_band: float
     gate_speed_rpm: float
     gate_iq_A: float
+    psi_rated: float = math.nan
+    I_rated: float = math.nan
+    speed_bandwidth_Hz: float = math.nan
+    divergence_speed_rpm: float = math.nan
+    n_comp: int = 1
+    sigma: float = math.nan
+    T2_s: float = math.nan
+    v_max_V: float = math.nan
 
 
 def _whole_periods(f: float, Ts: float) -> float:
@@ -166,8 +190,11 @@ def _resolve(sc) -> Resolved:
 
         rp = rated_point(m)
         gate_speed = comp.gate_speed_pu * (rp.synchronous_speed_rpm - rp.speed_rpm)
-    gate_iq = comp.gate_iq_A if comp.gate_iq_pu is None else comp.gate_iq_pu * m.rated_current_A
-    return Resolved(
+    I_rated = m.rated_current_A
+    gate_iq = comp.gate_iq_A if comp.gate_iq_pu is None else comp.gate_iq_pu * I_rated
+    from imdrive.config.compensator import decision_period_steps
+
+    r = Resolved(
         R1_hat=R1,
         R2_hat=R2,
         M_hat=M,
@@ -185,7 +212,17 @@ def _resolve(sc) -> Resolved:
         gate_band=band,
         gate_speed_rpm=gate_speed,
         gate_iq_A=gate_iq,
+        psi_rated=psi,
+        I_rated=I_rated,
+        speed_bandwidth_Hz=speed_bandwidth_Hz(sc),
+        divergence_speed_rpm=divergence_speed_rpm(sc),
+        sigma=m.sigma,
+        T2_s=m.T2_s,
+        v_max_V=sc.inverter.v_max_V,
     )
+    # the decision period holds whole periods of the injection frequency resolved above
+    n_comp = decision_period_steps(comp, inj, sc.simulation.Ts_s, r)
+    return dataclasses.replace(r, n_comp=n_comp)
 
 
 def lost_control_rpm(sc) -> float:

@@ -40,6 +40,12 @@ def new_record(dtype: np.dtype, /, **values) -> np.ndarray:
     return rec
 
 
+def new_records(specs: dict) -> dict:
+    """Several records at once: ``{name: (dtype, fields)}`` -> ``{name: new_record(dtype,
+    **fields)}`` (the drive's blocks, made in one call)."""
+    return {name: new_record(dtype, **fields) for name, (dtype, fields) in specs.items()}
+
+
 def record_bytes(rec: np.ndarray) -> np.ndarray:
     """The record array's raw bytes (uint8): equal bytes mean bit-identical records."""
     return np.ascontiguousarray(rec).view(np.uint8)

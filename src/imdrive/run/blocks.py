@@ -1,9 +1,12 @@
-"""One builder per block: its records from the scenario, filled by field name.
+"""One builder per block: its record's fields from the scenario, by field name.
 
-Each function turns the settings of one block into its record (``(1,)`` arrays of the block's
-dtype, :func:`imdrive.kernels.records.new_record`), with the gain design where the block has
-one. :func:`imdrive.run.build.build_arrays` assembles them into a drive; the estimator's
-records come from its own builder (:mod:`imdrive.run.estimators`).
+Each ``*_fields`` function turns the settings of one block into the fields of its record, with
+the gain design where the block has one; :func:`drive_records` makes every block's record
+(``(1,)`` arrays of the block's dtype, :func:`imdrive.kernels.records.new_records`) in one go.
+Every machine-dependent value comes from the scenario's resolved per-unit values ``D``
+(:func:`imdrive.config.perunit.resolve`), computed once per scenario.
+:func:`imdrive.run.build.build_arrays` assembles the drive; the estimator's records come from
+its own builder (:mod:`imdrive.run.estimators`).
 """
 
 from __future__ import annotations
@@ -12,8 +15,7 @@ import math
 
 import numpy as np
 
-from imdrive.config.compensator import decision_period_steps
-from imdrive.config.perunit import divergence_speed_rpm, resolve, speed_bandwidth_Hz
+from imdrive.config.perunit import Resolved
 from imdrive.config.profiles import Profile
 from imdrive.config.scenario import Scenario
 from imdrive.design.gains import default_current_gains, default_speed_gains
@@ -26,22 +28,24 @@ from imdrive.kernels.ifoc import CONTROL_PARAMS, CONTROL_STATE
 from imdrive.kernels.inverter import INVERTER_CODES, INVERTER_PARAMS, INVERTER_STATE
 from imdrive.kernels.machine import PLANT_PARAMS, initial_plant_state, saturation_table
 from imdrive.kernels.model import MODEL_STATE
-from imdrive.kernels.records import new_record
+from imdrive.kernels.records import new_records
 from imdrive.kernels.sensors import SENSOR_PARAMS
 from imdrive.run._profiles import profiles_to_arrays
 
 RPM = 2.0 * math.pi / 60.0  # rad/s per rpm
 
 
-def saturation_curve(sc: Scenario) -> dict:
-    """The plant's magnetising-curve fields (see ``SaturationSettings``)."""
+def saturation_curve(sc: Scenario, psi_rated: float | None = None) -> dict:
+    """The plant's magnetising-curve fields (see ``SaturationSettings``); ``psi_rated``: the
+    machine's rated flux, Wb (default ``machine.rated_flux_Wb``)."""
     sat = sc.plant.saturation
     m = sc.machine
     rho, S = sat.rated_ratio, sat.exponent
     Lm0 = sat.Lm0_H if sat.Lm0_H is not None else m.M_H / rho
     psi_sat = sat.psi_sat_Wb
     if psi_sat is None:
-        psi_sat = m.rated_flux_Wb * (rho / (1.0 - rho)) ** (1.0 / S)
+        psi = m.rated_flux_Wb if psi_rated is None else psi_rated
+        psi_sat = psi * (rho / (1.0 - rho)) ** (1.0 / S)
     fields = {"saturation": sat.enabled, "Lm0": Lm0, "psi_sat": psi_sat, "S": S}
     if sat.enabled:  # the inverse curve tabulated once per run (no Newton loop per step)
         table = saturation_table(m.Ll1_H, m.Ll2_H, Lm0, psi_sat, S)
@@ -50,12 +54,11 @@ def saturation_curve(sc: Scenario) -> dict:
     return fields
 
 
-def plant_record(sc: Scenario) -> np.ndarray:
+def plant_fields(sc: Scenario, D: Resolved) -> dict:
     """``PLANT_PARAMS``: the machine, its load, thermal model and saturation."""
     m = sc.machine
     th = sc.plant.thermal
-    return new_record(
-        PLANT_PARAMS,
+    return dict(
         R1=m.R1_ohm,
         R2=m.R2_ohm,
         Ll1=m.Ll1_H,
@@ -76,24 +79,23 @@ def plant_record(sc: Scenario) -> np.ndarray:
         tau2=th.tau2_s,
         thermal=th.enabled,
         speed_imposed=sc.plant.speed_mode == "imposed",
-        **saturation_curve(sc),
+        **saturation_curve(sc, D.psi_rated),
     )
 
 
-def divergence_current(sc: Scenario) -> float:
+def divergence_current(sc: Scenario, D: Resolved) -> float:
     """The current beyond which a run counts as diverged, A."""
-    return sc.simulation.divergence_current_A or 100.0 * sc.machine.rated_current_A
+    return sc.simulation.divergence_current_A or 100.0 * D.I_rated
 
 
-def sim_record(sc: Scenario) -> np.ndarray:
+def sim_fields(sc: Scenario, D: Resolved) -> dict:
     """``SIM_PARAMS``: the loop's period, sub-steps, divergence bounds and mode."""
     ctl = sc.control
-    return new_record(
-        SIM_PARAMS,
+    return dict(
         Ts=sc.simulation.Ts_s,
         nsub=sc.simulation.substeps,
-        i_lim=divergence_current(sc),
-        w_lim=divergence_speed_rpm(sc) * RPM,
+        i_lim=divergence_current(sc, D),
+        w_lim=D.divergence_speed_rpm * RPM,
         mode=DRIVE_FOC if sc.drive.mode == "vector" else DRIVE_OPEN_LOOP,
         sensorless=ctl.speed_feedback != "measured",
         delay=ctl.delay_periods,
@@ -102,11 +104,10 @@ def sim_record(sc: Scenario) -> np.ndarray:
     )
 
 
-def inverter_record(sc: Scenario) -> np.ndarray:
+def inverter_fields(sc: Scenario) -> dict:
     """``INVERTER_PARAMS``: DC link, model, dead time, device drop, switching frequency."""
     inv = sc.inverter
-    return new_record(
-        INVERTER_PARAMS,
+    return dict(
         Vdc=inv.Vdc_V,
         model=INVERTER_CODES[inv.model],
         t_d=inv.dead_time_s,
@@ -116,11 +117,10 @@ def inverter_record(sc: Scenario) -> np.ndarray:
     )
 
 
-def sensor_record(sc: Scenario) -> np.ndarray:
+def sensor_fields(sc: Scenario) -> dict:
     """``SENSOR_PARAMS``: current sensors (offsets, gains, noise, ADC) and the DC-link gain."""
     sen = sc.sensor
-    return new_record(
-        SENSOR_PARAMS,
+    return dict(
         i_offset_ab=complex(sen.i_offset_alpha_A, sen.i_offset_beta_A),
         phase_model=sen.per_phase,
         gain_a=sen.gain_a,
@@ -135,13 +135,12 @@ def sensor_record(sc: Scenario) -> np.ndarray:
     )
 
 
-def model_record(sc: Scenario) -> tuple[np.ndarray, dict]:
+def model_fields(D: Resolved) -> tuple[dict, dict]:
     """``MODEL_STATE`` (the controller's machine model: its estimates, absolute or as ratios of
     the plant's, :func:`imdrive.config.perunit.resolve`; unset: the plant's) and the
     model's inductances ``R1_hat, R2_hat, M_hat, L1_hat, L2_hat, sigma_L1_hat`` as a dict."""
-    r = resolve(sc)
-    R1h, R2h, Ll1h, Ll2h, Mh = r.R1_hat, r.R2_hat, r.Ll1_hat, r.Ll2_hat, r.M_hat
-    model = new_record(MODEL_STATE, R1_hat=R1h, R2_hat=R2h, Ll1_hat=Ll1h, Ll2_hat=Ll2h, M_hat=Mh)
+    R1h, R2h, Ll1h, Ll2h, Mh = D.R1_hat, D.R2_hat, D.Ll1_hat, D.Ll2_hat, D.M_hat
+    model = dict(R1_hat=R1h, R2_hat=R2h, Ll1_hat=Ll1h, Ll2_hat=Ll2h, M_hat=Mh)
     L1h, L2h = Ll1h + Mh, Ll2h + Mh
     sigma_L1 = L1h - Mh**2 / L2h
     mh = dict(R1_hat=R1h, R2_hat=R2h, M_hat=Mh, L1_hat=L1h, L2_hat=L2h, sigma_L1_hat=sigma_L1)
@@ -153,13 +152,19 @@ def flux_reference(sc: Scenario) -> Profile:
     return sc.control.flux_ref_Wb or Profile.constant(sc.machine.rated_flux_Wb)
 
 
+def initial_flux(sc: Scenario, D: Resolved) -> float:
+    """The rotor-flux reference at t = 0, Wb (that of :func:`flux_reference`)."""
+    given = sc.control.flux_ref_Wb
+    return given.points[0][1] if given else D.psi_rated
+
+
 def _assumed_dead_time(sc: Scenario) -> float:
     """The dead time the controller's compensation assumes, s (default: the inverter's)."""
     t = sc.control.dead_time_compensation_s
     return sc.inverter.dead_time_s if t is None else t
 
 
-def control_record(sc: Scenario, mh: dict, psi0: float) -> tuple[np.ndarray, dict]:
+def control_fields(sc: Scenario, D: Resolved, mh: dict, psi0: float) -> tuple[dict, dict]:
     """``CONTROL_PARAMS`` and the controller's gains (current and speed PI from bandwidths,
     each overridable), from the model ``mh`` of :func:`model_record` and flux ``psi0``."""
     m = sc.machine
@@ -171,21 +176,20 @@ def control_record(sc: Scenario, mh: dict, psi0: float) -> tuple[np.ndarray, dic
     kp_i, ki_i = default_current_gains(
         mh["sigma_L1_hat"], R_sigma, 2 * math.pi * ctl.current_bandwidth_Hz
     )
-    kp_w, ki_w = default_speed_gains(m.J_kgm2, k_t, 2 * math.pi * speed_bandwidth_Hz(sc))
+    kp_w, ki_w = default_speed_gains(m.J_kgm2, k_t, 2 * math.pi * D.speed_bandwidth_Hz)
     gains = {
         "current_kp": ctl.current_kp if ctl.current_kp is not None else kp_i,
         "current_ki": ctl.current_ki if ctl.current_ki is not None else ki_i,
         "speed_kp": ctl.speed_kp if ctl.speed_kp is not None else kp_w,
         "speed_ki": ctl.speed_ki if ctl.speed_ki is not None else ki_w,
     }
-    control = new_record(
-        CONTROL_PARAMS,
+    control = dict(
         n_p=m.pole_pairs,
         kp_w=gains["speed_kp"],
         ki_w=gains["speed_ki"],
         kp_i=gains["current_kp"],
         ki_i=gains["current_ki"],
-        i_max=current_limit(sc),
+        i_max=current_limit(sc, D),
         v_max=Vdc_meas / math.sqrt(3.0),
         decouple=ctl.decoupling,
         angle_advance=0.5 + (ctl.delay_periods if ctl.delay_compensation else 0),
@@ -203,29 +207,24 @@ def control_record(sc: Scenario, mh: dict, psi0: float) -> tuple[np.ndarray, dic
     return control, gains
 
 
-def current_limit(sc: Scenario) -> float:
+def current_limit(sc: Scenario, D: Resolved) -> float:
     """The controller's current limit, A (default twice the rated current)."""
-    return sc.control.current_limit_A or 2.0 * sc.machine.rated_current_A
+    return sc.control.current_limit_A or 2.0 * D.I_rated
 
 
-def compensator_period(sc: Scenario) -> int:
-    """The compensator's decision period in control periods (whole injection periods, checked
-    by the scenario: :func:`~imdrive.config.compensator.check_whole_injection_periods`)."""
-    return decision_period_steps(sc.compensator, sc.injection, sc.simulation.Ts_s, resolve(sc))
-
-
-def compensator_record(sc: Scenario) -> tuple[np.ndarray, dict]:
+def compensator_fields(sc: Scenario, D: Resolved) -> tuple[dict, dict]:
     """``COMPENSATOR_PARAMS`` (fuzzy compensator, injection, gating, step law) and what to
     report; gains, clamps and amplitude absolute or in per-unit of the machine
-    (:func:`imdrive.config.perunit.resolve`)."""
+    (:func:`imdrive.config.perunit.resolve`). The decision period ``D.n_comp`` holds whole
+    injection periods (checked by the scenario:
+    :func:`~imdrive.config.compensator.check_whole_injection_periods`)."""
     comp = sc.compensator
     inj = sc.injection
-    r = resolve(sc)
-    n_comp = compensator_period(sc)
+    r = D
+    n_comp = D.n_comp
     R2_min = r.R2_min
     R2_max = r.R2_max
-    record = new_record(
-        COMPENSATOR_PARAMS,
+    record = dict(
         enabled=comp.enabled,
         t_on=comp.t_on_s,
         n=n_comp,
@@ -314,8 +313,9 @@ def _vf_profiles(sc: Scenario) -> tuple[Profile, Profile]:
     return v_peak, ol.frequency_Hz
 
 
-def profile_list(sc: Scenario) -> list[Profile]:
-    """Every profile the kernels read, in the order of ``kernels/profiles.py`` (SI units)."""
+def profile_list(sc: Scenario, D: Resolved | None = None) -> list[Profile]:
+    """Every profile the kernels read, in the order of ``kernels/profiles.py`` (SI units);
+    ``D``: the scenario's resolved per-unit values, when known (for the rated flux)."""
     v_amp, freq = _vf_profiles(sc)
     profiles = [Profile.constant(0.0)] * kp.N_PROF
     profiles[kp.PR_SPEED_REF] = sc.control.speed_ref_rpm.scaled(RPM)
@@ -325,25 +325,28 @@ def profile_list(sc: Scenario) -> list[Profile]:
     profiles[kp.PR_V_AMP] = v_amp
     profiles[kp.PR_FREQ] = freq
     profiles[kp.PR_SPEED_IMPOSED] = sc.plant.imposed_speed_rpm.scaled(RPM)
-    profiles[kp.PR_FLUX_REF] = flux_reference(sc)
+    psi = sc.machine.rated_flux_Wb if D is None else D.psi_rated
+    profiles[kp.PR_FLUX_REF] = sc.control.flux_ref_Wb or Profile.constant(psi)
     return profiles
 
 
-def profile_arrays(sc: Scenario):
+def profile_arrays(sc: Scenario, D: Resolved | None = None):
     """The profiles as the kernels' breakpoint arrays ``(prof_t, prof_v, prof_n)``."""
-    return profiles_to_arrays(profile_list(sc))
+    return profiles_to_arrays(profile_list(sc, D))
 
 
-def _compensator_state(sc) -> np.ndarray:
+def _compensator_state(D: Resolved) -> np.ndarray:
     """Initial COMPENSATOR_STATE: zeros (no previous iq* yet), the injection frequency in use."""
     st = np.zeros(1, dtype=COMPENSATOR_STATE)
-    f1 = resolve(sc).inj_f1
+    f1 = D.inj_f1
     st[0]["inj_f"] = f1
     st[0]["inj_f_prev"] = f1
     return st
 
 
-def initial_state(sc: Scenario, model: np.ndarray, est_state: np.ndarray) -> DriveState:
+def initial_state(
+    sc: Scenario, D: Resolved, model: np.ndarray, est_state: np.ndarray
+) -> DriveState:
     """The drive's initial state: plant at rest (or at the imposed speed), the controller's
     model, the estimator's initial state, the rest zeros."""
     imposed = sc.plant.speed_mode == "imposed"
@@ -354,21 +357,63 @@ def initial_state(sc: Scenario, model: np.ndarray, est_state: np.ndarray) -> Dri
         model=model,
         control=np.zeros(1, dtype=CONTROL_STATE),
         est=est_state,
-        comp=_compensator_state(sc),
+        comp=_compensator_state(D),
         inverter=np.zeros(1, dtype=INVERTER_STATE),
     )
 
 
-def drive_derived(sc: Scenario, psi0: float, mh: dict) -> dict:
+def drive_derived(sc: Scenario, D: Resolved, psi0: float, mh: dict) -> dict:
     """Derived quantities of the drive for ``summary.json`` (flux, limits, machine)."""
     m = sc.machine
     return {
         "flux_ref_Wb": psi0,
         "torque_constant_Nm_per_A": 1.5 * m.pole_pairs * mh["M_hat"] / mh["L2_hat"] * psi0,
-        "current_limit_A": current_limit(sc),
-        "divergence_current_A": divergence_current(sc),
-        "rated_current_A": m.rated_current_A,
-        "sigma": m.sigma,
-        "T2_s": m.T2_s,
-        "v_max_V": sc.inverter.v_max_V,
+        "current_limit_A": current_limit(sc, D),
+        "divergence_current_A": divergence_current(sc, D),
+        "rated_current_A": D.I_rated,
+        "sigma": D.sigma,
+        "T2_s": D.T2_s,
+        "v_max_V": D.v_max_V,
     }
+
+
+def drive_records(
+    sc: Scenario, D: Resolved, model: dict, mh: dict, psi0: float
+) -> tuple[dict, dict, dict]:
+    """Every block's record but the estimator's, made in one go, and the derived quantities
+    the blocks report (gains, compensator period and clamps).
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+    D : Resolved
+        Its per-unit values resolved (:func:`imdrive.config.perunit.resolve`).
+    model, mh : dict
+        The controller's model: its ``MODEL_STATE`` fields and inductances
+        (:func:`model_fields`).
+    psi0 : float
+        The rotor-flux reference at t = 0, Wb.
+
+    Returns
+    -------
+    records : dict
+        ``{"sim", "plant", "inverter", "sensor", "control", "comp"}``: ``(1,)`` parameter
+        records; ``"model"``: the controller's initial ``MODEL_STATE``.
+    gains, comp_derived : dict
+        The controller's gains; the compensator's period and clamps.
+    """
+    control, gains = control_fields(sc, D, mh, psi0)
+    comp, comp_derived = compensator_fields(sc, D)
+    records = new_records(
+        {
+            "sim": (SIM_PARAMS, sim_fields(sc, D)),
+            "plant": (PLANT_PARAMS, plant_fields(sc, D)),
+            "inverter": (INVERTER_PARAMS, inverter_fields(sc)),
+            "sensor": (SENSOR_PARAMS, sensor_fields(sc)),
+            "control": (CONTROL_PARAMS, control),
+            "comp": (COMPENSATOR_PARAMS, comp),
+            "model": (MODEL_STATE, model),
+        }
+    )
+    return records, gains, comp_derived

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from imdrive.config.perunit import resolve
 from imdrive.config.scenario import Scenario
 from imdrive.errors import ConfigError
 from imdrive.kernels.engine import DriveParams, DriveState, log_dtype
@@ -23,15 +24,17 @@ from imdrive.run.estimators import EstimatorContext, build_estimator, estimator_
 MAX_LOG_BYTES = 2 * 2**30  # a log larger than this is refused before anything runs
 
 
-def check_log_size(sc: Scenario, log: np.dtype | None = None) -> None:
+def check_log_size(sc: Scenario, log: np.dtype | None = None, n_steps: int | None = None) -> None:
     """Refuse a scenario whose log would not fit in :data:`MAX_LOG_BYTES`.
 
-    ``log`` is the drive's log dtype (default: that of the scenario's estimator).
+    ``log`` is the drive's log dtype (default: that of the scenario's estimator), ``n_steps``
+    its number of control periods (default: ``simulation.n_steps``).
     """
     sim = sc.simulation
     if log is None:
         log = log_dtype(estimator_of(sc).kernel)
-    log_bytes = (sim.n_steps // sim.log_every + 1) * log.itemsize
+    n_steps = sim.n_steps if n_steps is None else n_steps
+    log_bytes = (n_steps // sim.log_every + 1) * log.itemsize
     if log_bytes > MAX_LOG_BYTES:
         raise ConfigError(
             "simulation.log_every",
@@ -58,6 +61,8 @@ class DriveArrays:
         its value is not finite).
     log : numpy.dtype
         The drive's log record: every block's fields and its estimator's own.
+    log_units : dict
+        ``{field: (unit, scale)}`` of the estimator's own log fields (for the result's columns).
     """
 
     params: DriveParams
@@ -67,6 +72,7 @@ class DriveArrays:
     derived: dict
     sources: dict = field(default_factory=dict)
     log: np.dtype = field(default_factory=lambda: log_dtype("mras"))
+    log_units: dict | None = None
 
     @property
     def Ts(self) -> float:
@@ -170,51 +176,53 @@ def build_arrays(sc: Scenario) -> DriveArrays:
 
 def _build_arrays(sc: Scenario) -> DriveArrays:
     """Every block's records from its own builder (:mod:`imdrive.run.blocks`)."""
-    check_log_size(sc)
+    est = estimator_of(sc)  # once: its kernel gives the log, its settings the gains and units
+    log = log_dtype(est.kernel)
+    n_steps = sc.simulation.n_steps
+    check_log_size(sc, log, n_steps)
+    D = resolve(sc)  # every machine-dependent value, once
     m = sc.machine
-    Ts = sc.simulation.Ts_s
-    model, mh = blocks.model_record(sc)
-    psi0 = blocks.flux_reference(sc).points[0][1]
-    control, gains = blocks.control_record(sc, mh, psi0)
-
+    model, mh = blocks.model_fields(D)
+    psi0 = blocks.initial_flux(sc, D)
     ctx = EstimatorContext(
         scenario=sc,
-        Ts=Ts,
+        Ts=sc.simulation.Ts_s,
         psi0=psi0,
         n_p=m.pole_pairs,
         J=m.J_kgm2,
         **mh,
     )
-    est, est_params, est_state, er = build_estimator(sc, ctx)
+    est, est_params, est_state, er = build_estimator(sc, ctx, est)
+    log_units = dict(est.log_units)
+    rec, gains, comp_derived = blocks.drive_records(sc, D, model, mh, psi0)
     gains.update(er.derived)
-
-    compensator, comp_derived = blocks.compensator_record(sc)
-    prof_t, prof_v, prof_n = blocks.profile_arrays(sc)
+    prof_t, prof_v, prof_n = blocks.profile_arrays(sc, D)
     params = DriveParams(
-        sim=blocks.sim_record(sc),
-        plant=blocks.plant_record(sc),
-        inverter=blocks.inverter_record(sc),
-        sensor=blocks.sensor_record(sc),
-        control=control,
+        sim=rec["sim"],
+        plant=rec["plant"],
+        inverter=rec["inverter"],
+        sensor=rec["sensor"],
+        control=rec["control"],
         est=est_params,
-        comp=compensator,
+        comp=rec["comp"],
         prof_t=prof_t[None],
         prof_v=prof_v[None],
         prof_n=prof_n[None],
         tables=np.ascontiguousarray(blocks.fuzzy_lookup_table(sc)[None]),
         table_idx=np.zeros(1, dtype=np.int64),
     )
-    state0 = blocks.initial_state(sc, model, est_state)
+    state0 = blocks.initial_state(sc, D, rec["model"], est_state)
 
     derived = dict(gains)
-    derived.update(blocks.drive_derived(sc, psi0, mh))
+    derived.update(blocks.drive_derived(sc, D, psi0, mh))
     derived.update(comp_derived)
     return DriveArrays(
         params=params,
         state0=state0,
-        n_steps=sc.simulation.n_steps,
+        n_steps=n_steps,
         log_every=sc.simulation.log_every,
         derived=derived,
         sources={**DERIVED_SOURCE, **er.sources},
-        log=log_dtype(est.kernel),
+        log=log,
+        log_units=log_units,
     )

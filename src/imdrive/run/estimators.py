@@ -132,7 +132,7 @@ def estimator(name: str) -> Estimator:
             f'estimator "{key}" has a compiled half but no settings class: decorate one with '
             f'@estimator_settings("{key}")',
         )
-    unitless = [f for f in kernel.log_fields if f not in cls.estimator_log_units]
+    unitless = sorted(set(kernel.log_fields) - set(cls.estimator_log_units))
     if unitless:
         raise ConfigError(
             "control.speed_feedback",
@@ -151,12 +151,13 @@ def estimator_names() -> tuple[str, ...]:
 def estimator_of(sc) -> Estimator:
     """The estimator of scenario ``sc``, importing its ``[plugins] modules`` first (a scenario
     unpickled in a worker process did not import them when it was read)."""
-    import_plugins(sc.plugins.modules)
+    if sc.plugins.modules:
+        import_plugins(sc.plugins.modules)
     return estimator(sc.control.speed_feedback)
 
 
 def build_estimator(
-    sc, ctx: EstimatorContext
+    sc, ctx: EstimatorContext, est: Estimator | None = None
 ) -> tuple[Estimator, np.ndarray, np.ndarray, EstimatorRecords]:
     """The scenario's estimator and its parameter and initial-state records.
 
@@ -166,6 +167,8 @@ def build_estimator(
         The scenario.
     ctx : EstimatorContext
         The controller's model and the drive.
+    est : Estimator, optional
+        The scenario's estimator when the caller has it (default: :func:`estimator_of`).
 
     Returns
     -------
@@ -175,7 +178,7 @@ def build_estimator(
     records : EstimatorRecords
         What its ``records(ctx)`` returned (derived quantities and their sources).
     """
-    est = estimator_of(sc)
+    est = estimator_of(sc) if est is None else est
     er = sc.estimator_settings().records(ctx)
     try:
         params = new_record(est.kernel.params, **er.params)

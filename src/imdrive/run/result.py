@@ -130,7 +130,9 @@ class SimulationResult:
             self.signals = Columns(self.signals)
 
     @classmethod
-    def from_log(cls, scenario, log, state0, state, params, status, k_end, wall, derived):
+    def from_log(
+        cls, scenario, log, state0, state, params, status, k_end, wall, derived, log_units=None
+    ):
         """Build a result from the kernel's outputs.
 
         Parameters
@@ -151,6 +153,9 @@ class SimulationResult:
             Wall time of the kernel call, s.
         derived : dict
             Derived quantities for the summary, SI units.
+        log_units : dict, optional
+            The estimator's own log fields' ``{field: (unit, scale)}`` (``DriveArrays.log_units``;
+            default: looked up from the scenario's estimator).
 
         Returns
         -------
@@ -158,9 +163,10 @@ class SimulationResult:
             Signals converted to the exported units.
         """
         vector = scenario.drive.mode == "vector"
-        return cls(
+        units = _estimator_units(scenario) if log_units is None else dict(log_units)
+        res = cls(
             scenario=scenario,
-            signals=columns_from_log(log, vector, _estimator_units(scenario)),
+            signals=columns_from_log(log, vector, units),
             state_initial=state0,
             state_final=state,
             params=params,
@@ -169,6 +175,8 @@ class SimulationResult:
             wall_time_s=wall,
             derived=derived,
         )
+        res.__dict__["_extra_units"] = units  # what extra_units would look up again
+        return res
 
     # -- the kernels' records (named state) ----------------------------------------------
     @property

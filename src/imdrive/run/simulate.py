@@ -115,7 +115,16 @@ def simulate(scenario: Scenario, arrays: DriveArrays | None = None) -> Simulatio
     wall = time.perf_counter() - t0
     log = logged_rows(log, status, k_end, a.log_every)
     res = SimulationResult.from_log(
-        scenario, log, a.state0, state, a.params, int(status), int(k_end), wall, a.derived
+        scenario,
+        log,
+        a.state0,
+        state,
+        a.params,
+        int(status),
+        int(k_end),
+        wall,
+        a.derived,
+        a.log_units,
     )
     if end_row is not None:
         res.end_values = {
