@@ -56,7 +56,7 @@ def test_site_builds_strict_with_every_page_and_the_api_reference(tmp_path):
         for name in images:
             assert (site / "examples" / name).stat().st_size > 5000, name
     # a gallery page as a browser draws it: the page and its figure, not a blank page
-    from test_report import assert_nonblank, find_chromium, screenshot
+    from data.browser import assert_nonblank, find_chromium, screenshot
 
     if find_chromium() is not None:
         page = site / "examples" / "01-quick-start.html"

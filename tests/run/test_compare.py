@@ -54,7 +54,7 @@ def test_compare_in_python_overlays_and_names_the_runs(two_runs):
 
 
 def test_compare_report_renders_in_a_browser(two_runs, tmp_path):
-    from test_report import assert_rendered, render
+    from data.browser import assert_rendered, render
 
     page = tmp_path / "report.html"
     page.write_text(compare(two_runs).report(), encoding="utf-8")
