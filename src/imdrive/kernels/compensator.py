@@ -125,7 +125,7 @@ import math
 from numba import njit
 
 from imdrive.kernels.fuzzy import lookup
-from imdrive.kernels.model import model_inductances
+from imdrive.kernels.model import incremental_L2
 from imdrive.kernels.records import b1, f8, record_dtype
 
 #: The quantiser's first threshold on the scaled E (level 1 starts here; Table III's axes).
@@ -340,9 +340,9 @@ def injection_sensitivity_ratio(p, s, m):
     """``S(f_base) / S(f_in_use)`` (:func:`in_phase_sensitivity`) with the controller's T2_hat:
     the adaptive law scales its input by it, so its loop gain does not drop when the schedule
     moves to a higher frequency (measured at 150 rpm, -12 N m on 4 Hz: R2_hat 4 % off after
-    10 s, still converging)."""
-    M, L1, L2, sigma_L1 = model_inductances(m)
-    T2 = L2 / m.R2_hat
+    10 s, still converging). The injected flux variation is small: on a saturation-aware
+    model its time constant is the incremental one, ``(Ll2 + L_inc)/R2_hat``."""
+    T2 = incremental_L2(m) / m.R2_hat
     f = s.inj_f if s.inj_f > 0.0 else p.inj_freq
     s_now = in_phase_sensitivity(2.0 * math.pi * f, T2)
     s_base = in_phase_sensitivity(2.0 * math.pi * p.inj_freq, T2)

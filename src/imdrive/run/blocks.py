@@ -13,6 +13,7 @@ import math
 import numpy as np
 
 from imdrive.config.compensator import decision_period_steps
+from imdrive.config.controller_model import inverter_error_half, magnetising_table
 from imdrive.config.perunit import divergence_speed_rpm, resolve, speed_bandwidth_Hz
 from imdrive.config.profiles import Profile
 from imdrive.config.scenario import Scenario
@@ -25,7 +26,7 @@ from imdrive.kernels.engine import DRIVE_FOC, DRIVE_OPEN_LOOP, SAMPLE_STATE, SIM
 from imdrive.kernels.ifoc import CONTROL_PARAMS, CONTROL_STATE
 from imdrive.kernels.inverter import INVERTER_CODES, INVERTER_PARAMS, INVERTER_STATE
 from imdrive.kernels.machine import PLANT_PARAMS, initial_plant_state, saturation_table
-from imdrive.kernels.model import MODEL_STATE
+from imdrive.kernels.model import MODEL_STATE, MODEL_TABLE_POINTS
 from imdrive.kernels.records import new_record
 from imdrive.kernels.sensors import SENSOR_PARAMS
 from imdrive.run._profiles import profiles_to_arrays
@@ -142,10 +143,26 @@ def model_record(sc: Scenario) -> tuple[np.ndarray, dict]:
     r = resolve(sc)
     R1h, R2h, Ll1h, Ll2h, Mh = r.R1_hat, r.R2_hat, r.Ll1_hat, r.Ll2_hat, r.M_hat
     model = new_record(MODEL_STATE, R1_hat=R1h, R2_hat=R2h, Ll1_hat=Ll1h, Ll2_hat=Ll2h, M_hat=Mh)
+    cm = sc.controller_model
+    if cm.uses_magnetising_curve:  # the saturation-aware flux model (kernels/model.py)
+        psi, i_m, di_m = magnetising_table(cm.magnetising_psi_Wb, cm.magnetising_Lm_H)
+        model["sat_n"] = len(psi)
+        model["sat_psi"] = _padded(psi)
+        model["sat_im"] = _padded(i_m)
+        model["sat_dim"] = _padded(di_m)
+        model["sat_Lm0"] = cm.magnetising_Lm_H[0]
+        model["L_inc_hat"] = Mh
     L1h, L2h = Ll1h + Mh, Ll2h + Mh
     sigma_L1 = L1h - Mh**2 / L2h
     mh = dict(R1_hat=R1h, R2_hat=R2h, M_hat=Mh, L1_hat=L1h, L2_hat=L2h, sigma_L1_hat=sigma_L1)
     return model, mh
+
+
+def _padded(values) -> np.ndarray:
+    """A table's nodes in the kernels' fixed-size array, the last value repeated after them."""
+    out = np.full(MODEL_TABLE_POINTS, float(values[-1]))
+    out[: len(values)] = values
+    return out
 
 
 def flux_reference(sc: Scenario) -> Profile:
@@ -200,6 +217,13 @@ def control_record(sc: Scenario, mh: dict, psi0: float) -> tuple[np.ndarray, dic
         fw_rate=ctl.field_weakening_rate,
         fw_min=ctl.field_weakening_min,
     )
+    cm = sc.controller_model
+    if cm.uses_inverter_error:  # the identified inverter-error table replaces dtc_u
+        ie_i, ie_u = inverter_error_half(cm.inverter_error_i_A, cm.inverter_error_u_V)
+        control["ie_n"] = len(ie_i)
+        control["ie_i"] = _padded(ie_i)
+        control["ie_u"] = _padded(ie_u)
+        control["dtc_u"] = 0.0
     return control, gains
 
 
