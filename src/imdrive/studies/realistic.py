@@ -18,8 +18,9 @@ gives, as the ``*-realistic`` presets do: ``[controller_model]`` from
 Every run goes through the batch engine (:func:`imdrive.run.batch.simulate_batch`): the
 study took 13.5–13.7 s in 2 runs on a shared 2-core VM (2026-11-22, before the commissioned
 drives were added). :func:`compensation_runs`, :func:`detuning_runs` and
-:func:`saturation_bias_runs` return the tables; ``imdrive paper`` does not run them; ``python -m imdrive.studies.realistic OUT``
-writes the CSVs and ``realistic_verdicts.md``, the Markdown tables of docs/paper-reproduction.md.
+:func:`saturation_bias_runs` return the tables; ``imdrive paper`` does not run them;
+``python -m imdrive.studies.realistic OUT`` writes the CSVs and ``realistic_verdicts.md``, the
+Markdown tables of docs/paper-reproduction.md.
 """
 
 from __future__ import annotations
