@@ -266,6 +266,24 @@ def dead_time_feedforward(p, i_alpha, i_beta):
 
 
 @njit(cache=True)
+def inverter_feedforward(p, s, i_alpha, i_beta, Ts):
+    """The inverter-error compensation added to the voltage reference, ``(alpha, beta)``, V.
+
+    With the identified table (``p.ie_n > 0``) each phase's error is taken at the current of
+    the middle of the period where the voltage acts: the measured current turned by the
+    controller's frequency over ``p.angle_advance`` periods (0.5, or 1.5 with a one-period
+    delay), so the compensation changes sign with the current, not one period after it.
+    Otherwise :func:`dead_time_feedforward` on the measured current (the sign model).
+    """
+    if p.ie_n > 0:
+        th = s.w_e * p.angle_advance * Ts
+        c = math.cos(th)
+        sn = math.sin(th)
+        return dead_time_feedforward(p, c * i_alpha - sn * i_beta, sn * i_alpha + c * i_beta)
+    return dead_time_feedforward(p, i_alpha, i_beta)
+
+
+@njit(cache=True)
 def field_weakening(p, s, v_use, Ts):
     """The field-weakening flux factor for this period (``p.fw``; updates ``s.fw_cut``).
 

@@ -39,10 +39,10 @@ from imdrive.kernels.compensator import (
 )
 from imdrive.kernels.estimators.registry import estimator_finite, estimator_log, estimator_step
 from imdrive.kernels.ifoc import (
-    dead_time_feedforward,
     field_weakening,
     foc_step,
     has_feedforward,
+    inverter_feedforward,
     log_control,
     open_loop_voltage,
 )
@@ -219,7 +219,7 @@ def control(sim, pc, x, mdl, ctl, smp, pr, foc):
     dv_alpha = 0.0
     dv_beta = 0.0
     if has_feedforward(pc):  # inverter-error compensation, on the measured current
-        dv_alpha, dv_beta = dead_time_feedforward(pc, i_meas_alpha, i_meas_beta)
+        dv_alpha, dv_beta = inverter_feedforward(pc, ctl, i_meas_alpha, i_meas_beta, Ts)
         v_ref_alpha += dv_alpha
         v_ref_beta += dv_beta
     pr.v_log_ab = complex(v_ref_alpha, v_ref_beta)
