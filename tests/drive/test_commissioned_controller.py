@@ -284,3 +284,56 @@ def test_table_feedforward_on_the_switching_bridge():
     u = ideal_commissioning(Scenario.read("free-acceleration", over))["inverter_error_u_V"][1]
     assert errors[1] > 0.5 * u  # uncompensated: the whole error (about 4/3 u rms in alpha)
     assert errors[0] < 0.2 * errors[1]
+
+
+def test_table_feedforward_acts_at_the_current_of_the_period_where_the_voltage_acts():
+    """The table's feed-forward takes the phase errors at the measured current turned by the
+    controller's frequency over angle_advance periods (1.5 with the one-period delay)."""
+    from imdrive.kernels.ifoc import CONTROL_STATE, inverter_feedforward
+
+    sc = _with_tables(["control.delay_periods=1", "inverter.dead_time_s=2e-6"])
+    pc = build_arrays(sc).params.control[0]
+    assert pc["angle_advance"] == 1.5
+    s = np.zeros(1, dtype=CONTROL_STATE)[0]
+    s["w_e"] = 2 * math.pi * 50.0
+    Ts = sc.simulation.Ts_s
+    i = complex(0.05, 3.0)  # phase a's current near its zero crossing
+    turned = i * complex(math.cos(s["w_e"] * 1.5 * Ts), math.sin(s["w_e"] * 1.5 * Ts))
+    got = inverter_feedforward(pc, s, i.real, i.imag, Ts)
+    assert got == dead_time_feedforward(pc, turned.real, turned.imag)
+    assert got != dead_time_feedforward(pc, i.real, i.imag)  # the sign of phase a changed
+    # the sign model of [control] is not turned (unchanged behaviour)
+    sign = Scenario.read("sensorless-realistic-uncommissioned")
+    pc0 = build_arrays(sign).params.control[0]
+    assert inverter_feedforward(pc0, s, i.real, i.imag, Ts) == dead_time_feedforward(
+        pc0, i.real, i.imag
+    )
+
+
+def test_injection_sensitivity_on_the_saturation_aware_model():
+    """The compensator's input scale M S(T2) / (L_inc S(T2_inc)) at rated flux, against the
+    plant's curve differentiated here; 1 on the constant model."""
+    from imdrive.kernels.compensator import in_phase_sensitivity, saturation_sensitivity_ratio
+
+    sc = _with_tables([], "injection-fig5-realistic")
+    arr = build_arrays(sc)
+    pk, s, m = arr.params.comp[0], arr.state0.comp[0], arr.state0.model[0]
+    psi = sc.machine.rated_flux_Wb
+    m["M_hat"], m["L_inc_hat"] = magnetising_inductances(m, psi)
+    Lm0, psi_sat, S = plant_magnetising_curve(sc)
+    r = (psi / psi_sat) ** S
+    M, L_inc = Lm0 / (1 + r), Lm0 / (1 + (S + 1) * r)
+    R2, Ll2, w = m["R2_hat"], m["Ll2_hat"], 2 * math.pi * pk["inj_freq"]
+
+    def ratio(M, L_inc):
+        want = M * in_phase_sensitivity(w, (Ll2 + M) / R2)
+        return want / (L_inc * in_phase_sensitivity(w, (Ll2 + L_inc) / R2))
+
+    got = saturation_sensitivity_ratio(pk, s, m)
+    assert got == pytest.approx(ratio(m["M_hat"], m["L_inc_hat"]), rel=1e-12)  # the formula
+    # against the plant's own curve: the table's L_inc is within 1 % (tested above), the ratio
+    # moves about twice as much as L_inc (its gain and its time constant)
+    assert got == pytest.approx(ratio(M, L_inc), rel=3e-2)
+    assert ratio(M, L_inc) > 2.0  # the unscaled signal: under half the constant model's
+    m0 = build_arrays(Scenario.read("injection-fig5")).state0.model[0]
+    assert saturation_sensitivity_ratio(pk, s, m0) == 1.0
