@@ -398,12 +398,27 @@ def test_bad_realistic_setting_on_the_command_line(tmp_path, capsys):
     ],
 )
 def test_realistic_presets_load_with_every_non_ideality_on(name):
+    from imdrive.analysis.commissioning import ideal_commissioning
+
     sc = Scenario.read(name)
     assert sc.inverter.model == "switching" and sc.inverter.dead_time_s == 2e-6
     assert sc.inverter.device_drop_V == 1.0 and sc.control.delay_periods == 1
-    assert sc.control.dead_time_compensation_s == pytest.approx(1.6e-6)
     assert sc.sensor.adc_bits == 12 and sc.sensor.noise_rms_A == 0.02
     assert sc.plant.saturation.enabled
+    # a commissioned controller: the tables the documented procedure gives (not stale)
+    cm = sc.controller_model
+    assert cm.uses_magnetising_curve and cm.uses_inverter_error
+    tables = ideal_commissioning(sc)
+    for key, values in tables.items():
+        assert getattr(cm, key) == pytest.approx(values, rel=1e-12), key
+
+
+def test_the_uncommissioned_realistic_preset_keeps_the_constant_model():
+    sc = Scenario.read("sensorless-realistic-uncommissioned")
+    assert not sc.controller_model.uses_magnetising_curve
+    assert not sc.controller_model.uses_inverter_error
+    assert sc.control.dead_time_compensation_s == pytest.approx(1.6e-6)
+    assert sc.plant.saturation.enabled and sc.inverter.dead_time_s == 2e-6
 
 
 def test_batch_and_sweeps_run_the_realistic_drive_bit_identical_to_single_runs():

@@ -228,15 +228,16 @@ def test_mras_normalisation_changes_nothing_at_rated_flux():
 
 
 def test_standstill_R1_identification_sees_the_dead_time_error():
-    """The documented limit: on the realistic drive (2 us dead time compensated for 1.6 us)
-    the residual dead-time voltage dominates R1 |i| at standstill."""
+    """The documented limit: on the uncommissioned realistic drive (2 us dead time
+    compensated for 1.6 us) the residual dead-time voltage dominates R1 |i| at standstill."""
     sc = Scenario.read(
-        "sensorless-realistic", ["mras.R1_standstill=true", "simulation.t_end_s=0.75"]
+        "sensorless-realistic-uncommissioned",
+        ["mras.R1_standstill=true", "simulation.t_end_s=0.75"],
     )
     res = simulate(sc)
     assert res["R1_hat_ohm"][-1] / res["R1_ohm"][-1] > 1.5
     exact = Scenario.read(
-        "sensorless-realistic",
+        "sensorless-realistic-uncommissioned",
         [
             "mras.R1_standstill=true",
             "simulation.t_end_s=0.75",

@@ -171,7 +171,9 @@ def _type(key: Key) -> str:
     if hint is Profile:
         name = "*profile*"
     elif typing.get_origin(hint) is tuple:
-        name = "list of strings"
+        item = typing.get_args(hint)[0]
+        item = typing.get_args(item)[0] if typing.get_origin(item) is typing.Annotated else item
+        name = "list of numbers" if item is float else "list of strings"
     elif typing.get_origin(hint) is dict:
         name = "tables by estimator name"
     if key.path == ("control", "speed_feedback"):

@@ -87,7 +87,8 @@ class ThermalSettings:
 @settings("plant.saturation")
 class SaturationSettings:
     """Main-flux saturation of the plant (``[plant.saturation]``); the controller keeps its
-    constant M̂, so saturation is also a model mismatch.
+    constant M̂, so saturation is also a model mismatch, unless ``[controller_model]`` gives it
+    the curve (a commissioning's).
 
     The magnetising curve (:mod:`imdrive.kernels.machine`)::
 

@@ -40,6 +40,7 @@ from imdrive.config.control import (  # noqa: F401  (NonNegativeProfile: re-expo
     NonNegativeProfile,
     OpenLoopSettings,
 )
+from imdrive.config.controller_model import ControllerModelSettings
 from imdrive.config.estimators import (
     ESTIMATOR_SETTINGS,
     AfoSettings,
@@ -115,6 +116,7 @@ __all__ = [
     "AfoSettings",
     "CompensatorSettings",
     "ControlSettings",
+    "ControllerModelSettings",
     "DriveSettings",
     "EkfSettings",
     "EstimatorSettings",
@@ -152,6 +154,7 @@ SECTIONS: dict[str, type] = {
     "open_loop": OpenLoopSettings,
     "control": ControlSettings,
     "estimator": EstimatorSettings,
+    "controller_model": ControllerModelSettings,
     **package_sections(),
     "plugins": PluginSettings,
     "flux_injection": FluxInjectionSettings,
@@ -188,6 +191,8 @@ class Scenario:
     estimator, mras, reactive_mras, afo, ekf : settings section
         The controller's machine model and the speed estimators' settings (one section per
         estimator of the package, from its settings class).
+    controller_model : ControllerModelSettings
+        The controller's magnetising curve and inverter-error table (commissioning's).
     plugins : PluginSettings
         Estimators from the user's own modules (``[plugins] modules``) and their settings
         (``[plugins.settings.NAME]``).
@@ -229,6 +234,9 @@ class Scenario:
     estimator: Annotated[EstimatorSettings, setting("the controller's machine model")] = (
         EstimatorSettings()
     )
+    controller_model: Annotated[
+        ControllerModelSettings, setting("the controller's magnetising curve and inverter error")
+    ] = ControllerModelSettings()
     # one section per estimator of the package (mras, reactive_mras, afo, ekf, ...), from
     # their settings classes (config/estimators.py): a new estimator adds its own
     for _section, _cls in package_sections().items():

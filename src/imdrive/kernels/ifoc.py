@@ -39,8 +39,14 @@ import math
 from numba import njit
 
 from imdrive.kernels.inverter import clarke, limit_magnitude, phase_values, smooth_sign
-from imdrive.kernels.model import model_inductances
-from imdrive.kernels.records import b1, c16, f8, record_dtype
+from imdrive.kernels.model import (
+    MODEL_TABLE_POINTS,
+    model_inductances,
+    reference_magnetising,
+    table_interp,
+    update_magnetising,
+)
+from imdrive.kernels.records import b1, c16, f8, i8, record_dtype
 
 #: Parameters of the speed and current controllers (gains from :mod:`imdrive.design.gains`).
 CONTROL_PARAMS = record_dtype(
@@ -56,6 +62,11 @@ CONTROL_PARAMS = record_dtype(
         ("angle_advance", f8),  # where in the next periods the voltage acts, periods (0.5, 1.5)
         ("dtc_u", f8),  # dead-time compensation: assumed t_d f_sw Vdc_meas per phase, V (0: off)
         ("dtc_band", f8),  # its current band (smooth sign), A
+        # the inverter's voltage error per phase as a function of the phase current (odd:
+        # the nodes i >= 0 from i = 0, u(0) = 0); ie_n > 0 replaces dtc_u's sign model
+        ("ie_n", i8),
+        ("ie_i", f8, (MODEL_TABLE_POINTS,)),  # phase current at the nodes, A
+        ("ie_u", f8, (MODEL_TABLE_POINTS,)),  # the voltage the inverter loses there, V
         ("fw", b1),  # field weakening by voltage feedback
         ("fw_v", f8),  # voltage use it holds, fraction of v_max
         ("fw_rate", f8),  # its integral gain, 1/s per unit of voltage use
@@ -134,8 +145,10 @@ def foc_step(p, m, s, i_alpha, i_beta, w_fb_m, w_ref_m, psi_ref, i_inj, Ts):
     n_p = p.n_p
     i_max = p.i_max
 
-    # flux-current reference, plus the injected component (persistent excitation)
-    id_ref = min(psi_ref / M + i_inj, i_max)
+    # flux-current reference, plus the injected component (persistent excitation); with a
+    # magnetising curve, at the secant inductance the reference flux needs (M without one)
+    M_ref = reference_magnetising(m, psi_ref, s.i_ref_dq.imag)
+    id_ref = min(psi_ref / M_ref + i_inj, i_max)
 
     # the controller's rotor-flux model (exact for id* held over the period)
     T2_hat = L2 / m.R2_hat
@@ -197,6 +210,8 @@ def foc_step(p, m, s, i_alpha, i_beta, w_fb_m, w_ref_m, psi_ref, i_inj, Ts):
     s.w_e = w_e
     s.i_ref_dq = complex(id_ref, iq_ref)
     s.i_s_dq = complex(i_d, i_q)
+    # saturation-aware model: M_hat at the magnetising flux of the new flux estimate
+    update_magnetising(m, s.psi_hat, s.i_ref_dq)
     return v_alpha, v_beta
 
 
@@ -216,20 +231,56 @@ def log_control(row, s, w_ref_m, theta_k):
 
 
 @njit(cache=True)
+def inverter_error(p, i_x):
+    """The inverter's voltage error of one phase at phase current ``i_x`` (A) from the
+    identified table, V: odd in ``i_x``, linear between the nodes, held past the last."""
+    u, _ = table_interp(abs(i_x), p.ie_i, p.ie_u, p.ie_n)
+    return u if i_x >= 0.0 else -u
+
+
+@njit(cache=True)
+def has_feedforward(p):
+    """Whether the controller compensates the inverter's voltage error (either model)."""
+    return p.dtc_u > 0.0 or p.ie_n > 0
+
+
+@njit(cache=True)
 def dead_time_feedforward(p, i_alpha, i_beta):
     """Dead-time compensation added to the voltage reference, ``(alpha, beta)``, V.
 
     Each phase's pole voltage is raised by ``sgn_b(i_x) u`` with ``u = t_d,assumed f_sw
     Vdc_meas`` (``p.dtc_u``), the averaged loss the dead time causes, signed by the measured
-    phase current (smooth inside ``p.dtc_band``).
+    phase current (smooth inside ``p.dtc_band``). With an identified inverter-error table
+    (``p.ie_n > 0``, a commissioning's standstill DC test) each phase is raised by the
+    table's ``u(i_x)`` instead (:func:`inverter_error`).
     """
     ia, ib, ic = phase_values(i_alpha, i_beta)
+    if p.ie_n > 0:
+        return clarke(inverter_error(p, ia), inverter_error(p, ib), inverter_error(p, ic))
     u = p.dtc_u
     return clarke(
         smooth_sign(ia, p.dtc_band) * u,
         smooth_sign(ib, p.dtc_band) * u,
         smooth_sign(ic, p.dtc_band) * u,
     )
+
+
+@njit(cache=True)
+def inverter_feedforward(p, s, i_alpha, i_beta, Ts):
+    """The inverter-error compensation added to the voltage reference, ``(alpha, beta)``, V.
+
+    With the identified table (``p.ie_n > 0``) each phase's error is taken at the current of
+    the middle of the period where the voltage acts: the measured current turned by the
+    controller's frequency over ``p.angle_advance`` periods (0.5, or 1.5 with a one-period
+    delay), so the compensation changes sign with the current, not one period after it.
+    Otherwise :func:`dead_time_feedforward` on the measured current (the sign model).
+    """
+    if p.ie_n > 0:
+        th = s.w_e * p.angle_advance * Ts
+        c = math.cos(th)
+        sn = math.sin(th)
+        return dead_time_feedforward(p, c * i_alpha - sn * i_beta, sn * i_alpha + c * i_beta)
+    return dead_time_feedforward(p, i_alpha, i_beta)
 
 
 @njit(cache=True)

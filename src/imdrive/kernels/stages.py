@@ -39,9 +39,10 @@ from imdrive.kernels.compensator import (
 )
 from imdrive.kernels.estimators.registry import estimator_finite, estimator_log, estimator_step
 from imdrive.kernels.ifoc import (
-    dead_time_feedforward,
     field_weakening,
     foc_step,
+    has_feedforward,
+    inverter_feedforward,
     log_control,
     open_loop_voltage,
 )
@@ -217,8 +218,8 @@ def control(sim, pc, x, mdl, ctl, smp, pr, foc):
 
     dv_alpha = 0.0
     dv_beta = 0.0
-    if pc.dtc_u > 0.0:  # dead-time compensation, on the measured current
-        dv_alpha, dv_beta = dead_time_feedforward(pc, i_meas_alpha, i_meas_beta)
+    if has_feedforward(pc):  # inverter-error compensation, on the measured current
+        dv_alpha, dv_beta = inverter_feedforward(pc, ctl, i_meas_alpha, i_meas_beta, Ts)
         v_ref_alpha += dv_alpha
         v_ref_beta += dv_beta
     pr.v_log_ab = complex(v_ref_alpha, v_ref_beta)
@@ -287,7 +288,7 @@ def modulate(pinv, pc, smp, pr, switching, Vdc_meas, seg, Ts):
     # the dead-time compensation is not part of it: it is meant to cancel the dead time's
     # loss, so the commanded voltage less the compensation is the controller's best estimate
     # of what reaches the terminals
-    if pc.dtc_u > 0.0:
+    if has_feedforward(pc):
         smp.v_prev_ab = complex(v_cmd_alpha - pr.dv_ab.real, v_cmd_beta - pr.dv_ab.imag)
     else:
         smp.v_prev_ab = complex(v_cmd_alpha, v_cmd_beta)

@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 
+from imdrive.config.controller_model import inverter_error_half, magnetising_table
 from imdrive.config.perunit import Resolved
 from imdrive.config.profiles import Profile
 from imdrive.config.scenario import Scenario
@@ -27,7 +28,7 @@ from imdrive.kernels.engine import DRIVE_FOC, DRIVE_OPEN_LOOP, SAMPLE_STATE, SIM
 from imdrive.kernels.ifoc import CONTROL_PARAMS, CONTROL_STATE
 from imdrive.kernels.inverter import INVERTER_CODES, INVERTER_PARAMS, INVERTER_STATE
 from imdrive.kernels.machine import PLANT_PARAMS, initial_plant_state, saturation_table
-from imdrive.kernels.model import MODEL_STATE
+from imdrive.kernels.model import MODEL_STATE, MODEL_TABLE_POINTS
 from imdrive.kernels.records import new_records
 from imdrive.kernels.sensors import SENSOR_PARAMS
 from imdrive.run._profiles import profiles_to_arrays
@@ -135,16 +136,32 @@ def sensor_fields(sc: Scenario) -> dict:
     )
 
 
-def model_fields(D: Resolved) -> tuple[dict, dict]:
+def model_fields(sc: Scenario, D: Resolved) -> tuple[dict, dict]:
     """``MODEL_STATE`` (the controller's machine model: its estimates, absolute or as ratios of
     the plant's, :func:`imdrive.config.perunit.resolve`; unset: the plant's) and the
     model's inductances ``R1_hat, R2_hat, M_hat, L1_hat, L2_hat, sigma_L1_hat`` as a dict."""
     R1h, R2h, Ll1h, Ll2h, Mh = D.R1_hat, D.R2_hat, D.Ll1_hat, D.Ll2_hat, D.M_hat
     model = dict(R1_hat=R1h, R2_hat=R2h, Ll1_hat=Ll1h, Ll2_hat=Ll2h, M_hat=Mh)
+    cm = sc.controller_model
+    if cm.uses_magnetising_curve:  # the saturation-aware flux model (kernels/model.py)
+        psi, i_m, di_m = magnetising_table(cm.magnetising_psi_Wb, cm.magnetising_Lm_H)
+        model["sat_n"] = len(psi)
+        model["sat_psi"] = _padded(psi)
+        model["sat_im"] = _padded(i_m)
+        model["sat_dim"] = _padded(di_m)
+        model["sat_Lm0"] = cm.magnetising_Lm_H[0]
+        model["L_inc_hat"] = Mh
     L1h, L2h = Ll1h + Mh, Ll2h + Mh
     sigma_L1 = L1h - Mh**2 / L2h
     mh = dict(R1_hat=R1h, R2_hat=R2h, M_hat=Mh, L1_hat=L1h, L2_hat=L2h, sigma_L1_hat=sigma_L1)
     return model, mh
+
+
+def _padded(values) -> np.ndarray:
+    """A table's nodes in the kernels' fixed-size array, the last value repeated after them."""
+    out = np.full(MODEL_TABLE_POINTS, float(values[-1]))
+    out[: len(values)] = values
+    return out
 
 
 def flux_reference(sc: Scenario) -> Profile:
@@ -166,7 +183,7 @@ def _assumed_dead_time(sc: Scenario) -> float:
 
 def control_fields(sc: Scenario, D: Resolved, mh: dict, psi0: float) -> tuple[dict, dict]:
     """``CONTROL_PARAMS`` and the controller's gains (current and speed PI from bandwidths,
-    each overridable), from the model ``mh`` of :func:`model_record` and flux ``psi0``."""
+    each overridable), from the model ``mh`` of :func:`model_fields` and flux ``psi0``."""
     m = sc.machine
     ctl = sc.control
     inv = sc.inverter
@@ -204,6 +221,13 @@ def control_fields(sc: Scenario, D: Resolved, mh: dict, psi0: float) -> tuple[di
         fw_rate=ctl.field_weakening_rate,
         fw_min=ctl.field_weakening_min,
     )
+    cm = sc.controller_model
+    if cm.uses_inverter_error:  # the identified inverter-error table replaces dtc_u
+        ie_i, ie_u = inverter_error_half(cm.inverter_error_i_A, cm.inverter_error_u_V)
+        control["ie_n"] = len(ie_i)
+        control["ie_i"] = _padded(ie_i)
+        control["ie_u"] = _padded(ie_u)
+        control["dtc_u"] = 0.0
     return control, gains
 
 

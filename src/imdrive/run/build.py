@@ -182,7 +182,7 @@ def _build_arrays(sc: Scenario) -> DriveArrays:
     check_log_size(sc, log, n_steps)
     D = resolve(sc)  # every machine-dependent value, once
     m = sc.machine
-    model, mh = blocks.model_fields(D)
+    model, mh = blocks.model_fields(sc, D)
     psi0 = blocks.initial_flux(sc, D)
     ctx = EstimatorContext(
         scenario=sc,
