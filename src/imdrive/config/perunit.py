@@ -76,6 +76,9 @@ class Resolved:
         The machine's leakage factor and rotor time constant, s.
     v_max_V : float
         The largest phase voltage the inverter can apply, V (``inverter.v_max_V``).
+    model_curve, model_inverter_error : bool
+        Whether the controller uses ``[controller_model]``'s magnetising curve and its
+        inverter-error table.
     """
 
     R1_hat: float
@@ -103,6 +106,8 @@ class Resolved:
     sigma: float = math.nan
     T2_s: float = math.nan
     v_max_V: float = math.nan
+    model_curve: bool = False
+    model_inverter_error: bool = False
 
 
 def _whole_periods(f: float, Ts: float) -> float:
@@ -219,6 +224,8 @@ def _resolve(sc) -> Resolved:
         sigma=m.sigma,
         T2_s=m.T2_s,
         v_max_V=sc.inverter.v_max_V,
+        model_curve=sc.controller_model.uses_magnetising_curve,
+        model_inverter_error=sc.controller_model.uses_inverter_error,
     )
     # the decision period holds whole periods of the injection frequency resolved above
     n_comp = decision_period_steps(comp, inj, sc.simulation.Ts_s, r)

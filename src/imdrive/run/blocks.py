@@ -143,7 +143,7 @@ def model_fields(sc: Scenario, D: Resolved) -> tuple[dict, dict]:
     R1h, R2h, Ll1h, Ll2h, Mh = D.R1_hat, D.R2_hat, D.Ll1_hat, D.Ll2_hat, D.M_hat
     model = dict(R1_hat=R1h, R2_hat=R2h, Ll1_hat=Ll1h, Ll2_hat=Ll2h, M_hat=Mh)
     cm = sc.controller_model
-    if cm.uses_magnetising_curve:  # the saturation-aware flux model (kernels/model.py)
+    if D.model_curve:  # the saturation-aware flux model (kernels/model.py)
         psi, i_m, di_m = magnetising_table(cm.magnetising_psi_Wb, cm.magnetising_Lm_H)
         model["sat_n"] = len(psi)
         model["sat_psi"] = _padded(psi)
@@ -222,7 +222,7 @@ def control_fields(sc: Scenario, D: Resolved, mh: dict, psi0: float) -> tuple[di
         fw_min=ctl.field_weakening_min,
     )
     cm = sc.controller_model
-    if cm.uses_inverter_error:  # the identified inverter-error table replaces dtc_u
+    if D.model_inverter_error:  # the identified inverter-error table replaces dtc_u
         ie_i, ie_u = inverter_error_half(cm.inverter_error_i_A, cm.inverter_error_u_V)
         control["ie_n"] = len(ie_i)
         control["ie_i"] = _padded(ie_i)
