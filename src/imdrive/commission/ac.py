@@ -40,6 +40,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from imdrive.commission.base import (
+    HELD_ROTOR,
+    NO_SPEED_LOOP,
     CommissioningFailed,
     Nameplate,
     fundamental,
@@ -127,8 +129,8 @@ def ac_test(sc, npl: Nameplate, R1: float, L1_0: float, I_m: float, table, model
             "ac",
             t_end + 2.0 * npl.Ts_s,
             control={
-                "speed_ref_rpm": 0.0,
                 "speed_feedback": "measured",
+                **NO_SPEED_LOOP,
                 "flux_ref_Wb": I_dc * model["M_H"],
             },
             injection={
@@ -139,6 +141,7 @@ def ac_test(sc, npl: Nameplate, R1: float, L1_0: float, I_m: float, table, model
                 "compensate_filter": False,
             },
             estimator=model,
+            plant=HELD_ROTOR,
         )
         res = run_test(scen, "ac")
         t, v, i = window(res, settle, t_end, npl.delay, table)

@@ -63,8 +63,7 @@ def table(rows: list[dict]) -> str:
     """The Markdown table: worst and median |relative error| of each quantity, %."""
     ok = [r for r in rows if not r["failed"]]
     lines = [
-        f"{len(ok)} of {len(rows)} random plants identified "
-        f"({len(rows) - len(ok)} failed a test).",
+        f"{len(ok)} of {len(rows)} random plants identified ({len(rows) - len(ok)} failed a test).",
         "",
         "| quantity | goal | median | worst |",
         "|---|---|---|---|",

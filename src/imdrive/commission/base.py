@@ -197,6 +197,16 @@ def test_scenario(sc: Scenario, test: str, t_end: float, **sections) -> Scenario
         return Scenario.from_dict(d)
 
 
+#: The speed loop of a standstill test: no torque current (a gain of 1e-12 A per rad/s, no
+#: integral; ``[control]`` keys), so the controller's angle stays where it starts, on alpha.
+NO_SPEED_LOOP = {"speed_kp": 1e-12, "speed_ki": 0.0, "speed_ref_rpm": 0.0}
+#: The plant of a standstill test: the rotor held still (``[plant]`` keys). The tests make no
+#: torque but the few mN m of the current sensors' errors, which a real machine's static
+#: friction holds; the model has no static friction, and a rotor creeping by a fraction of a
+#: rpm would turn the measured-speed controller's angle away from alpha.
+HELD_ROTOR = {"speed_mode": "imposed", "imposed_speed_rpm": 0.0}
+
+
 def run_test(scenario: Scenario, test: str):
     """Simulate a test's scenario; a diverged run is a :class:`CommissioningFailed`."""
     with warnings.catch_warnings():
