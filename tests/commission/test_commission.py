@@ -69,3 +69,16 @@ def test_realistic_drive_is_identified_within_the_goals(tmp_path):
     Scenario.read(str(tmp_path / "identified.toml"))  # a valid scenario
     for name in ("dc", "no-load", "ac", "acceleration"):
         assert (tmp_path / f"{name}.png").stat().st_size > 0
+
+
+@pytest.mark.slow
+def test_random_plants_are_identified_within_the_goals():
+    """The accuracy study at reduced size: three random plants (both library machines)."""
+    from imdrive.commission.accuracy import GOALS, accuracy_rows
+
+    rows = accuracy_rows(3, seed=7)
+    assert {r["machine"] for r in rows} == {"paper-table-iv", "aalto-2.2kw"}
+    for row in rows:
+        assert not row["failed"], row["failed"]
+        for q, goal in GOALS.items():
+            assert abs(row[q]) <= goal / 100.0, (row["plant"], q, row[q])

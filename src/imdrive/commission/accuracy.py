@@ -18,7 +18,8 @@ from pathlib import Path
 import numpy as np
 
 MACHINES = ("paper-table-iv", "aalto-2.2kw")
-QUANTITIES = ("R1_ohm", "R2_ohm", "sigma_L1_H", "L1_H", "J_kgm2", "Lm_H")
+QUANTITIES = ("R1_ohm", "R2_ohm", "sigma_L1_H", "L1_H", "J_kgm2", "Lm_H", "u_err_V")
+#: The goals, % (``u_err_V``, the inverter-error table's plateau, has none).
 GOALS = {"R1_ohm": 3, "R2_ohm": 5, "sigma_L1_H": 10, "L1_H": 5, "J_kgm2": 10, "Lm_H": 3}
 DOC = Path(__file__).resolve().parents[3] / "docs" / "commissioning.md"
 CSV = DOC.parent / "data" / "commissioning-accuracy.csv"
@@ -70,7 +71,8 @@ def table(rows: list[dict]) -> str:
     ]
     for q in QUANTITIES:
         e = np.abs([float(r[q]) for r in ok]) * 100.0
-        lines.append(f"| {q} | {GOALS[q]} % | {np.median(e):.2f} % | {np.max(e):.2f} % |")
+        goal = f"{GOALS[q]} %" if q in GOALS else "-"
+        lines.append(f"| {q} | {goal} | {np.median(e):.2f} % | {np.max(e):.2f} % |")
     return "\n".join(lines)
 
 
