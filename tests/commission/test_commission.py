@@ -66,7 +66,11 @@ def test_realistic_drive_is_identified_within_the_goals(tmp_path):
     assert set(summary["identified"]["inverter_error"]) == {"i_A", "u_V"}
     data = tomllib.loads((tmp_path / "identified.toml").read_text())
     assert data["estimator"]["R1_ohm"] == pytest.approx(res.identified["R1_ohm"])
-    Scenario.read(str(tmp_path / "identified.toml"))  # a valid scenario
+    from imdrive.run.simulate import simulate
+
+    run = simulate(Scenario.read(str(tmp_path / "identified.toml")))  # imdrive run's scenario
+    assert not run.diverged and not run.lost_control
+    assert run.final_values["speed_rpm"] == pytest.approx(1000.0, abs=5.0)
     for name in ("dc", "no-load", "ac", "acceleration"):
         assert (tmp_path / f"{name}.png").stat().st_size > 0
 

@@ -19,7 +19,8 @@ def _cmd_commission(args) -> int:
         print(f"imdrive: commissioning failed: {exc}", file=sys.stderr)
         return EXIT_NOT_IDENTIFIED
     for key, err in res.relative_error.items():
-        print(f"{key:12s} {100 * err:+7.2f} %")
+        text = "-" if err is None else f"{100 * err:+7.2f} %"
+        print(f"{key:12s} {text}")
     print(f"wrote {args.out}/summary.json, identified.toml and the figures ({res.wall_s:.1f} s)")
     return EXIT_OK
 

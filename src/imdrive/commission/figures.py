@@ -57,8 +57,8 @@ def save_figures(res, out) -> list[Path]:
     col = "speed_est_rpm" if "speed_est_rpm" in r.columns else "speed_rpm"
     ax.plot(r["time_s"], r[col], label="speed the drive uses")
     ax.plot(r["time_s"], r["speed_ref_rpm"], "k:", label="reference")
-    for a, b in acc.windows:
-        ax.axvspan(a, b, alpha=0.2)
+    for k, (a, b) in enumerate(acc.windows):
+        ax.axvspan(a, b, alpha=0.2, color="C1" if k else "C0")
     ax.set(
         xlabel="time (s)",
         ylabel="speed (rpm)",

@@ -42,7 +42,8 @@ class CommissioningResult:
         The plant's values of the same quantities (the simulator's; a real drive has none).
     relative_error : dict
         ``identified/true - 1`` of each scalar; ``Lm_H``: the largest over the curve's
-        points within :data:`CURVE_RANGE_PU` of rated flux; ``u_err_V``: of the table's plateau.
+        points within :data:`CURVE_RANGE_PU` of rated flux; ``u_err_V``: of the table's plateau
+        (None for an inverter that loses nothing).
     durations_s : dict
         Simulated duration of each test.
     wall_s : float
@@ -154,8 +155,11 @@ def relative_errors(ident: dict, true: dict, psi_rated: float) -> dict:
     lo, hi = CURVE_RANGE_PU
     inside = (psi >= lo * psi_rated * 0.98) & (psi <= hi * psi_rated * 1.02)
     out["Lm_H"] = float(err[inside][np.argmax(np.abs(err[inside]))])
-    out["u_err_V"] = ident["inverter_error"]["u_V"][-1] / true["inverter_error_plateau_V"] - 1.0
-    return {k: float(v) for k, v in out.items()}
+    u_true = true["inverter_error_plateau_V"]
+    # an ideal inverter loses nothing: no relative error (None)
+    u_id = ident["inverter_error"]["u_V"][-1]
+    out["u_err_V"] = u_id / u_true - 1.0 if u_true > 0.0 else None
+    return {k: (None if v is None else float(v)) for k, v in out.items()}
 
 
 def identified_scenario(sc: Scenario, res: CommissioningResult) -> dict:
