@@ -70,7 +70,7 @@ def test_realistic_drive_is_identified_within_the_goals(tmp_path):
 
     run = simulate(Scenario.read(str(tmp_path / "identified.toml")))  # imdrive run's scenario
     assert not run.diverged and not run.lost_control
-    assert run.final_values["speed_rpm"] == pytest.approx(1000.0, abs=5.0)
+    assert run.final_values()["speed_rpm"] == pytest.approx(1000.0, abs=5.0)
     for name in ("dc", "no-load", "ac", "acceleration"):
         assert (tmp_path / f"{name}.png").stat().st_size > 0
 
