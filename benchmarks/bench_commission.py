@@ -1,6 +1,7 @@
 """Wall time of one identification run (``imdrive commission``) on one core.
 
-Run: ``python benchmarks/bench_commission.py [PRESET]``. The kernels are loaded (or compiled)
+Run: ``python benchmarks/bench_commission.py [PRESET [KEY=VALUE ...]]`` (overrides as
+``imdrive run --set``, e.g. ``'machine.preset="aalto-2.2kw"'``). The kernels are loaded (or compiled)
 once before timing: the figure is the identification run with a warm kernel cache, as for a
 drive commissioned after installation; the figures' PNGs are not included.
 """
@@ -17,7 +18,7 @@ def main(argv=None) -> int:
     from imdrive.commission.identify import identify
     from imdrive.config.scenario import Scenario
 
-    sc = Scenario.read(preset)
+    sc = Scenario.read(preset, argv[1:])
     identify(sc)  # loads (or compiles) the kernels
     times = []
     for _ in range(3):
@@ -25,7 +26,7 @@ def main(argv=None) -> int:
         res = identify(sc)
         times.append(time.perf_counter() - t0)
     sim = sum(res.durations_s.values())
-    print(f"{preset}: commissioning {min(times):.2f} s wall (best of 3; {sim:.1f} s simulated)")
+    print(f"{preset} {' '.join(argv[1:])}: commissioning {min(times):.2f} s wall (best of 3; {sim:.1f} s simulated)")
     return 0
 
 
