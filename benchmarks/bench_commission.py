@@ -1,15 +1,17 @@
 """Wall time of one identification run (``imdrive commission``) on one core.
 
 Run: ``python benchmarks/bench_commission.py [PRESET [KEY=VALUE ...]]`` (overrides as
-``imdrive run --set``, e.g. ``'machine.preset="aalto-2.2kw"'``). The kernels are loaded (or compiled)
-once before timing: the figure is the identification run with a warm kernel cache, as for a
-drive commissioned after installation; the figures' PNGs are not included.
+``imdrive run --set``, e.g. ``'machine.preset="aalto-2.2kw"'``). The kernels are loaded (or
+compiled) once before timing: the figure is the identification run with a warm kernel cache,
+as for a drive commissioned after installation; the figures' PNGs are not included.
 """
 
 from __future__ import annotations
 
 import sys
 import time
+
+from _measured import machine_line, span
 
 
 def main(argv=None) -> int:
@@ -26,7 +28,11 @@ def main(argv=None) -> int:
         res = identify(sc)
         times.append(time.perf_counter() - t0)
     sim = sum(res.durations_s.values())
-    print(f"{preset} {' '.join(argv[1:])}: commissioning {min(times):.2f} s wall (best of 3; {sim:.1f} s simulated)")
+    print(machine_line())
+    print(
+        f"{preset} {' '.join(argv[1:])}: commissioning {min(times):.2f} s wall, best of 3 "
+        f"({span(times)}; {sim:.1f} s simulated)"
+    )
     return 0
 
 
