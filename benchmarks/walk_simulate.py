@@ -32,6 +32,7 @@ RANK = {
     "studies": 6,
     "stability": 6,
     "bench": 6,
+    "commission": 6,
     "cli": 7,
 }
 

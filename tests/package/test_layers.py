@@ -29,8 +29,8 @@ rank layer                                        why it sits there
 5    ``run``                                      assembles a drive: config + design + fuzzy ->
                                                   records -> kernels -> result, its metrics and
                                                   figures (``run.plots``)
-6    ``sweep``, ``studies``                       users of ``run``: many runs, the paper's
-                                                  studies
+6    ``sweep``, ``studies``, ``commission``       users of ``run``: many runs, the paper's
+                                                  studies, the identification run
 7    ``cli``, ``__main__``                        the command line, on top of everything
 ==== ============================================ ===============================================
 
@@ -94,6 +94,7 @@ RANK = {
     "studies": 6,
     "stability": 6,
     "bench": 6,
+    "commission": 6,
     "cli": 7,
     "__main__": 7,
 }

@@ -23,6 +23,9 @@ Exit codes
     manifest without ``"complete": true``; ``--resume`` continues a sweep).
 5 (``EXIT_INTERNAL``)
     An unexpected error (a bug): one line; set ``IMDRIVE_DEBUG=1`` for the traceback.
+6 (``EXIT_NOT_IDENTIFIED``)
+    ``imdrive commission``: a test of the identification run did not converge (one line
+    naming the test and why); no ``identified.toml`` is written.
 130
     Interrupted (Ctrl-C).
 
@@ -42,7 +45,17 @@ import sys
 import time
 import warnings
 
-from imdrive.cli import bench, compare, info, machine, paper, run, stability, sweep
+from imdrive.cli import (
+    bench,
+    commission,
+    compare,
+    info,
+    machine,
+    paper,
+    run,
+    stability,
+    sweep,
+)
 from imdrive.cli._common import (
     EXIT_BAD_INPUT,
     EXIT_DIVERGED,
@@ -95,11 +108,12 @@ EXIT_CODES_HELP = """exit codes:
   3    the run lost control of the speed (results written, "lost_control": true)
   4    the environment failed (I/O, disk full, permission, memory, dask, a locked store)
   5    internal error (a bug); IMDRIVE_DEBUG=1 shows the traceback
+  6    imdrive commission: a test did not converge (it says which and why), nothing written
   130  interrupted (Ctrl-C)
 a sweep records its diverged and lost runs in its table and exits 0."""
 
 #: the command groups, in the order ``imdrive --help`` lists them
-COMMANDS = (run, compare, info, paper, sweep, stability, bench, machine)
+COMMANDS = (run, compare, info, paper, sweep, stability, bench, machine, commission)
 
 
 def build_parser() -> argparse.ArgumentParser:

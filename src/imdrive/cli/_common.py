@@ -17,6 +17,7 @@ EXIT_BAD_INPUT = 2
 EXIT_LOST_CONTROL = 3
 EXIT_ENVIRONMENT = 4
 EXIT_INTERNAL = 5
+EXIT_NOT_IDENTIFIED = 6  # a commissioning test did not converge
 
 OUT_ROOT = Path("out")  # default output root: out/NAME, out/sweep-NAME
 NAME_MAX_BYTES = 255  # longest file name on common file systems (ext4, xfs, btrfs, apfs)

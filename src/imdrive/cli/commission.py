@@ -1,0 +1,43 @@
+"""``imdrive commission``: the identification run of a drive (self-commissioning)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from imdrive.cli._common import EXIT_NOT_IDENTIFIED, EXIT_OK, _examples
+
+
+def _cmd_commission(args) -> int:
+    from imdrive.commission import CommissioningFailed, commission
+    from imdrive.config.scenario import Scenario
+
+    sc = Scenario.read(args.scenario, args.set or [])
+    try:
+        res = commission(sc, args.out)
+    except CommissioningFailed as exc:
+        print(f"imdrive: commissioning failed: {exc}", file=sys.stderr)
+        return EXIT_NOT_IDENTIFIED
+    for key, err in res.relative_error.items():
+        text = "-" if err is None else f"{100 * err:+7.2f} %"
+        print(f"{key:12s} {text}")
+    print(f"wrote {args.out}/summary.json, identified.toml and the figures ({res.wall_s:.1f} s)")
+    return EXIT_OK
+
+
+def add_parser(sub) -> None:
+    """Register ``commission`` on the sub-command parser ``sub``."""
+    p = sub.add_parser(
+        "commission",
+        help="identify the machine and inverter of a scenario (identification run)",
+        description="Run the standstill DC, rotating no-load, standstill AC and acceleration "
+        "tests on the simulated drive and write DIR/summary.json (identified and true values), "
+        "DIR/identified.toml (the scenario with the identified controller model) and figures. "
+        f"A test that does not converge exits {EXIT_NOT_IDENTIFIED}, writing nothing.",
+        epilog=_examples("imdrive commission sensorless-realistic --out out/commission"),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("scenario", help="preset name or scenario file")
+    p.add_argument("--out", required=True, metavar="DIR", help="output folder")
+    p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a setting")
+    p.set_defaults(func=_cmd_commission)

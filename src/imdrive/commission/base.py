@@ -1,0 +1,283 @@
+"""Common ground of the identification run: what the drive knows before it starts, the test
+scenarios built from the user's, and the signals a drive sees.
+
+A commissioning drive knows its nameplate (rated voltage, frequency, current, speed, torque,
+pole pairs), its DC link (through its own sensor), its control period and computation delay;
+it sees its measured currents and the voltages it commands. Everything a test imposes is
+stated in per-unit of the nameplate (:class:`Nameplate`): currents in rated peak current,
+frequencies in rated slip frequency, durations in ``1/w_slip`` (the rated slip's time scale,
+which sets the rotor time constant's order: ``T2 ~ (i_q/i_d)/w_slip``).
+
+The plant's parameters are never read here: a test scenario's controller model
+(``[estimator]``) is set explicitly, first from per-unit guesses (:func:`guess_model`), then
+from what the earlier tests identified.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from imdrive.config.rated import rated_point
+from imdrive.config.scenario import Scenario
+from imdrive.errors import ConfigError
+from imdrive.run.simulate import simulate
+
+
+class CommissioningFailed(RuntimeError):
+    """A test of the identification run did not give a usable result.
+
+    Parameters
+    ----------
+    test : str
+        Which test (``"dc"``, ``"no-load"``, ``"ac"``, ``"acceleration"``).
+    reason : str
+        Why, in one line (what was expected, what was measured).
+    """
+
+    def __init__(self, test: str, reason: str):
+        self.test = test
+        self.reason = reason
+        super().__init__(f"commissioning test {test!r} did not converge: {reason}")
+
+
+@dataclass(frozen=True)
+class Nameplate:
+    """What the drive knows before it identifies anything (SI units; currents peak).
+
+    Attributes
+    ----------
+    I_rated_A : float
+        Rated current, peak (phase), A.
+    f_rated_Hz, w_rated : float
+        Rated frequency, Hz, and electrical rad/s.
+    w_slip : float
+        Rated slip frequency, electrical rad/s (``s_rated w_rated``).
+    V_phase_V : float
+        Rated phase voltage, peak, V.
+    psi_rated_Wb : float
+        Rated rotor flux (the scenario's flux reference at its start), Wb.
+    n_p : int
+        Pole pairs.
+    torque_Nm, speed_rpm : float
+        Rated torque, N m, and speed, rpm.
+    Vdc_meas_V : float
+        The DC link as the drive measures it, V; ``v_max = Vdc_meas/sqrt 3``.
+    Ts_s : float
+        Control period, s.
+    delay : int
+        Computation delay, periods.
+    """
+
+    I_rated_A: float
+    f_rated_Hz: float
+    w_rated: float
+    w_slip: float
+    V_phase_V: float
+    psi_rated_Wb: float
+    n_p: int
+    torque_Nm: float
+    speed_rpm: float
+    Vdc_meas_V: float
+    Ts_s: float
+    delay: int
+
+    @property
+    def v_max(self) -> float:
+        """The largest voltage vector the drive can command, ``Vdc_meas/sqrt 3``, V."""
+        return self.Vdc_meas_V / math.sqrt(3.0)
+
+    @property
+    def Z_base(self) -> float:
+        """Base impedance, rated phase voltage over rated current, ohm."""
+        return self.V_phase_V / self.I_rated_A
+
+    @property
+    def tau_slip(self) -> float:
+        """``1/w_slip``, s: the time unit of the tests' durations."""
+        return 1.0 / self.w_slip
+
+
+def nameplate(sc: Scenario) -> Nameplate:
+    """The nameplate and drive data of scenario ``sc`` (``config/rated.py`` ``rated_point``)."""
+    m = sc.machine
+    rp = rated_point(m)
+    w = 2.0 * math.pi * rp.frequency_Hz
+    psi = sc.control.flux_ref_Wb.points[0][1] if sc.control.flux_ref_Wb else m.rated_flux_Wb
+    return Nameplate(
+        I_rated_A=rp.current_peak_A,
+        f_rated_Hz=rp.frequency_Hz,
+        w_rated=w,
+        w_slip=rp.slip * w,
+        V_phase_V=rp.voltage_V * math.sqrt(2.0 / 3.0),
+        psi_rated_Wb=psi,
+        n_p=m.pole_pairs,
+        torque_Nm=rp.torque_Nm,
+        speed_rpm=rp.speed_rpm,
+        Vdc_meas_V=sc.sensor.vdc_gain * sc.inverter.Vdc_V,
+        Ts_s=sc.simulation.Ts_s,
+        delay=sc.control.delay_periods,
+    )
+
+
+def guess_model(npl: Nameplate) -> dict:
+    """The controller's model before any test, in per-unit of the nameplate: ``R1 = R2 =
+    0.04 Z_b``, leakages ``0.06 Z_b/w``, ``M = 1.7 Z_b/w`` (typical of 1-100 kW machines).
+
+    Only the current controllers' gains of the standstill tests depend on it (the tests
+    impose currents, whatever the model); ``[estimator]`` keys.
+    """
+    Zb, w = npl.Z_base, npl.w_rated
+    return {
+        "R1_ohm": 0.04 * Zb,
+        "R2_ohm": 0.04 * Zb,
+        "Ll1_H": 0.06 * Zb / w,
+        "Ll2_H": 0.06 * Zb / w,
+        "M_H": 1.7 * Zb / w,
+    }
+
+
+def check_commissionable(sc: Scenario) -> None:
+    """Refuse, in one line, a scenario the identification run cannot handle."""
+    if sc.drive.mode != "vector":
+        raise ConfigError(
+            "drive.mode",
+            f'is "{sc.drive.mode}": commissioning identifies the model of a field-oriented '
+            'controller, and an open-loop drive has none (set drive.mode = "vector")',
+        )
+    npl = nameplate(sc)
+    need = 1.1 * npl.V_phase_V * 0.5 / 0.85  # the no-load test's top level, with headroom
+    if npl.v_max < need:
+        raise ConfigError(
+            "inverter.Vdc_V",
+            f"the DC link ({npl.Vdc_meas_V:.4g} V measured) gives at most {npl.v_max:.4g} V, "
+            f"too low to reach the no-load test's 1.1 x rated flux at half the rated "
+            f"frequency (needs {need:.4g} V: Vdc >= {need * math.sqrt(3.0):.4g} V)",
+        )
+
+
+def test_scenario(sc: Scenario, test: str, t_end: float, **sections) -> Scenario:
+    """A test's scenario: the user's plant, inverter and sensors, the test's controller.
+
+    Every non-ideality of ``sc`` stays (inverter model, dead time, drops, delay, sensors,
+    saturation, thermal model). The machine is uncoupled from its load (no load torque), the
+    compensator, injection, field weakening and dead-time compensation are off unless the
+    test sets them, the log keeps every period. ``sections``: ``{section: {key: value}}``
+    applied last.
+    """
+    d = sc.to_dict()
+    d["name"] = f"{sc.name[:80]}-commission-{test}"
+    d["load"].update(torque_Nm=0.0, viscous_Nms=0.0, fan_Nms2=0.0)
+    d["compensator"]["enabled"] = False
+    d["injection"]["amplitude_A"] = 0.0
+    d["injection"]["amplitude_pu"] = None
+    d["flux_injection"] = {}
+    d["control"].update(
+        field_weakening=False,
+        dead_time_compensation="none",
+        speed_kp=None,
+        speed_ki=None,
+        current_kp=None,
+        current_ki=None,
+        flux_ref_Wb=None,
+    )
+    for key in ("R1_ratio", "R2_ratio", "M_ratio"):
+        d["estimator"][key] = None
+    d["estimator"]["R2_adaptation"] = "compensator"
+    d["simulation"].update(
+        t_end_s=t_end, log_every=1, lost_control_rpm=0.0, divergence_current_A=None
+    )
+    for section, values in sections.items():
+        d.setdefault(section, {}).update(values)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return Scenario.from_dict(d)
+
+
+#: The speed loop of a standstill test: no torque current (a gain of 1e-12 A per rad/s, no
+#: integral; ``[control]`` keys), so the controller's angle stays where it starts, on alpha.
+NO_SPEED_LOOP = {"speed_kp": 1e-12, "speed_ki": 0.0, "speed_ref_rpm": 0.0}
+#: The plant of a standstill test: the rotor held still (``[plant]`` keys). The tests make no
+#: torque but the few mN m of the current sensors' errors, which a real machine's static
+#: friction holds; the model has no static friction, and a rotor creeping by a fraction of a
+#: rpm would turn the measured-speed controller's angle away from alpha.
+HELD_ROTOR = {"speed_mode": "imposed", "imposed_speed_rpm": 0.0}
+
+
+def run_test(scenario: Scenario, test: str):
+    """Simulate a test's scenario; a diverged run is a :class:`CommissioningFailed`."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = simulate(scenario)
+    if res.diverged:
+        raise CommissioningFailed(test, f"the drive diverged ({res.divergence_message})")
+    return res
+
+
+def known_voltage(res, delay: int) -> tuple[np.ndarray, np.ndarray]:
+    """The voltage the drive commanded over each period, aligned with its current samples.
+
+    The logged reference of sample ``k`` acts over ``[t_{k+delay}, t_{k+delay+1})``; returned:
+    the voltage acting over ``[t_k, t_k+1)`` (alpha + j beta, V) and the mean of the two
+    current samples that bracket that period (A), both of length ``n - 1 - delay``.
+    """
+    v = res["v_ref_alpha_V"] + 1j * res["v_ref_beta_V"]
+    i = res["i_alpha_meas_A"] + 1j * res["i_beta_meas_A"]
+    n = len(v)
+    v_act = v[: n - 1 - delay]
+    i_mid = 0.5 * (i[delay : n - 1] + i[delay + 1 : n])
+    return v_act, i_mid
+
+
+def phase_currents(i_ab: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Phase currents a, b, c of stationary-frame currents (amplitude-invariant Clarke)."""
+    a = i_ab.real
+    b = -0.5 * i_ab.real + (math.sqrt(3.0) / 2.0) * i_ab.imag
+    return a, b, -a - b
+
+
+def inverter_error_ab(i_ab: np.ndarray, table_i: np.ndarray, table_u: np.ndarray) -> np.ndarray:
+    """The voltage the inverter loses at currents ``i_ab``, stationary frame, V.
+
+    Each phase loses ``sgn(i_x) u(|i_x|)`` (``u`` interpolated in the table, held past its
+    last node); the loss vector is their Clarke transform (the zero sequence drops out).
+    """
+    ua, ub, uc = (np.sign(x) * np.interp(np.abs(x), table_i, table_u) for x in phase_currents(i_ab))
+    return (2.0 / 3.0) * (ua - 0.5 * ub - 0.5 * uc) + 1j * (ub - uc) / math.sqrt(3.0)
+
+
+def window(res, t0: float, t1: float, delay: int, table=None):
+    """Time, applied-voltage estimate and measured current over ``[t0, t1)``.
+
+    The voltage is the command acting over each period (:func:`known_voltage`) less the
+    inverter's loss from the identified table ``(i_A, u_V)`` at the period's current, if
+    given. Returns ``(t, v_ab, i_ab)``; ``t`` is the middle of the period the voltage acts
+    over.
+    """
+    v, i = known_voltage(res, delay)
+    time = res["time_s"]
+    t = time[delay : delay + len(v)] + 0.5 * (time[1] - time[0])
+    sel = (t >= t0) & (t < t1)
+    v, i, t = v[sel], i[sel], t[sel]
+    if table is not None:
+        v = v - inverter_error_ab(i, *table)
+    return t, v, i
+
+
+def fundamental(x: np.ndarray, t: np.ndarray, w: float) -> complex:
+    """Complex amplitude of the component of ``x`` at ``w`` rad/s (the window should hold
+    whole periods): for a space vector ``x = X e^{jwt}``, ``X``; for a real ``x = Re(X
+    e^{jwt})``, ``X`` (twice the mean of ``x e^{-jwt}``)."""
+    rot = np.exp(-1j * w * t)
+    if np.iscomplexobj(x):
+        return complex(np.mean(x * rot))
+    return complex(2.0 * np.mean(x * rot))
+
+
+def whole_frequency(f: float, Ts: float) -> float:
+    """``f`` moved to the nearest frequency with a whole number of control periods."""
+    n = max(round(1.0 / (f * Ts)), 2)
+    return 1.0 / (n * Ts)
