@@ -165,11 +165,13 @@ def test_scenario(sc: Scenario, test: str, t_end: float, **sections) -> Scenario
     Every non-ideality of ``sc`` stays (inverter model, dead time, drops, delay, sensors,
     saturation, thermal model). The machine is uncoupled from its load (no load torque), the
     compensator, injection, field weakening and dead-time compensation are off unless the
-    test sets them, the log keeps every period. ``sections``: ``{section: {key: value}}``
-    applied last.
+    test sets them, the controller's model is the constant one (no ``[controller_model]``
+    tables: they are what commissioning identifies), the log keeps every period.
+    ``sections``: ``{section: {key: value}}`` applied last.
     """
     d = sc.to_dict()
     d["name"] = f"{sc.name[:80]}-commission-{test}"
+    d["controller_model"] = {}  # uncommissioned: a scenario already commissioned starts over
     d["load"].update(torque_Nm=0.0, viscous_Nms=0.0, fan_Nms2=0.0)
     d["compensator"]["enabled"] = False
     d["injection"]["amplitude_A"] = 0.0
