@@ -97,6 +97,7 @@ def metrics_dtypes() -> dict[str, np.dtype]:
     out["speed_error_pu_slip"] = np.dtype(np.float64)
     out["speed_tolerance_rpm"] = np.dtype(np.float64)
     out["verdict"] = np.dtype(object)
+    out["verdict_ok"] = np.dtype(bool)
     out["verdict_text"] = np.dtype(object)
     out["verdict_at_s"] = np.dtype(np.float64)
     out["error"] = np.dtype(object)
@@ -252,7 +253,6 @@ def _run_block(block, offset, logs, log_every, window_s, parallel, errors):
     res_blk: list = [None] * B
     e_blk = np.full(B, "", dtype=object)
     kernel_wall = 0.0
-    periods: dict[int, float] = {}  # each built drive's compensator period, s
     groups: dict[tuple, list] = {}
     for i, sc in enumerate(block):
         try:
@@ -273,7 +273,6 @@ def _run_block(block, offset, logs, log_every, window_s, parallel, errors):
             s_blk[i], k_blk[i], ts_blk[i] = S_FAILED, 0, 0.0
             e_blk[i] = sc.message if isinstance(sc, FailedRun) else str(exc)
             continue
-        periods[i] = float(a.params.comp[0]["n"]) * a.Ts
         le = (log_every or a.log_every) if logs else 1
         # one kernel call per number of periods, decimation and estimator (its records)
         key = (a.n_steps, int(le), a.params.est.dtype)
@@ -301,11 +300,11 @@ def _run_block(block, offset, logs, log_every, window_s, parallel, errors):
                     0.0,
                     a.derived,
                 )
-    v_blk = _verdicts(block, m_blk, s_blk, k_blk, ts_blk, e_blk, periods)
+    v_blk = _verdicts(block, m_blk, s_blk, k_blk, ts_blk, e_blk)
     return m_blk, s_blk, k_blk, ts_blk, e_blk, v_blk, res_blk, kernel_wall
 
 
-def _verdicts(block, m_blk, s_blk, k_blk, ts_blk, e_blk, periods) -> list[dict]:
+def _verdicts(block, m_blk, s_blk, k_blk, ts_blk, e_blk) -> list[dict]:
     """The status columns (:func:`imdrive.run.status.verdict`) of each drive of a block."""
     from imdrive.run.status import verdict
 
@@ -322,11 +321,15 @@ def _verdicts(block, m_blk, s_blk, k_blk, ts_blk, e_blk, periods) -> list[dict]:
         if s_blk[i] == S_FAILED:
             out.append(
                 {"speed_error_pu_slip": np.nan, "speed_tolerance_rpm": np.nan}
-                | {"verdict": "not-run", "verdict_text": f"not run: {e_blk[i]}"}
+                | {
+                    "verdict": "not-run",
+                    "verdict_ok": False,
+                    "verdict_text": f"not run: {e_blk[i]}",
+                }
                 | {"verdict_at_s": np.nan}
             )
         else:
-            out.append(verdict(sc, row, periods.get(i)))
+            out.append(verdict(sc, row))
     return out
 
 

@@ -178,13 +178,8 @@ def drive_metrics(res, window_s: float = DEFAULT_WINDOW_S) -> dict:
     out.update(held_metrics(res))
     from imdrive.run.status import verdict
 
-    out.update(verdict(sc, out, comp_period_s(res.params)))
+    out.update(verdict(sc, out))
     return out
-
-
-def comp_period_s(params) -> float:
-    """The compensator's decision period of a drive's records, s."""
-    return float(params.comp[0]["n"]) * float(params.sim[0]["Ts"])
 
 
 def held_metrics(res) -> dict:

@@ -12,8 +12,8 @@ metrics (:func:`imdrive.run.metrics.drive_metrics`) and its scenario:
 ``lost-control``, ``diverged``
     the first loss of control, the divergence (:mod:`imdrive.run.metrics`).
 ``frozen``
-    the compensator was held from its first decision on: R̂2 was never estimated in this run
-    and keeps its starting value.
+    the compensator is held at the end and R̂2 never moved from its starting value: it was
+    never estimated in this run.
 ``held``
     the compensator estimated, then held R̂2 from ``R2_held_since_s`` to the end.
 ``R2-off``
@@ -42,7 +42,7 @@ from __future__ import annotations
 
 import math
 
-from imdrive.config.perunit import rated_slip_rpm, speed_tolerance_rpm
+from imdrive.config.perunit import rated_slip_rpm, resolve, speed_tolerance_rpm
 from imdrive.kernels.batch import CONVERGENCE_BAND
 
 #: R̂2 within this fraction of the plant's R2 at the end: the convergence band of the metrics
@@ -65,6 +65,7 @@ STATUS_COLUMNS = (
     "speed_error_pu_slip",
     "speed_tolerance_rpm",
     "verdict",
+    "verdict_ok",
     "verdict_text",
     "verdict_at_s",
 )
@@ -112,7 +113,7 @@ def _finite(x) -> bool:
         return False
 
 
-def verdict(sc, row: dict, comp_period_s: float | None = None) -> dict:
+def verdict(sc, row: dict) -> dict:
     """The status columns of one run (module docstring).
 
     Parameters
@@ -121,17 +122,16 @@ def verdict(sc, row: dict, comp_period_s: float | None = None) -> dict:
         The scenario as run.
     row : dict
         Its metrics: ``status``, ``diverged_at_s``, ``lost_control_at_s``, ``R2_error_pct``,
-        ``speed_error_rpm``, ``R2_held_since_s``, ``R2_held_end_causes``, ``simulated_s``.
-    comp_period_s : float, optional
-        The compensator's decision period, s (a hold that starts within two of its enable
-        time is ``frozen``); default ``compensator.period_s`` or 10 ms.
+        ``speed_error_rpm``, ``R2_hat_final_ohm``, ``R2_held_since_s``,
+        ``R2_held_end_causes``, ``simulated_s``.
 
     Returns
     -------
     dict
         :data:`STATUS_COLUMNS`: the speed error in per-unit of the rated slip speed, the
-        tolerance (rpm), the verdict (one of :data:`VERDICTS`), its text and the time of
-        its first cause, s (NaN for ``ok``).
+        tolerance (rpm), the verdict (one of :data:`VERDICTS`), whether it is ``ok`` (a
+        boolean column, for the heatmaps' shares), its text and the time of its first cause, s
+        (NaN for ``ok``).
     """
     tol_rpm = speed_tolerance_rpm(sc)
     slip = rated_slip_rpm(sc)
@@ -143,6 +143,7 @@ def verdict(sc, row: dict, comp_period_s: float | None = None) -> dict:
     status = int(row.get("status", 0))
     if status < 0:
         out["verdict"] = "not-run"
+        out["verdict_ok"] = False
         out["verdict_text"] = f"not run: {row.get('error') or 'the scenario could not be built'}"
         out["verdict_at_s"] = math.nan
         return out
@@ -160,8 +161,9 @@ def verdict(sc, row: dict, comp_period_s: float | None = None) -> dict:
     if vector and comp.enabled and _finite(row.get("R2_held_since_s")):
         t = float(row["R2_held_since_s"])
         why = ", ".join(held_reasons(row.get("R2_held_end_causes"))) or "gating"
-        period = comp_period_s or comp.period_s or 0.01
-        if t <= comp.t_on_s + 2.0 * period + 1e-9:
+        r2_0 = resolve(sc).R2_hat
+        r2_end = row.get("R2_hat_final_ohm", math.nan)
+        if _finite(r2_end) and abs(float(r2_end) - r2_0) <= 1e-12 * r2_0:
             code = "frozen"
             text = f"compensator frozen from t = {t:.3g} s ({why}): R2 never estimated"
         else:
@@ -186,10 +188,12 @@ def verdict(sc, row: dict, comp_period_s: float | None = None) -> dict:
     events.sort(key=lambda e: e[0])
     if events:
         out["verdict"] = events[0][1]
+        out["verdict_ok"] = False
         out["verdict_text"] = "; ".join(e[2] for e in events)
         out["verdict_at_s"] = events[0][0]
         return out
     out["verdict"] = "ok"
+    out["verdict_ok"] = True
     out["verdict_at_s"] = math.nan
     out["verdict_text"] = "ok" + (f"; {held_note[2]}, still within tolerance" if held_note else "")
     return out
