@@ -219,3 +219,14 @@ def run_status(m: dict) -> dict:
         got[key] = held_reasons(m[key]) if _finite(m[key]) else None
     got["R2_tolerance_pct"] = 100.0 * R2_TOLERANCE
     return got
+
+
+def verdict_counts(df) -> str:
+    """``"ok in 812 of 1920 (frozen 300, R2-off 12, ...)"`` for a batch or sweep table, or ""
+    for a table without a ``verdict`` column (a store written before the status existed)."""
+    if "verdict" not in df:
+        return ""
+    counts = df["verdict"].value_counts()
+    n_ok = int(counts.get("ok", 0))
+    rest = ", ".join(f"{c} {int(counts[c])}" for c in VERDICTS if c != "ok" and c in counts)
+    return f"ok in {n_ok} of {len(df)}" + (f" ({rest})" if rest else "")
