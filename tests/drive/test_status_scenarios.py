@@ -118,6 +118,8 @@ def test_each_failure_says_why(runs, machine):
     assert row["R2_held_pct"] > 90.0
     line = closing_line(res)
     assert line.startswith("compensator frozen from t = 4.")  # the first cause, in time order
+    assert res.verdict["R2_observable"].startswith("not observable here: held since t = 4.")
+    assert "voltage limit" in res.verdict["R2_observable"]
 
     row, res = runs[(machine, "low-bandwidth")]
     assert row["verdict"] == "lost-control" and row["lost_control"]
@@ -142,6 +144,7 @@ def test_good_runs_report_ok(runs, machine):
         assert row["verdict"] == "ok" and row["verdict_ok"], (name, row["verdict_text"])
         assert abs(row["R2_error_pct"]) < 2.0
         assert closing_line(res) is None
-    row, _ = runs[(machine, "good-injection")]
+    row, res = runs[(machine, "good-injection")]
     assert row["R2_held_pct"] == pytest.approx(0.0)  # estimated throughout
+    assert res.verdict["R2_observable"] == "estimated at the end"
     assert math.isnan(row["R2_held_since_s"])

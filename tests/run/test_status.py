@@ -139,6 +139,7 @@ def test_summary_and_console_say_why_a_completed_run_is_not_ok(tmp_path, capsys)
     assert v["verdict"] == "R2-off" and v["verdict_ok"] is False
     assert v["verdict_text"].startswith("R2_hat off by +20 % (compensator off)")
     assert v["R2_held_pct"] is None  # no compensator: nothing held, nothing estimated
+    assert v["R2_observable"] is None
     # the detuning law: a +20 % R2_hat shifts the speed by about 0.2 rated slips at rated load
     assert 0.15 < v["speed_error_pu_slip"] < 0.25
     line = capsys.readouterr().err.strip().splitlines()[-1]

@@ -95,7 +95,8 @@ SUMMARY_DOCS = {
     "failure (lost-control, diverged, frozen, held, R2-off, speed-error), `verdict_text` every "
     "cause in time order, `verdict_at_s`; the speed error in rated slips and its tolerance; "
     "the share of the compensator's time R2_hat was held, since when and why (voltage limit, "
-    "stator frequency band, gated transient)",
+    "stator frequency band, gated transient); `R2_observable`: estimated at the end, or not "
+    "observable here and why",
 }
 
 

@@ -201,8 +201,10 @@ def verdict(sc, row: dict) -> dict:
 
 def run_status(m: dict) -> dict:
     """``summary.json``'s ``"verdict"`` from a run's metrics (:func:`drive_metrics`): the
-    status columns, the R̂2 tolerance, and how long and why R̂2 was held (the gating masks as
-    their groups, :func:`held_reasons`; None without a compensator).
+    status columns, the R̂2 tolerance, how long and why R̂2 was held (the gating masks as
+    their groups, :func:`held_reasons`; None without a compensator), and ``R2_observable``:
+    ``"estimated at the end"``, or ``"not observable here: held since t = ... s (reason)"``
+    (None without a compensator).
 
     Parameters
     ----------
@@ -218,6 +220,14 @@ def run_status(m: dict) -> dict:
     for key in ("R2_held_causes", "R2_held_end_causes"):
         got[key] = held_reasons(m[key]) if _finite(m[key]) else None
     got["R2_tolerance_pct"] = 100.0 * R2_TOLERANCE
+    since = m["R2_held_since_s"]
+    if not _finite(m["R2_held_pct"]):
+        got["R2_observable"] = None  # no compensator: R2_hat is not estimated at all
+    elif _finite(since):
+        why = ", ".join(got["R2_held_end_causes"] or []) or "gating"
+        got["R2_observable"] = f"not observable here: held since t = {since:.3g} s ({why})"
+    else:
+        got["R2_observable"] = "estimated at the end"
     return got
 
 

@@ -206,7 +206,7 @@ def page(text: str, df: pd.DataFrame) -> str:
     return text
 
 
-def reduced_sweep(path: Path, speeds=(-2.0, 0.0116, 1.0), loads=(-1.0, 0.5)) -> Path:
+def reduced_sweep(path: Path, speeds=(-2.0, 0.0116), loads=(0.5,)) -> Path:
     """A reduced grid of the sweep written as a sweep file at ``path``: the given speeds and
     loads, R̂2(0)/R2 1.3, R̂1/R1 1.1, both thermal cases and both inverters (the tests)."""
     from imdrive.sweep.spec import sweep_text
