@@ -145,3 +145,12 @@ def test_summary_and_console_say_why_a_completed_run_is_not_ok(tmp_path, capsys)
     line = capsys.readouterr().err.strip().splitlines()[-1]
     assert line.startswith("imdrive: status: R2_hat off by +20 % (compensator off)")
     assert str(out) in line
+
+
+def test_R2_hat_on_its_clamp_is_named(sc):
+    r = resolve(sc)
+    v = verdict(sc, _row(sc, R2_error_pct=-6.7, R2_hat_final_ohm=r.R2_max))
+    assert v["verdict"] == "R2-off"
+    assert f"(at its upper clamp, {r.R2_max / r.R2_hat:.3g} R2_hat(0)" in v["verdict_text"]
+    v = verdict(sc, _row(sc, R2_error_pct=-6.7, R2_hat_final_ohm=1.001 * r.R2_max))
+    assert "clamp" not in v["verdict_text"]

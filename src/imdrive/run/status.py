@@ -18,7 +18,8 @@ metrics (:func:`imdrive.run.metrics.drive_metrics`) and its scenario:
     the compensator estimated, then held R̂2 from ``R2_held_since_s`` to the end.
 ``R2-off``
     R̂2 ends more than :data:`R2_TOLERANCE` from R2 while it was being estimated (or with no
-    compensator).
+    compensator); the text says when R̂2 ended on one of its clamps (``compensator.R2_min_*``,
+    ``R2_max_*``), which then kept it from R2.
 ``speed-error``
     the mean speed error over the final window exceeds the tolerance.
 ``not-run``
@@ -113,6 +114,20 @@ def _finite(x) -> bool:
         return False
 
 
+def _at_clamp(sc, r2_end) -> str:
+    """`` (at its upper clamp ...)`` when R̂2 ended on a clamp of the compensator, else ""."""
+    if not _finite(r2_end):
+        return ""
+    r = resolve(sc)
+    for bound, name, key in ((r.R2_max, "upper", "max"), (r.R2_min, "lower", "min")):
+        if abs(float(r2_end) - bound) <= 1e-9 * bound:
+            return (
+                f" (at its {name} clamp, {bound / r.R2_hat:.3g} R2_hat(0): "
+                f"compensator.R2_{key}_ratio / R2_{key}_ohm)"
+            )
+    return ""
+
+
 def verdict(sc, row: dict) -> dict:
     """The status columns of one run (module docstring).
 
@@ -175,6 +190,8 @@ def verdict(sc, row: dict) -> dict:
         if held_note is not None:
             events.append(held_note)
         what = "" if comp.enabled else " (compensator off)"
+        if comp.enabled:
+            what = _at_clamp(sc, row.get("R2_hat_final_ohm"))
         events.append((t_end, "R2-off", f"R2_hat off by {float(r2_err):+.3g} %{what}"))
     if vector and status == 0 and _finite(err) and abs(float(err)) > tol_rpm:
         events.append(

@@ -75,6 +75,7 @@ KEEP = (
     "R2_held_end_causes",
     "verdict",
     "verdict_ok",
+    "verdict_text",
 )
 
 
@@ -149,15 +150,18 @@ def speed_table(df: pd.DataFrame, rated_rpm: float) -> list[str]:
 
 
 def verdict_table(df: pd.DataFrame) -> list[str]:
-    """How many runs carry each verdict (the first cause), per inverter and thermal case."""
+    """How many runs carry each verdict (the first cause), per inverter and thermal case, and
+    how many of the runs whose R̂2 ended off ended on one of its clamps."""
     codes = [c for c in ("ok", "frozen", "held", "R2-off", "speed-error", "lost-control",
                          "diverged", "not-run") if (df["verdict"] == c).any()]  # fmt: skip
-    out = ["| drive | R2 | " + " | ".join(codes) + " |", "|---|---|" + "---|" * len(codes)]
+    out = [
+        "| drive | R2 | " + " | ".join(codes) + " | R2_hat ended on a clamp |",
+        "|---|---|" + "---|" * (len(codes) + 1),
+    ]
     for inv, th, g in _groups(df):
-        out.append(
-            f"| {inv} | {th} | " + " | ".join(str(int((g["verdict"] == c).sum())) for c in codes)
-            + " |"
-        )  # fmt: skip
+        clamp = int(g["verdict_text"].str.contains("clamp", regex=False).sum())
+        counts = " | ".join(str(int((g["verdict"] == c).sum())) for c in codes)
+        out.append(f"| {inv} | {th} | {counts} | {clamp} |")
     return out
 
 
@@ -229,12 +233,27 @@ def reduced_sweep(path: Path, speeds=(-2.0, 0.0116), loads=(0.5,)) -> Path:
     return path
 
 
-def run(store: Path, sweep_file=SWEEP, csv: Path = CSV_PATH, figures: Path = FIG_DIR):
-    """Run the sweep into ``store``; write its table's :data:`KEEP` columns to ``csv`` and its
-    heatmaps into ``figures``. Returns the table."""
+def rescore(sweep, df: pd.DataFrame) -> pd.DataFrame:
+    """Recompute the status columns of a sweep's table in place with today's
+    :func:`imdrive.run.status.verdict` (a resumed store's rows keep the status of the code that
+    ran them; the metrics it reads do not change). Returns ``df``."""
+    from imdrive.run.status import STATUS_COLUMNS, verdict
+
+    rows = [verdict(sweep.scenario(int(r["run"])), r.to_dict()) for _, r in df.iterrows()]
+    for name in STATUS_COLUMNS:
+        df[name] = [v[name] for v in rows]
+    return df
+
+
+def run(store: Path, sweep_file=SWEEP, csv: Path = CSV_PATH, figures: Path = FIG_DIR, resume=False):
+    """Run the sweep into ``store`` (``resume``: continue an interrupted one there); write its
+    table's :data:`KEEP` columns to ``csv`` and its heatmaps into ``figures``. Returns the
+    table."""
     from imdrive.sweep import load_sweep, run_sweep
 
-    df = run_sweep(load_sweep(sweep_file), store, report=False)
+    sweep = load_sweep(sweep_file)
+    df = run_sweep(sweep, store, report=False, resume=resume)
+    rescore(sweep, df)
     df[list(KEEP)].to_csv(csv, index=False, float_format="%.6g")
     figures.mkdir(parents=True, exist_ok=True)
     for png in sorted((Path(store) / "figures").glob("*.png")):
@@ -246,12 +265,13 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="python -m imdrive.studies.envelope")
     ap.add_argument("--run", action="store_true", help="run the sweep first (about 10 min)")
     ap.add_argument("--store", default="out/sweep-envelope-full", help="the sweep's store")
+    ap.add_argument("--resume", action="store_true", help="continue an interrupted --run")
     ap.add_argument("--check", action="store_true", help="exit 1 if the page is stale")
     ap.add_argument("--path", default=str(DOC_PATH), help="the page (default docs/envelope.md)")
     ap.add_argument("--csv", default=str(CSV_PATH), help="the stored table")
     args = ap.parse_args(argv)
     if args.run:
-        run(Path(args.store), csv=Path(args.csv))
+        run(Path(args.store), csv=Path(args.csv), resume=args.resume)
     path = Path(args.path)
     text = path.read_text(encoding="utf-8")
     new = page(text, pd.read_csv(args.csv))
