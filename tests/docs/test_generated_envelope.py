@@ -46,7 +46,7 @@ def test_reduced_grid_runs_end_to_end(tmp_path):
     assert len(df) == 8
     stored = pd.read_csv(tmp_path / "e.csv")
     assert list(stored.columns) == list(envelope.KEEP)
-    assert (tmp_path / "f" / "verdict_ok__speed_pu_vs_load_pu.png").is_file()
+    assert (tmp_path / "f" / "verdict_ok__speed_pu_vs_load_pu_by_inverter_by_thermal.png").is_file()
     c = envelope.classify(stored)
     assert not c["unflagged"].any(), c[c["unflagged"]].to_string()
     # twice the rated speed: R2 is not observable there on today's code, and the rows say so
