@@ -333,6 +333,14 @@ def _verdicts(block, m_blk, s_blk, k_blk, ts_blk, e_blk) -> list[dict]:
     return out
 
 
+def _status_columns(verdicts: list[dict]) -> dict:
+    """The status columns (:data:`~imdrive.run.status.STATUS_COLUMNS`) of the table."""
+    kinds = metrics_dtypes()
+    return {
+        name: np.array([v[name] for v in verdicts], dtype=kinds[name]) for name in STATUS_COLUMNS
+    }
+
+
 def _is_int(v) -> bool:
     return isinstance(v, int | np.integer) and not isinstance(v, bool)
 
@@ -464,9 +472,7 @@ def simulate_batch(
     }
     for name in METRICS:
         cols[name] = np.ascontiguousarray(met[name])
-    for name in STATUS_COLUMNS:
-        dt = metrics_dtypes()[name]
-        cols[name] = np.array([v[name] for v in verdicts], dtype=dt)
+    cols.update(_status_columns(verdicts))
     cols["error"] = err
     del met
     df = pd.DataFrame(cols, copy=False)
