@@ -186,13 +186,13 @@ def held_metrics(res) -> dict:
     """``R2_held_pct``, ``R2_held_causes``, ``R2_held_since_s``, ``R2_held_end_causes`` of a
     run (module docstring), from its logged gating mask."""
     nan = math.nan
-    comp = res.params.comp[0]
+    comp = res.scenario.compensator  # as the drive's COMPENSATOR_PARAMS enabled, t_on
     s = res.signals
     t = s["time_s"]
-    if not comp["enabled"] or "comp_frozen_flags" not in s:
+    if not comp.enabled or "comp_frozen_flags" not in s:
         active = np.zeros(len(t), dtype=bool)
     else:
-        active = t >= comp["t_on"]
+        active = t >= comp.t_on_s
     if not active.any():
         return dict.fromkeys(
             ("R2_held_pct", "R2_held_causes", "R2_held_since_s", "R2_held_end_causes"), nan

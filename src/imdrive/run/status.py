@@ -155,7 +155,10 @@ def verdict(sc, row: dict) -> dict:
         "speed_error_pu_slip": float(err) / slip if _finite(err) and slip > 0 else math.nan,
         "speed_tolerance_rpm": tol_rpm,
     }
-    status = int(row.get("status", 0))
+    status = row.get("status", 0)
+    if isinstance(status, str):  # summary.json's text ("ok" or what diverged)
+        status = 0 if status == "ok" else 1
+    status = int(status)
     if status < 0:
         out["verdict"] = "not-run"
         out["verdict_ok"] = False
