@@ -100,6 +100,10 @@ def _cmd_run(args) -> int:
             f"{open_loop_note(scenario)} -> {out}",
             file=sys.stderr,
         )
+    if s["verdict"]["verdict"] != "ok":  # completed, but R2_hat or the speed is not right
+        from imdrive.run.diagnosis import closing_line
+
+        print(f"imdrive: status: {closing_line(res, out)}", file=sys.stderr)
     return EXIT_OK
 
 

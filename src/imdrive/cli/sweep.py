@@ -68,10 +68,13 @@ def _cmd_sweep(args) -> int:
         n_div = int(df["diverged"].sum())
         n_fail = int((df["status"] < 0).sum())
         n_lc = int(df["lost_control"].sum()) if "lost_control" in df else 0
+        from imdrive.run.status import verdict_counts
+
         print(
             f"imdrive: sweep {sweep.name}: {len(df)} runs ({n_div} diverged, {n_lc} lost "
             f"control, {n_fail} failed) in "
-            f"{time.perf_counter() - t0:.1f} s -> {out / 'runs.parquet'}",
+            f"{time.perf_counter() - t0:.1f} s -> {out / 'runs.parquet'}; status: "
+            f"{verdict_counts(df)}",
             file=sys.stderr,
         )
     # diverged runs are results of the sweep (recorded in the table), not a failure

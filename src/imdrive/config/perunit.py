@@ -260,6 +260,59 @@ def lost_control_rpm(sc) -> float:
     return max(2.0 * slip_rpm, 0.01 * rp.speed_rpm)
 
 
+def rated_slip_rpm(sc) -> float:
+    """The machine's rated slip speed ``n_sync - n_rated``, rpm (mechanical): the unit of
+    the per-unit speed errors (a 100 % R̂2 error shifts the speed by about this much at rated
+    load). Without a rated point, 5 % of the synchronous speed.
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+
+    Returns
+    -------
+    float
+        rpm.
+    """
+    from imdrive.config.machine import rated_point
+
+    try:
+        rp = rated_point(sc.machine)
+    except ConfigError:
+        return 0.05 * 60.0 * sc.machine.rated_frequency_Hz / sc.machine.pole_pairs
+    return rp.synchronous_speed_rpm - rp.speed_rpm
+
+
+#: the speed-error tolerance of a run's status: at least this, rpm ...
+SPEED_TOLERANCE_MIN_RPM = 1.0
+#: ... or this fraction of the rated speed, whichever is larger
+SPEED_TOLERANCE_PU = 1e-3
+
+
+def speed_tolerance_rpm(sc) -> float:
+    """The speed-error tolerance of a run's status (:mod:`imdrive.run.status`), rpm: 1 rpm or
+    0.1 % of the machine's rated speed, whichever is larger (1.72 rpm on Table IV).
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+
+    Returns
+    -------
+    float
+        rpm.
+    """
+    from imdrive.config.machine import rated_point
+
+    try:
+        n_rated = rated_point(sc.machine).speed_rpm
+    except ConfigError:
+        n_rated = 60.0 * sc.machine.rated_frequency_Hz / sc.machine.pole_pairs
+    return max(SPEED_TOLERANCE_MIN_RPM, SPEED_TOLERANCE_PU * n_rated)
+
+
 #: the speed bandwidth every machine gets at least, Hz (the paper's drive)
 SPEED_BANDWIDTH_MIN_HZ = 5.0
 #: the largest speed dip a rated-load step may cause, per-unit of the rated speed

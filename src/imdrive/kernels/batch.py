@@ -39,6 +39,10 @@ BATCH_METRICS = record_dtype(
         ("final_speed_ref_rpm", f8),
         ("final_speed_est_rpm", f8),
         ("lost_control_at_s", f8),
+        ("R2_held_pct", f8),
+        ("R2_held_causes", f8),
+        ("R2_held_since_s", f8),
+        ("R2_held_end_causes", f8),
     ]
 )
 METRICS = BATCH_METRICS.names
@@ -57,6 +61,11 @@ ACCUMULATOR = record_dtype(
         ("speed_max", f8),
         ("lc_start", i8),  # first sample of the current departure from the reference (-1: none)
         ("lc_at", i8),  # first sample of the first departure that lasted too long (-1: none)
+        ("n_active", i8),  # samples with the compensator enabled (t >= its t_on)
+        ("n_held", i8),  # of those, samples with R2_hat held (comp_frozen != 0)
+        ("held_causes", i8),  # OR of the gating masks over the active samples
+        ("held_start", i8),  # first sample of the present held stretch (-1: updating)
+        ("held_run_causes", i8),  # OR of the masks over the present held stretch
     ]
 )
 
@@ -86,12 +95,17 @@ def new_accumulator():
     a.speed_max = -np.inf
     a.lc_start = -1
     a.lc_at = -1
+    a.held_start = -1
     return acc
 
 
 @njit(cache=True)
-def accumulate(log, n_rows, k_first, k_win0, acc_arr, lc_bound=0.0, lc_n=0):
+def accumulate(log, n_rows, k_first, k_win0, acc_arr, lc_bound=0.0, lc_n=0, t_on=np.inf):
     """Fold full-rate log rows ``0 .. n_rows-1`` (samples ``k_first ...``) into ``acc_arr[0]``.
+
+    R2_hat held (samples with ``time >= t_on``, the compensator's enable time; ``inf``: no
+    compensator): counts the samples whose gating mask ``comp_frozen`` is not 0, ORs the
+    masks, and keeps the first sample and the mask of the present held stretch.
 
     Loss of control (``lc_bound > 0``, rad/s): a departure is a run of consecutive samples
     with ``|speed - speed_ref| > lc_bound``; the first that lasts ``lc_n`` periods or more
@@ -109,6 +123,18 @@ def accumulate(log, n_rows, k_first, k_win0, acc_arr, lc_bound=0.0, lc_n=0):
                     acc.lc_at = acc.lc_start
             else:
                 acc.lc_start = -1
+        if row.time >= t_on:
+            acc.n_active += 1
+            fl = int(row.comp_frozen)
+            if fl != 0:
+                acc.n_held += 1
+                acc.held_causes |= fl
+                if acc.held_start < 0:
+                    acc.held_start = k
+                    acc.held_run_causes = 0
+                acc.held_run_causes |= fl
+            else:
+                acc.held_start = -1
         i_mag = math.sqrt(row.i_alpha**2 + row.i_beta**2)
         if i_mag > acc.peak:
             acc.peak = i_mag
@@ -159,6 +185,17 @@ def summarize(acc, last, n_valid, ok, Ts, out):
     out.final_speed_ref_rpm = last.speed_ref * _INV_RPM
     out.final_speed_est_rpm = last.speed_est * _INV_RPM
     out.lost_control_at_s = acc.lc_at * Ts if acc.lc_at >= 0 else nan
+    if acc.n_active > 0:
+        out.R2_held_pct = 100.0 * acc.n_held / acc.n_active
+        out.R2_held_causes = float(acc.held_causes)
+        held = acc.held_start >= 0
+        out.R2_held_since_s = acc.held_start * Ts if held else nan
+        out.R2_held_end_causes = float(acc.held_run_causes) if held else 0.0
+    else:
+        out.R2_held_pct = nan
+        out.R2_held_causes = nan
+        out.R2_held_since_s = nan
+        out.R2_held_end_causes = nan
 
 
 @njit(cache=True)
@@ -176,6 +213,7 @@ def one_drive(P, S, i, n_steps, n_win, log_out, log_every, metrics, scratch, lc_
     acc_arr = new_accumulator()
     Ts = P.sim[i].Ts
     k_win0 = max(n_steps - n_win, 0)
+    t_on = P.comp[i].t_on if P.comp[i].enabled else np.inf
     k0 = 0
     while True:
         steps = min(chunk, n_steps - k0)
@@ -183,7 +221,7 @@ def one_drive(P, S, i, n_steps, n_win, log_out, log_every, metrics, scratch, lc_
         status, ke = run_drive(P, S, i, steps, scratch, 1, k0, final)
         ok = status == S_OK
         rows = ke + 1 if (ok and final) else ke
-        accumulate(scratch, rows, k0, k_win0, acc_arr, lc_bound, lc_n)
+        accumulate(scratch, rows, k0, k_win0, acc_arr, lc_bound, lc_n, t_on)
         for r in range(rows):
             k = k0 + r
             if k % log_every == 0 and k // log_every < log_out.shape[0]:

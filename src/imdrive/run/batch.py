@@ -67,6 +67,7 @@ from imdrive.kernels.engine import S_OK, DriveParams, DriveState, log_dtype
 from imdrive.kernels.estimators.registry import kernel_of_state
 from imdrive.kernels.profiles import N_PROF
 from imdrive.run.metrics import lost_control_check
+from imdrive.run.status import STATUS_COLUMNS
 
 COLUMNS = (
     "drive",
@@ -76,6 +77,7 @@ COLUMNS = (
     "simulated_s",
     "lost_control",
     *METRICS,
+    *STATUS_COLUMNS,
     "error",
 )
 
@@ -92,6 +94,12 @@ def metrics_dtypes() -> dict[str, np.dtype]:
         "lost_control": np.dtype(bool),
     }
     out.update((name, BATCH_METRICS[name]) for name in METRICS)
+    out["speed_error_pu_slip"] = np.dtype(np.float64)
+    out["speed_tolerance_rpm"] = np.dtype(np.float64)
+    out["verdict"] = np.dtype(object)
+    out["verdict_ok"] = np.dtype(bool)
+    out["verdict_text"] = np.dtype(object)
+    out["verdict_at_s"] = np.dtype(np.float64)
     out["error"] = np.dtype(object)
     return out
 
@@ -292,7 +300,45 @@ def _run_block(block, offset, logs, log_every, window_s, parallel, errors):
                     0.0,
                     a.derived,
                 )
-    return m_blk, s_blk, k_blk, ts_blk, e_blk, res_blk, kernel_wall
+    v_blk = _verdicts(block, m_blk, s_blk, k_blk, ts_blk, e_blk)
+    return m_blk, s_blk, k_blk, ts_blk, e_blk, v_blk, res_blk, kernel_wall
+
+
+def _verdicts(block, m_blk, s_blk, k_blk, ts_blk, e_blk) -> list[dict]:
+    """The status columns (:func:`imdrive.run.status.verdict`) of each drive of a block."""
+    from imdrive.run.status import verdict
+
+    out = []
+    for i, sc in enumerate(block):
+        row = {name: float(m_blk[name][i]) for name in METRICS}
+        simulated = float(k_blk[i] * ts_blk[i])
+        row.update(
+            status=int(s_blk[i]),
+            simulated_s=simulated,
+            diverged_at_s=simulated,
+            error=e_blk[i],
+        )
+        if s_blk[i] == S_FAILED:
+            out.append(
+                {"speed_error_pu_slip": np.nan, "speed_tolerance_rpm": np.nan}
+                | {
+                    "verdict": "not-run",
+                    "verdict_ok": False,
+                    "verdict_text": f"not run: {e_blk[i]}",
+                }
+                | {"verdict_at_s": np.nan}
+            )
+        else:
+            out.append(verdict(sc, row))
+    return out
+
+
+def _status_columns(verdicts: list[dict]) -> dict:
+    """The status columns (:data:`~imdrive.run.status.STATUS_COLUMNS`) of the table."""
+    kinds = metrics_dtypes()
+    return {
+        name: np.array([v[name] for v in verdicts], dtype=kinds[name]) for name in STATUS_COLUMNS
+    }
 
 
 def _is_int(v) -> bool:
@@ -364,6 +410,7 @@ def simulate_batch(
     _check_batch_arguments(log_every, window_s, block_size, errors)
     t_start = time.perf_counter()
     chunks_m, chunks_s, chunks_k, chunks_ts, chunks_e = [], [], [], [], []
+    verdicts: list[dict] = []
     results: list = []
     kernel_wall = 0.0
     if isinstance(scenarios, Scenario | str | dict):
@@ -387,9 +434,10 @@ def simulate_batch(
                 break
         if not block:
             break
-        m_blk, s_blk, k_blk, ts_blk, e_blk, res_blk, wall = _run_block(
+        m_blk, s_blk, k_blk, ts_blk, e_blk, v_blk, res_blk, wall = _run_block(
             block, offset, logs, log_every, window_s, parallel, errors
         )
+        verdicts.extend(v_blk)
         kernel_wall += wall
         chunks_m.append(m_blk)
         chunks_s.append(s_blk)
@@ -424,6 +472,7 @@ def simulate_batch(
     }
     for name in METRICS:
         cols[name] = np.ascontiguousarray(met[name])
+    cols.update(_status_columns(verdicts))
     cols["error"] = err
     del met
     df = pd.DataFrame(cols, copy=False)

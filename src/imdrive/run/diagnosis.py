@@ -4,7 +4,9 @@ A run that loses control and later diverges is reported by its first event (the 
 control), with what moved first (the speed estimate away from the actual speed, or the actual
 speed away from its reference), where to look, and, when the scenario's own numbers explain
 it, which setting is the likely cause: a speed loop too slow for the machine's inertia lets a
-load step pull the speed further than the loss-of-control bound.
+load step pull the speed further than the loss-of-control bound. A run that completed but
+whose status (:mod:`imdrive.run.status`) is not ok gets a line too: its causes in time order
+(R̂2 frozen or held and why, R̂2 off, the speed error beyond its tolerance).
 
 The speed loop (IFOC, :func:`imdrive.design.gains.default_speed_gains`) with the plant
 ``J p w = k_t i_q - T_L`` and the PI ``i_q = kp e + ki ∫e`` answers a load step ``ΔT_L`` with
@@ -138,6 +140,14 @@ def _what_moved(res, t0: float) -> str:
     )
 
 
+def _verdict(res) -> dict | None:
+    """The run's status (:attr:`SimulationResult.verdict`), None for a stand-in without one."""
+    try:
+        return res.verdict
+    except (AttributeError, KeyError):
+        return None
+
+
 def closing_line(res, out=None) -> str | None:
     """The console's last line for a run that diverged or lost control, or None.
 
@@ -152,11 +162,23 @@ def closing_line(res, out=None) -> str | None:
     -------
     str or None
         ``"lost control at t = 2.03 s (...), then diverged at t = 4.28 s: ...; first: ...;
-        look at ..."``, or None for a run that did neither.
+        look at ..."``; for a completed run whose status is not ok (:mod:`imdrive.run.status`)
+        its causes in time order (``"R2 held since t = 4.5 s (voltage limit); R2_hat off by
+        +25 %; look at ..."``); None for a run whose status is ok. A hold of R̂2 that began
+        before a loss of control is named first.
     """
     lost, diverged = res.lost_control, res.diverged
+    v = _verdict(res)
     if not (lost or diverged):
-        return None
+        if v is None or v["verdict"] == "ok":
+            return None
+        where = "estimator.png, speed.png and report.html" if out is not None else "res.plot()"
+        loc = f" in {out}" if out is not None else ""
+        t0 = v["verdict_at_s"]
+        return f"{v['verdict_text']}; look at {where}{loc} around t = {t0:.3g} s"
+    earlier = None
+    if v is not None and v["verdict"] in ("frozen", "held"):
+        earlier = v["verdict_text"].split("; ")[0]
     if lost and (not diverged or res.lost_control_at_s < res.end_time_s):
         t0 = res.lost_control_at_s
         line = res.lost_control_message
@@ -172,6 +194,8 @@ def closing_line(res, out=None) -> str | None:
     else:
         t0 = res.end_time_s
         parts = [res.divergence_message]
+    if earlier:
+        parts[0] = f"{earlier}, then {parts[0]}"
     where = "speed.png, estimator.png and report.html" if out is not None else "res.plot()"
     loc = f" in {out}" if out is not None else ""
     parts.append(f"look at {where}{loc} around t = {t0:.3g} s")

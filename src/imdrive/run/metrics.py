@@ -40,8 +40,18 @@ seconds, both ends included; the whole run if ``window_s >= t_end``).
                          a free speed (not ``plant.speed_mode = "imposed"``) and a bound > 0.
                          Also on the samples of a diverged run before the divergence.
 ``lost_control``         ``lost_control_at_s`` is not NaN (a boolean column)
+``R2_held_pct``          share of the samples from the compensator's enable time
+                         (``t >= compensator.t_on_s``) at which R2_hat was held, i.e. the
+                         gating mask ``comp_frozen`` of the last decision was not 0, % (NaN
+                         without a compensator)
+``R2_held_causes``       OR of those masks (the bits of :mod:`imdrive.kernels.compensator`)
+``R2_held_since_s``      when R2_hat is held at the last sample: the first sample time of that
+                         uninterrupted held stretch; NaN if it was being estimated at the end
+``R2_held_end_causes``   OR of the masks over that stretch (0 if none)
 
-plus ``status`` (0 ok, else the divergence code of :mod:`imdrive.kernels.engine`), ``diverged``,
+plus the status columns of :mod:`imdrive.run.status` (``speed_error_pu_slip``,
+``speed_tolerance_rpm``, ``verdict``, ``verdict_text``, ``verdict_at_s``), ``status`` (0 ok,
+else the divergence code of :mod:`imdrive.kernels.engine`), ``diverged``,
 ``diverged_at_s`` (the time the divergence was found, ``k_end Ts``; NaN if not diverged) and
 ``simulated_s`` (``k_end Ts``). For a diverged drive the samples are those logged before the
 divergence: the window metrics and ``convergence_time_s`` are NaN (no steady state was reached),
@@ -165,7 +175,44 @@ def drive_metrics(res, window_s: float = DEFAULT_WINDOW_S) -> dict:
     t_lc = lost_control_time(s["time_s"], speed, speed_ref, bound * 30.0 / math.pi, duration)
     out["lost_control"] = not math.isnan(t_lc)
     out["lost_control_at_s"] = t_lc
+    out.update(held_metrics(res))
+    from imdrive.run.status import verdict
+
+    out.update(verdict(sc, out))
     return out
+
+
+def held_metrics(res) -> dict:
+    """``R2_held_pct``, ``R2_held_causes``, ``R2_held_since_s``, ``R2_held_end_causes`` of a
+    run (module docstring), from its logged gating mask."""
+    nan = math.nan
+    comp = res.scenario.compensator  # as the drive's COMPENSATOR_PARAMS enabled, t_on
+    s = res.signals
+    t = s["time_s"]
+    if not comp.enabled or "comp_frozen_flags" not in s:
+        active = np.zeros(len(t), dtype=bool)
+    else:
+        active = t >= comp.t_on_s
+    if not active.any():
+        return dict.fromkeys(
+            ("R2_held_pct", "R2_held_causes", "R2_held_since_s", "R2_held_end_causes"), nan
+        )
+    flags = s["comp_frozen_flags"][active].astype(np.int64)
+    held = flags != 0
+    causes = int(np.bitwise_or.reduce(flags)) if len(flags) else 0
+    if held[-1]:
+        upd = np.flatnonzero(~held)
+        first = upd[-1] + 1 if upd.size else 0
+        since = float(t[active][first])
+        end = float(np.bitwise_or.reduce(flags[first:]))
+    else:
+        since, end = nan, 0.0
+    return {
+        "R2_held_pct": 100.0 * held.sum() / len(held),
+        "R2_held_causes": float(causes),
+        "R2_held_since_s": since,
+        "R2_held_end_causes": end,
+    }
 
 
 def compensation_metrics(

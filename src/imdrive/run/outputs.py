@@ -91,6 +91,12 @@ SUMMARY_DOCS = {
     "machine_rated": "the machine's rated point: nameplate where given, else derived from the "
     "circuit (voltage, frequency, speed, slip, torque, current, power factor, efficiency, "
     "magnetising current, rotor flux, breakdown torque): imdrive.config.machine.rated_point",
+    "verdict": "the run's status (imdrive.run.status): `verdict` ok, or the first cause of a "
+    "failure (lost-control, diverged, frozen, held, R2-off, speed-error), `verdict_text` every "
+    "cause in time order, `verdict_at_s`; the speed error in rated slips and its tolerance; "
+    "the share of the compensator's time R2_hat was held, since when and why (voltage limit, "
+    "stator frequency band, gated transient); `R2_observable`: estimated at the end, or not "
+    "observable here and why",
 }
 
 
@@ -168,7 +174,9 @@ def markdown() -> str:
         "## Batch and sweep tables",
         "",
         "One row per drive; the metric columns are defined in `imdrive.run.metrics` (module"
-        " docstring) and computed while the samples stream (`imdrive.kernels.batch`).",
+        " docstring) and computed while the samples stream (`imdrive.kernels.batch`); the"
+        " status columns (`verdict`, `verdict_ok`, `verdict_text`, `verdict_at_s`,"
+        " `speed_error_pu_slip`, `speed_tolerance_rpm`) are those of `imdrive.run.status`.",
         "",
     ]
     return "\n".join(lines) + "\n"

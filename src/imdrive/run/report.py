@@ -452,6 +452,9 @@ def run_report(res, max_points: int = MAX_POINTS) -> str:
         notes.append(f"<span class='bad'>{html.escape(res.divergence_message)}</span>")
     elif res.lost_control:
         notes.append(f"<span class='bad'>{html.escape(res.lost_control_message)}</span>")
+    v = summary["verdict"]  # the run's status (imdrive.run.status): ok, or every cause
+    cls = "" if v["verdict_ok"] else " class='bad'"
+    notes.append(f"<span{cls}>status: {html.escape(v['verdict_text'])}</span>")
     notes.append(html.escape(st))
     n = len(res.time_s)
     if b > 1:

@@ -47,6 +47,7 @@ from imdrive.run.metrics import (
     lost_control_check,
     lost_control_time,
 )
+from imdrive.run.status import run_status
 
 STATUS_TEXT = {
     S_OK: "ok",
@@ -414,6 +415,13 @@ class SimulationResult:
         """
         return compensation_metrics(self, tol, window_s)
 
+    @property
+    def verdict(self) -> dict:
+        """This run's status: ``"ok"`` or why not (:func:`imdrive.run.status.run_status`)."""
+        if "_verdict" not in self.__dict__:
+            self.__dict__["_verdict"] = run_status(self.metrics())
+        return dict(self.__dict__["_verdict"])
+
     def metrics(self, window_s: float = DEFAULT_WINDOW_S) -> dict:
         """This run's row of the batch table; see :func:`imdrive.run.metrics.drive_metrics`.
 
@@ -484,6 +492,7 @@ class SimulationResult:
             "energy_J": {k: float(v) for k, v in self.energy_balance().items()},
             "compensation": self.compensation_metrics(),
             "machine_rated": rated_point_dict(self.scenario.machine),
+            "verdict": self.verdict,
         }
 
     def to_csv(self, path) -> None:

@@ -40,6 +40,7 @@ import pandas as pd
 
 from imdrive.analysis import detuning_speed_error_rpm
 from imdrive.config.machine import machine_presets, rated_point
+from imdrive.config.perunit import SPEED_TOLERANCE_MIN_RPM, SPEED_TOLERANCE_PU
 from imdrive.config.scenario import Scenario
 from imdrive.errors import ConfigWarning
 from imdrive.run.batch import simulate_batch
@@ -53,8 +54,9 @@ R2_BAND_PCT = 2.0
 
 
 def tolerance_rpm(rated_speed_rpm: float) -> float:
-    """The speed tolerance: 1 rpm or 0.1 % of the rated speed, whichever is larger, rpm."""
-    return max(1.0, 1e-3 * rated_speed_rpm)
+    """The speed tolerance: 1 rpm or 0.1 % of the rated speed, whichever is larger, rpm (the
+    runs' status uses the same, :func:`imdrive.config.perunit.speed_tolerance_rpm`)."""
+    return max(SPEED_TOLERANCE_MIN_RPM, SPEED_TOLERANCE_PU * rated_speed_rpm)
 
 
 #: Table IV's rotor time constant L2/R2, s (the time scale the presets' timings were set for)

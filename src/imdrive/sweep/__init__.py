@@ -57,14 +57,17 @@ Axes
     * ``speed_rpm`` — the final speed reference: sets the value of the last breakpoint of
       ``control.speed_ref_rpm`` (the base's ramp or step then ends at this speed);
     * ``load_Nm``   — the final load: the same for ``load.torque_Nm``;
+    * ``speed_pu``, ``load_pu`` — the same in per-unit of the run's machine: times its rated
+      speed (rpm) and rated torque (N m) (:func:`imdrive.config.rated.rated_point`), so one
+      sweep means the same operating points on every machine of the library;
     * any name whose value is a table of tables — a set axis: each entry names a set of
       overrides (``{}`` for none), its name is what the table records.
 
     For each run, a set axis's overrides are applied first, then the key-path axes (set on the
     base's TOML dictionary and validated once, as ``imdrive run --set`` does), then
-    ``R2_ratio``, ``R1_ratio``, ``speed_rpm``, ``load_Nm``. Two axes may not set the same key
-    (nor a table and a key inside it), whichever their kinds: a set axis's keys are those any
-    of its sets overrides.
+    ``R2_ratio``, ``R1_ratio``, ``speed_rpm``, ``load_Nm``, ``speed_pu``, ``load_pu``. Two
+    axes may not set the same key (nor a table and a key inside it), whichever their kinds: a
+    set axis's keys are those any of its sets overrides.
 
 Bad input (an unknown key or parameter, an empty axis, ``min > max``, a value a scenario
 rejects, an unsafe ``name``, more runs than ``max_runs``) raises

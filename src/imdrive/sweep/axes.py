@@ -241,7 +241,7 @@ def _default_heatmaps(axes: tuple[Axis, ...], random: bool) -> tuple[Heatmap, ..
 
 def _heatmap(h, where: str, axes: tuple[Axis, ...], random: bool) -> Heatmap:
     """One ``[[heatmap]]`` table."""
-    from imdrive.run.batch import COLUMNS
+    from imdrive.run.batch import COLUMNS, metrics_dtypes
 
     if not isinstance(h, dict):
         raise ConfigError(where, "must be a table")
@@ -255,7 +255,8 @@ def _heatmap(h, where: str, axes: tuple[Axis, ...], random: bool) -> Heatmap:
     for key in ("rows", "cols"):
         if key in h:
             _check_panel_axis(h[key], f"{where}.{key}", axes, random)
-    metric_cols = [c for c in COLUMNS if c != "drive"]
+    kinds = metrics_dtypes()
+    metric_cols = [c for c in COLUMNS if c != "drive" and kinds[c] != np.dtype(object)]
     value = h.get("value", "speed_error_rpm")
     if value not in metric_cols:
         raise ConfigError(f"{where}.value", f"must be a metric ({', '.join(metric_cols)})")

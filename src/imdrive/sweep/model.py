@@ -21,13 +21,17 @@ from imdrive.config.profiles import Profile
 from imdrive.config.scenario import Scenario
 from imdrive.errors import ConfigError
 
-CONVENIENCE = ("R2_ratio", "R1_ratio", "speed_rpm", "load_Nm")
+CONVENIENCE = ("R2_ratio", "R1_ratio", "speed_rpm", "load_Nm", "speed_pu", "load_pu")
 CONVENIENCE_TARGET = {
     "R2_ratio": "estimator.R2_ratio",
     "R1_ratio": "estimator.R1_ratio",
     "speed_rpm": "control.speed_ref_rpm",
     "load_Nm": "load.torque_Nm",
+    "speed_pu": "control.speed_ref_rpm",
+    "load_pu": "load.torque_Nm",
 }
+#: the convenience axes that change only a profile's last value (cheap to validate)
+PROFILE_AXES = ("speed_rpm", "load_Nm", "speed_pu", "load_pu")
 TOP_KEYS = (
     "name",
     "description",
@@ -365,12 +369,27 @@ def _with_load(sc: Scenario, torque: float) -> Scenario:
     return replace(sc, load=replace(sc.load, torque_Nm=_with_final(sc.load.torque_Nm, torque)))
 
 
+def _with_speed_pu(sc: Scenario, pu: float) -> Scenario:
+    # in per-unit of the run's machine's rated speed (config/rated.py), so it follows the machine
+    from imdrive.config.rated import rated_point
+
+    return _with_speed(sc, pu * rated_point(sc.machine).speed_rpm)
+
+
+def _with_load_pu(sc: Scenario, pu: float) -> Scenario:
+    from imdrive.config.rated import rated_point
+
+    return _with_load(sc, pu * rated_point(sc.machine).torque_Nm)
+
+
 # the convenience axes, applied in this order after the overrides
 CONVENIENCE_APPLY = {
     "R2_ratio": _with_R2_ratio,
     "R1_ratio": _with_R1_ratio,
     "speed_rpm": _with_speed,
     "load_Nm": _with_load,
+    "speed_pu": _with_speed_pu,
+    "load_pu": _with_load_pu,
 }
 
 

@@ -16,6 +16,7 @@ import numpy as np
 
 from imdrive._io import atomic_path
 from imdrive.run.report import html_page, html_table
+from imdrive.run.status import verdict_counts
 from imdrive.sweep.figures import (
     SIGNED_METRICS,
     _levels,
@@ -213,6 +214,7 @@ def sweep_report(sweep: Sweep, df) -> str:
             "not be built. Hover a cell for its values; drag to zoom, double-click to reset."
         )
     )
+    notes.append(html.escape(f"status (imdrive.run.status): {verdict_counts(df)}"))
     figures = [heatmap_plot(sweep, df, h, f"heatmap-{i}") for i, h in enumerate(sweep.heatmaps)]
     if not figures:
         notes.append("The sweep declares no heatmaps.")

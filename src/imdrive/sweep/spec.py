@@ -43,6 +43,7 @@ from imdrive.sweep.model import (  # noqa: F401  (re-exports: the public names o
     CONVENIENCE_TARGET,
     DEFAULT_CHUNK,
     DEFAULT_MAX_RUNS,
+    PROFILE_AXES,
     TOP_KEYS,
     VALIDATE_ALL_MAX,
     Axis,
@@ -270,9 +271,9 @@ def _validate(sweep: Sweep) -> dict:
             except ConfigError as exc:
                 raise ConfigError(f"axes.{a.name}", f"value {v!r} is rejected: {exc}") from None
             checked += 1
-            if a.kind not in ("speed_rpm", "load_Nm"):
+            if a.kind not in PROFILE_AXES:
                 derived(sc, f"{a.name} = {v!r}")
-    joint = [k for k, a in enumerate(sweep.axes) if a.kind not in ("speed_rpm", "load_Nm")]
+    joint = [k for k, a in enumerate(sweep.axes) if a.kind not in PROFILE_AXES]
     combos = _combinations(sweep, joint)
     complete = combos is not None
     if combos is not None and len(joint) > 1:

@@ -1,0 +1,262 @@
+"""The honest status of a run: whether its R̂2 and its speed can be relied on, and if not, why.
+
+Every run (``summary.json`` ``"verdict"``, the batch and sweep tables' ``verdict`` and
+``verdict_text`` columns, the console's closing line) carries a *verdict* built from its
+metrics (:func:`imdrive.run.metrics.drive_metrics`) and its scenario:
+
+``ok``
+    the run completed, did not lose control, R̂2 ends within :data:`R2_TOLERANCE` of the
+    plant's R2 (the simulator knows it) and the mean speed error over the final window is
+    within :func:`imdrive.config.perunit.speed_tolerance_rpm`. When R̂2 is held at the end
+    (not observable there) but still right, the text says so (``ok; R2 held since ...``).
+``lost-control``, ``diverged``
+    the first loss of control, the divergence (:mod:`imdrive.run.metrics`).
+``frozen``
+    the compensator is held at the end and R̂2 never moved from its starting value: it was
+    never estimated in this run.
+``held``
+    the compensator estimated, then held R̂2 from ``R2_held_since_s`` to the end.
+``R2-off``
+    R̂2 ends more than :data:`R2_TOLERANCE` from R2 while it was being estimated (or with no
+    compensator); the text says when R̂2 ended on one of its clamps (``compensator.R2_min_*``,
+    ``R2_max_*``), which then kept it from R2.
+``speed-error``
+    the mean speed error over the final window exceeds the tolerance.
+``not-run``
+    the scenario could not be built (the batch's ``status`` -1).
+
+The failures are listed in time order (a loss of control before the divergence it led to, a
+hold before the R̂2 error it left at the end) and the verdict is the first; ``verdict_text``
+names every one. Why R̂2 was held comes from the compensator's gating mask (the log column
+``comp_frozen_flags``, :mod:`imdrive.kernels.compensator`), grouped as a drive engineer reads
+it (:data:`HELD_CAUSES`): the voltage limit (the injection backed off for headroom or in field
+weakening, or the voltage at the inverter's limit), the stator frequency band (the stator
+frequency near the injection's, where the injected signal is not detectable), or a gated
+transient (a speed or load change, and the settling after it).
+
+Speed accuracy is also given in per-unit of the machine's rated slip speed
+(``speed_error_pu_slip``): the slip error a wrong R̂2 causes scales with it, so the same
+number means the same on every machine of the library.
+"""
+
+from __future__ import annotations
+
+import math
+
+from imdrive.config.perunit import rated_slip_rpm, resolve, speed_tolerance_rpm
+from imdrive.kernels.batch import CONVERGENCE_BAND
+
+#: R̂2 within this fraction of the plant's R2 at the end: the convergence band of the metrics
+#: (``convergence_time_s``), the envelope's goal on the ideal drive.
+R2_TOLERANCE = CONVERGENCE_BAND
+
+#: Gating bit (``comp_frozen``) -> (group, what it means), the groups in the order they are
+#: named (the voltage limit first: it outlasts the transients it causes).
+HELD_CAUSES = {
+    32: ("voltage limit", "injection backed off for voltage headroom / field weakening"),
+    4: ("voltage limit", "voltage at the gating's limit"),
+    8: ("stator frequency band", "stator frequency near the injection frequency"),
+    1: ("gated transient", "speed reference or speed error moving"),
+    2: ("gated transient", "load step"),
+    16: ("gated transient", "settling after a gated event"),
+}
+
+#: Columns the status adds to a metrics row (batch, sweep, ``drive_metrics``).
+STATUS_COLUMNS = (
+    "speed_error_pu_slip",
+    "speed_tolerance_rpm",
+    "verdict",
+    "verdict_ok",
+    "verdict_text",
+    "verdict_at_s",
+)
+
+VERDICTS = ("ok", "lost-control", "diverged", "frozen", "held", "R2-off", "speed-error", "not-run")
+
+
+def held_reasons(mask) -> list[str]:
+    """The groups of a gating mask, in the order of :data:`HELD_CAUSES` (unknown bits named).
+
+    Parameters
+    ----------
+    mask : int or float
+        OR of ``comp_frozen`` values (0 or NaN: none).
+
+    Returns
+    -------
+    list of str
+        E.g. ``["voltage limit"]``; a settling bit alone (16) reads ``"gated transient"``.
+    """
+    if mask is None or (isinstance(mask, float) and math.isnan(mask)):
+        return []
+    m = int(mask)
+    out: list[str] = []
+    for bit, (group, _) in HELD_CAUSES.items():
+        if m & bit and group not in out:
+            out.append(group)
+    rest = m & ~sum(HELD_CAUSES)
+    b = 1
+    while rest:
+        if rest & b:
+            out.append(f"gating bit {b}")
+            rest &= ~b
+        b <<= 1
+    # a settling hold (16) after a voltage or band event belongs to that event
+    if "gated transient" in out and len(out) > 1 and not m & 3:
+        out.remove("gated transient")
+    return out
+
+
+def _finite(x) -> bool:
+    try:
+        return x is not None and math.isfinite(float(x))
+    except (TypeError, ValueError):
+        return False
+
+
+def _at_clamp(sc, r2_end) -> str:
+    """`` (at its upper clamp ...)`` when R̂2 ended on a clamp of the compensator, else ""."""
+    if not _finite(r2_end):
+        return ""
+    r = resolve(sc)
+    for bound, name, key in ((r.R2_max, "upper", "max"), (r.R2_min, "lower", "min")):
+        if abs(float(r2_end) - bound) <= 1e-9 * bound:
+            return (
+                f" (at its {name} clamp, {bound / r.R2_hat:.3g} R2_hat(0): "
+                f"compensator.R2_{key}_ratio / R2_{key}_ohm)"
+            )
+    return ""
+
+
+def verdict(sc, row: dict) -> dict:
+    """The status columns of one run (module docstring).
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario as run.
+    row : dict
+        Its metrics: ``status``, ``diverged_at_s``, ``lost_control_at_s``, ``R2_error_pct``,
+        ``speed_error_rpm``, ``R2_hat_final_ohm``, ``R2_held_since_s``,
+        ``R2_held_end_causes``, ``simulated_s``.
+
+    Returns
+    -------
+    dict
+        :data:`STATUS_COLUMNS`: the speed error in per-unit of the rated slip speed, the
+        tolerance (rpm), the verdict (one of :data:`VERDICTS`), whether it is ``ok`` (a
+        boolean column, for the heatmaps' shares), its text and the time of its first cause, s
+        (NaN for ``ok``).
+    """
+    tol_rpm = speed_tolerance_rpm(sc)
+    slip = rated_slip_rpm(sc)
+    err = row.get("speed_error_rpm", math.nan)
+    out = {
+        "speed_error_pu_slip": float(err) / slip if _finite(err) and slip > 0 else math.nan,
+        "speed_tolerance_rpm": tol_rpm,
+    }
+    status = row.get("status", 0)
+    if isinstance(status, str):  # summary.json's text ("ok" or what diverged)
+        status = 0 if status == "ok" else 1
+    status = int(status)
+    if status < 0:
+        out["verdict"] = "not-run"
+        out["verdict_ok"] = False
+        out["verdict_text"] = f"not run: {row.get('error') or 'the scenario could not be built'}"
+        out["verdict_at_s"] = math.nan
+        return out
+    t_end = float(row.get("simulated_s", sc.simulation.t_end_s))
+    events: list[tuple[float, str, str]] = []  # (time, code, text)
+    if _finite(row.get("lost_control_at_s")):
+        t = float(row["lost_control_at_s"])
+        events.append((t, "lost-control", f"lost control at t = {t:.3g} s"))
+    if status != 0:
+        t = float(row.get("diverged_at_s", t_end))
+        events.append((t, "diverged", f"diverged at t = {t:.3g} s"))
+    vector = sc.drive.mode == "vector"
+    comp = sc.compensator
+    held_note = None
+    if vector and comp.enabled and _finite(row.get("R2_held_since_s")):
+        t = float(row["R2_held_since_s"])
+        why = ", ".join(held_reasons(row.get("R2_held_end_causes"))) or "gating"
+        r2_0 = resolve(sc).R2_hat
+        r2_end = row.get("R2_hat_final_ohm", math.nan)
+        if _finite(r2_end) and abs(float(r2_end) - r2_0) <= 1e-12 * r2_0:
+            code = "frozen"
+            text = f"compensator frozen from t = {t:.3g} s ({why}): R2 never estimated"
+        else:
+            code, text = "held", f"R2 held since t = {t:.3g} s ({why})"
+        held_note = (t, code, text)
+    r2_err = row.get("R2_error_pct", math.nan)
+    r2_bad = vector and _finite(r2_err) and abs(float(r2_err)) > 100.0 * R2_TOLERANCE
+    if r2_bad:
+        if held_note is not None:
+            events.append(held_note)
+        what = "" if comp.enabled else " (compensator off)"
+        if comp.enabled:
+            what = _at_clamp(sc, row.get("R2_hat_final_ohm"))
+        events.append((t_end, "R2-off", f"R2_hat off by {float(r2_err):+.3g} %{what}"))
+    if vector and status == 0 and _finite(err) and abs(float(err)) > tol_rpm:
+        events.append(
+            (
+                t_end,
+                "speed-error",
+                f"speed error {float(err):+.3g} rpm > tol {tol_rpm:.3g} rpm "
+                f"({out['speed_error_pu_slip']:+.3g} x rated slip)",
+            )
+        )
+    events.sort(key=lambda e: e[0])
+    if events:
+        out["verdict"] = events[0][1]
+        out["verdict_ok"] = False
+        out["verdict_text"] = "; ".join(e[2] for e in events)
+        out["verdict_at_s"] = events[0][0]
+        return out
+    out["verdict"] = "ok"
+    out["verdict_ok"] = True
+    out["verdict_at_s"] = math.nan
+    out["verdict_text"] = "ok" + (f"; {held_note[2]}, still within tolerance" if held_note else "")
+    return out
+
+
+def run_status(m: dict) -> dict:
+    """``summary.json``'s ``"verdict"`` from a run's metrics (:func:`drive_metrics`): the
+    status columns, the R̂2 tolerance, how long and why R̂2 was held (the gating masks as
+    their groups, :func:`held_reasons`; None without a compensator), and ``R2_observable``:
+    ``"estimated at the end"``, or ``"not observable here: held since t = ... s (reason)"``
+    (None without a compensator).
+
+    Parameters
+    ----------
+    m : dict
+        :func:`imdrive.run.metrics.drive_metrics` of the run.
+
+    Returns
+    -------
+    dict
+        JSON-ready values.
+    """
+    got = {k: m[k] for k in (*STATUS_COLUMNS, "R2_held_pct", "R2_held_since_s")}
+    for key in ("R2_held_causes", "R2_held_end_causes"):
+        got[key] = held_reasons(m[key]) if _finite(m[key]) else None
+    got["R2_tolerance_pct"] = 100.0 * R2_TOLERANCE
+    since = m["R2_held_since_s"]
+    if not _finite(m["R2_held_pct"]):
+        got["R2_observable"] = None  # no compensator: R2_hat is not estimated at all
+    elif _finite(since):
+        why = ", ".join(got["R2_held_end_causes"] or []) or "gating"
+        got["R2_observable"] = f"not observable here: held since t = {since:.3g} s ({why})"
+    else:
+        got["R2_observable"] = "estimated at the end"
+    return got
+
+
+def verdict_counts(df) -> str:
+    """``"ok in 812 of 1920 (frozen 300, R2-off 12, ...)"`` for a batch or sweep table, or ""
+    for a table without a ``verdict`` column (a store written before the status existed)."""
+    if "verdict" not in df:
+        return ""
+    counts = df["verdict"].value_counts()
+    n_ok = int(counts.get("ok", 0))
+    rest = ", ".join(f"{c} {int(counts[c])}" for c in VERDICTS if c != "ok" and c in counts)
+    return f"ok in {n_ok} of {len(df)}" + (f" ({rest})" if rest else "")

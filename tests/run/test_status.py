@@ -1,0 +1,156 @@
+"""The status of a run (imdrive.run.status): the verdict's rules on hand-made metric rows, the
+gating mask read as reasons, the per-unit tolerances, and what summary.json and the console
+say for a completed run that is not ok."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import pytest
+
+from imdrive.cli import main
+from imdrive.config.perunit import rated_slip_rpm, resolve, speed_tolerance_rpm
+from imdrive.config.rated import rated_point
+from imdrive.config.scenario import Scenario
+from imdrive.run.status import R2_TOLERANCE, held_reasons, verdict
+
+NAN = math.nan
+
+
+@pytest.fixture(scope="module")
+def sc():
+    return Scenario.read("injection-robust")
+
+
+def _row(sc, **kw):
+    """A completed run with R2_hat exact and no speed error, then ``kw``."""
+    row = {
+        "status": 0,
+        "simulated_s": 14.0,
+        "diverged_at_s": NAN,
+        "lost_control_at_s": NAN,
+        "R2_error_pct": 0.0,
+        "speed_error_rpm": 0.0,
+        "R2_hat_final_ohm": 0.9 * resolve(sc).R2_hat,
+        "R2_held_since_s": NAN,
+        "R2_held_end_causes": 0.0,
+    }
+    row.update(kw)
+    return row
+
+
+def test_tolerances_follow_the_machine(sc):
+    rp = rated_point(sc.machine)
+    assert speed_tolerance_rpm(sc) == pytest.approx(max(1.0, 1e-3 * rp.speed_rpm))
+    assert rated_slip_rpm(sc) == pytest.approx(rp.synchronous_speed_rpm - rp.speed_rpm)
+    big = Scenario.read("injection-robust", ["machine.preset=geyer-3.3kv"])
+    assert speed_tolerance_rpm(big) != speed_tolerance_rpm(sc)
+    assert rated_slip_rpm(big) < 0.5 * rated_slip_rpm(sc)  # a large machine slips less
+
+
+def test_exact_run_is_ok_and_gives_its_speed_error_in_rated_slips(sc):
+    v = verdict(sc, _row(sc, speed_error_rpm=0.5))
+    assert v["verdict"] == "ok" and v["verdict_ok"] and v["verdict_text"] == "ok"
+    assert v["speed_error_pu_slip"] == pytest.approx(0.5 / rated_slip_rpm(sc))
+    assert math.isnan(v["verdict_at_s"])
+
+
+@pytest.mark.parametrize("err", [2.1, -2.1, 5.01, -30.0])
+def test_R2_beyond_the_tolerance_is_never_ok(sc, err):
+    assert abs(err) > 100 * R2_TOLERANCE
+    v = verdict(sc, _row(sc, R2_error_pct=err))
+    assert v["verdict"] == "R2-off" and not v["verdict_ok"]
+    assert f"R2_hat off by {err:+.3g} %" in v["verdict_text"]
+
+
+def test_speed_error_beyond_the_tolerance_is_never_ok(sc):
+    tol = speed_tolerance_rpm(sc)
+    v = verdict(sc, _row(sc, speed_error_rpm=-1.01 * tol))
+    assert v["verdict"] == "speed-error"
+    assert f"> tol {tol:.3g} rpm" in v["verdict_text"]
+    assert verdict(sc, _row(sc, speed_error_rpm=0.99 * tol))["verdict"] == "ok"
+
+
+def test_causes_are_named_in_time_order(sc):
+    # held from 4.3 s, lost control at 6 s, diverged at 7 s, R2 off at the end
+    row = _row(
+        sc,
+        status=2,
+        simulated_s=7.0,
+        diverged_at_s=7.0,
+        lost_control_at_s=6.0,
+        R2_error_pct=12.0,
+        R2_held_since_s=4.3,
+        R2_held_end_causes=float(32 | 16),
+        speed_error_rpm=NAN,
+    )
+    v = verdict(sc, row)
+    text = v["verdict_text"]
+    assert v["verdict"] == "held" and v["verdict_at_s"] == 4.3
+    assert text.index("R2 held since t = 4.3 s (voltage limit)") < text.index("lost control")
+    assert text.index("lost control at t = 6 s") < text.index("diverged at t = 7 s")
+    assert text.index("diverged") < text.index("R2_hat off by +12 %")
+    # without the hold, the loss of control comes first, before the divergence
+    row.update(R2_held_since_s=NAN)
+    assert verdict(sc, row)["verdict"] == "lost-control"
+
+
+def test_frozen_means_R2_hat_never_moved(sc):
+    r2_0 = resolve(sc).R2_hat
+    held = _row(sc, R2_error_pct=20.0, R2_held_since_s=4.3, R2_held_end_causes=8.0)
+    v = verdict(sc, held | {"R2_hat_final_ohm": r2_0})
+    assert v["verdict"] == "frozen"
+    assert "R2 never estimated" in v["verdict_text"]
+    assert "(stator frequency band)" in v["verdict_text"]
+    assert verdict(sc, held)["verdict"] == "held"  # it moved, then was held
+
+
+def test_a_hold_with_R2_still_right_is_ok_and_says_so(sc):
+    v = verdict(sc, _row(sc, R2_held_since_s=9.0, R2_held_end_causes=4.0))
+    assert v["verdict"] == "ok"
+    assert "R2 held since t = 9 s (voltage limit), still within tolerance" in v["verdict_text"]
+
+
+def test_gating_mask_reads_as_reasons():
+    assert held_reasons(32) == ["voltage limit"]
+    assert held_reasons(4 | 16) == ["voltage limit"]  # the settling belongs to the limit
+    assert held_reasons(8) == ["stator frequency band"]
+    assert held_reasons(1 | 32) == ["voltage limit", "gated transient"]
+    assert held_reasons(2) == ["gated transient"]
+    assert held_reasons(16) == ["gated transient"]
+    assert held_reasons(64 | 8) == ["stator frequency band", "gating bit 64"]
+    assert held_reasons(NAN) == [] and held_reasons(0) == []
+
+
+def test_open_loop_has_no_R2_or_speed_verdict():
+    ol = Scenario.read("free-acceleration")
+    v = verdict(ol, _row(ol, R2_error_pct=50.0, speed_error_rpm=100.0))
+    assert v["verdict"] == "ok"
+
+
+def test_summary_and_console_say_why_a_completed_run_is_not_ok(tmp_path, capsys):
+    out = tmp_path / "r"
+    code = main(["run", "sensorless", "--set", "estimator.R2_ratio=1.2", "--set",
+                 "simulation.t_end_s=4", "--out", str(out), "--format", "csv"])  # fmt: skip
+    assert code == 0  # completed: the exit code is unchanged
+    s = json.loads((out / "summary.json").read_text())
+    v = s["verdict"]
+    assert v["verdict"] == "R2-off" and v["verdict_ok"] is False
+    assert v["verdict_text"].startswith("R2_hat off by +20 % (compensator off)")
+    assert v["R2_held_pct"] is None  # no compensator: nothing held, nothing estimated
+    assert v["R2_observable"] is None
+    # the detuning law: a +20 % R2_hat shifts the speed by about 0.2 rated slips at rated load
+    assert 0.15 < v["speed_error_pu_slip"] < 0.25
+    line = capsys.readouterr().err.strip().splitlines()[-1]
+    assert line.startswith("imdrive: status: R2_hat off by +20 % (compensator off)")
+    assert str(out) in line
+
+
+def test_R2_hat_on_its_clamp_is_named(sc):
+    r = resolve(sc)
+    v = verdict(sc, _row(sc, R2_error_pct=-6.7, R2_hat_final_ohm=r.R2_max))
+    assert v["verdict"] == "R2-off"
+    assert f"(at its upper clamp, {r.R2_max / r.R2_hat:.3g} R2_hat(0)" in v["verdict_text"]
+    v = verdict(sc, _row(sc, R2_error_pct=-6.7, R2_hat_final_ohm=1.001 * r.R2_max))
+    assert "clamp" not in v["verdict_text"]
