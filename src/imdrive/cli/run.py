@@ -60,7 +60,7 @@ def _cmd_run(args) -> int:
 
     scenario = Scenario.read(args.scenario, args.set or [])
     if args.format:  # an unknown format is bad input before anything runs
-        from imdrive.run.result import formats_wanted
+        from imdrive.run.formats import formats_wanted
 
         formats_wanted([f.strip() for s in args.format for f in s.split(",") if f.strip()])
     out = output_folder(

@@ -38,7 +38,7 @@ from imdrive.run.files import (  # noqa: F401  (re-exports)
     is_result_folder,
     summary_json,
 )
-from imdrive.run.formats import output_formats
+from imdrive.run.formats import formats_wanted, output_formats
 from imdrive.run.metrics import (
     CONVERGENCE_BAND,
     DEFAULT_WINDOW_S,
@@ -571,37 +571,6 @@ class SimulationResult:
             (staging / "summary.json").write_text(summary_json(self.summary()))
             names = sorted(p.name for p in staging.iterdir())
         return [out_dir / n for n in names if n != "summary.json"] + [out_dir / "summary.json"]
-
-
-def formats_wanted(names) -> dict[str, bool]:
-    """``[output]`` key -> on, with exactly the formats ``names`` on (``res.save(formats=)``,
-    ``imdrive run --format``).
-
-    Parameters
-    ----------
-    names : iterable of str
-        Format names (:func:`imdrive.run.formats.output_formats`).
-
-    Returns
-    -------
-    dict
-        The ``[output]`` key of every format -> whether it is written.
-
-    Raises
-    ------
-    ConfigError
-        An unknown name (the known ones listed).
-    """
-    from imdrive.errors import ConfigError
-
-    if isinstance(names, str):
-        names = [names]
-    known = {f.name: f.key for f in output_formats()}
-    names = list(names)
-    for n in names:
-        if n not in known:
-            raise ConfigError("formats", f"no output format {n!r}; known: {', '.join(known)}")
-    return {key: name in names for name, key in known.items()}
 
 
 #: The files :meth:`SimulationResult.save` may write besides PNG figures

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from fnmatch import fnmatchcase
 from pathlib import Path
 
-__all__ = ["OutputFormat", "output_formats"]
+__all__ = ["OutputFormat", "formats_wanted", "output_formats"]
 
 
 @dataclass(frozen=True)
@@ -80,3 +80,34 @@ def output_formats() -> tuple[OutputFormat, ...]:
         module = importlib.import_module(info.name)
         found.append(module.FORMAT)
     return tuple(sorted(found, key=lambda f: (f.order, f.name)))
+
+
+def formats_wanted(names) -> dict[str, bool]:
+    """``[output]`` key -> on, with exactly the formats ``names`` on (``res.save(formats=)``,
+    ``imdrive run --format``).
+
+    Parameters
+    ----------
+    names : iterable of str
+        Format names (:func:`imdrive.run.formats.output_formats`).
+
+    Returns
+    -------
+    dict
+        The ``[output]`` key of every format -> whether it is written.
+
+    Raises
+    ------
+    ConfigError
+        An unknown name (the known ones listed).
+    """
+    from imdrive.errors import ConfigError
+
+    if isinstance(names, str):
+        names = [names]
+    known = {f.name: f.key for f in output_formats()}
+    names = list(names)
+    for n in names:
+        if n not in known:
+            raise ConfigError("formats", f"no output format {n!r}; known: {', '.join(known)}")
+    return {key: name in names for name, key in known.items()}
