@@ -26,8 +26,7 @@ from imdrive.kernels import compensator, ifoc, inverter, machine, model, sensors
 from imdrive.kernels.bridge import switching_period  # noqa: F401  (re-exported: old path)
 from imdrive.kernels.estimators import afo, ekf, mras, reactive_mras, registry  # noqa: F401  (the package's estimators register on import)
 from imdrive.kernels.estimators.registry import ESTIMATOR_INPUT
-from imdrive.kernels.inverter import INV_SWITCHING, MAX_EVENTS, MAX_SEGMENTS
-from imdrive.kernels.machine import PLANT_STATE
+from imdrive.kernels.inverter import INV_SWITCHING, MAX_EVENTS  # noqa: F401  (MAX_EVENTS: old path)
 from imdrive.kernels.records import b1, c16, f8, i8, record_dtype
 from imdrive.kernels.stages import (
     NO_ESTIMATE,
@@ -35,6 +34,7 @@ from imdrive.kernels.stages import (
     S_NAN,
     S_OK,
     S_SPEED,
+    SCRATCH,
     check,
     control,
     estimate,
@@ -164,7 +164,7 @@ DriveParams.__getattr__ = _old_estimator_field
 DriveState.__getattr__ = _old_estimator_field
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
     """Simulate drive ``i`` of ``P``/``S`` for ``n_steps`` control periods (``S`` in place).
 
@@ -222,15 +222,10 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
     Vdc_meas = psen.vdc_gain * pinv.Vdc
     n_rows = log.shape[0]
 
-    work = np.empty(5, dtype=PLANT_STATE)  # RK4 scratch
-    seg_dt = np.empty(MAX_SEGMENTS)  # the average model's segments: durations, voltages
-    seg_va = np.empty(MAX_SEGMENTS)
-    seg_vb = np.empty(MAX_SEGMENTS)
-    ev = np.empty((3, MAX_EVENTS))
-    no_trace = np.empty((0, 3))
-    # the estimator's input; the array stays in use in the loop (a record of a local array
-    # does not keep it alive, see kernels/records.py)
+    # the estimator's input and the loop's scratch; both arrays stay in use in the loop (a
+    # record of a local array does not keep it alive, see kernels/records.py)
     est_in = np.zeros(1, dtype=ESTIMATOR_INPUT)
+    scratch = np.zeros(1, dtype=SCRATCH)
     i_next_ab = 0j  # the plant's current after the last period (check), the next sample's
     have_next = False
 
@@ -245,7 +240,7 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
                 Vdc_meas,
             )  # fmt: skip
         cmd = control(sim, pc, x, mdl, ctl, smp, prof, smpl, estm, foc)
-        mod = modulate(pinv, pc, smp, smpl, cmd, switching, Vdc_meas, seg_dt, seg_va, seg_vb, Ts)
+        mod = modulate(pinv, pc, smp, smpl, cmd, switching, Vdc_meas, scratch[0], Ts)
 
         logged = log_every > 0 and k % log_every == 0 and k // log_every < n_rows
         if logged:
@@ -255,8 +250,7 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
             break
 
         v_app_ab = plant(
-            pinv, sinv, pp, x, prof, mod, switching, Vdc_meas, nsub, work, ev, no_trace,
-            seg_dt, seg_va, seg_vb, Ts,
+            pinv, sinv, pp, x, prof, mod, switching, Vdc_meas, nsub, scratch[0], Ts,
         )  # fmt: skip
         if switching and logged:  # the true average, known only now
             log[k // log_every].v_alpha = v_app_ab.real

@@ -49,7 +49,7 @@ from imdrive.kernels.ifoc import (
     log_control,
     open_loop_voltage,
 )
-from imdrive.kernels.inverter import inverter_segments, limit_magnitude
+from imdrive.kernels.inverter import MAX_EVENTS, MAX_SEGMENTS, inverter_segments, limit_magnitude
 from imdrive.kernels.machine import integrate_segment, log_plant, stator_current
 from imdrive.kernels.profiles import (
     PR_FLUX_REF,
@@ -62,6 +62,7 @@ from imdrive.kernels.profiles import (
     PR_V_AMP,
     profile_at,
 )
+from imdrive.kernels.records import f8, record_dtype
 from imdrive.kernels.sensors import measure_current
 
 S_OK = 0
@@ -118,6 +119,19 @@ class Modulation(NamedTuple):
     v_app_ab: complex  # the period-average voltage at the terminals, V (switching: the command)
     n_seg: int  # segments of the average model
 
+
+#: The loop's scratch memory, one record for the run. A record is handed to a stage as a
+#: pointer, without the reference count an array costs: an array argument of an inlined stage
+#: is a new reference, counted up and down (atomically) every period.
+SCRATCH = record_dtype(
+    [
+        ("seg_dt", f8, (MAX_SEGMENTS,)),  # the average model's segments: durations, s
+        ("seg_va", f8, (MAX_SEGMENTS,)),  # and voltages, V
+        ("seg_vb", f8, (MAX_SEGMENTS,)),
+        ("ev", f8, (3, MAX_EVENTS)),  # the switching bridge's events: times, legs, states
+        ("no_trace", f8, (0, 3)),  # the bridge's current trace: none
+    ]
+)
 
 #: The open-loop drive's :class:`Estimate`: no estimator runs.
 NO_ESTIMATE = Estimate(0.0, 0j, 0.0, 0.0)
@@ -263,16 +277,15 @@ def control(sim, pc, x, mdl, ctl, smp, prof, smpl, estm, foc):
 
 
 @njit(cache=True, inline="always")
-def modulate(pinv, pc, smp, smpl, cmd, switching, Vdc_meas, seg_dt, seg_va, seg_vb, Ts):
+def modulate(pinv, pc, smp, smpl, cmd, switching, Vdc_meas, scr, Ts):
     """The inverter's part at the sample: commanded voltage, average-model segments.
 
     Returns the :class:`Modulation`: ``v_cmd_ab`` (what the controller commands and believes
     it applies), ``v_app_ab`` (the average model's true period average; for the switching
     bridge the command, replaced by :func:`plant` once the period is integrated) and
-    ``n_seg``; fills the segments (``seg_dt``, ``seg_va``, ``seg_vb``: float64[MAX_SEGMENTS],
-    durations and alpha, beta voltages; three arrays, not views of one, which would cost two
-    reference counts each a period); stores the commanded voltage less the dead-time
-    compensation and the measured current in ``smp`` for the next estimator step.
+    ``n_seg``; fills the segments in the :data:`SCRATCH` record ``scr``; stores the
+    commanded voltage less the dead-time compensation and the measured current in ``smp``
+    for the next estimator step.
     """
     v_ref_alpha = cmd.v_ref_ab.real
     v_ref_beta = cmd.v_ref_ab.imag
@@ -289,6 +302,9 @@ def modulate(pinv, pc, smp, smpl, cmd, switching, Vdc_meas, seg_dt, seg_va, seg_
             v_ref_alpha *= k_dc
             v_ref_beta *= k_dc
         i_s = smpl.i_s_ab
+        seg_dt = scr.seg_dt
+        seg_va = scr.seg_va
+        seg_vb = scr.seg_vb
         n_seg = inverter_segments(
             pinv, v_ref_alpha, v_ref_beta, i_s.real, i_s.imag, Ts, seg_dt, seg_va, seg_vb
         )
@@ -341,23 +357,24 @@ def log_row(row, pp, pe, x, mdl, ctl, est, cmp, prof, smpl, estm, cmd, v_app_ab)
 
 
 @njit(cache=True, inline="always")
-def plant(
-    pinv, sinv, pp, x, prof, mod, switching, Vdc_meas, nsub, work, ev, no_trace,
-    seg_dt, seg_va, seg_vb, Ts,
-):  # fmt: skip
+def plant(pinv, sinv, pp, x, prof, mod, switching, Vdc_meas, nsub, scr, Ts):
     """Integrate the plant over the period: the average model's segments, or the switching
-    bridge between its gate events. Returns the period's true average voltage, V (complex)."""
+    bridge between its gate events (``scr``: the :data:`SCRATCH` record). Returns the period's
+    true average voltage, V (complex)."""
     if switching:
         v_cmd = mod.v_cmd_ab
         v_app_alpha, v_app_beta = switching_period(
             pinv, sinv, pp, x, v_cmd.real, v_cmd.imag, Vdc_meas,
-            prof.R1_base, prof.R2_base, prof.T_L0, Ts, nsub, work, ev, no_trace,
+            prof.R1_base, prof.R2_base, prof.T_L0, Ts, nsub, None, scr.ev, scr.no_trace,
         )  # fmt: skip
         return complex(v_app_alpha, v_app_beta)
+    seg_dt = scr.seg_dt
+    seg_va = scr.seg_va
+    seg_vb = scr.seg_vb
     for s in range(mod.n_seg):
         integrate_segment(
             pp, x, seg_va[s], seg_vb[s], prof.R1_base, prof.R2_base, prof.T_L0, seg_dt[s],
-            nsub, work,
+            nsub, None,
         )  # fmt: skip
     return mod.v_app_ab
 
