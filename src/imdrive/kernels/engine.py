@@ -25,7 +25,6 @@ from numba import njit
 from imdrive.kernels import compensator, ifoc, inverter, machine, model, sensors
 from imdrive.kernels.bridge import switching_period  # noqa: F401  (re-exported: old path)
 from imdrive.kernels.estimators import afo, ekf, mras, reactive_mras, registry  # noqa: F401  (the package's estimators register on import)
-from imdrive.kernels.estimators.registry import ESTIMATOR_INPUT
 from imdrive.kernels.inverter import INV_SWITCHING, MAX_EVENTS  # noqa: F401  (MAX_EVENTS: old path)
 from imdrive.kernels.records import b1, c16, f8, i8, record_dtype
 from imdrive.kernels.stages import (
@@ -222,9 +221,8 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
     Vdc_meas = psen.vdc_gain * pinv.Vdc
     n_rows = log.shape[0]
 
-    # the estimator's input and the loop's scratch; both arrays stay in use in the loop (a
-    # record of a local array does not keep it alive, see kernels/records.py)
-    est_in = np.zeros(1, dtype=ESTIMATOR_INPUT)
+    # the loop's scratch; the array stays in use in the loop (a record of a local array does
+    # not keep it alive, see kernels/records.py)
     scratch = np.zeros(1, dtype=SCRATCH)
     i_next_ab = 0j  # the plant's current after the last period (check), the next sample's
     have_next = False
@@ -236,8 +234,7 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
         estm = NO_ESTIMATE
         if foc:
             estm = estimate(
-                sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, est_in[0], prof, smpl,
-                Vdc_meas,
+                sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc_meas,
             )  # fmt: skip
         cmd = control(sim, pc, x, mdl, ctl, smp, prof, smpl, estm, foc)
         mod = modulate(pinv, pc, smp, smpl, cmd, switching, Vdc_meas, scratch[0], Ts)

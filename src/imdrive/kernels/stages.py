@@ -41,7 +41,12 @@ from imdrive.kernels.compensator import (
     injection_sine,
     log_compensator,
 )
-from imdrive.kernels.estimators.registry import estimator_finite, estimator_log, estimator_step
+from imdrive.kernels.estimators.registry import (
+    EstimatorInput,
+    estimator_finite,
+    estimator_log,
+    estimator_step,
+)
 from imdrive.kernels.ifoc import (
     dead_time_feedforward,
     field_weakening,
@@ -181,7 +186,7 @@ def measure(pp, psen, x, ctl, prof, t, k, i_next_ab, have_next):
 
 
 @njit(cache=True, inline="always")
-def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, inp, prof, smpl, Vdc_meas):
+def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc_meas):
     """The injection, the selected estimator, the detection and the R2 compensator.
 
     Returns the :class:`Estimate`; updates the estimator's state ``est`` and the compensator's
@@ -205,19 +210,13 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, inp, prof, smpl
         i_inj = a_inj * pk.inj_amp * sine
     w_ref = prof.w_ref
 
-    inp.v_ab = smp.v_prev_ab
-    inp.i_prev_ab = smp.i_prev_ab
-    inp.i_ab = smpl.i_meas_ab
-    inp.theta_e = smpl.theta_k
-    inp.w_e = ctl.w_e
-    inp.i_ref_dq = ctl.i_ref_dq
-    inp.w_ref = w_ref
-    inp.i_inj = i_inj
     # R1 adaptation held from the compensator's start until it first updates and whenever
     # its gating freezes it (transients)
-    inp.hold_R1 = pk.enabled and pk.gate and (t < pk.t_on or cmp.frozen != 0.0)
-    inp.Ts = Ts
-    inp.t = t
+    hold_R1 = pk.enabled and pk.gate and (t < pk.t_on or cmp.frozen != 0.0)
+    inp = EstimatorInput(
+        smp.v_prev_ab, smp.i_prev_ab, smpl.i_meas_ab, smpl.theta_k, ctl.w_e, ctl.i_ref_dq,
+        w_ref, i_inj, hold_R1, Ts, t,
+    )  # fmt: skip
     w_r_hat, e_dq0 = estimator_step(pe, mdl, est, inp)
 
     if pk.inj_amp != 0.0:
