@@ -167,6 +167,11 @@ DriveState.__getattr__ = _old_estimator_field
 def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
     """Simulate drive ``i`` of ``P``/``S`` for ``n_steps`` control periods (``S`` in place).
 
+    Compiled with numpy's error model: a division by zero in the loop gives inf or NaN, which
+    the divergence check reports (``S_NAN``), instead of raising; the exception branches would
+    keep numba from pruning the reference counts of the stages' arguments (atomic, every
+    period).
+
     Parameters
     ----------
     P : DriveParams
