@@ -3,7 +3,7 @@
 Run with the peers venv (see benchmarks/README.md), NOT the imdrive venv::
 
     benchmarks/.venv-peers/bin/python benchmarks/bench_motulator.py [--repeat N] [--json PATH]
-        [--imdrive-csv PATH]
+        [--imdrive-csv PATH] [--pwm [--dead-time T_D]]
 
 It simulates the free acceleration of the paper's Table IV machine (R1 = 0.435 ohm,
 R2 = 0.816 ohm, Ll1 = Ll2 = 2 mH, M = 69.3 mH, 2 pole pairs, J = 0.069 kg m^2) from standstill on
@@ -29,6 +29,11 @@ exp(j w (t_k + Ts/2))``, and returns the duty ratios that make the converter app
 voltage sequence imdrive applies. The DC bus is 400 V so that the sinusoidal duty ratios stay in
 [0, 1]; the machine sees exactly ``u``. motulator integrates each period with scipy's solve_ivp
 (RK45 by default, rtol = 1e-3, atol = 1e-6); ``--tight`` also runs rtol = atol = 1e-8.
+
+``--pwm`` switches on motulator's carrier-comparison PWM (``Drive(pwm=True)``: the converter's
+switching instants within each period, every interval between them integrated on its own),
+``--dead-time T_D`` its converter dead time (``VoltageSourceConverter(t_d=T_D)``): the peers of
+imdrive's switching bridge (``inverter.model = "switching"``, ``inverter.dead_time_s``).
 """
 
 from __future__ import annotations
@@ -114,13 +119,16 @@ class OpenLoopSupply(ControlSystem):
         self.k += 1
 
 
-def run_once(rtol: float | None = None, atol: float | None = None):
+def run_once(rtol: float | None = None, atol: float | None = None, pwm=False, t_d=0.0):
+    """One free acceleration; ``pwm``: motulator's carrier comparison (the converter switches,
+    each switching interval integrated on its own) instead of the period-average voltage;
+    ``t_d``: its dead time, s."""
     par = InductionMachinePars(n_p=N_P, **gamma_parameters())
     mdl = Drive(
         machine=InductionMachine(par),
         mechanics=MechanicalSystem(J=J),
-        converter=VoltageSourceConverter(u_dc=U_DC),
-        pwm=False,
+        converter=VoltageSourceConverter(u_dc=U_DC, t_d=t_d),
+        pwm=pwm,
         delay=0,
     )
     ctrl = OpenLoopSupply(math.sqrt(2 / 3) * V_LL, F_HZ, TS, U_DC)
@@ -178,6 +186,8 @@ def main(argv=None) -> int:
     ap.add_argument("--repeat", type=int, default=3, help="runs per setting (median reported)")
     ap.add_argument("--tight", action="store_true", help="also run with rtol = atol = 1e-8")
     ap.add_argument("--json", metavar="PATH", help="write the figures as JSON")
+    ap.add_argument("--pwm", action="store_true", help="motulator's carrier-comparison PWM")
+    ap.add_argument("--dead-time", type=float, default=0.0, help="converter dead time, s")
     ap.add_argument(
         "--imdrive-csv",
         metavar="PATH",
@@ -186,6 +196,9 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
 
     settings = [("default (RK45, rtol 1e-3, atol 1e-6)", None, None)]
+    mode = ("pwm" if args.pwm else "average") + (
+        f", dead time {args.dead_time:g} s" * bool(args.dead_time)
+    )
     if args.tight:
         settings.append(("tight (RK45, rtol 1e-8, atol 1e-8)", 1e-8, 1e-8))
     gp = gamma_parameters()
@@ -195,6 +208,7 @@ def main(argv=None) -> int:
         "numpy": np.__version__,
         "gamma_parameters": gp,
         "simulated_s": T_END,
+        "converter": mode,
         "Ts_s": TS,
         "runs": {},
     }
@@ -204,7 +218,7 @@ def main(argv=None) -> int:
         walls = []
         res = None
         for _ in range(args.repeat):
-            res, wall, _ = run_once(rtol, atol)
+            res, wall, _ = run_once(rtol, atol, args.pwm, args.dead_time)
             walls.append(wall)
         wall = statistics.median(walls)
         fig = figures(res)
@@ -212,7 +226,7 @@ def main(argv=None) -> int:
         if args.imdrive_csv:
             entry.update(compare_with_imdrive(res, args.imdrive_csv))
         out["runs"][label] = entry
-        print(f"\n{label}: median of {args.repeat}")
+        print(f"\n{label}, converter {mode}: median of {args.repeat}")
         for k, v in entry.items():
             if k != "walls_s":
                 print(f"  {k:<22} {v:.6g}" if isinstance(v, float) else f"  {k:<22} {v}")

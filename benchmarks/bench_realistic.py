@@ -2,7 +2,8 @@
 
 Run from the repository root with the imdrive venv::
 
-    python benchmarks/bench_realistic.py [--rounds N] [--batch N] [--json PATH]
+    python benchmarks/bench_realistic.py [--rounds N] [--batch N] [--envelope N] [--memory]
+        [--json PATH]
 
 Four variants of the 3 s ``sensorless`` scenario, timed in turn within each round (so a
 load change on the shared machine hits them alike) in process CPU time of the kernel alone
@@ -18,8 +19,10 @@ load change on the shared machine hits them alike) in process CPU time of the ke
 Each round's cost ratio is the variant's time over the ``average`` time of the same round;
 the script prints the range (lowest-highest, median, number of rounds) of the times and of the
 ratios. It also prints the record sizes of ``DriveParams``/``DriveState`` per drive and, with
-``--batch N``, the kernel time per drive of N realistic drives in ``simulate_batch`` (both
-cores) beside the single runs, and the estimate of an 800-run envelope of 14.5 s drives.
+``--batch N``, the process CPU time per drive of N realistic 1 s drives in ``simulate_batch``
+(both cores) beside a single run's kernel time; with ``--envelope N``, N realistic 14.5 s
+drives of an envelope (load 0-12 N m) in one batch, extrapolated to 800 runs; with
+``--memory``, what a realistic drive costs in memory in a batch (tracemalloc).
 """
 
 from __future__ import annotations
@@ -80,28 +83,92 @@ def record_sizes(a) -> dict:
 
 
 def bench_batch(n: int, t_end: float) -> dict:
+    """``n`` realistic drives of ``t_end`` s in one ``simulate_batch`` call (both cores) beside
+    3 single runs: wall and process CPU time (all threads) of the batch, kernel CPU time of the
+    single runs. On a shared machine the batch's wall time depends on the other jobs; its CPU
+    time per drive against a single run's is the per-drive cost."""
     from imdrive.config.scenario import Scenario
+    from imdrive.kernels.engine import run_drive
     from imdrive.run.batch import simulate_batch
-    from imdrive.run.simulate import simulate
+    from imdrive.run.build import build_arrays, copy_state
+    from imdrive.run.simulate import new_log
 
     scs = [
         Scenario.read("sensorless-realistic", [f"simulation.t_end_s={t_end}", f"sensor.seed={s}"])
         for s in range(n)
     ]
     simulate_batch(scs[:2])  # compile or load
-    t0 = time.perf_counter()
-    simulate_batch(scs)
-    wall = time.perf_counter() - t0
+    c0, w0 = time.process_time(), time.perf_counter()
+    res = simulate_batch(scs)
+    cpu, wall = time.process_time() - c0, time.perf_counter() - w0
     single = []
     for sc in scs[:3]:
-        single.append(simulate(sc).wall_time_s)
-    return {"n": n, "t_end_s": t_end, "batch_wall_s": wall, "single_wall_s": single}
+        a = build_arrays(sc)
+        log = new_log(a.n_steps // a.log_every + 1, a.log)
+        S = copy_state(a.state0)
+        t0 = time.process_time()
+        run_drive(a.params, S, 0, a.n_steps, log, a.log_every)
+        single.append(time.process_time() - t0)
+    return {"n": n, "t_end_s": t_end, "batch_wall_s": wall, "batch_cpu_s": cpu,
+            "batch_kernel_wall_s": res.wall_time_s, "single_cpu_s": single}  # fmt: skip
+
+
+def bench_envelope(n: int) -> dict:
+    """A subset of an 800-run envelope: ``n`` realistic drives of 14.5 s (load torque 0-12 N m
+    in ``n`` steps, one sensor seed each) in one ``simulate_batch`` call; the 800 runs are
+    extrapolated from its process CPU time (both cores) and wall time."""
+    from imdrive.config.scenario import Scenario
+    from imdrive.run.batch import simulate_batch
+
+    scs = [
+        Scenario.read("sensorless-realistic", ["simulation.t_end_s=14.5",
+                      f"load.torque_Nm={12.0 * j / max(n - 1, 1):.4f}", f"sensor.seed={j}"])
+        for j in range(n)
+    ]  # fmt: skip
+    simulate_batch(scs[:1])  # compile or load
+    c0, w0 = time.process_time(), time.perf_counter()
+    res = simulate_batch(scs)
+    cpu, wall = time.process_time() - c0, time.perf_counter() - w0
+    periods = int(res.control_periods)
+    return {"n": n, "cpu_s": cpu, "wall_s": wall, "control_periods": periods,
+            "cpu_800_s": 800 * cpu / n, "wall_800_s": 800 * wall / n}  # fmt: skip
+
+
+def bench_memory(sizes=(200, 1200)) -> dict:
+    """tracemalloc of ``simulate_batch`` over realistic 10 ms drives: peak during the call and
+    what stays after it, per drive and as the slope between the two sizes."""
+    import tracemalloc
+
+    from imdrive.config.scenario import Scenario
+    from imdrive.run.batch import simulate_batch
+
+    def scs(n):
+        return (
+            Scenario.read("sensorless-realistic", ["simulation.t_end_s=0.01", f"sensor.seed={i}"])
+            for i in range(n)
+        )
+
+    simulate_batch(scs(4))
+    out = {}
+    for n in sizes:
+        tracemalloc.start()
+        res = simulate_batch(scs(n))
+        cur, peak = tracemalloc.get_traced_memory()
+        tracemalloc.stop()
+        out[n] = {"peak_bytes": peak, "kept_bytes": cur}
+        del res
+    a, b = sizes
+    out["kept_slope_bytes_per_drive"] = (out[b]["kept_bytes"] - out[a]["kept_bytes"]) / (b - a)
+    out["peak_slope_bytes_per_drive"] = (out[b]["peak_bytes"] - out[a]["peak_bytes"]) / (b - a)
+    return out
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description="Realistic drive vs the average model.")
     ap.add_argument("--rounds", type=int, default=9, help="rounds of the four variants")
     ap.add_argument("--batch", type=int, default=0, help="also N realistic drives in a batch")
+    ap.add_argument("--envelope", type=int, default=0, help="N 14.5 s drives of an envelope")
+    ap.add_argument("--memory", action="store_true", help="memory per drive in a batch")
     ap.add_argument("--json", metavar="PATH", help="also write the figures as JSON")
     args = ap.parse_args(argv)
 
@@ -140,14 +207,30 @@ def main(argv=None) -> int:
     result = {"times_s": times, "ratios": ratios, "n_steps": n_steps, "record_bytes": sizes}
     if args.batch:
         b = bench_batch(args.batch, 1.0)
-        per = b["batch_wall_s"] / b["n"]
+        cpu_per = b["batch_cpu_s"] / b["n"]
+        s1 = statistics.median(b["single_cpu_s"])
         print(
             f"  batch of {b['n']} realistic 1 s drives: {b['batch_wall_s']:.2f} s wall, "
-            f"{1e3 * per:.1f} ms per drive; single runs {span(b['single_wall_s'], 'ms', 1e3)} "
-            f"(kernel); per drive on {os.cpu_count()} cores vs one: "
-            f"{statistics.median(b['single_wall_s']) / per:.2f}x throughput"
+            f"{b['batch_cpu_s']:.2f} s CPU; CPU per drive {1e3 * cpu_per:.1f} ms against a "
+            f"single run's kernel {span(b['single_cpu_s'], 'ms', 1e3)}: {cpu_per / s1:.2f}x"
         )
         result["batch"] = b
+    if args.envelope:
+        e = bench_envelope(args.envelope)
+        print(
+            f"  envelope subset, {e['n']} drives of 14.5 s: {e['cpu_s']:.1f} s CPU, "
+            f"{e['wall_s']:.1f} s wall; 800 runs: {e['cpu_800_s']:.0f} s CPU "
+            f"({e['cpu_800_s'] / (os.cpu_count() or 1):.0f} s on {os.cpu_count()} cores), "
+            f"{e['wall_800_s']:.0f} s at this run's wall time"
+        )
+        result["envelope"] = e
+    if args.memory:
+        m = bench_memory()
+        print(
+            f"  memory per drive in a batch: kept {m['kept_slope_bytes_per_drive']:.0f} B, "
+            f"peak {m['peak_slope_bytes_per_drive']:.0f} B (tracemalloc, slope N = 200 -> 1200)"
+        )
+        result["memory"] = m
     if args.json:
         Path(args.json).write_text(json.dumps(result, indent=2) + "\n")
     return 0

@@ -11,8 +11,12 @@ Each round runs, for each preset, one subprocess per tree (old, new, then new, o
 next round, so drift of the machine's load falls on both): the subprocess imports
 imdrive from that tree's ``src`` (``PYTHONPATH``), compiles or loads the kernel, then times
 ``--repeat`` runs of ``run_drive`` over the whole preset in process CPU time (robust on a
-shared machine). Prints, per preset, each tree's range (lowest-highest, median, runs) and the
-ratio of the medians new/old (below 1: the new tree is faster).
+shared machine). Prints, per preset, each tree's range (lowest-highest, median, runs) and
+three ratios new/old (below 1: the new tree is faster): of the medians of all runs; of the
+fastest runs (the least disturbed by other jobs); and the paired ratios of each round (the
+median of the new tree's runs over the old tree's, the two subprocesses run back to back),
+as their range and median: on a loaded machine the paired and fastest-run ratios are the
+ones to read, the median of all runs mixes rounds of different load.
 """
 
 from __future__ import annotations
@@ -98,14 +102,19 @@ def main(argv=None) -> int:
         try:
             trees = {tree: Path(tmp) / tree / "src" for tree in revs}
             times: dict[str, dict[str, list[float]]] = {p: {"old": [], "new": []} for p in presets}
+            paired: dict[str, list[float]] = {p: [] for p in presets}
             periods = {}
             for r in range(args.rounds):
                 order = ("old", "new") if r % 2 == 0 else ("new", "old")
                 for p in presets:
+                    med = {}
                     for tree in order:
                         res = _run(trees[tree], p, args.repeat)
                         periods[p] = res["periods"]
-                        times[p][tree] += [t / res["periods"] * 1e6 for t in res["times"]]
+                        us = [t / res["periods"] * 1e6 for t in res["times"]]
+                        times[p][tree] += us
+                        med[tree] = statistics.median(us)
+                    paired[p].append(med["new"] / med["old"])
         finally:
             for tree in revs:
                 subprocess.run(
@@ -113,13 +122,20 @@ def main(argv=None) -> int:
                     check=False,
                 )
     print(f"\nkernel CPU time per control period, us (old = {args.old_rev}, new = {args.new})")
-    print(f"{'preset':24s} {'old':32s} {'new':32s} new/old")
+    print(f"{'preset':22s} {'old':40s} {'new':40s} new/old: medians, fastest, paired rounds")
     for p in presets:
         o, n = times[p]["old"], times[p]["new"]
         ratio = statistics.median(n) / statistics.median(o)
-        print(f"{p:24s} {span(o, 'us', digits=3):32s} {span(n, 'us', digits=3):32s} {ratio:.3f}")
+        fastest = min(n) / min(o)
+        pr = span(paired[p], "", digits=3)
+        print(
+            f"{p:22s} {span(o, 'us', digits=3):40s} {span(n, 'us', digits=3):40s} "
+            f"{ratio:.3f}, {fastest:.3f}, {pr}"
+        )
     if args.json:
-        Path(args.json).write_text(json.dumps({"periods": periods, "times_us": times}, indent=1))
+        Path(args.json).write_text(
+            json.dumps({"periods": periods, "times_us": times, "paired": paired}, indent=1)
+        )
     return 0
 
 

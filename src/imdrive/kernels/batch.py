@@ -13,7 +13,7 @@ import numba
 import numpy as np
 from numba import njit, prange
 
-from imdrive.kernels.engine import LOG, S_OK, run_drive
+from imdrive.kernels.engine import LOG, S_OK, DriveParams, DriveState, run_drive
 from imdrive.kernels.records import f8, i8, record_dtype
 
 RPM = 2.0 * math.pi / 60.0
@@ -199,7 +199,70 @@ def summarize(acc, last, n_valid, ok, Ts, out):
 
 
 @njit(cache=True)
+def _drive_params(P, i):
+    """Drive ``i``'s parameter rows as a one-drive :class:`DriveParams` (views, no copy)."""
+    return DriveParams(
+        P.sim[i : i + 1],
+        P.plant[i : i + 1],
+        P.inverter[i : i + 1],
+        P.sensor[i : i + 1],
+        P.control[i : i + 1],
+        P.est[i : i + 1],
+        P.comp[i : i + 1],
+        P.prof_t[i : i + 1],
+        P.prof_v[i : i + 1],
+        P.prof_n[i : i + 1],
+        P.tables,
+        P.table_idx[i : i + 1],
+    )
+
+
+@njit(cache=True)
+def _own_state(S, i):
+    """Drive ``i``'s state rows copied into arrays of its own (one row each)."""
+    return DriveState(
+        S.plant[i : i + 1].copy(),
+        S.sample[i : i + 1].copy(),
+        S.model[i : i + 1].copy(),
+        S.control[i : i + 1].copy(),
+        S.est[i : i + 1].copy(),
+        S.comp[i : i + 1].copy(),
+        S.inverter[i : i + 1].copy(),
+    )
+
+
+@njit(cache=True)
+def _give_back(S, i, own):
+    """Write the state :func:`_own_state` copied out back into drive ``i``'s rows."""
+    S.plant[i] = own.plant[0]
+    S.sample[i] = own.sample[0]
+    S.model[i] = own.model[0]
+    S.control[i] = own.control[0]
+    S.est[i] = own.est[0]
+    S.comp[i] = own.comp[0]
+    S.inverter[i] = own.inverter[0]
+
+
+@njit(cache=True)
 def one_drive(P, S, i, n_steps, n_win, log_out, log_every, metrics, scratch, lc_bound=0.0, lc_n=0):
+    """Run drive ``i`` of the batch (:func:`run_one`) on a copy of its state of its own.
+
+    The drives' state records lie side by side in ``S``, and the threads run neighbouring
+    drives at the same time: updated in place every period, two drives' records sharing a
+    cache line would bounce it between the cores (false sharing). The copy is the thread's
+    own memory; it goes back into ``S`` when the drive ends.
+    """
+    own = _own_state(S, i)
+    status, k_end = run_one(
+        _drive_params(P, i), own, 0, n_steps, n_win, log_out, log_every, metrics, scratch,
+        lc_bound, lc_n,
+    )  # fmt: skip
+    _give_back(S, i, own)
+    return status, k_end
+
+
+@njit(cache=True)
+def run_one(P, S, i, n_steps, n_win, log_out, log_every, metrics, scratch, lc_bound=0.0, lc_n=0):
     """Run drive ``i`` at full rate, ``scratch.shape[0] - 1`` periods per engine call, folding
     each chunk into the metrics and copying its decimated rows into ``log_out``.
 

@@ -25,16 +25,15 @@ from numba import njit
 from imdrive.kernels import compensator, ifoc, inverter, machine, model, sensors
 from imdrive.kernels.bridge import switching_period  # noqa: F401  (re-exported: old path)
 from imdrive.kernels.estimators import afo, ekf, mras, reactive_mras, registry  # noqa: F401  (the package's estimators register on import)
-from imdrive.kernels.estimators.registry import ESTIMATOR_INPUT
-from imdrive.kernels.inverter import INV_SWITCHING, MAX_EVENTS, MAX_SEGMENTS
-from imdrive.kernels.machine import PLANT_STATE
+from imdrive.kernels.inverter import INV_SWITCHING, MAX_EVENTS  # noqa: F401  (MAX_EVENTS: old path)
 from imdrive.kernels.records import b1, c16, f8, i8, record_dtype
 from imdrive.kernels.stages import (
-    PERIOD,
+    NO_ESTIMATE,
     S_CURRENT,
     S_NAN,
     S_OK,
     S_SPEED,
+    SCRATCH,
     check,
     control,
     estimate,
@@ -164,9 +163,14 @@ DriveParams.__getattr__ = _old_estimator_field
 DriveState.__getattr__ = _old_estimator_field
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
     """Simulate drive ``i`` of ``P``/``S`` for ``n_steps`` control periods (``S`` in place).
+
+    Compiled with numpy's error model: a division by zero in the loop gives inf or NaN, which
+    the divergence check reports (``S_NAN``), instead of raising; the exception branches would
+    keep numba from pruning the reference counts of the stages' arguments (atomic, every
+    period).
 
     Parameters
     ----------
@@ -222,46 +226,40 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
     Vdc_meas = psen.vdc_gain * pinv.Vdc
     n_rows = log.shape[0]
 
-    work = np.empty(5, dtype=PLANT_STATE)  # RK4 scratch
-    seg = np.empty((3, MAX_SEGMENTS))  # the average model's segments: dt, v_alpha, v_beta
-    ev = np.empty((3, MAX_EVENTS))
-    no_trace = np.empty((0, 3))
-    # the period's signals and the estimator's input; the arrays stay in use in the loop
-    # (a record of a local array does not keep it alive, see kernels/records.py)
-    period = np.zeros(1, dtype=PERIOD)
-    est_in = np.zeros(1, dtype=ESTIMATOR_INPUT)
+    # the loop's scratch; the array stays in use in the loop (a record of a local array does
+    # not keep it alive, see kernels/records.py)
+    scratch = np.zeros(1, dtype=SCRATCH)
+    i_next_ab = 0j  # the plant's current after the last period (check), the next sample's
+    have_next = False
 
     for k in range(n_steps + 1 if final else n_steps):
-        pr = period[0]
-        pr.t = (k0 + k) * Ts
-        pr.k = k0 + k
-        profiles(pp, pt, pv, pn, pr, foc)
-        measure(pp, psen, x, pr)
-        pr.theta_k = ctl.theta_e  # the controller's d-axis angle at this sample
-        pr.w_r_hat = 0.0
-        pr.e_dq0 = 0j
+        t = (k0 + k) * Ts
+        prof = profiles(pp, pt, pv, pn, t, foc)
+        smpl = measure(pp, psen, x, ctl, prof, t, k0 + k, i_next_ab, have_next)
+        estm = NO_ESTIMATE
         if foc:
-            estimate(
-                sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, est_in[0], pr,
-                Vdc_meas,
+            estm = estimate(
+                sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc_meas,
             )  # fmt: skip
-        control(sim, pc, x, mdl, ctl, smp, pr, foc)
-        modulate(pinv, pc, smp, pr, switching, Vdc_meas, seg, Ts)
+        cmd = control(sim, pc, x, mdl, ctl, smp, prof, smpl, estm, foc)
+        mod = modulate(pinv, pc, smp, smpl, cmd, switching, Vdc_meas, scratch[0], Ts)
 
         logged = log_every > 0 and k % log_every == 0 and k // log_every < n_rows
         if logged:
-            log_row(log[k // log_every], pp, pe, x, mdl, ctl, est, cmp, pr)
+            row = log[k // log_every]
+            log_row(row, pp, pe, x, mdl, ctl, est, cmp, prof, smpl, estm, cmd, mod.v_app_ab)
         if k == n_steps:
             break
 
-        plant(
-            pinv, sinv, pp, x, pr, switching, Vdc_meas, nsub, work, ev, no_trace, seg, Ts,
+        v_app_ab = plant(
+            pinv, sinv, pp, x, prof, mod, switching, Vdc_meas, nsub, scratch[0], Ts,
         )  # fmt: skip
         if switching and logged:  # the true average, known only now
-            log[k // log_every].v_alpha = pr.v_app_ab.real
-            log[k // log_every].v_beta = pr.v_app_ab.imag
+            log[k // log_every].v_alpha = v_app_ab.real
+            log[k // log_every].v_beta = v_app_ab.imag
 
-        status = check(sim, pp, x, smp, mdl, ctl, est, cmp, pr)
+        status, i_next_ab = check(sim, pp, x, smp, mdl, ctl, est, cmp, estm)
+        have_next = True
         if status != S_OK:
             return status, k + 1
     return S_OK, n_steps

@@ -131,7 +131,7 @@ LOG_FIELDS = (
 )
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def currents_from_fluxes(psi_s_alpha, psi_s_beta, psi_r_alpha, psi_r_beta, L1, L2, M):
     """Stator and rotor currents from the flux linkages, A.
 
@@ -145,7 +145,7 @@ def currents_from_fluxes(psi_s_alpha, psi_s_beta, psi_r_alpha, psi_r_beta, L1, L
     return i_s_alpha, i_s_beta, i_r_alpha, i_r_beta
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def plant_currents(p, psi_s_alpha, psi_s_beta, psi_r_alpha, psi_r_beta):
     """Stator and rotor currents of the plant (linear or saturated), A."""
     i_s_alpha, i_s_beta, i_r_alpha, i_r_beta, _ = plant_currents_m(
@@ -154,7 +154,7 @@ def plant_currents(p, psi_s_alpha, psi_s_beta, psi_r_alpha, psi_r_beta):
     return i_s_alpha, i_s_beta, i_r_alpha, i_r_beta
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def plant_currents_m(p, psi_s_alpha, psi_s_beta, psi_r_alpha, psi_r_beta, m0):
     """:func:`plant_currents` and ``|psi_m|`` (0 when linear), from a start ``m0`` for the
     saturated solve (``m0 < 0``: the default start)."""
@@ -168,7 +168,7 @@ def plant_currents_m(p, psi_s_alpha, psi_s_beta, psi_r_alpha, psi_r_beta, m0):
     return i_s_alpha, i_s_beta, i_r_alpha, i_r_beta, 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def stator_current_m(p, x, m0):
     """:func:`stator_current` and ``|psi_m|`` from the start ``m0`` of the saturated solve."""
     i_s_alpha, i_s_beta, _, _, m = plant_currents_m(
@@ -177,7 +177,7 @@ def stator_current_m(p, x, m0):
     return i_s_alpha, i_s_beta, m
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def stator_current(p, x):
     """Stator current ``(i_s_alpha, i_s_beta)`` of plant state ``x``, A."""
     i_s_alpha, i_s_beta, _, _ = plant_currents(

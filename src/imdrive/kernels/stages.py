@@ -15,16 +15,20 @@
 6. :func:`plant` -- the plant integrated over the period (segments or the switching bridge);
 7. :func:`check` -- divergence.
 
-What one stage hands the next lives in a :data:`PERIOD` record (the period's signals, SI
-units, space vectors complex in the stationary frame ``_ab`` or the controller's ``_dq``).
-Stored part by part from floats, the values are exactly those of the one-function loop they
-replace, so every result is bit for bit the same.
+What one stage hands the next is a named tuple of the period's signals (:class:`Profiles`,
+:class:`Sample`, :class:`Estimate`, :class:`Command`, :class:`Modulation`; SI units, space
+vectors complex in the stationary frame ``_ab`` or the controller's ``_dq``). A named tuple is
+a value: numba keeps its fields in registers across the inlined stages, as the one-function
+loop kept its local variables (a record in memory would be stored and loaded again by every
+stage). The values are exactly those of the one-function loop the stages replace, so every
+result is bit for bit the same.
 """
 
 from __future__ import annotations
 
 import cmath
 import math
+from typing import NamedTuple
 
 from numba import njit
 
@@ -37,7 +41,12 @@ from imdrive.kernels.compensator import (
     injection_sine,
     log_compensator,
 )
-from imdrive.kernels.estimators.registry import estimator_finite, estimator_log, estimator_step
+from imdrive.kernels.estimators.registry import (
+    EstimatorInput,
+    estimator_finite,
+    estimator_log,
+    estimator_step,
+)
 from imdrive.kernels.ifoc import (
     field_weakening,
     foc_step,
@@ -46,7 +55,7 @@ from imdrive.kernels.ifoc import (
     log_control,
     open_loop_voltage,
 )
-from imdrive.kernels.inverter import inverter_segments, limit_magnitude
+from imdrive.kernels.inverter import MAX_EVENTS, MAX_SEGMENTS, inverter_segments, limit_magnitude
 from imdrive.kernels.machine import integrate_segment, log_plant, stator_current
 from imdrive.kernels.profiles import (
     PR_FLUX_REF,
@@ -59,7 +68,7 @@ from imdrive.kernels.profiles import (
     PR_V_AMP,
     profile_at,
 )
-from imdrive.kernels.records import b1, c16, f8, i8, record_dtype
+from imdrive.kernels.records import f8, record_dtype
 from imdrive.kernels.sensors import measure_current
 
 S_OK = 0
@@ -67,83 +76,126 @@ S_NAN = 1
 S_CURRENT = 2
 S_SPEED = 3
 
-#: The signals of one period, handed from stage to stage.
-PERIOD = record_dtype(
+
+class Profiles(NamedTuple):
+    """The profiles a drive reads at the sample (:func:`profiles`); those it does not use are 0."""
+
+    w_imposed: float  # the imposed speed, mechanical rad/s
+    R1_base: float  # the plant's resistances before temperature, ohm
+    R2_base: float
+    T_L0: float  # load torque, N m
+    w_ref: float  # the speed reference, mechanical rad/s (field-oriented control)
+    psi_ref: float  # the rotor-flux reference, Wb (field-oriented control)
+    v_amp: float  # the open-loop voltage amplitude, V (open loop)
+    f: float  # the open-loop frequency, Hz (open loop)
+
+
+class Sample(NamedTuple):
+    """What the controller samples at ``t`` (:func:`measure`)."""
+
+    t: float  # time of the sample, s
+    k: int  # index of the sample since the start of the run
+    i_s_ab: complex  # the plant's stator current, A
+    i_meas_ab: complex  # the measured current, A
+    theta_k: float  # the controller's d-axis angle at this sample, rad
+
+
+class Estimate(NamedTuple):
+    """What :func:`estimate` hands the controller (all 0 in open loop)."""
+
+    w_r_hat: float  # the selected estimator's speed, electrical rad/s
+    e_dq0: complex  # its flux error in the controller's frame, Wb
+    i_inj: float  # the R2 compensator's injected d-axis current, A
+    v_use: float  # last period's voltage over Vdc_meas/sqrt 3
+
+
+class Command(NamedTuple):
+    """What :func:`control` computes at the sample."""
+
+    w_ref: float  # speed reference, mechanical rad/s
+    v_log_ab: complex  # the reference computed at this sample (logged), V
+    v_ref_ab: complex  # the reference that acts this period (after the delay), V
+    dv_ab: complex  # the dead-time compensation contained in v_ref_ab, V
+
+
+class Modulation(NamedTuple):
+    """The inverter's part at the sample (:func:`modulate`)."""
+
+    v_cmd_ab: complex  # what the controller commands and believes applied, V
+    v_app_ab: complex  # the period-average voltage at the terminals, V (switching: the command)
+    n_seg: int  # segments of the average model
+
+
+#: The loop's scratch memory, one record for the run. A record is handed to a stage as a
+#: pointer, without the reference count an array costs: an array argument of an inlined stage
+#: is a new reference, counted up and down (atomically) every period.
+SCRATCH = record_dtype(
     [
-        ("t", f8),  # time of the sample, s
-        ("k", i8),  # index of the sample since the start of the run
-        ("R1_base", f8),  # the plant's resistances before temperature, ohm
-        ("R2_base", f8),
-        ("T_L0", f8),  # load torque profile, N m
-        ("w_imposed", f8),  # the imposed speed profile, mechanical rad/s
-        ("w_ref_prof", f8),  # the speed reference profile, mechanical rad/s
-        ("psi_ref_prof", f8),  # the rotor-flux reference profile, Wb
-        ("v_amp_prof", f8),  # the open-loop voltage amplitude profile, V
-        ("f_prof", f8),  # the open-loop frequency profile, Hz
-        ("i_s_ab", c16),  # the plant's stator current at the sample, A
-        ("i_meas_ab", c16),  # the measured current, A
-        ("w_ref", f8),  # speed reference, mechanical rad/s
-        ("theta_k", f8),  # the controller's d-axis angle at this sample, rad
-        ("w_r_hat", f8),  # the selected estimator's speed, electrical rad/s
-        ("e_dq0", c16),  # its flux error in the controller's frame, Wb
-        ("i_inj", f8),  # the R2 compensator's injected d-axis current, A
-        ("v_use", f8),  # last period's voltage over Vdc_meas/sqrt 3
-        ("v_ref_ab", c16),  # the reference that acts this period (after the delay), V
-        ("v_log_ab", c16),  # the reference computed at this sample (logged), V
-        ("dv_ab", c16),  # the dead-time compensation contained in v_ref_ab, V
-        ("v_cmd_ab", c16),  # what the controller commands and believes applied, V
-        ("v_app_ab", c16),  # the period-average voltage at the terminals, V
-        ("n_seg", i8),  # segments of the average model
-        ("i_next_ab", c16),  # the plant's current after the period (check), A: the next
-        ("have_next", b1),  # sample's, so a saturated machine's curve is solved once a period
+        ("seg_dt", f8, (MAX_SEGMENTS,)),  # the average model's segments: durations, s
+        ("seg_va", f8, (MAX_SEGMENTS,)),  # and voltages, V
+        ("seg_vb", f8, (MAX_SEGMENTS,)),
+        ("ev", f8, (3, MAX_EVENTS)),  # the switching bridge's events: times, legs, states
+        ("no_trace", f8, (0, 3)),  # the bridge's current trace: none
     ]
 )
 
+#: The open-loop drive's :class:`Estimate`: no estimator runs.
+NO_ESTIMATE = Estimate(0.0, 0j, 0.0, 0.0)
+
 
 @njit(cache=True, inline="always")
-def profiles(pp, pt, pv, pn, pr, foc):
-    """The profiles the drive reads at ``pr.t`` into ``pr`` (the stages after it read no
-    profile array): the references of field-oriented control, or the open-loop voltage."""
-    t = pr.t
+def profiles(pp, pt, pv, pn, t, foc):
+    """The profiles the drive reads at ``t`` (the stages after it read no profile array): the
+    references of field-oriented control, or the open-loop voltage."""
+    w_imposed = 0.0
     if pp.speed_imposed:
-        pr.w_imposed = profile_at(pt, pv, pn, PR_SPEED_IMPOSED, t)
-    pr.R1_base = pp.R1 * profile_at(pt, pv, pn, PR_R1_SCALE, t)
-    pr.R2_base = pp.R2 * profile_at(pt, pv, pn, PR_R2_SCALE, t)
-    pr.T_L0 = profile_at(pt, pv, pn, PR_LOAD, t)
+        w_imposed = profile_at(pt, pv, pn, PR_SPEED_IMPOSED, t)
+    R1_base = pp.R1 * profile_at(pt, pv, pn, PR_R1_SCALE, t)
+    R2_base = pp.R2 * profile_at(pt, pv, pn, PR_R2_SCALE, t)
+    T_L0 = profile_at(pt, pv, pn, PR_LOAD, t)
+    w_ref = 0.0
+    psi_ref = 0.0
+    v_amp = 0.0
+    f_Hz = 0.0
     if foc:
-        pr.w_ref_prof = profile_at(pt, pv, pn, PR_SPEED_REF, t)
-        pr.psi_ref_prof = profile_at(pt, pv, pn, PR_FLUX_REF, t)
+        w_ref = profile_at(pt, pv, pn, PR_SPEED_REF, t)
+        psi_ref = profile_at(pt, pv, pn, PR_FLUX_REF, t)
     else:
-        pr.v_amp_prof = profile_at(pt, pv, pn, PR_V_AMP, t)
-        pr.f_prof = profile_at(pt, pv, pn, PR_FREQ, t)
+        v_amp = profile_at(pt, pv, pn, PR_V_AMP, t)
+        f_Hz = profile_at(pt, pv, pn, PR_FREQ, t)
+    return Profiles(w_imposed, R1_base, R2_base, T_L0, w_ref, psi_ref, v_amp, f_Hz)
 
 
 @njit(cache=True, inline="always")
-def measure(pp, psen, x, pr):
-    """The plant's current and the current sensors at ``pr.t`` (fills ``pr``)."""
+def measure(pp, psen, x, ctl, prof, t, k, i_next_ab, have_next):
+    """The plant's current and the current sensors at ``t``: the :class:`Sample`.
+
+    ``i_next_ab`` is the current :func:`check` computed from this same state after the last
+    period (``have_next``), so a saturated machine's curve is solved once a period.
+    """
     if pp.speed_imposed:
-        x.w_m = pr.w_imposed
-    if pr.have_next:  # the current the last check computed from this same state
-        i_s_alpha = pr.i_next_ab.real
-        i_s_beta = pr.i_next_ab.imag
+        x.w_m = prof.w_imposed
+    if have_next:
+        i_s_alpha = i_next_ab.real
+        i_s_beta = i_next_ab.imag
     else:
         i_s_alpha, i_s_beta = stator_current(pp, x)
-    pr.i_s_ab = complex(i_s_alpha, i_s_beta)
-    i_meas_alpha, i_meas_beta = measure_current(psen, i_s_alpha, i_s_beta, pr.k)
-    pr.i_meas_ab = complex(i_meas_alpha, i_meas_beta)
+    i_meas_alpha, i_meas_beta = measure_current(psen, i_s_alpha, i_s_beta, k)
+    return Sample(
+        t, k, complex(i_s_alpha, i_s_beta), complex(i_meas_alpha, i_meas_beta), ctl.theta_e
+    )
 
 
 @njit(cache=True, inline="always")
-def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, inp, pr, Vdc_meas):
+def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc_meas):
     """The injection, the selected estimator, the detection and the R2 compensator.
 
-    Writes ``pr.w_r_hat``, ``pr.e_dq0``, ``pr.i_inj``, ``pr.v_use``; the estimator's state
-    ``est`` and the compensator's ``cmp`` in place, and the controller's model ``mdl`` where
-    they adapt it.
+    Returns the :class:`Estimate`; updates the estimator's state ``est`` and the compensator's
+    ``cmp`` in place, and the controller's model ``mdl`` where they adapt it.
     """
-    t = pr.t
+    t = smpl.t
     Ts = sim.Ts
-    pr.v_use = abs(smp.v_prev_ab) / (Vdc_meas / math.sqrt(3.0))
+    v_use = abs(smp.v_prev_ab) / (Vdc_meas / math.sqrt(3.0))
     sine = 0.0
     cosine = 0.0
     i_inj = 0.0
@@ -155,66 +207,55 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, inp, pr, Vdc_me
         a_inj = 1.0
         if pk.inj_v_hi > 0.0:  # the injection backs off near the voltage limit
             wrapped = cmp.inj_phase < ph0
-            a_inj = injection_headroom(pk, cmp, pr.v_use, ctl.fw_cut > 1e-3, wrapped)
+            a_inj = injection_headroom(pk, cmp, v_use, ctl.fw_cut > 1e-3, wrapped)
         i_inj = a_inj * pk.inj_amp * sine
-    pr.i_inj = i_inj
-    w_ref = pr.w_ref_prof
+    w_ref = prof.w_ref
 
-    inp.v_ab = smp.v_prev_ab
-    inp.i_prev_ab = smp.i_prev_ab
-    inp.i_ab = pr.i_meas_ab
-    inp.theta_e = pr.theta_k
-    inp.w_e = ctl.w_e
-    inp.i_ref_dq = ctl.i_ref_dq
-    inp.w_ref = w_ref
-    inp.i_inj = i_inj
     # R1 adaptation held from the compensator's start until it first updates and whenever
     # its gating freezes it (transients)
-    inp.hold_R1 = pk.enabled and pk.gate and (t < pk.t_on or cmp.frozen != 0.0)
-    inp.Ts = Ts
-    inp.t = t
+    hold_R1 = pk.enabled and pk.gate and (t < pk.t_on or cmp.frozen != 0.0)
+    inp = EstimatorInput(
+        smp.v_prev_ab, smp.i_prev_ab, smpl.i_meas_ab, smpl.theta_k, ctl.w_e, ctl.i_ref_dq,
+        w_ref, i_inj, hold_R1, Ts, t,
+    )  # fmt: skip
     w_r_hat, e_dq0 = estimator_step(pe, mdl, est, inp)
-    pr.w_r_hat = w_r_hat
-    pr.e_dq0 = e_dq0
 
     if pk.inj_amp != 0.0:
         demodulate(pk, cmp, e_dq0, sine, cosine, ctl.w_e, Ts)
     if pk.enabled:
         if pk.gate and t >= pk.t_on:  # the compensator's gating signals
             w_fb_g = w_r_hat / pp.n_p if sim.sensorless else x.w_m
-            compensator_gate_sample(pk, cmp, w_ref, w_fb_g, ctl.i_ref_dq.imag, pr.v_use, ctl.w_e)
-        compensator_step(pk, cmp, mdl, table, e_dq0.real, t, pr.k, ctl.w_e)
+            compensator_gate_sample(pk, cmp, w_ref, w_fb_g, ctl.i_ref_dq.imag, v_use, ctl.w_e)
+        compensator_step(pk, cmp, mdl, table, e_dq0.real, t, smpl.k, ctl.w_e)
+    return Estimate(w_r_hat, e_dq0, i_inj, v_use)
 
 
 @njit(cache=True, inline="always")
-def control(sim, pc, x, mdl, ctl, smp, pr, foc):
+def control(sim, pc, x, mdl, ctl, smp, prof, smpl, estm, foc):
     """Field-oriented control (or the open-loop voltage), dead-time feed-forward, delay.
 
-    Writes ``pr.w_ref``, ``pr.v_log_ab`` (the reference of this sample), ``pr.v_ref_ab`` (the
-    one that acts this period: the last sample's with a one-period delay) and ``pr.dv_ab``
-    (the dead-time compensation it contains).
+    Returns the :class:`Command`: the reference of this sample (``v_log_ab``), the one that
+    acts this period (``v_ref_ab``: the last sample's with a one-period delay) and the
+    dead-time compensation it contains (``dv_ab``).
     """
-    t = pr.t
+    t = smpl.t
     Ts = sim.Ts
     w_ref = 0.0
-    i_meas_alpha = pr.i_meas_ab.real
-    i_meas_beta = pr.i_meas_ab.imag
+    i_meas_alpha = smpl.i_meas_ab.real
+    i_meas_beta = smpl.i_meas_ab.imag
     if foc:
-        w_ref = pr.w_ref_prof
-        psi_ref = pr.psi_ref_prof
+        w_ref = prof.w_ref
+        psi_ref = prof.psi_ref
         if pc.fw:  # field weakening above base speed (voltage feedback)
-            psi_ref *= field_weakening(pc, ctl, pr.v_use, Ts)
+            psi_ref *= field_weakening(pc, ctl, estm.v_use, Ts)
         if sim.flux_inj_amp != 0.0:  # excitation for R2 adaptation (Kubota & Matsuse 1994)
             psi_ref *= 1.0 + sim.flux_inj_amp * math.sin(2.0 * math.pi * sim.flux_inj_freq * t)
-        w_fb = pr.w_r_hat / pc.n_p if sim.sensorless else x.w_m
+        w_fb = estm.w_r_hat / pc.n_p if sim.sensorless else x.w_m
         v_ref_alpha, v_ref_beta = foc_step(
-            pc, mdl, ctl, i_meas_alpha, i_meas_beta, w_fb, w_ref, psi_ref, pr.i_inj, Ts
+            pc, mdl, ctl, i_meas_alpha, i_meas_beta, w_fb, w_ref, psi_ref, estm.i_inj, Ts
         )
     else:
-        v_amp = pr.v_amp_prof
-        f_Hz = pr.f_prof
-        v_ref_alpha, v_ref_beta = open_loop_voltage(ctl, v_amp, f_Hz, Ts)
-    pr.w_ref = w_ref
+        v_ref_alpha, v_ref_beta = open_loop_voltage(ctl, prof.v_amp, prof.f, Ts)
 
     dv_alpha = 0.0
     dv_beta = 0.0
@@ -222,7 +263,7 @@ def control(sim, pc, x, mdl, ctl, smp, pr, foc):
         dv_alpha, dv_beta = inverter_feedforward(pc, ctl, i_meas_alpha, i_meas_beta, Ts)
         v_ref_alpha += dv_alpha
         v_ref_beta += dv_beta
-    pr.v_log_ab = complex(v_ref_alpha, v_ref_beta)
+    v_log_ab = complex(v_ref_alpha, v_ref_beta)
     if sim.delay > 0:  # the reference of the last sample acts now, this one next period
         held = smp.v_hold_ab
         held_dv = smp.dv_hold_ab
@@ -232,39 +273,38 @@ def control(sim, pc, x, mdl, ctl, smp, pr, foc):
         v_ref_beta = held.imag
         dv_alpha = held_dv.real
         dv_beta = held_dv.imag
-    pr.v_ref_ab = complex(v_ref_alpha, v_ref_beta)
-    pr.dv_ab = complex(dv_alpha, dv_beta)
+    return Command(w_ref, v_log_ab, complex(v_ref_alpha, v_ref_beta), complex(dv_alpha, dv_beta))
 
 
 @njit(cache=True, inline="always")
-def modulate(pinv, pc, smp, pr, switching, Vdc_meas, seg, Ts):
+def modulate(pinv, pc, smp, smpl, cmd, switching, Vdc_meas, scr, Ts):
     """The inverter's part at the sample: commanded voltage, average-model segments.
 
-    Writes ``pr.v_cmd_ab`` (what the controller commands and believes it applies),
-    ``pr.v_app_ab`` (the average model's true period average; for the switching bridge the
-    command, replaced by :func:`plant` once the period is integrated), ``pr.n_seg`` and the
-    segments (``seg``: float64[3, MAX_SEGMENTS], durations and alpha, beta voltages); stores
-    the commanded voltage less the dead-time compensation and the measured
-    current in ``smp`` for the next estimator step.
+    Returns the :class:`Modulation`: ``v_cmd_ab`` (what the controller commands and believes
+    it applies), ``v_app_ab`` (the average model's true period average; for the switching
+    bridge the command, replaced by :func:`plant` once the period is integrated) and
+    ``n_seg``; fills the segments in the :data:`SCRATCH` record ``scr``; stores the
+    commanded voltage less the dead-time compensation and the measured current in ``smp``
+    for the next estimator step.
     """
-    v_ref_alpha = pr.v_ref_ab.real
-    v_ref_beta = pr.v_ref_ab.imag
+    v_ref_alpha = cmd.v_ref_ab.real
+    v_ref_beta = cmd.v_ref_ab.imag
     if switching:
         v_cmd_alpha, v_cmd_beta = limit_magnitude(
             v_ref_alpha, v_ref_beta, Vdc_meas / math.sqrt(3.0)
         )
-        pr.v_app_ab = complex(v_cmd_alpha, v_cmd_beta)
-        pr.n_seg = 0
+        v_app_ab = complex(v_cmd_alpha, v_cmd_beta)
+        n_seg = 0
     else:
         # the DC-link sensor's gain error scales what the bridge really applies
         k_dc = pinv.Vdc / Vdc_meas
         if k_dc != 1.0:
             v_ref_alpha *= k_dc
             v_ref_beta *= k_dc
-        i_s = pr.i_s_ab
-        seg_dt = seg[0]
-        seg_va = seg[1]
-        seg_vb = seg[2]
+        i_s = smpl.i_s_ab
+        seg_dt = scr.seg_dt
+        seg_va = scr.seg_va
+        seg_vb = scr.seg_vb
         n_seg = inverter_segments(
             pinv, v_ref_alpha, v_ref_beta, i_s.real, i_s.imag, Ts, seg_dt, seg_va, seg_vb
         )
@@ -273,8 +313,7 @@ def modulate(pinv, pc, smp, pr, switching, Vdc_meas, seg, Ts):
         for s in range(n_seg):
             v_app_alpha += seg_dt[s] * seg_va[s]
             v_app_beta += seg_dt[s] * seg_vb[s]
-        pr.v_app_ab = complex(v_app_alpha / Ts, v_app_beta / Ts)
-        pr.n_seg = n_seg
+        v_app_ab = complex(v_app_alpha / Ts, v_app_beta / Ts)
         v_cmd_alpha, v_cmd_beta = limit_magnitude(
             v_ref_alpha, v_ref_beta, pinv.Vdc / math.sqrt(3.0)
         )
@@ -283,34 +322,34 @@ def modulate(pinv, pc, smp, pr, switching, Vdc_meas, seg, Ts):
         if k_dc != 1.0:
             v_cmd_alpha /= k_dc
             v_cmd_beta /= k_dc
-    pr.v_cmd_ab = complex(v_cmd_alpha, v_cmd_beta)
     # the controller knows the voltage it commanded for this period (used by the estimator);
     # the dead-time compensation is not part of it: it is meant to cancel the dead time's
     # loss, so the commanded voltage less the compensation is the controller's best estimate
     # of what reaches the terminals
     if has_feedforward(pc):
-        smp.v_prev_ab = complex(v_cmd_alpha - pr.dv_ab.real, v_cmd_beta - pr.dv_ab.imag)
+        smp.v_prev_ab = complex(v_cmd_alpha - cmd.dv_ab.real, v_cmd_beta - cmd.dv_ab.imag)
     else:
         smp.v_prev_ab = complex(v_cmd_alpha, v_cmd_beta)
-    smp.i_prev_ab = pr.i_meas_ab
+    smp.i_prev_ab = smpl.i_meas_ab
+    return Modulation(complex(v_cmd_alpha, v_cmd_beta), v_app_ab, n_seg)
 
 
 @njit(cache=True, inline="always")
-def log_row(row, pp, pe, x, mdl, ctl, est, cmp, pr):
+def log_row(row, pp, pe, x, mdl, ctl, est, cmp, prof, smpl, estm, cmd, v_app_ab):
     """Write one log row: every block's fields at this sample."""
-    row.time = pr.t
-    i_s = pr.i_s_ab
-    log_plant(row, pp, x, i_s.real, i_s.imag, pr.T_L0, pr.R1_base, pr.R2_base)
-    row.v_alpha = pr.v_app_ab.real
-    row.v_beta = pr.v_app_ab.imag
-    row.v_ref_alpha = pr.v_log_ab.real
-    row.v_ref_beta = pr.v_log_ab.imag
-    row.i_alpha_meas = pr.i_meas_ab.real
-    row.i_beta_meas = pr.i_meas_ab.imag
-    log_control(row, ctl, pr.w_ref, pr.theta_k)
-    row.speed_est = pr.w_r_hat / pp.n_p
-    row.e_d0 = pr.e_dq0.real
-    row.e_q0 = pr.e_dq0.imag
+    row.time = smpl.t
+    i_s = smpl.i_s_ab
+    log_plant(row, pp, x, i_s.real, i_s.imag, prof.T_L0, prof.R1_base, prof.R2_base)
+    row.v_alpha = v_app_ab.real
+    row.v_beta = v_app_ab.imag
+    row.v_ref_alpha = cmd.v_log_ab.real
+    row.v_ref_beta = cmd.v_log_ab.imag
+    row.i_alpha_meas = smpl.i_meas_ab.real
+    row.i_beta_meas = smpl.i_meas_ab.imag
+    log_control(row, ctl, cmd.w_ref, smpl.theta_k)
+    row.speed_est = estm.w_r_hat / pp.n_p
+    row.e_d0 = estm.e_dq0.real
+    row.e_q0 = estm.e_dq0.imag
     estimator_log(row, pe, est, pp.n_p)
     row.R2_hat = mdl.R2_hat
     row.R1_hat = mdl.R1_hat
@@ -318,34 +357,26 @@ def log_row(row, pp, pe, x, mdl, ctl, est, cmp, pr):
 
 
 @njit(cache=True, inline="always")
-def plant(pinv, sinv, pp, x, pr, switching, Vdc_meas, nsub, work, ev, no_trace, seg, Ts):
+def plant(pinv, sinv, pp, x, prof, mod, switching, Vdc_meas, nsub, scr, Ts):
     """Integrate the plant over the period: the average model's segments, or the switching
-    bridge between its gate events (then ``pr.v_app_ab`` becomes the true average)."""
+    bridge between its gate events (``scr``: the :data:`SCRATCH` record). Returns the period's
+    true average voltage, V (complex)."""
     if switching:
-        v_cmd = pr.v_cmd_ab
+        v_cmd = mod.v_cmd_ab
         v_app_alpha, v_app_beta = switching_period(
-            pinv,
-            sinv,
-            pp,
-            x,
-            v_cmd.real,
-            v_cmd.imag,
-            Vdc_meas,
-            pr.R1_base,
-            pr.R2_base,
-            pr.T_L0,
-            Ts,
-            nsub,
-            work,
-            ev,
-            no_trace,
-        )
-        pr.v_app_ab = complex(v_app_alpha, v_app_beta)
-    else:
-        for s in range(pr.n_seg):
-            integrate_segment(
-                pp, x, seg[1, s], seg[2, s], pr.R1_base, pr.R2_base, pr.T_L0, seg[0, s], nsub, work
-            )
+            pinv, sinv, pp, x, v_cmd.real, v_cmd.imag, Vdc_meas,
+            prof.R1_base, prof.R2_base, prof.T_L0, Ts, nsub, None, scr.ev, scr.no_trace,
+        )  # fmt: skip
+        return complex(v_app_alpha, v_app_beta)
+    seg_dt = scr.seg_dt
+    seg_va = scr.seg_va
+    seg_vb = scr.seg_vb
+    for s in range(mod.n_seg):
+        integrate_segment(
+            pp, x, seg_va[s], seg_vb[s], prof.R1_base, prof.R2_base, prof.T_L0, seg_dt[s],
+            nsub, None,
+        )  # fmt: skip
+    return mod.v_app_ab
 
 
 @njit(cache=True, inline="always")
@@ -363,23 +394,23 @@ def _controller_finite(smp, mdl, ctl, cmp):
 
 
 @njit(cache=True, inline="always")
-def check(sim, pp, x, smp, mdl, ctl, est, cmp, pr):
-    """Divergence after the period: ``S_OK`` or ``S_NAN``, ``S_CURRENT``, ``S_SPEED``.
+def check(sim, pp, x, smp, mdl, ctl, est, cmp, estm):
+    """Divergence after the period: ``(status, i_s_ab)``.
 
-    Keeps the plant's current in ``pr.i_next_ab`` for the next :func:`measure`.
+    ``status`` is ``S_OK`` or ``S_NAN``, ``S_CURRENT``, ``S_SPEED``; ``i_s_ab`` the plant's
+    current now, A (complex), which the next :func:`measure` takes.
     """
     i_s_alpha, i_s_beta = stator_current(pp, x)
-    pr.i_next_ab = complex(i_s_alpha, i_s_beta)
-    pr.have_next = True
+    i_s_ab = complex(i_s_alpha, i_s_beta)
     i_mag = math.sqrt(i_s_alpha * i_s_alpha + i_s_beta * i_s_beta)
     if not (math.isfinite(i_mag) and math.isfinite(x.w_m)):
-        return S_NAN
+        return S_NAN, i_s_ab
     if not (_controller_finite(smp, mdl, ctl, cmp) and estimator_finite(est)):
-        return S_NAN
-    if not math.isfinite(pr.w_r_hat):
-        return S_NAN
+        return S_NAN, i_s_ab
+    if not math.isfinite(estm.w_r_hat):
+        return S_NAN, i_s_ab
     if i_mag > sim.i_lim:
-        return S_CURRENT
+        return S_CURRENT, i_s_ab
     if abs(x.w_m) > sim.w_lim:
-        return S_SPEED
-    return S_OK
+        return S_SPEED, i_s_ab
+    return S_OK, i_s_ab

@@ -14,9 +14,11 @@ The contract
 ``step(p, model, s, inp) -> (w_r_hat, e_dq0)``
     ``p``: the estimator's parameter record; ``model``: the controller's machine model
     (:data:`imdrive.kernels.model.MODEL_STATE`; an estimator may adapt ``R1_hat``/``R2_hat``
-    in it); ``s``: its state record (updated in place); ``inp``: an :data:`ESTIMATOR_INPUT`
-    record (the last period's voltage, the last two current samples, the controller's angle,
-    frequency and references, the R2 compensator's injected current). Returns the electrical
+    in it); ``s``: its state record (updated in place); ``inp``: an :class:`EstimatorInput`
+    (the fields of :data:`ESTIMATOR_INPUT`, read-only: the last period's voltage, the last
+    two current samples, the controller's angle, frequency and references, the R2
+    compensator's injected current; a step written for an ``ESTIMATOR_INPUT`` record reads
+    the named tuple unchanged). Returns the electrical
     speed estimate, rad/s, and the rotor-flux error in the controller's frame, Wb (complex;
     ``0j`` if the estimator has none: the R2 compensator then sees no signal).
 ``log(row, p, s, n_p)`` (optional)
@@ -42,6 +44,7 @@ import inspect
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 from numba import types
@@ -67,6 +70,24 @@ ESTIMATOR_INPUT = record_dtype(
         ("t", f8),  # time of this sample, s
     ]
 )
+
+
+class EstimatorInput(NamedTuple):
+    """What the engine hands an estimator each period: the fields of :data:`ESTIMATOR_INPUT`,
+    in its order, as a named tuple (a value numba keeps in registers; a step reads
+    ``inp.v_ab`` etc. from either)."""
+
+    v_ab: complex
+    i_prev_ab: complex
+    i_ab: complex
+    theta_e: float
+    w_e: float
+    i_ref_dq: complex
+    w_ref: float
+    i_inj: float
+    hold_R1: bool
+    Ts: float
+    t: float
 
 
 @dataclass(frozen=True)
