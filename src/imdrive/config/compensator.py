@@ -326,6 +326,28 @@ class InjectionSettings:
     headroom_to: Annotated[
         Float, setting("headroom: voltage use where it reaches zero", gt=0.0)
     ] = 0.95
+    headroom_voltage: Annotated[
+        Float | None,
+        setting(
+            "estimation headroom: the peak voltage use per injection period (fraction of "
+            "Vdc/√3, at most headroom_from) the field weakening holds while the injection "
+            "runs, so near and above base speed the flux is lowered a few percent and the "
+            "injection keeps its full amplitude, also in field weakening "
+            "(kernels/compensator.py, headroom_weakening_input); needs control.field_weakening",
+            gt=0.0,
+            lt=1.0,
+            default_doc="unset: no lowering, and no injection in field weakening",
+        ),
+    ] = None
+    headroom_rate_per_s: Annotated[
+        Float,
+        setting(
+            "estimation headroom: integral gain of the flux factor on the peak voltage use "
+            "(sampled once per injection period: keep it below about 1/(injection period))",
+            "1/s",
+            gt=0.0,
+        ),
+    ] = 1.0
     t_on_s: Annotated[Float, setting("time the injection starts", "s", ge=0.0)] = 0.0
     compensate_filter: Annotated[
         Bool,

@@ -33,6 +33,7 @@ from imdrive.kernels.compensator import (
     compensator_gate_sample,
     compensator_step,
     demodulate,
+    headroom_weakening_input,
     injection_headroom,
     injection_sine,
     log_compensator,
@@ -87,6 +88,7 @@ PERIOD = record_dtype(
         ("e_dq0", c16),  # its flux error in the controller's frame, Wb
         ("i_inj", f8),  # the R2 compensator's injected d-axis current, A
         ("v_use", f8),  # last period's voltage over Vdc_meas/sqrt 3
+        ("v_fw", f8),  # the voltage use the field weakening sees (the injection's headroom)
         ("v_ref_ab", c16),  # the reference that acts this period (after the delay), V
         ("v_log_ab", c16),  # the reference computed at this sample (logged), V
         ("dv_ab", c16),  # the dead-time compensation contained in v_ref_ab, V
@@ -143,6 +145,7 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, inp, pr, Vdc_me
     t = pr.t
     Ts = sim.Ts
     pr.v_use = abs(smp.v_prev_ab) / (Vdc_meas / math.sqrt(3.0))
+    pr.v_fw = pr.v_use
     sine = 0.0
     cosine = 0.0
     i_inj = 0.0
@@ -154,8 +157,10 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, inp, pr, Vdc_me
         a_inj = 1.0
         if pk.inj_v_hi > 0.0:  # the injection backs off near the voltage limit
             wrapped = cmp.inj_phase < ph0
-            a_inj = injection_headroom(pk, cmp, pr.v_use, ctl.fw_cut > 1e-3, wrapped)
+            a_inj = injection_headroom(pk, cmp, pr.v_use, 1.0 - ctl.fw_cut, wrapped)
         i_inj = a_inj * pk.inj_amp * sine
+        if pk.inj_fw and cmp.v_peak_last > 0.0:  # the field weakening leaves it headroom
+            pr.v_fw = headroom_weakening_input(pk, cmp, pr.v_use)
     pr.i_inj = i_inj
     w_ref = pr.w_ref_prof
 
@@ -202,7 +207,7 @@ def control(sim, pc, x, mdl, ctl, smp, pr, foc):
         w_ref = pr.w_ref_prof
         psi_ref = pr.psi_ref_prof
         if pc.fw:  # field weakening above base speed (voltage feedback)
-            psi_ref *= field_weakening(pc, ctl, pr.v_use, Ts)
+            psi_ref *= field_weakening(pc, ctl, pr.v_fw, Ts)
         if sim.flux_inj_amp != 0.0:  # excitation for R2 adaptation (Kubota & Matsuse 1994)
             psi_ref *= 1.0 + sim.flux_inj_amp * math.sin(2.0 * math.pi * sim.flux_inj_freq * t)
         w_fb = pr.w_r_hat / pc.n_p if sim.sensorless else x.w_m

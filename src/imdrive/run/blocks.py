@@ -263,6 +263,19 @@ def _gating(sc, r) -> dict:
             raise ConfigError("injection.headroom_from", "must be < injection.headroom_to")
         out["inj_v_lo"] = inj.headroom_from
         out["inj_v_hi"] = inj.headroom_to
+    if inj.headroom_voltage is not None and r.inj_amp > 0.0:
+        fw_v = sc.control.field_weakening_voltage
+        if not sc.control.field_weakening:
+            raise ConfigError("injection.headroom_voltage", "needs control.field_weakening = true")
+        if not inj.headroom_voltage <= inj.headroom_from:
+            raise ConfigError("injection.headroom_voltage", "must be <= injection.headroom_from")
+        out |= {
+            "inj_fw": True,
+            "inj_v_peak": inj.headroom_voltage,
+            "inj_fw_rate": inj.headroom_rate_per_s,
+            "fw_v": fw_v,
+            "fw_rate": sc.control.field_weakening_rate,
+        }
     if comp.step_law == "adaptive":
         dmax = comp.drift_max_ohm if comp.drift_max_ohm is not None else 3.0 * r.G_CR
         out |= {
