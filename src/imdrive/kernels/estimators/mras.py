@@ -286,8 +286,9 @@ def mras_r1_standstill(
     controller's T2_hat) and each block's apparent resistance ``r_b = sum Re(u conj i) /
     sum |i|^2`` is ``R1`` plus the build-up's ``(M/L2) p psi . i / |i|^2``, which decays as
     ``exp(-t/T2)`` with the *plant's* T2. The ratio of two successive block differences is
-    ``q = exp(-block/T2)``, so ``T2 = -block / ln q`` is measured (the mean over the blocks); the window opens at
-    ``p.R1_dc_nT2`` (3.5) measured T2 (and not before ``p.R1_dc_settle``, one T2_hat). A
+    ``q = exp(-block/T2)``, so ``T2 = -block / ln q`` is measured (the mean over the
+    blocks); the window opens at ``p.R1_dc_nT2`` (3.5) measured T2 (and not before
+    ``p.R1_dc_settle``, one T2_hat). A
     window fixed at four T2_hat (as before) fell after the 0.5 s magnetisation whenever
     R2_hat(0) <= 0.76 R2, and the identification silently did nothing; 3.5 of the plant's
     T2 are 0.31 s on Table IV whatever R2_hat is (the build-up left, 3 %, is fitted by the
