@@ -228,6 +228,37 @@ class CompensatorSettings:
         ),
     ] = None
 
+    thermal_model: Annotated[
+        Bool,
+        setting(
+            "rotor thermal model (rotor copper losses -> first-order thermal network -> "
+            "temperature -> R̂2) that carries R̂2 while the compensator holds it and is "
+            "recalibrated by its estimate whenever R2 is observable (kernels/compensator.py, "
+            "thermal_step)"
+        ),
+    ] = False
+    thermal_time_constant_s: Annotated[
+        Float, setting("thermal model: the rotor's thermal time constant", "s", gt=0.0)
+    ] = 1200.0
+    thermal_rise_K: Annotated[
+        Float,
+        setting(
+            "thermal model: the rotor's temperature rise above ambient at the machine's rated "
+            "rotor copper losses (its thermal resistance in per-unit of the machine: "
+            "config/perunit.py; 80 K: the class B limit of IEC 60034-1)",
+            "K",
+            gt=0.0,
+        ),
+    ] = 80.0
+    thermal_alpha_per_K: Annotated[
+        Float,
+        setting(
+            "thermal model: temperature coefficient of R2 (copper 0.00393, aluminium 0.00403)",
+            "1/K",
+            gt=0.0,
+        ),
+    ] = 0.00393
+
     @model_validator(mode="after")
     def _clamps_in_order(self):
         lo, hi = self.R2_min_ohm, self.R2_max_ohm

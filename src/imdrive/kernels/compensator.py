@@ -169,6 +169,10 @@ COMPENSATOR_PARAMS = record_dtype(
         ("inj_fw_rate", f8),  # its (slow) integral gain on that peak, 1/s
         ("fw_v", f8),  # the field weakening's voltage use (control.field_weakening_voltage)
         ("fw_rate", f8),  # and its integral gain, 1/s (control.field_weakening_rate)
+        ("th_on", b1),  # rotor thermal model carries R2_hat while it is held
+        ("th_tau", f8),  # its thermal time constant, s
+        ("th_Rth", f8),  # its thermal resistance, rotor to ambient, K/W
+        ("th_alpha", f8),  # temperature coefficient of R2, 1/K
     ]
 )
 
@@ -205,6 +209,9 @@ COMPENSATOR_STATE = record_dtype(
         ("inj_scale", f8),  # estimation headroom: the amplitude's scale with the flux (0: 1)
         ("g_err_half", f8),  # adaptive step law: speed-error sum of the last half period
         ("g_cnt_half", f8),  # and its samples
+        ("live", b1),  # the last decision updated R2_hat from the detected error
+        ("th_rise", f8),  # thermal model: rotor temperature above ambient, K
+        ("th_R2_cold", f8),  # thermal model: R2 at ambient, calibrated (0: not yet), ohm
     ]
 )
 
@@ -213,6 +220,10 @@ LOG_FIELDS = (
     "e_d0_demod",  # Wb
     "comp_frozen",  # gating bit mask of the last decision (0: R2_hat updated)
     "inj_freq",  # injection frequency in use, Hz
+    "comp_live",  # 1: the last decision estimated R2_hat from the detected error; 0: held
+    # (before the compensator's start, frozen by the gating: comp_frozen says why, or its
+    # window refilling after a freeze)
+    "rotor_rise",  # thermal model: rotor temperature above ambient, K (0 without it)
 )
 
 
@@ -437,7 +448,63 @@ def compensator_update(p, s, m, table, E):
     r2 = m.R2_hat + dr
     m.R2_hat = min(max(r2, p.R2_min), p.R2_max)
     s.cr = cr
+    s.live = True
+    if p.th_on and abs(x) < THRESHOLD_1:
+        thermal_recalibrate(p, s, m)
     return cr
+
+
+@njit(cache=True)
+def thermal_recalibrate(p, s, m):
+    """The compensator's estimate recalibrates the rotor thermal model (``p.th_on``).
+
+    Called at a decision that updated R2_hat inside the first threshold (the estimate is
+    converged to within its fine band, not in its first large steps). The first such
+    decision calibrates the model's cold resistance ``R2_cold = R2_hat / (1 + alpha rise)``
+    with the temperature rise the losses gave so far (R2_hat(0) may be off by tens of %, a
+    temperature the rotor does not have); every later one sets the model's temperature from
+    the estimate, ``rise = (R2_hat / R2_cold - 1) / alpha``, so an error of the thermal
+    parameters does not accumulate while R2 is observable.
+    """
+    if s.th_R2_cold <= 0.0:
+        s.th_R2_cold = m.R2_hat / (1.0 + p.th_alpha * s.th_rise)
+    else:
+        s.th_rise = (m.R2_hat / s.th_R2_cold - 1.0) / p.th_alpha
+
+
+@njit(cache=True)
+def thermal_step(p, s, m, i_q, t, Ts):
+    """One control period of the rotor thermal model (``p.th_on``; updates ``s.th_rise`` and,
+    while the compensator holds R2_hat, ``m.R2_hat``).
+
+    First-order thermal network of the rotor (one thermal resistance and capacitance to
+    ambient), driven by the rotor copper losses the controller's model gives::
+
+        tau dtheta/dt = Rth P_r - theta,   P_r = 1.5 R2_hat (M/L2)^2 i_q^2
+        R2 = R2_cold (1 + alpha theta)      (theta above ambient)
+
+    In rotor-flux orientation the rotor current is ``-(M/L2) i_q`` (``i_q``: the measured
+    torque current in the controller's frame, A). While the compensator holds R2_hat (before
+    its start, frozen by the gating, or its window refilling) R2_hat follows the model's
+    relative change ``(1 + alpha theta_new) / (1 + alpha theta_old)``, from the last
+    estimate; while it estimates, :func:`thermal_recalibrate` sets the model's temperature
+    from the estimate. Combining a rotor-resistance estimate (where it works) with a lumped
+    thermal equivalent circuit (one thermal resistance and capacitance, where it does not) is
+    the scheme of C. Kral, T. G. Habetler, R. G. Harley, F. Pirker, G. Pascoli,
+    H. Oberguggenberger, C.-J. M. Fenz, "Rotor temperature estimation of squirrel-cage
+    induction motors by means of a combined scheme of parameter estimation and a thermal
+    equivalent model", IEEE Trans. Ind. Appl. 40(4), 2004 (there for mains-fed motors at low
+    load, here for the drive's unobservable intervals); the temperature rise at rated losses
+    is bounded by the insulation's thermal class (IEC 60034-1: 80 K class B, 105 K class F).
+    """
+    M, L1, L2, sigma_L1 = model_inductances(m)
+    k = M / L2
+    p_r = 1.5 * m.R2_hat * k * k * i_q * i_q
+    rise = s.th_rise + Ts * (p.th_Rth * p_r - s.th_rise) / p.th_tau
+    if t < p.t_on or not s.live:
+        r2 = m.R2_hat * (1.0 + p.th_alpha * rise) / (1.0 + p.th_alpha * s.th_rise)
+        m.R2_hat = min(max(r2, p.R2_min), p.R2_max)
+    s.th_rise = rise
 
 
 @njit(cache=True)
@@ -578,6 +645,7 @@ def compensator_step(p, s, m, table, e_d0, t, k, w_e=0.0):
         s.frozen = float(flags)
         if flags != 0:
             s.started = False  # no change of E is known across a frozen period
+            s.live = False
             return
     compensator_update(p, s, m, table, E)
 
@@ -602,9 +670,12 @@ def _compensator_step_sliding(p, s, m, table, k, n, w_e):
         if flags != 0:
             s.started = False
             s.halves = 0.0  # the window restarts after a frozen half
+            s.live = False
             return
     if full:
         compensator_update(p, s, m, table, E)
+    else:
+        s.live = False
 
 
 @njit(cache=True)
@@ -613,3 +684,5 @@ def log_compensator(row, s):
     row.e_d0_demod = s.demod
     row.comp_frozen = s.frozen
     row.inj_freq = s.inj_f
+    row.comp_live = 1.0 if s.live else 0.0
+    row.rotor_rise = s.th_rise

@@ -37,6 +37,7 @@ from imdrive.kernels.compensator import (
     injection_headroom,
     injection_sine,
     log_compensator,
+    thermal_step,
 )
 from imdrive.kernels.estimators.registry import estimator_finite, estimator_log, estimator_step
 from imdrive.kernels.ifoc import (
@@ -188,6 +189,8 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, inp, pr, Vdc_me
             w_fb_g = w_r_hat / pp.n_p if sim.sensorless else x.w_m
             compensator_gate_sample(pk, cmp, w_ref, w_fb_g, ctl.i_ref_dq.imag, pr.v_use, ctl.w_e)
         compensator_step(pk, cmp, mdl, table, e_dq0.real, t, pr.k, ctl.w_e)
+        if pk.th_on:  # the rotor thermal model carries R2_hat while it is held
+            thermal_step(pk, cmp, mdl, ctl.i_s_dq.imag, t, Ts)
 
 
 @njit(cache=True, inline="always")

@@ -13,7 +13,12 @@ import math
 import numpy as np
 
 from imdrive.config.compensator import decision_period_steps
-from imdrive.config.perunit import divergence_speed_rpm, resolve, speed_bandwidth_Hz
+from imdrive.config.perunit import (
+    divergence_speed_rpm,
+    resolve,
+    rotor_thermal_resistance,
+    speed_bandwidth_Hz,
+)
 from imdrive.config.profiles import Profile
 from imdrive.config.scenario import Scenario
 from imdrive.design.gains import default_current_gains, default_speed_gains
@@ -242,6 +247,7 @@ def compensator_record(sc: Scenario) -> tuple[np.ndarray, dict]:
         inj_t_on=inj.t_on_s,
         inj_hp_wc=sc.mras.wc_rad_s if inj.compensate_filter else 0.0,
         **_gating(sc, r),
+        **_thermal(sc),
     )
     derived = {
         "compensator_period_steps": n_comp,
@@ -299,6 +305,21 @@ def _gating(sc, r) -> dict:
         "gate_hold": float(comp.gate_hold_periods),
         "inj_freq2": f2 if injecting and band > 0 else 0.0,
         "inj_freq3": (r.inj_f3 if r.inj_f3 is not None and injecting and band > 0 else 0.0),
+    }
+
+
+def _thermal(sc) -> dict:
+    """The rotor thermal model's parameters (off: none); its thermal resistance in per-unit of
+    the machine's rated rotor losses (:func:`~imdrive.config.perunit.rotor_thermal_resistance`).
+    """
+    comp = sc.compensator
+    if not (comp.enabled and comp.thermal_model):
+        return {}
+    return {
+        "th_on": True,
+        "th_tau": comp.thermal_time_constant_s,
+        "th_Rth": rotor_thermal_resistance(sc),
+        "th_alpha": comp.thermal_alpha_per_K,
     }
 
 
