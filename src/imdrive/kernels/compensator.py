@@ -82,7 +82,8 @@ the period that ends
 * ``2`` the mean iq* changed from the previous period by more than ``p.gate_diq`` (A): a load
   step or removal;
 * ``4`` the voltage reached ``p.gate_v`` times the inverter's limit ``Vdc/sqrt 3``;
-* ``8`` the injection frequency was switched (the flux response to the new sinusoid settles);
+* ``8`` the injection frequency was switched (the flux response to the new sinusoid settles),
+  or, with the adaptive law, the injection started;
 * ``16`` within ``p.gate_hold`` periods after any of the above (the flux and the MRAS settle);
 * ``32`` the injection's amplitude was backed off below half (voltage headroom, field
   weakening: :func:`injection_headroom`); a smaller signal at a factor above half only slows
@@ -212,6 +213,8 @@ COMPENSATOR_STATE = record_dtype(
         ("live", b1),  # the last decision updated R2_hat from the detected error
         ("th_rise", f8),  # thermal model: rotor temperature above ambient, K
         ("th_R2_cold", f8),  # thermal model: R2 at ambient, calibrated (0: not yet), ohm
+        ("inj_running", b1),  # the injection has started
+        ("inj_new", b1),  # it started since the last decision (adaptive law: a settling period)
     ]
 )
 
@@ -236,6 +239,9 @@ def injection_sine(p, s, t, Ts):
     """
     if t < p.inj_t_on:
         return 0.0
+    if not s.inj_running:
+        s.inj_running = True
+        s.inj_new = True
     ph = s.inj_phase
     f = s.inj_f if s.inj_f > 0.0 else p.inj_freq
     nxt = ph + 2.0 * math.pi * f * Ts
@@ -607,6 +613,12 @@ def _gate_decide(p, s, w_e):
             flags |= 8
     if s.inj_back > 0.5:  # the injection backed off (voltage headroom, field weakening)
         flags |= 32
+    if p.fine and s.inj_new:
+        # the injection started in this period: its first windows held a fraction of a period
+        # and the flux's start-up transient (measured on injection-fig6: the first two
+        # decisions stepped R2_hat 0.5 % the wrong way); settle as after a frequency switch
+        s.inj_new = False
+        flags |= 8
     if flags != 0:
         s.g_hold = p.gate_hold
     elif s.g_hold > 0.0:
