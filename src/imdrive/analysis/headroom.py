@@ -1,10 +1,10 @@
 """Steady state of a field-oriented drive at a lowered flux: the cost of the estimation headroom.
 
 The injection compensator needs voltage headroom for its sinusoid near and above base speed;
-the estimation headroom (:func:`imdrive.kernels.compensator.headroom_weakening_input`) makes it
-by lowering the rotor flux while estimating. At a given speed and torque a lower flux needs
-more torque current and less flux current, so the stator current changes; this module states
-that cost in torque per ampere from the steady-state circuit.
+the estimation headroom (:func:`imdrive.kernels.compensator_range.headroom_weakening_input`)
+makes it by lowering the rotor flux while estimating. At a given speed and torque a lower flux
+needs more torque current and less flux current, so the stator current changes; this module
+states that cost in torque per ampere from the steady-state circuit.
 
 With the rotor flux ``psi`` on the d axis (correct orientation, steady state, amplitude-
 invariant space vectors, peak values) the standard relations of field orientation hold

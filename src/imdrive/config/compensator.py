@@ -233,7 +233,7 @@ class CompensatorSettings:
         setting(
             "rotor thermal model (rotor copper losses -> first-order thermal network -> "
             "temperature -> R̂2) that carries R̂2 while the compensator holds it and is "
-            "recalibrated by its estimate whenever R2 is observable (kernels/compensator.py, "
+            "recalibrated by its estimate whenever R2 is observable (kernels/compensator_range.py, "
             "thermal_step)"
         ),
     ] = False
@@ -364,7 +364,8 @@ class InjectionSettings:
             "Vdc/√3, at most headroom_from) the field weakening holds while the injection "
             "runs, so near and above base speed the flux is lowered a few percent and the "
             "injection keeps its full amplitude, also in field weakening "
-            "(kernels/compensator.py, headroom_weakening_input); needs control.field_weakening",
+            "(kernels/compensator_range.py, headroom_weakening_input); needs "
+            "control.field_weakening",
             gt=0.0,
             lt=1.0,
             default_doc="unset: no lowering, and no injection in field weakening",

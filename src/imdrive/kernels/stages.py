@@ -33,10 +33,12 @@ from imdrive.kernels.compensator import (
     compensator_gate_sample,
     compensator_step,
     demodulate,
-    headroom_weakening_input,
-    injection_headroom,
     injection_sine,
     log_compensator,
+)
+from imdrive.kernels.compensator_range import (
+    headroom_weakening_input,
+    injection_headroom,
     thermal_step,
 )
 from imdrive.kernels.estimators.registry import estimator_finite, estimator_log, estimator_step

@@ -265,6 +265,39 @@ R1_DC_MIN_WINDOW = 0.05
 
 
 @njit(cache=True)
+def _r1_window_opens(p, s, y, i2, Ts):
+    """One sample of the measured flux build-up (:func:`mras_r1_standstill`): block sums of
+    ``y = Re(u conj i)`` and ``|i|^2``; at each block's end the plant's T2 from the decay
+    ratio of the apparent resistance, and ``s.dc_open`` once ``p.R1_dc_nT2`` measured T2
+    have passed."""
+    s.dc_by += y
+    s.dc_bx += i2
+    s.dc_bt += Ts
+    if s.dc_bt < p.R1_dc_block:
+        return
+    r_b = s.dc_by / s.dc_bx
+    if s.dc_r_prev2 > 0.0:
+        # the decay ratio of the build-up over one block: exp(-block / T2)
+        d0 = s.dc_r_prev - s.dc_r_prev2
+        q = (r_b - s.dc_r_prev) / d0 if d0 != 0.0 else 0.0
+        # measured while the build-up is well above the current ripple's noise (a block
+        # moving by more than 1 %): later the differences are noise. The mean of the
+        # block-wise values: a saturating machine's build-up is not one exponential, and a
+        # single late value was a fifth of the rest
+        if 0.0 < q < 1.0 and abs(r_b - s.dc_r_prev) > 0.01 * abs(r_b):
+            s.dc_T2_sum += -s.dc_bt / math.log(q)
+            s.dc_T2_n += 1.0
+            s.dc_T2 = s.dc_T2_sum / s.dc_T2_n
+        if s.dc_T2 > 0.0 and s.dc_t >= max(p.R1_dc_nT2 * s.dc_T2, p.R1_dc_settle):
+            s.dc_open = True
+    s.dc_r_prev2 = s.dc_r_prev
+    s.dc_r_prev = r_b
+    s.dc_by = 0.0
+    s.dc_bx = 0.0
+    s.dc_bt = 0.0
+
+
+@njit(cache=True)
 def mras_r1_standstill(
     p, m, s, v_alpha, v_beta, i_prev_alpha, i_prev_beta, i_alpha, i_beta, w_ref, w_e, Ts
 ):
@@ -323,30 +356,7 @@ def mras_r1_standstill(
         u_beta = v_beta - sigma_L1 * (i_beta - i_prev_beta) / Ts
         y = u_alpha * i_m_alpha + u_beta * i_m_beta
         if not s.dc_open:  # the measured build-up: compare block by block
-            s.dc_by += y
-            s.dc_bx += i2
-            s.dc_bt += Ts
-            if s.dc_bt >= p.R1_dc_block:
-                r_b = s.dc_by / s.dc_bx
-                if s.dc_r_prev2 > 0.0:
-                    # the decay ratio of the build-up over one block: exp(-block / T2)
-                    d0 = s.dc_r_prev - s.dc_r_prev2
-                    q = (r_b - s.dc_r_prev) / d0 if d0 != 0.0 else 0.0
-                    # measured while the build-up is well above the current ripple's noise
-                    # (a block moving by more than 1 %): later the differences are noise
-                    # (the mean of the block-wise values: a saturating machine's build-up is
-                    # not one exponential, and a single late value was a fifth of the rest)
-                    if 0.0 < q < 1.0 and abs(r_b - s.dc_r_prev) > 0.01 * abs(r_b):
-                        s.dc_T2_sum += -s.dc_bt / math.log(q)
-                        s.dc_T2_n += 1.0
-                        s.dc_T2 = s.dc_T2_sum / s.dc_T2_n
-                    if s.dc_T2 > 0.0 and s.dc_t >= max(p.R1_dc_nT2 * s.dc_T2, p.R1_dc_settle):
-                        s.dc_open = True
-                s.dc_r_prev2 = s.dc_r_prev
-                s.dc_r_prev = r_b
-                s.dc_by = 0.0
-                s.dc_bx = 0.0
-                s.dc_bt = 0.0
+            _r1_window_opens(p, s, y, i2, Ts)
         else:
             g_alpha = (M / L2) * s.dlam_i_ab.real / Ts
             g_beta = (M / L2) * s.dlam_i_ab.imag / Ts
