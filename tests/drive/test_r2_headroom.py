@@ -134,3 +134,23 @@ def test_headroom_voltage_needs_field_weakening():
 
     with pytest.raises(ConfigError, match="injection.headroom_voltage"):
         compensator_record(sc)
+
+
+@pytest.mark.slow
+def test_headroom_yields_when_the_speed_is_not_held():
+    # rated motoring torque at 1.4 x base speed is beyond the machine's power (3.1 of 2.2 kW):
+    # with the flux lowered for the injection regardless, the load ran the drive away (to the
+    # divergence bound, measured); the headroom now yields to the field weakening's own rule
+    # while the speed is not held, and the drive stays in control (R2_hat held, flagged)
+    sc = Scenario.read(
+        "injection-robust",
+        [
+            "control.speed_ref_rpm={initial=0,changes=[{at=0.5,to=2400,over=2.24}]}",
+            "load.torque_Nm={initial=0,changes=[{at=3.24,to=12.418}]}",
+            "estimator.R2_ratio=0.8",
+            "simulation.t_end_s=18",
+        ],
+    )
+    res = simulate(sc)
+    assert not res.diverged and not res.lost_control
+    assert _tail(res, "comp_live_flag", 3.0).max() == 0.0  # not estimated: says so

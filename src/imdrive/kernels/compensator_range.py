@@ -77,6 +77,12 @@ def headroom_weakening_input(p, s, v_use):
     2 Hz, no overshoot. The cost of the lowered flux in torque per ampere is
     :func:`imdrive.analysis.headroom.torque_per_ampere_at_flux`.
     """
+    if int(s.frozen) & 1:
+        # the speed is not held (a transient, or a torque beyond what the lowered
+        # flux gives): the field weakening's own rule, so the estimation never costs control
+        # (measured at 1.4 x base speed, rated regenerating torque: the lowered flux let the
+        # load run the drive away)
+        return v_use
     dk = p.inj_fw_rate * (p.inj_v_peak - s.v_peak_last) + p.fw_rate * min(p.fw_v - v_use, 0.0)
     return p.fw_v - dk / p.fw_rate
 
