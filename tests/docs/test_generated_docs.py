@@ -23,7 +23,9 @@ def test_paper_reproduction_tables_are_the_rendering_of_the_csv():
 
 def test_check_fails_on_an_edited_table(tmp_path):
     page = tmp_path / "p.md"
-    page.write_text(docs.DOC_PATH.read_text(encoding="utf-8").replace("+0.23", "+0.25", 1))
+    page.write_text(
+        docs.DOC_PATH.read_text(encoding="utf-8").replace("+14.53 → −0.06", "+14.55 → −0.06", 1)
+    )
     assert docs.main(["--check", "--path", str(page)]) == 1
 
 

@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 import pytest
+from data.first_release import first_release
 
 from imdrive.cli import EXIT_LOST_CONTROL, main
 from imdrive.config.perunit import resolve
@@ -130,7 +131,7 @@ def test_no_limit_cycle_with_overestimated_R1():
 
 def _injection_at(speed, torque, ratio, t_end=16.0, extra=()):
     R2 = Scenario.read("injection-fig5").machine.R2_ohm
-    return Scenario.read(
+    return first_release(
         "injection-fig5",
         [
             f"control.speed_ref_rpm={{initial=0,changes=[{{at=0.5,to={speed},over=1.0}}]}}",
@@ -162,7 +163,7 @@ def test_convergence_with_the_stator_frequency_at_the_injection_frequency():
 
 
 def _r2_ramp(extra=()):
-    return Scenario.read(
+    return first_release(
         "injection-fig5-150rpm",
         [
             "estimator.R2_ohm=0.816",
@@ -202,7 +203,7 @@ def test_online_R1_removes_the_R2_bias_of_an_R1_error():
     R1 = Scenario.read("injection-fig5-150rpm").machine.R1_ohm
 
     def run(extra):
-        sc = Scenario.read(
+        sc = first_release(
             "injection-fig5-150rpm",
             [f"estimator.R1_ohm={0.9 * R1}", "simulation.t_end_s=16", *extra],
         )
@@ -221,7 +222,7 @@ def test_thermal_model_at_150_rpm_speed_error_under_1_rpm():
     """R1 and R2 heat together (+13-15 % in 40 s, thermal time constants shortened to 15 s)."""
 
     def run(extra):
-        sc = Scenario.read(
+        sc = first_release(
             "injection-fig5-150rpm",
             [
                 "estimator.R2_ohm=0.816",
@@ -249,7 +250,7 @@ def test_thermal_model_at_150_rpm_speed_error_under_1_rpm():
 def test_R2_hat_holds_through_a_speed_step_a_load_cycle_and_a_fast_ramp():
     """Converged at 1000 rpm, then 1000 -> 500 rpm step (10 s), rated load removed (13 s) and
     re-applied (16 s), 500 -> 1000 rpm in 0.5 s (19 s). Ungated, R2_hat left by 21-30 %."""
-    sc = Scenario.read(
+    sc = first_release(
         "injection-fig5",
         [
             "control.speed_ref_rpm={initial=0,changes=[{at=0.5,to=1000,over=1.0},"
@@ -280,7 +281,7 @@ def test_field_weakening_holds_the_voltage_and_freezes_the_compensator():
     limit, the injection is off and R2_hat is held (frozen, flag 32)."""
 
     def run(extra):
-        sc = Scenario.read(
+        sc = first_release(
             "injection-fig5",
             [
                 "control.speed_ref_rpm={initial=0,changes=[{at=0.5,to=1000,over=1.0},"

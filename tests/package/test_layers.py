@@ -112,7 +112,7 @@ NUMBA_ALLOWED = ("kernels", "_cache")
 #: order inside a package: a module may import only siblings listed before it
 INTRA = {
     "fuzzy": ("tables", "inference", "fit"),
-    "analysis": ("circuit", "foc", "figures", "nameplate", "commissioning"),
+    "analysis": ("circuit", "foc", "figures", "nameplate", "commissioning", "headroom"),
 }
 
 MAX_LEVELS = 6

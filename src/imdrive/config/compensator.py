@@ -228,6 +228,37 @@ class CompensatorSettings:
         ),
     ] = None
 
+    thermal_model: Annotated[
+        Bool,
+        setting(
+            "rotor thermal model (rotor copper losses -> first-order thermal network -> "
+            "temperature -> R̂2) that carries R̂2 while the compensator holds it and is "
+            "recalibrated by its estimate whenever R2 is observable (kernels/compensator_range.py, "
+            "thermal_step)"
+        ),
+    ] = False
+    thermal_time_constant_s: Annotated[
+        Float, setting("thermal model: the rotor's thermal time constant", "s", gt=0.0)
+    ] = 1200.0
+    thermal_rise_K: Annotated[
+        Float,
+        setting(
+            "thermal model: the rotor's temperature rise above ambient at the machine's rated "
+            "rotor copper losses (its thermal resistance in per-unit of the machine: "
+            "config/perunit.py; 80 K: the class B limit of IEC 60034-1)",
+            "K",
+            gt=0.0,
+        ),
+    ] = 80.0
+    thermal_alpha_per_K: Annotated[
+        Float,
+        setting(
+            "thermal model: temperature coefficient of R2 (copper 0.00393, aluminium 0.00403)",
+            "1/K",
+            gt=0.0,
+        ),
+    ] = 0.00393
+
     @model_validator(mode="after")
     def _clamps_in_order(self):
         lo, hi = self.R2_min_ohm, self.R2_max_ohm
@@ -326,6 +357,29 @@ class InjectionSettings:
     headroom_to: Annotated[
         Float, setting("headroom: voltage use where it reaches zero", gt=0.0)
     ] = 0.95
+    headroom_voltage: Annotated[
+        Float | None,
+        setting(
+            "estimation headroom: the peak voltage use per injection period (fraction of "
+            "Vdc/√3, at most headroom_from) the field weakening holds while the injection "
+            "runs, so near and above base speed the flux is lowered a few percent and the "
+            "injection keeps its full amplitude, also in field weakening "
+            "(kernels/compensator_range.py, headroom_weakening_input); needs "
+            "control.field_weakening",
+            gt=0.0,
+            lt=1.0,
+            default_doc="unset: no lowering, and no injection in field weakening",
+        ),
+    ] = None
+    headroom_rate_per_s: Annotated[
+        Float,
+        setting(
+            "estimation headroom: integral gain of the flux factor on the peak voltage use "
+            "(sampled once per injection period: keep it below about 1/(injection period))",
+            "1/s",
+            gt=0.0,
+        ),
+    ] = 1.0
     t_on_s: Annotated[Float, setting("time the injection starts", "s", ge=0.0)] = 0.0
     compensate_filter: Annotated[
         Bool,

@@ -315,7 +315,8 @@ _WB = ("Wb", 1.0)
 @estimator_settings(
     "mras",
     "mras",
-    log_units={f: _WB for f in ("lam_v_alpha", "lam_v_beta", "lam_i_alpha", "lam_i_beta")},
+    log_units={f: _WB for f in ("lam_v_alpha", "lam_v_beta", "lam_i_alpha", "lam_i_beta")}
+    | {"R1_id_status": ("code", 1.0)},
     flux_error=True,
     description="Schauder's MRAS speed estimator",
 )
@@ -379,8 +380,9 @@ class MrasSettings:
         Bool,
         setting(
             "standstill R1 identification: while the speed reference is zero and the flux "
-            "current flows, R̂1 = Σ v·i / Σ |i|² over the part after four rotor time constants, "
-            "applied when the reference leaves zero (kernels/estimators/mras.py); exact on "
+            "current flows, R̂1 = Σ v·i / Σ |i|² over the part after the measured flux build-up, "
+            "applied when the reference leaves zero, log column R1_id_status 1 identified, 2 "
+            "could not (kernels/estimators/mras.py); exact on "
             "the average inverter, biased by an uncompensated dead-time voltage (1.9 R1 on "
             "sensorless-realistic): leave it off there"
         ),
@@ -424,8 +426,11 @@ class MrasSettings:
             R1_max=2.0 * ctx.R1_hat,
             psi2_norm=ctx.psi0 * ctx.psi0 if normalise else 0.0,
             R1_dc=self.R1_standstill,
-            # the flux build-up: four rotor time constants of the controller's model
-            R1_dc_settle=4.0 * ctx.L2_hat / ctx.R2_hat,
+            # the window opens 3.5 rotor time constants, measured on the flux build-up
+            # (blocks of a quarter of the controller's T2_hat), into the run
+            R1_dc_settle=ctx.L2_hat / ctx.R2_hat,
+            R1_dc_block=0.25 * ctx.L2_hat / ctx.R2_hat,
+            R1_dc_nT2=3.5,
         )
         src = {
             "mras_K1": "mras.K1" if self.K1 is not None else "mras.bandwidth_Hz",

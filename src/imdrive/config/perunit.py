@@ -18,6 +18,8 @@ per-unit key                                SI value
 ``compensator.gate_speed_pu``               ``pu x`` the rated slip speed, rpm
 ``compensator.gate_iq_pu``                  ``pu x machine.rated_current_A``, A
 ``inverter.Vdc_V`` unset                    ``sqrt(2) x rated line voltage`` (the scenario)
+``compensator.thermal_rise_K``              rotor thermal resistance ``rise / P_r,rated``,
+                                            K/W (:func:`rotor_thermal_resistance`)
 ==========================================  ===============================================
 
 ``psi_rated`` is :attr:`~imdrive.config.machine.MachineParams.rated_flux_Wb` (the no-load
@@ -378,3 +380,31 @@ def divergence_speed_rpm(sc) -> float:
         return given
     m = sc.machine
     return 20000.0 * (60.0 * m.rated_frequency_Hz / m.pole_pairs) / 1800.0
+
+
+def rated_rotor_loss_W(sc) -> float:
+    """The machine's rotor copper losses at its rated point, W: the slip times the air-gap
+    power, ``s T_rated w_sync`` (the rated point of :func:`imdrive.config.rated.rated_point`).
+
+    Raises
+    ------
+    ConfigError
+        The machine has no rated point (naming ``compensator.thermal_model``).
+    """
+    from imdrive.config.machine import rated_point
+
+    try:
+        rp = rated_point(sc.machine)
+    except ConfigError as exc:
+        raise ConfigError(
+            "compensator.thermal_model", f"needs the machine's rated point ({exc})"
+        ) from exc
+    w_sync = rp.synchronous_speed_rpm * math.pi / 30.0
+    return rp.slip * rp.torque_Nm * w_sync
+
+
+def rotor_thermal_resistance(sc) -> float:
+    """The rotor thermal model's thermal resistance to ambient, K/W: the temperature rise
+    ``compensator.thermal_rise_K`` at the rated rotor losses (:func:`rated_rotor_loss_W`), so
+    the same rise (an insulation class of IEC 60034-1) suits every machine."""
+    return sc.compensator.thermal_rise_K / rated_rotor_loss_W(sc)

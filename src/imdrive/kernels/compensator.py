@@ -82,11 +82,12 @@ the period that ends
 * ``2`` the mean iq* changed from the previous period by more than ``p.gate_diq`` (A): a load
   step or removal;
 * ``4`` the voltage reached ``p.gate_v`` times the inverter's limit ``Vdc/sqrt 3``;
-* ``8`` the injection frequency was switched (the flux response to the new sinusoid settles);
+* ``8`` the injection frequency was switched (the flux response to the new sinusoid settles),
+  or, with the adaptive law, the injection started;
 * ``16`` within ``p.gate_hold`` periods after any of the above (the flux and the MRAS settle);
 * ``32`` the injection's amplitude was backed off below half (voltage headroom, field
-  weakening: :func:`injection_headroom`); a smaller signal at a factor above half only slows
-  the adaptation.
+  weakening: :func:`imdrive.kernels.compensator_range.injection_headroom`); a smaller
+  signal at a factor above half only slows the adaptation.
 
 The blind band: in the stationary frame the injected flux oscillation appears at
 ``|f_e| +- f_inj``; when ``|f_e|`` is near ``f_inj`` the lower side band is near DC, where
@@ -124,9 +125,14 @@ import math
 
 from numba import njit
 
+from imdrive.kernels.compensator_range import thermal_recalibrate
 from imdrive.kernels.fuzzy import lookup
-from imdrive.kernels.model import incremental_L2
 from imdrive.kernels.records import b1, f8, record_dtype
+from imdrive.kernels.sensitivity import (  # noqa: F401  (in_phase_sensitivity: old path)
+    in_phase_sensitivity,
+    injection_sensitivity_ratio,
+    saturation_sensitivity_ratio,
+)
 
 #: The quantiser's first threshold on the scaled E (level 1 starts here; Table III's axes).
 THRESHOLD_1 = 1.0
@@ -164,6 +170,15 @@ COMPENSATOR_PARAMS = record_dtype(
         ("inj_hp_wc", f8),  # MRAS filter cut-off the detection compensates, rad/s (0: plain)
         ("drift_fmin", f8),  # adaptive law: drift integrated only above this |f_e|, Hz (gated)
         ("inj_freq3", f8),  # a third injection frequency for the schedule, Hz (0: two only)
+        ("inj_fw", b1),  # estimation headroom: the field weakening leaves the injection room
+        ("inj_v_peak", f8),  # peak voltage use per injection period it holds while injecting
+        ("inj_fw_rate", f8),  # its (slow) integral gain on that peak, 1/s
+        ("fw_v", f8),  # the field weakening's voltage use (control.field_weakening_voltage)
+        ("fw_rate", f8),  # and its integral gain, 1/s (control.field_weakening_rate)
+        ("th_on", b1),  # rotor thermal model carries R2_hat while it is held
+        ("th_tau", f8),  # its thermal time constant, s
+        ("th_Rth", f8),  # its thermal resistance, rotor to ambient, K/W
+        ("th_alpha", f8),  # temperature coefficient of R2, 1/K
     ]
 )
 
@@ -196,6 +211,15 @@ COMPENSATOR_STATE = record_dtype(
         ("g_we", f8),  # sum of the controller's stator frequency over the period, rad/s
         ("fe_mean", f8),  # |stator frequency| over the last decision period, Hz
         ("inj_f_prev", f8),  # frequency in use at the last decision, Hz (three-frequency mode)
+        ("v_peak_last", f8),  # peak voltage use over the last whole injection period (0: none)
+        ("inj_scale", f8),  # estimation headroom: the amplitude's scale with the flux (0: 1)
+        ("g_err_half", f8),  # adaptive step law: speed-error sum of the last half period
+        ("g_cnt_half", f8),  # and its samples
+        ("live", b1),  # the last decision updated R2_hat from the detected error
+        ("th_rise", f8),  # thermal model: rotor temperature above ambient, K
+        ("th_R2_cold", f8),  # thermal model: R2 at ambient, calibrated (0: not yet), ohm
+        ("inj_running", b1),  # the injection has started
+        ("inj_new", b1),  # it started since the last decision (adaptive law: a settling period)
     ]
 )
 
@@ -204,6 +228,10 @@ LOG_FIELDS = (
     "e_d0_demod",  # Wb
     "comp_frozen",  # gating bit mask of the last decision (0: R2_hat updated)
     "inj_freq",  # injection frequency in use, Hz
+    "comp_live",  # 1: the last decision estimated R2_hat from the detected error; 0: held
+    # (before the compensator's start, frozen by the gating: comp_frozen says why, or its
+    # window refilling after a freeze)
+    "rotor_rise",  # thermal model: rotor temperature above ambient, K (0 without it)
 )
 
 
@@ -216,36 +244,14 @@ def injection_sine(p, s, t, Ts):
     """
     if t < p.inj_t_on:
         return 0.0
+    if not s.inj_running:
+        s.inj_running = True
+        s.inj_new = True
     ph = s.inj_phase
     f = s.inj_f if s.inj_f > 0.0 else p.inj_freq
     nxt = ph + 2.0 * math.pi * f * Ts
     s.inj_phase = nxt - 2.0 * math.pi if nxt >= 2.0 * math.pi else nxt
     return math.sin(ph)
-
-
-@njit(cache=True)
-def injection_headroom(p, s, v_use, weakening, wrapped):
-    """Voltage headroom of the injection (``p.inj_v_hi > 0``; updates ``s.inj_back``).
-
-    Tracks the peak voltage use ``v_use`` (fraction of ``Vdc_meas/sqrt 3``) over each
-    injection period; at the period's end (``wrapped``: the phase restarted this sample) the
-    amplitude factor for the next period is
-
-        a = clip((inj_v_hi - v_peak) / (inj_v_hi - inj_v_lo), 0, 1),   0 in field weakening
-
-    held over the whole period, so the detection still sees whole periods of one sinusoid.
-    The injection's own voltage ripple counts in ``v_peak``, so it backs off before the
-    current controllers saturate. Returns the factor in use.
-    """
-    s.v_peak = max(s.v_peak, v_use)
-    if wrapped:
-        a = (p.inj_v_hi - s.v_peak) / (p.inj_v_hi - p.inj_v_lo)
-        a = min(max(a, 0.0), 1.0)
-        if weakening:
-            a = 0.0
-        s.inj_back = 1.0 - a
-        s.v_peak = 0.0
-    return 1.0 - s.inj_back
 
 
 @njit(cache=True)
@@ -318,59 +324,6 @@ def compensator_input(p, s, e_d0):
 
 
 @njit(cache=True)
-def in_phase_sensitivity(w_i, T2):
-    """In-phase flux response to a relative R2 error, per unit of ``M i_inj`` (dimensionless).
-
-    The rotor flux answers an injected flux current ``i sin(w_i t)`` as ``M/(1 + s T2)``; its
-    part in phase with the current is ``M i / (1 + (w_i T2)^2)``. For ``R2_hat = R2 (1 + r)``
-    (``T2_hat = T2 / (1 + r)``) the model's in-phase part differs from the plant's by
-    ``-M i r S`` to first order, with::
-
-        S = 2 (w_i T2)^2 / (1 + (w_i T2)^2)^2
-
-    (0.50 at 2 Hz, 0.29 at 4 Hz, 0.16 at 6 Hz for T2 = 87 ms): the detected signal per % of
-    R2 error falls with the injection frequency.
-    """
-    a = (w_i * T2) ** 2
-    return 2.0 * a / (1.0 + a) ** 2
-
-
-@njit(cache=True)
-def injection_sensitivity_ratio(p, s, m):
-    """``S(f_base) / S(f_in_use)`` (:func:`in_phase_sensitivity`) with the controller's T2_hat:
-    the adaptive law scales its input by it, so its loop gain does not drop when the schedule
-    moves to a higher frequency (measured at 150 rpm, -12 N m on 4 Hz: R2_hat 4 % off after
-    10 s, still converging). The injected flux variation is small: on a saturation-aware
-    model its time constant is the incremental one, ``(Ll2 + L_inc)/R2_hat``."""
-    T2 = incremental_L2(m) / m.R2_hat
-    f = s.inj_f if s.inj_f > 0.0 else p.inj_freq
-    s_now = in_phase_sensitivity(2.0 * math.pi * f, T2)
-    s_base = in_phase_sensitivity(2.0 * math.pi * p.inj_freq, T2)
-    return s_base / max(s_now, 1e-6 * s_base)
-
-
-@njit(cache=True)
-def saturation_sensitivity_ratio(p, s, m):
-    """``M S(T2) / (L_inc S(T2_inc))`` on a saturation-aware model (``m.sat_n > 0``), else 1.
-
-    The injected flux variation is small, so the plant answers it with the incremental
-    inductance ``L_inc`` and the incremental time constant ``T2_inc = (Ll2 + L_inc)/R2_hat``;
-    the in-phase signal per % of R2 error is ``L_inc i S(w_i T2_inc)`` instead of the constant
-    model's ``M i S(w_i T2)`` (:func:`in_phase_sensitivity`). The demodulated input is scaled
-    by the ratio so that the table's thresholds and the gains mean the same error as on an
-    unsaturated machine (0.41 at rated flux, 2 Hz on Table IV's machine with the default
-    curve: the dead zone would otherwise be 2.4 times wider in R2 error).
-    """
-    if m.sat_n == 0:
-        return 1.0
-    M = m.M_hat
-    w_i = 2.0 * math.pi * (s.inj_f if s.inj_f > 0.0 else p.inj_freq)
-    s_sec = M * in_phase_sensitivity(w_i, (m.Ll2_hat + M) / m.R2_hat)
-    s_inc = m.L_inc_hat * in_phase_sensitivity(w_i, incremental_L2(m) / m.R2_hat)
-    return s_sec / max(s_inc, 1e-6 * s_sec)
-
-
-@njit(cache=True)
 def compensator_update(p, s, m, table, E):
     """One compensator decision from the input ``E`` (Wb); updates ``m.R2_hat`` (MODEL_STATE).
 
@@ -385,6 +338,10 @@ def compensator_update(p, s, m, table, E):
         k = saturation_sensitivity_ratio(p, s, m)
         E *= k
         DE *= k
+    if p.inj_fw and s.inj_scale > 0.0:
+        # the same loop gain at every flux level: the amplitude follows the flux factor
+        E /= max(s.inj_scale, 0.1)
+        DE /= max(s.inj_scale, 0.1)
     if p.fine and p.demodulated and p.inj_freq > 0.0:
         # the same loop gain at every injection frequency of the schedule
         k = injection_sensitivity_ratio(p, s, m)
@@ -412,6 +369,9 @@ def compensator_update(p, s, m, table, E):
     r2 = m.R2_hat + dr
     m.R2_hat = min(max(r2, p.R2_min), p.R2_max)
     s.cr = cr
+    s.live = True
+    if p.th_on and abs(x) < THRESHOLD_1:
+        thermal_recalibrate(p, s, m)
     return cr
 
 
@@ -470,7 +430,17 @@ def _gate_decide(p, s, w_e):
     schedule (see the module docstring). Resets the period's sums; returns the mask."""
     flags = int(s.g_flags)
     if s.g_cnt > 0.0:
-        if abs(s.g_err / s.g_cnt) > p.gate_dw:
+        err, cnt = s.g_err, s.g_cnt
+        if p.fine:
+            # half periods: the speed error's mean over the whole period that ends (both
+            # halves), so the injection's own speed ripple averages out as the docstring says
+            # (over a half period it did not: at 3400 rpm and 0.4 of the rated flux, +-7 rpm
+            # of ripple held the compensator frozen)
+            err += s.g_err_half
+            cnt += s.g_cnt_half
+            s.g_err_half = s.g_err
+            s.g_cnt_half = s.g_cnt
+        if abs(err / cnt) > p.gate_dw:
             flags |= 1
         iq = s.g_iq / s.g_cnt
         if p.fine:  # half periods: compare with the same half of the previous period
@@ -505,6 +475,12 @@ def _gate_decide(p, s, w_e):
             flags |= 8
     if s.inj_back > 0.5:  # the injection backed off (voltage headroom, field weakening)
         flags |= 32
+    if p.fine and s.inj_new:
+        # the injection started in this period: its first windows held a fraction of a period
+        # and the flux's start-up transient (measured on injection-fig6: the first two
+        # decisions stepped R2_hat 0.5 % the wrong way); settle as after a frequency switch
+        s.inj_new = False
+        flags |= 8
     if flags != 0:
         s.g_hold = p.gate_hold
     elif s.g_hold > 0.0:
@@ -543,6 +519,7 @@ def compensator_step(p, s, m, table, e_d0, t, k, w_e=0.0):
         s.frozen = float(flags)
         if flags != 0:
             s.started = False  # no change of E is known across a frozen period
+            s.live = False
             return
     compensator_update(p, s, m, table, E)
 
@@ -567,9 +544,12 @@ def _compensator_step_sliding(p, s, m, table, k, n, w_e):
         if flags != 0:
             s.started = False
             s.halves = 0.0  # the window restarts after a frozen half
+            s.live = False
             return
     if full:
         compensator_update(p, s, m, table, E)
+    else:
+        s.live = False
 
 
 @njit(cache=True)
@@ -578,3 +558,5 @@ def log_compensator(row, s):
     row.e_d0_demod = s.demod
     row.comp_frozen = s.frozen
     row.inj_freq = s.inj_f
+    row.comp_live = 1.0 if s.live else 0.0
+    row.rotor_rise = s.th_rise

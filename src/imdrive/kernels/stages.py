@@ -37,9 +37,13 @@ from imdrive.kernels.compensator import (
     compensator_gate_sample,
     compensator_step,
     demodulate,
-    injection_headroom,
     injection_sine,
     log_compensator,
+)
+from imdrive.kernels.compensator_range import (
+    headroom_weakening_input,
+    injection_headroom,
+    thermal_step,
 )
 from imdrive.kernels.estimators.registry import (
     EstimatorInput,
@@ -107,6 +111,7 @@ class Estimate(NamedTuple):
     e_dq0: complex  # its flux error in the controller's frame, Wb
     i_inj: float  # the R2 compensator's injected d-axis current, A
     v_use: float  # last period's voltage over Vdc_meas/sqrt 3
+    v_fw: float  # the voltage use the field weakening sees (the injection's headroom)
 
 
 class Command(NamedTuple):
@@ -140,7 +145,7 @@ SCRATCH = record_dtype(
 )
 
 #: The open-loop drive's :class:`Estimate`: no estimator runs.
-NO_ESTIMATE = Estimate(0.0, 0j, 0.0, 0.0)
+NO_ESTIMATE = Estimate(0.0, 0j, 0.0, 0.0, 0.0)
 
 
 @njit(cache=True, inline="always")
@@ -196,6 +201,7 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc
     t = smpl.t
     Ts = sim.Ts
     v_use = abs(smp.v_prev_ab) / (Vdc_meas / math.sqrt(3.0))
+    v_fw = v_use
     sine = 0.0
     cosine = 0.0
     i_inj = 0.0
@@ -207,8 +213,10 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc
         a_inj = 1.0
         if pk.inj_v_hi > 0.0:  # the injection backs off near the voltage limit
             wrapped = cmp.inj_phase < ph0
-            a_inj = injection_headroom(pk, cmp, v_use, ctl.fw_cut > 1e-3, wrapped)
+            a_inj = injection_headroom(pk, cmp, v_use, 1.0 - ctl.fw_cut, wrapped)
         i_inj = a_inj * pk.inj_amp * sine
+        if pk.inj_fw and cmp.v_peak_last > 0.0:  # the field weakening leaves it headroom
+            v_fw = headroom_weakening_input(pk, cmp, v_use)
     w_ref = prof.w_ref
 
     # R1 adaptation held from the compensator's start until it first updates and whenever
@@ -227,7 +235,9 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc
             w_fb_g = w_r_hat / pp.n_p if sim.sensorless else x.w_m
             compensator_gate_sample(pk, cmp, w_ref, w_fb_g, ctl.i_ref_dq.imag, v_use, ctl.w_e)
         compensator_step(pk, cmp, mdl, table, e_dq0.real, t, smpl.k, ctl.w_e)
-    return Estimate(w_r_hat, e_dq0, i_inj, v_use)
+        if pk.th_on:  # the rotor thermal model carries R2_hat while it is held
+            thermal_step(pk, cmp, mdl, ctl.i_s_dq.imag, t, Ts)
+    return Estimate(w_r_hat, e_dq0, i_inj, v_use, v_fw)
 
 
 @njit(cache=True, inline="always")
@@ -247,7 +257,7 @@ def control(sim, pc, x, mdl, ctl, smp, prof, smpl, estm, foc):
         w_ref = prof.w_ref
         psi_ref = prof.psi_ref
         if pc.fw:  # field weakening above base speed (voltage feedback)
-            psi_ref *= field_weakening(pc, ctl, estm.v_use, Ts)
+            psi_ref *= field_weakening(pc, ctl, estm.v_fw, Ts)
         if sim.flux_inj_amp != 0.0:  # excitation for R2 adaptation (Kubota & Matsuse 1994)
             psi_ref *= 1.0 + sim.flux_inj_amp * math.sin(2.0 * math.pi * sim.flux_inj_freq * t)
         w_fb = estm.w_r_hat / pc.n_p if sim.sensorless else x.w_m

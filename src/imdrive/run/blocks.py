@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from imdrive.config.controller_model import inverter_error_half, magnetising_table
-from imdrive.config.perunit import Resolved
+from imdrive.config.perunit import Resolved, rotor_thermal_resistance
 from imdrive.config.profiles import Profile
 from imdrive.config.scenario import Scenario
 from imdrive.design.gains import default_current_gains, default_speed_gains
@@ -265,6 +265,7 @@ def compensator_fields(sc: Scenario, D: Resolved) -> tuple[dict, dict]:
         inj_t_on=inj.t_on_s,
         inj_hp_wc=sc.mras.wc_rad_s if inj.compensate_filter else 0.0,
         **_gating(sc, r),
+        **_thermal(sc),
     )
     derived = {
         "compensator_period_steps": n_comp,
@@ -286,6 +287,19 @@ def _gating(sc, r) -> dict:
             raise ConfigError("injection.headroom_from", "must be < injection.headroom_to")
         out["inj_v_lo"] = inj.headroom_from
         out["inj_v_hi"] = inj.headroom_to
+    if inj.headroom_voltage is not None and r.inj_amp > 0.0:
+        fw_v = sc.control.field_weakening_voltage
+        if not sc.control.field_weakening:
+            raise ConfigError("injection.headroom_voltage", "needs control.field_weakening = true")
+        if not inj.headroom_voltage <= inj.headroom_from:
+            raise ConfigError("injection.headroom_voltage", "must be <= injection.headroom_from")
+        out |= {
+            "inj_fw": True,
+            "inj_v_peak": inj.headroom_voltage,
+            "inj_fw_rate": inj.headroom_rate_per_s,
+            "fw_v": fw_v,
+            "fw_rate": sc.control.field_weakening_rate,
+        }
     if comp.step_law == "adaptive":
         dmax = comp.drift_max_ohm if comp.drift_max_ohm is not None else 3.0 * r.G_CR
         out |= {
@@ -309,6 +323,21 @@ def _gating(sc, r) -> dict:
         "gate_hold": float(comp.gate_hold_periods),
         "inj_freq2": f2 if injecting and band > 0 else 0.0,
         "inj_freq3": (r.inj_f3 if r.inj_f3 is not None and injecting and band > 0 else 0.0),
+    }
+
+
+def _thermal(sc) -> dict:
+    """The rotor thermal model's parameters (off: none); its thermal resistance in per-unit of
+    the machine's rated rotor losses (:func:`~imdrive.config.perunit.rotor_thermal_resistance`).
+    """
+    comp = sc.compensator
+    if not (comp.enabled and comp.thermal_model):
+        return {}
+    return {
+        "th_on": True,
+        "th_tau": comp.thermal_time_constant_s,
+        "th_Rth": rotor_thermal_resistance(sc),
+        "th_alpha": comp.thermal_alpha_per_K,
     }
 
 

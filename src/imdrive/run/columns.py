@@ -59,6 +59,9 @@ LOG_UNITS = {
     "e_d0_demod": ("Wb", 1.0),
     "comp_frozen": ("flags", 1.0),
     "inj_freq": ("Hz", 1.0),
+    "comp_live": ("flag", 1.0),
+    "R1_id_status": ("code", 1.0),
+    "rotor_rise": ("K", 1.0),
 }
 # column -> (log field, scale) for every column taken straight from the log
 _DIRECT = {f"{f}_{u}": (f, k) for f, (u, k) in LOG_UNITS.items()}
@@ -74,7 +77,7 @@ VECTOR_COLUMNS = (
     + (
         "speed_ref_rpm speed_est_rpm id_ref_A iq_ref_A i_d_A i_q_A R2_hat_ohm e_d0_Wb e_q0_Wb "
         "theta_e_rad lam_v_alpha_Wb lam_v_beta_Wb lam_i_alpha_Wb lam_i_beta_Wb e_d0_demod_Wb "
-        "comp_frozen_flags inj_freq_Hz R1_hat_ohm"
+        "comp_frozen_flags inj_freq_Hz R1_hat_ohm comp_live_flag rotor_rise_K R1_id_status_code"
     ).split()
 )
 

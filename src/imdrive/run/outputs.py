@@ -64,8 +64,17 @@ COLUMN_DOCS = {
     "injection compensator's input",
     "comp_frozen_flags": "why the compensator's last decision was frozen, a bit mask: 1 speed "
     "error or reference moving, 2 load (iq*) change, 4 voltage limit, 8 injection frequency "
-    "switched, 16 within the hold periods after any of these (0: R2_hat updated); see "
-    "imdrive.kernels.compensator",
+    "switched or the injection started, 16 within the hold periods after any of these, 32 the "
+    "injection backed off near the voltage limit (R2 not observable there) (0: R2_hat "
+    "updated); see imdrive.kernels.compensator",
+    "comp_live_flag": "1 when the compensator's last decision estimated R2_hat from the "
+    "detected error; 0 when R2_hat was held (before its start, frozen by the gating: "
+    "comp_frozen_flags says why, or its window refilling after a freeze)",
+    "rotor_rise_K": "the compensator's rotor thermal model: rotor temperature above ambient "
+    "(compensator.thermal_model; recalibrated by the estimate, it carries R2_hat while held)",
+    "R1_id_status_code": "standstill R1 identification (mras.R1_standstill): 0 no standstill "
+    "run yet, 1 R1_hat identified, 2 a standstill run ended before the flux build-up was over "
+    "(R1_hat left as it was)",
     "inj_freq_Hz": "injection frequency in use (the compensator moves it away from the stator "
     "frequency)",
 }

@@ -93,7 +93,9 @@ MRAS_PARAMS = record_dtype(
         ("R1_max", f8),
         ("psi2_norm", f8),  # flux^2 the gains were designed for, Wb^2 (0: no normalisation)
         ("R1_dc", b1),  # standstill R1 identification while magnetising (0: off)
-        ("R1_dc_settle", f8),  # time from the start of a standstill run to its window, s
+        ("R1_dc_settle", f8),  # shortest time from the start of a standstill run to its window, s
+        ("R1_dc_block", f8),  # block over which the measured build-up is compared, s
+        ("R1_dc_nT2", f8),  # the window opens this many measured rotor time constants in
     ]
 )
 
@@ -114,6 +116,16 @@ MRAS_STATE = record_dtype(
         ("dc_gg", f8),  # x2 x2
         ("dc_gy", f8),  # x2 y
         ("dc_n", f8),  # samples in the window
+        ("dc_by", f8),  # the present block's sum of y = Re(u conj i)
+        ("dc_bx", f8),  # and of |i|^2
+        ("dc_bt", f8),  # its duration so far, s
+        ("dc_r_prev", f8),  # apparent resistance of the last block (0: none yet), ohm
+        ("dc_r_prev2", f8),  # and of the one before (0: none yet), ohm
+        ("dc_T2", f8),  # the rotor time constant measured from the build-up's decay, s
+        ("dc_T2_sum", f8),  # sum of its block-wise measurements, s
+        ("dc_T2_n", f8),  # and their number
+        ("dc_open", b1),  # the window is open: the measured flux build-up is over
+        ("dc_status", f8),  # 0 no standstill run yet, 1 R1 identified, 2 could not identify
     ]
 )
 
@@ -127,6 +139,7 @@ LOG_FIELDS = (
     "lam_v_beta",
     "lam_i_alpha",  # adjustable model, filtered, Wb
     "lam_i_beta",
+    "R1_id_status",  # standstill R1 identification: 0 not run, 1 identified, 2 could not
 )
 
 
@@ -221,6 +234,7 @@ def log_mras(row, s, n_p):
     row.lam_v_beta = s.lam_v_ab.imag
     row.lam_i_alpha = s.lam_f_ab.real
     row.lam_i_beta = s.lam_f_ab.imag
+    row.R1_id_status = s.dc_status
 
 
 @njit(cache=True)
@@ -251,6 +265,39 @@ R1_DC_MIN_WINDOW = 0.05
 
 
 @njit(cache=True)
+def _r1_window_opens(p, s, y, i2, Ts):
+    """One sample of the measured flux build-up (:func:`mras_r1_standstill`): block sums of
+    ``y = Re(u conj i)`` and ``|i|^2``; at each block's end the plant's T2 from the decay
+    ratio of the apparent resistance, and ``s.dc_open`` once ``p.R1_dc_nT2`` measured T2
+    have passed."""
+    s.dc_by += y
+    s.dc_bx += i2
+    s.dc_bt += Ts
+    if s.dc_bt < p.R1_dc_block:
+        return
+    r_b = s.dc_by / s.dc_bx
+    if s.dc_r_prev2 > 0.0:
+        # the decay ratio of the build-up over one block: exp(-block / T2)
+        d0 = s.dc_r_prev - s.dc_r_prev2
+        q = (r_b - s.dc_r_prev) / d0 if d0 != 0.0 else 0.0
+        # measured while the build-up is well above the current ripple's noise (a block
+        # moving by more than 1 %): later the differences are noise. The mean of the
+        # block-wise values: a saturating machine's build-up is not one exponential, and a
+        # single late value was a fifth of the rest
+        if 0.0 < q < 1.0 and abs(r_b - s.dc_r_prev) > 0.01 * abs(r_b):
+            s.dc_T2_sum += -s.dc_bt / math.log(q)
+            s.dc_T2_n += 1.0
+            s.dc_T2 = s.dc_T2_sum / s.dc_T2_n
+        if s.dc_T2 > 0.0 and s.dc_t >= max(p.R1_dc_nT2 * s.dc_T2, p.R1_dc_settle):
+            s.dc_open = True
+    s.dc_r_prev2 = s.dc_r_prev
+    s.dc_r_prev = r_b
+    s.dc_by = 0.0
+    s.dc_bx = 0.0
+    s.dc_bt = 0.0
+
+
+@njit(cache=True)
 def mras_r1_standstill(
     p, m, s, v_alpha, v_beta, i_prev_alpha, i_prev_beta, i_alpha, i_beta, w_ref, w_e, Ts
 ):
@@ -267,9 +314,20 @@ def mras_r1_standstill(
     subtracting the model's build-up with k = 1: +-1.1 %).
 
     A standstill run is a stretch of periods with ``w_ref = 0``, ``|i| > 1 A`` and
-    ``|w_e| < 2 pi 0.5 Hz``; its first ``p.R1_dc_settle`` seconds (the flux build-up, a few
-    rotor time constants) are skipped, the rest is the window. When the
-    run ends (the speed reference leaves zero) and its window lasted at least
+    ``|w_e| < 2 pi 0.5 Hz``. Its window opens when the flux build-up *measured* is nearly
+    over: the run is cut into blocks of ``p.R1_dc_block`` seconds (a quarter of the
+    controller's T2_hat) and each block's apparent resistance ``r_b = sum Re(u conj i) /
+    sum |i|^2`` is ``R1`` plus the build-up's ``(M/L2) p psi . i / |i|^2``, which decays as
+    ``exp(-t/T2)`` with the *plant's* T2. The ratio of two successive block differences is
+    ``q = exp(-block/T2)``, so ``T2 = -block / ln q`` is measured (the mean over the
+    blocks); the window opens at ``p.R1_dc_nT2`` (3.5) measured T2 (and not before
+    ``p.R1_dc_settle``, one T2_hat). A
+    window fixed at four T2_hat (as before) fell after the 0.5 s magnetisation whenever
+    R2_hat(0) <= 0.76 R2, and the identification silently did nothing; 3.5 of the plant's
+    T2 are 0.31 s on Table IV whatever R2_hat is (the build-up left, 3 %, is fitted by the
+    ``k g`` term below). T2 is measured only while a block moves by more than 1 % (above the
+    current ripple's noise on a switching bridge). When the run ends (the speed reference
+    leaves zero) and its window lasted at least
     :data:`R1_DC_MIN_WINDOW`, R1_hat is the least-squares solution over the window of::
 
         Re(u conj i) = R1 |i|^2 + k Re(g conj i),   u = v - sigma L1 p i,  g = (M/L2) p lam_hat
@@ -282,6 +340,10 @@ def mras_r1_standstill(
     volts: measured on ``sensorless-realistic`` (2 us dead time, compensated for 1.6 us) R1_hat
     came out 1.9 R1. There it needs an exact dead-time compensation, or a test at two current
     levels (not implemented), and should stay off.
+
+    ``s.dc_status`` says what the last run did: 1 R1_hat identified, 2 the run ended before
+    a window of :data:`R1_DC_MIN_WINDOW` (the build-up was not over: a magnetisation too
+    short for the machine's T2), R1_hat left as it was (logged as ``R1_id_status``).
     """
     still = w_ref == 0.0 and abs(w_e) < math.pi
     i_m_alpha = 0.5 * (i_alpha + i_prev_alpha)
@@ -289,13 +351,15 @@ def mras_r1_standstill(
     i2 = i_m_alpha * i_m_alpha + i_m_beta * i_m_beta
     if still and i2 > 1.0:
         s.dc_t += Ts
-        if s.dc_t > p.R1_dc_settle:
-            M, L1, L2, sigma_L1 = model_inductances(m)
-            u_alpha = v_alpha - sigma_L1 * (i_alpha - i_prev_alpha) / Ts
-            u_beta = v_beta - sigma_L1 * (i_beta - i_prev_beta) / Ts
+        M, L1, L2, sigma_L1 = model_inductances(m)
+        u_alpha = v_alpha - sigma_L1 * (i_alpha - i_prev_alpha) / Ts
+        u_beta = v_beta - sigma_L1 * (i_beta - i_prev_beta) / Ts
+        y = u_alpha * i_m_alpha + u_beta * i_m_beta
+        if not s.dc_open:  # the measured build-up: compare block by block
+            _r1_window_opens(p, s, y, i2, Ts)
+        else:
             g_alpha = (M / L2) * s.dlam_i_ab.real / Ts
             g_beta = (M / L2) * s.dlam_i_ab.imag / Ts
-            y = u_alpha * i_m_alpha + u_beta * i_m_beta
             x1 = i2  # |i|^2, the regressor of R1
             x2 = (
                 g_alpha * i_m_alpha + g_beta * i_m_beta
@@ -317,7 +381,19 @@ def mras_r1_standstill(
         else:
             r1 = (s.dc_vi - s.dc_gi) / s.dc_ii
         m.R1_hat = min(max(r1, p.R1_min), p.R1_max)
+        s.dc_status = 1.0
+    elif s.dc_t > 0.0:  # a standstill run ended without its window: say so
+        s.dc_status = 2.0
     s.dc_t = 0.0
+    s.dc_by = 0.0
+    s.dc_bx = 0.0
+    s.dc_bt = 0.0
+    s.dc_r_prev = 0.0
+    s.dc_r_prev2 = 0.0
+    s.dc_T2 = 0.0
+    s.dc_T2_sum = 0.0
+    s.dc_T2_n = 0.0
+    s.dc_open = False
     s.dc_vi = 0.0
     s.dc_ii = 0.0
     s.dc_gi = 0.0
@@ -363,6 +439,7 @@ def log_mras_own(row, p, s, n_p):
     row.lam_v_beta = s.lam_v_ab.imag
     row.lam_i_alpha = s.lam_f_ab.real
     row.lam_i_beta = s.lam_f_ab.imag
+    row.R1_id_status = s.dc_status
 
 
 @njit(cache=True, inline="always")

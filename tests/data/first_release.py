@@ -1,0 +1,36 @@
+"""The injection presets' first-release tuning, for the tests that reproduce a finding with it.
+
+The injection presets (``injection-fig5``, ``-fig6``, their ``-150rpm`` twins) now carry the
+recommended mechanisms (adaptive step law, three frequencies, R1 estimation, field weakening
+with the estimation headroom, the rotor thermal model). A test that shows what a mechanism
+fixes starts from the tuning the presets had before: :data:`FIRST_RELEASE` restores it, and
+``tests/drive/test_first_release_tuning.py`` checks that it does, bit for bit, against the
+fingerprints the presets had then (``first_release_baseline.json``).
+"""
+
+from __future__ import annotations
+
+from imdrive.config.scenario import Scenario
+
+#: Overrides that turn an injection preset back into its first-release tuning.
+FIRST_RELEASE = {
+    "control.field_weakening": False,
+    "mras.R1_standstill": False,
+    "mras.R1_rate_per_s": 0.0,
+    "injection.frequency3_Hz": None,
+    "injection.headroom_voltage": None,
+    "injection.headroom_from": 0.85,
+    "injection.headroom_to": 0.95,
+    "compensator.step_law": "table",
+    "compensator.fine_gain": 2.5,
+    "compensator.gate_band_Hz": 1.0,
+    "compensator.gate_voltage": 0.97,
+    "compensator.thermal_model": False,
+}
+
+
+def first_release(name: str, overrides=()) -> Scenario:
+    """Injection preset ``name`` in its first-release tuning, then ``overrides`` (strings
+    ``"key=value"`` as for :meth:`Scenario.read`)."""
+    sc = Scenario.read(name).with_overrides(FIRST_RELEASE)
+    return sc.with_overrides(list(overrides)) if overrides else sc
