@@ -81,6 +81,9 @@ class Resolved:
     model_curve, model_inverter_error : bool
         Whether the controller uses ``[controller_model]``'s magnetising curve and its
         inverter-error table.
+    rotor_Rth : float
+        The rotor thermal model's thermal resistance, K/W (:func:`rotor_thermal_resistance`;
+        NaN when the model is off).
     """
 
     R1_hat: float
@@ -110,6 +113,7 @@ class Resolved:
     v_max_V: float = math.nan
     model_curve: bool = False
     model_inverter_error: bool = False
+    rotor_Rth: float = math.nan
 
 
 def _whole_periods(f: float, Ts: float) -> float:
@@ -228,6 +232,9 @@ def _resolve(sc) -> Resolved:
         v_max_V=sc.inverter.v_max_V,
         model_curve=sc.controller_model.uses_magnetising_curve,
         model_inverter_error=sc.controller_model.uses_inverter_error,
+        rotor_Rth=(
+            rotor_thermal_resistance(sc) if comp.enabled and comp.thermal_model else math.nan
+        ),
     )
     # the decision period holds whole periods of the injection frequency resolved above
     n_comp = decision_period_steps(comp, inj, sc.simulation.Ts_s, r)

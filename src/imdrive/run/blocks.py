@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from imdrive.config.controller_model import inverter_error_half, magnetising_table
-from imdrive.config.perunit import Resolved, rotor_thermal_resistance
+from imdrive.config.perunit import Resolved
 from imdrive.config.profiles import Profile
 from imdrive.config.scenario import Scenario
 from imdrive.design.gains import default_current_gains, default_speed_gains
@@ -265,7 +265,7 @@ def compensator_fields(sc: Scenario, D: Resolved) -> tuple[dict, dict]:
         inj_t_on=inj.t_on_s,
         inj_hp_wc=sc.mras.wc_rad_s if inj.compensate_filter else 0.0,
         **_gating(sc, r),
-        **_thermal(sc),
+        **_thermal(sc, D),
     )
     derived = {
         "compensator_period_steps": n_comp,
@@ -326,7 +326,7 @@ def _gating(sc, r) -> dict:
     }
 
 
-def _thermal(sc) -> dict:
+def _thermal(sc, D: Resolved) -> dict:
     """The rotor thermal model's parameters (off: none); its thermal resistance in per-unit of
     the machine's rated rotor losses (:func:`~imdrive.config.perunit.rotor_thermal_resistance`).
     """
@@ -336,7 +336,7 @@ def _thermal(sc) -> dict:
     return {
         "th_on": True,
         "th_tau": comp.thermal_time_constant_s,
-        "th_Rth": rotor_thermal_resistance(sc),
+        "th_Rth": D.rotor_Rth,
         "th_alpha": comp.thermal_alpha_per_K,
     }
 
