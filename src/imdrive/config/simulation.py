@@ -72,7 +72,7 @@ class SimulationSettings:
             "current magnitude that stops a diverging run",
             "A",
             gt=0.0,
-            default_doc="100 × the rated peak current ({divergence_current_A} A for {preset})",
+            default_doc="70 × the rated peak current ({divergence_current_A} A for {preset})",
         ),
     ] = None
     divergence_speed_rpm: Annotated[
@@ -97,9 +97,15 @@ class SimulationSettings:
         ),
     ] = None
     lost_control_s: Annotated[
-        Float,
-        setting("... for at least this long without interruption", "s", gt=0.0),
-    ] = 1.0
+        Float | None,
+        setting(
+            "... for at least this long without interruption",
+            "s",
+            gt=0.0,
+            default_doc="the machine's mechanical time constant J ω_rated / T_rated (1.00 s on "
+            "Table IV)",
+        ),
+    ] = None
 
     @model_validator(mode="after")
     def _period_fits_run(self):

@@ -13,7 +13,13 @@ import math
 import numpy as np
 
 from imdrive.config.compensator import decision_period_steps
-from imdrive.config.perunit import divergence_speed_rpm, resolve, speed_bandwidth_Hz
+from imdrive.config.perunit import (
+    current_limit_A,
+    divergence_current_A,
+    divergence_speed_rpm,
+    resolve,
+    speed_bandwidth_Hz,
+)
 from imdrive.config.profiles import Profile
 from imdrive.config.scenario import Scenario
 from imdrive.design.gains import default_current_gains, default_speed_gains
@@ -82,7 +88,7 @@ def plant_record(sc: Scenario) -> np.ndarray:
 
 def divergence_current(sc: Scenario) -> float:
     """The current beyond which a run counts as diverged, A."""
-    return sc.simulation.divergence_current_A or 100.0 * sc.machine.rated_current_A
+    return divergence_current_A(sc)
 
 
 def sim_record(sc: Scenario) -> np.ndarray:
@@ -204,8 +210,8 @@ def control_record(sc: Scenario, mh: dict, psi0: float) -> tuple[np.ndarray, dic
 
 
 def current_limit(sc: Scenario) -> float:
-    """The controller's current limit, A (default twice the rated current)."""
-    return sc.control.current_limit_A or 2.0 * sc.machine.rated_current_A
+    """The controller's current limit, A (:func:`imdrive.config.perunit.current_limit_A`)."""
+    return current_limit_A(sc)
 
 
 def compensator_period(sc: Scenario) -> int:
