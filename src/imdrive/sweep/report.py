@@ -175,7 +175,7 @@ def lost_control_note(sweep: Sweep) -> str:
         bounds |= set(here.values())
         if len(set(here.values())) > 1:
             per_axis += [
-                f"{a.name} = {v}: {b * 30 / math.pi:.3g} rpm for {t:g} s"
+                f"{a.name} = {v}: {b * 30 / math.pi:.3g} rpm for {t:.3g} s"
                 for v, (b, t) in here.items()
             ]
     if len(bounds) == 1:
