@@ -33,7 +33,7 @@ def main() -> int:
     import numba
 
     numba.set_num_threads(1)
-    from imdrive.bench.protocol import ESTIMATORS  # the configurations the bench compares
+    from imdrive.bench.protocol import ESTIMATORS, machine_values  # the bench's configurations
     from imdrive.config.scenario import Scenario
     from imdrive.run.simulate import simulate
 
@@ -41,10 +41,14 @@ def main() -> int:
     from _measured import factor_span, machine_line, span
 
     preset = "sensorless-realistic" if args.realistic else "sensorless"
-    print(machine_line())
+    machine = machine_line()
+    print(machine)
     print(f"{preset}: {args.repeat} runs each, kernel wall time, one core")
     rows = []
     for name, ov in ESTIMATORS.items():
+        values = machine_values(Scenario.read(preset).machine)  # the machine-relative placeholders
+        for key, value in values.items():
+            ov = [o.replace(key, value) for o in ov]
         sc = Scenario.read(preset, ov)
         simulate(sc)
         walls = [simulate(sc).wall_time_s for _ in range(args.repeat)]
@@ -58,7 +62,7 @@ def main() -> int:
         with open(args.csv, "w", newline="") as f:
             out = csv.writer(f)
             out.writerow(["estimator", "run", "wall_s", "simulated_s", "preset", "machine"])
-            out.writerows([*row, machine_line()] for row in rows)
+            out.writerows([*row, machine] for row in rows)
     if args.bench:
         with tempfile.TemporaryDirectory() as d:
             env = dict(os.environ, NUMBA_NUM_THREADS="2")

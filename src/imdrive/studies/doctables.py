@@ -175,5 +175,7 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
-if __name__ == "__main__":
-    raise SystemExit(main())
+if __name__ == "__main__":  # run the imported module's main: the tables register there
+    from imdrive.studies.doctables import main as _main
+
+    raise SystemExit(_main())
