@@ -22,8 +22,6 @@ per-unit key                                SI value
 ``control.current_limit_A`` unset           ``1.5 x`` the rated peak current
                                             (:func:`current_limit_A`)
 ``simulation.divergence_current_A`` unset   ``70 x`` the rated peak current
-``simulation.lost_control_s`` unset         the mechanical time constant ``J w_rated /
-                                            T_rated`` (:func:`lost_control_s`)
 ==========================================  ===============================================
 
 ``psi_rated`` is :attr:`~imdrive.config.machine.MachineParams.rated_flux_Wb` (the no-load
@@ -220,27 +218,6 @@ def lost_control_rpm(sc) -> float:
         return 0.1 * 60.0 * sc.machine.rated_frequency_Hz / sc.machine.pole_pairs
     slip_rpm = rp.synchronous_speed_rpm - rp.speed_rpm
     return max(2.0 * slip_rpm, 0.01 * rp.speed_rpm)
-
-
-def lost_control_s(sc) -> float:
-    """How long a departure must last to count as a loss of control, s:
-    ``simulation.lost_control_s``, or by default the machine's mechanical time constant
-    ``J w_rated / T_rated`` (the time rated torque takes to bring the rotor to rated speed; a
-    departure lasting longer is not a transient the speed loop is still correcting). It is
-    1.00 s on Table IV (J = 0.069 kg m^2), the value every run used before it followed the
-    machine, 0.16 s on the 2.2 kW Aalto machine and 1.0-1.4 s on the others of the library.
-    A circuit without a rated point keeps 1 s.
-    """
-    given = sc.simulation.lost_control_s
-    if given is not None:
-        return given
-    from imdrive.config.machine import rated_point
-
-    try:
-        rp = rated_point(sc.machine)
-    except ConfigError:
-        return 1.0
-    return sc.machine.J_kgm2 * rp.speed_rpm * math.pi / 30.0 / rp.torque_Nm
 
 
 #: the controller's default current limit, per-unit of the rated peak current

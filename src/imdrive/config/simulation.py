@@ -97,15 +97,9 @@ class SimulationSettings:
         ),
     ] = None
     lost_control_s: Annotated[
-        Float | None,
-        setting(
-            "... for at least this long without interruption",
-            "s",
-            gt=0.0,
-            default_doc="the machine's mechanical time constant J ω_rated / T_rated (1.00 s on "
-            "Table IV)",
-        ),
-    ] = None
+        Float,
+        setting("... for at least this long without interruption", "s", gt=0.0),
+    ] = 1.0
 
     @model_validator(mode="after")
     def _period_fits_run(self):

@@ -22,7 +22,7 @@ import math
 
 import numpy as np
 
-from imdrive.config.perunit import lost_control_rpm, lost_control_s, speed_bandwidth_Hz
+from imdrive.config.perunit import lost_control_rpm, speed_bandwidth_Hz
 
 
 def load_step_dip_rpm(J: float, k_t: float, kp: float, ki: float, step_Nm: float) -> float:
@@ -121,7 +121,7 @@ def _what_moved(res, t0: float) -> str:
     s = res.signals
     if "speed_est_rpm" not in s or "speed_ref_rpm" not in s:
         return ""
-    duration = max(lost_control_s(res.scenario), 1e-3)
+    duration = max(res.scenario.simulation.lost_control_s, 1e-3)
     m = (s["time_s"] >= t0) & (s["time_s"] <= t0 + duration)
     if not m.any():
         return ""

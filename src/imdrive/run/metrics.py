@@ -54,7 +54,7 @@ import math
 
 import numpy as np
 
-from imdrive.config.perunit import lost_control_rpm, lost_control_s
+from imdrive.config.perunit import lost_control_rpm
 from imdrive.kernels.batch import CONVERGENCE_BAND, METRICS
 from imdrive.run.columns import Metrics
 
@@ -75,9 +75,10 @@ __all__ = [
 
 def lost_control_check(scenario) -> tuple[float, float]:
     """``(bound, duration)`` of the loss-of-control check: rad/s (0: off) and s."""
+    sim = scenario.simulation
     bound = lost_control_rpm(scenario)
     on = scenario.drive.mode == "vector" and scenario.plant.speed_mode != "imposed" and bound > 0
-    return (bound * math.pi / 30.0 if on else 0.0), lost_control_s(scenario)
+    return (bound * math.pi / 30.0 if on else 0.0), sim.lost_control_s
 
 
 def lost_control_rule(scenario) -> str:
@@ -95,8 +96,7 @@ def lost_control_rule(scenario) -> str:
     )
     return (
         f"loss of control: the speed more than {lost_control_rpm(scenario):.3g} rpm from its "
-        f"reference for {lost_control_s(scenario):.3g} s or longer (simulation.lost_control_rpm:"
-        f" {how}; lost_control_s: the mechanical time constant unless set)"
+        f"reference for {sim.lost_control_s:g} s or longer (simulation.lost_control_rpm: {how})"
     )
 
 

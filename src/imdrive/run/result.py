@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from imdrive.config.perunit import lost_control_rpm, lost_control_s
+from imdrive.config.perunit import lost_control_rpm
 from imdrive.config.rated import rated_point_dict
 from imdrive.kernels.engine import S_CURRENT, S_NAN, S_OK, S_SPEED, DriveParams, DriveState
 from imdrive.kernels.machine import magnetic_energy
@@ -239,10 +239,11 @@ class SimulationResult:
         """One line saying when and how control was lost, or None."""
         if not self.lost_control:
             return None
+        sim = self.scenario.simulation
         return (
             f"lost control at t = {self.lost_control_at_s:.6g} s: the speed stayed more than "
             f"{lost_control_rpm(self.scenario):.3g} rpm from its reference for "
-            f"{lost_control_s(self.scenario):.3g} s or "
+            f"{sim.lost_control_s:g} s or "
             "longer (simulation.lost_control_rpm, lost_control_s)"
         )
 
