@@ -135,6 +135,7 @@ def test_generated_tables_are_the_rendering_of_their_data():
 
 
 def test_check_fails_on_an_edited_table(tmp_path):
+    doctables.pages()  # registers the tables
     docs = tmp_path / "docs"
     shutil.copytree(DOCS, docs)
     page = docs / "stability.md"
@@ -153,6 +154,7 @@ def test_ringing_table_is_what_the_code_computes():
     """The cheapest measurement (four linearisations) against its stored data."""
     from imdrive.studies.stability_tables import measure_ringing
 
+    doctables.pages()  # registers the tables
     stored = pd.read_csv(DOCS / doctables.TABLES["ramp-ringing"].data)
     fresh = measure_ringing()
     pd.testing.assert_frame_equal(fresh, stored, check_exact=False, rtol=1e-6)

@@ -160,8 +160,10 @@ def profile_time_notes_for(sc, m) -> list[tuple[str, str]]:
     except ConfigError:
         return out
     for (t0, v0), (t1, v1) in zip(pts, pts[1:], strict=False):
-        if t1 > t0 and m.J_kgm2 * abs(v1 - v0) * math.pi / 30.0 / (t1 - t0) > T_rated:
-            need = m.J_kgm2 * abs(v1 - v0) * math.pi / 30.0 / T_rated
+        need = m.J_kgm2 * abs(v1 - v0) * math.pi / 30.0 / T_rated
+        if not need < 1e6:  # beyond any machine: left to the checks of the derived quantities
+            break
+        if t1 > t0 and need > t1 - t0:
             out.append(
                 (
                     "control.speed_ref_rpm",

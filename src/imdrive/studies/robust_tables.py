@@ -17,7 +17,7 @@ import numpy as np
 import pandas as pd
 
 from imdrive.config.scenario import Scenario
-from imdrive.studies.doctables import DocTable, register
+from imdrive.studies.doctable import DocTable, register
 
 PRESETS = ("injection-fig5", "injection-fig5-150rpm", "injection-fig6", "injection-fig6-150rpm")
 LAWS = {"published table": (), "adaptive": ('compensator.step_law="adaptive"',)}

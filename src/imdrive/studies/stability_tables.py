@@ -19,7 +19,7 @@ import numpy as np
 import pandas as pd
 
 from imdrive.config.scenario import Scenario
-from imdrive.studies.doctables import DocTable, register
+from imdrive.studies.doctable import DocTable, register
 
 PAPER_TUNING = ("mras.wc_rad_s=5", "mras.bandwidth_Hz=40")
 LOW_SPEEDS = np.linspace(0.0, 300.0, 50)

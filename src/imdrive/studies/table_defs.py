@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 
-from imdrive.studies.doctables import DocTable, register
+from imdrive.studies.doctable import DocTable, register
 
 
 def _signed(v: float, digits: int = 2) -> str:
