@@ -171,10 +171,14 @@ def test_closed_loop_holds_the_speed_and_the_estimate(runs, case):
 @pytest.mark.parametrize("rpm, load", LOST)
 def test_low_speed_regeneration_is_outside_its_region(runs, rpm, load):
     """Measured, not wanted: at a low stator frequency in regeneration the speed estimate runs
-    away (the region of Schauder's MRAS too, which shares both models)."""
+    away (the region of Schauder's MRAS too, which shares both models). The speed swings by
+    more than 100 rpm about a reference of at most 60 rpm; at 60 and 20 rpm the estimate's mean
+    error is beyond 100 rpm too, at 10 rpm (-3 N m) the swing is about its reference (mean
+    error -7.7 rpm since the default current limit is 1.5 times the rated peak current)."""
     row = runs[(rpm, load, ())]
-    assert row.speed_ripple_rpm > 100.0  # measured 440, 343, 177 rpm over the last second
-    assert abs(row.speed_est_error_rpm) > 100.0
+    assert row.speed_ripple_rpm > 100.0  # measured 614, 357, 212 rpm over the last second
+    if rpm >= 20:
+        assert abs(row.speed_est_error_rpm) > 100.0  # measured +202, -381 rpm
 
 
 def test_ramp_lag_is_the_designed_equivalent_control_lag():

@@ -192,3 +192,24 @@ def test_sweep_report_is_a_facet_grid_with_values_and_round_labels(tmp_path):
     cells = re.findall(r'<text[^>]*data-notex="1"[^>]*>(-?[\d.]+k?)</text>', dom)
     assert len(cells) == 28, cells
     assert_nonblank(screenshot(page, tmp_path / "sweep.png", height=1400))
+
+
+def test_reports_state_the_machine_derived_lost_control_bound(short_run):
+    """The run report and the sweep report state the loss-of-control bound the run used: twice
+    the rated slip of its machine (158 rpm on Table IV, 190 rpm on Krause's 50 hp machine)."""
+    from imdrive.config.perunit import lost_control_rpm
+    from imdrive.sweep.report import lost_control_note
+    from imdrive.sweep.spec import parse_sweep
+
+    page = run_report(short_run)
+    bound = lost_control_rpm(short_run.scenario)
+    assert f"more than {bound:.3g} rpm" in page and "158 rpm" in page
+    assert "rated slip" in page and "200 rpm" not in page
+    one = parse_sweep('base = "sensorless"\n[axes]\nR2_ratio = [1.0, 1.1]\n')
+    assert "more than 158 rpm from its reference for 1 s" in lost_control_note(one)
+    two = parse_sweep(
+        'base = "sensorless"\n[axes]\n"machine.preset" = ["paper-table-iv", "krause-50hp"]\n'
+    )
+    note = lost_control_note(two)
+    big = lost_control_rpm(im.Scenario.read("sensorless", ["machine.preset=krause-50hp"]))
+    assert "paper-table-iv: 158 rpm" in note and f"krause-50hp: {big:.3g} rpm" in note

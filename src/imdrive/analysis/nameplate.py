@@ -4,14 +4,26 @@ A motor's nameplate gives rated power ``P``, line voltage ``V``, frequency ``f``
 speed ``n``, line current ``I``, power factor ``cos phi`` and efficiency ``eta``; a catalogue
 adds the breakdown torque ratio ``T_bd / T_n`` and the starting current ratio ``I_st / I_n``.
 :func:`estimate_circuit` finds the single-cage T-circuit (``R1``, ``R2``, ``X1``, ``X2``,
-``X_M``) that reproduces these exactly, following the manufacturer-data approach of
+``X_M``) that reproduces these exactly: ``R1`` from the rated point's power balance, then a
+least-squares fit of ``R2``, ``X1 + X2`` and ``X_M`` to the rated point's impedance and the
+breakdown torque (equations below). This is the formulation of the *manufacturer-data*
+methods, which fit the circuit to a catalogue's rated point and torque figures:
 
 * J. Pedra, F. Córcoles, "Estimation of induction motor double-cage model parameters from
   manufacturer data", IEEE Trans. Energy Conversion 19(2), 2004 (its single-cage model:
-  the rated point's active and reactive power and the breakdown torque fix the circuit);
+  the rated point and the breakdown torque fix the circuit);
 * M. H. Haque, "Determination of NEMA design induction motor parameters from manufacturer
-  data", IEEE Trans. Energy Conversion 23(4), 2008 (the same data, with the stator/rotor
-  leakage split of IEEE Std 112 by NEMA design letter).
+  data", IEEE Trans. Energy Conversion 23(4), 2008 (the leakage split of IEEE Std 112 by
+  NEMA design letter).
+
+The equations and the lumping of every loss into ``R1`` are this module's; they are not a
+transcription of either paper's algorithm (authors, titles and journals as cited in the
+literature; the papers' equations were not re-checked here). It is *not* the nameplate-only
+iterative method of K. Lee, S. Frank, P. K. Sen, L. Gentile Polese, M. Alahmad, C. Waters,
+"Estimation of induction motor equivalent circuit parameters from nameplate data", North
+American Power Symposium (NAPS), 2012 (authors and title checked against the paper, the
+venue and year not), which needs no breakdown torque: without a breakdown torque this module
+assumes one (:data:`DEFAULT_BREAKDOWN_RATIO`) and says so.
 
 Equations (per phase, star equivalent, rms; ``s_n = 1 - n / n_sync``)::
 

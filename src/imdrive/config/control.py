@@ -158,7 +158,8 @@ class ControlSettings:
             "stator current limit (peak)",
             "A",
             gt=0.0,
-            default_doc="2 × the rated peak current ({current_limit_A} A for {preset})",
+            default_doc="1.5 × the rated peak current, √2 × the nameplate's rms current "
+            "({current_limit_A} A for {preset})",
         ),
     ] = None
     decoupling: Annotated[

@@ -23,6 +23,11 @@ import annotated_types
 
 from imdrive.config.estimators import package_sections
 from imdrive.config.machine import machine_preset, machine_presets
+from imdrive.config.perunit import (
+    CURRENT_LIMIT_PU,
+    DIVERGENCE_CURRENT_PU,
+    rated_peak_current_A,
+)
 from imdrive.config.profiles import Profile
 from imdrive.config.scenario import DEFAULT_MACHINE_PRESET, Scenario
 from imdrive.config.schema import Key, json_schema, scenario_keys
@@ -190,8 +195,8 @@ def _derived_values() -> dict:
     return {
         "preset": DEFAULT_MACHINE_PRESET,
         "rated_flux_Wb": f"{m.rated_flux_Wb:.3f}",
-        "current_limit_A": f"{2.0 * m.rated_current_A:.1f}",
-        "divergence_current_A": f"{100.0 * m.rated_current_A:.0f}",
+        "current_limit_A": f"{CURRENT_LIMIT_PU * rated_peak_current_A(m):.1f}",
+        "divergence_current_A": f"{DIVERGENCE_CURRENT_PU * rated_peak_current_A(m):.0f}",
     }
 
 

@@ -28,8 +28,10 @@ __all__ = [
     "Key",
     "_schema_allows",
     "apply_override",
+    "dotted",
     "is_setting",
     "is_table_class",
+    "key_path",
     "parse_override",
     "parse_toml",
     "scenario_keys",
@@ -273,6 +275,22 @@ def _profile_element(parts) -> bool:
     return False
 
 
+def key_path(key: str, field: str | None = None) -> tuple:
+    """The path of a scenario key written ``a.b.c`` or into a profile's element
+    (``control.speed_ref_rpm.changes[0].to`` -> ``("control", "speed_ref_rpm", "changes", 0,
+    "to")``); a key that names no setting raises :class:`ConfigError` naming ``field`` (default
+    the key)."""
+    parts = _split_key(key)
+    if not (all(isinstance(p, str) for p in parts) and is_setting(parts)) and not (
+        _profile_element(parts)
+    ):
+        raise ConfigError(
+            key if field is None else field,
+            "no such setting (see 'imdrive show PRESET' for the keys)",
+        )
+    return parts
+
+
 def parse_override(spec: str) -> tuple[tuple, object]:
     """Split ``key.path=value`` into the path and the value (parsed as a TOML value).
 
@@ -297,11 +315,7 @@ def parse_override(spec: str) -> tuple[tuple, object]:
     key = key.strip()
     if not key:
         raise ConfigError("--set", f"{spec!r}: the key before '=' is empty")
-    parts = _split_key(key)
-    if not (all(isinstance(p, str) for p in parts) and is_setting(parts)) and not (
-        _profile_element(parts)
-    ):
-        raise ConfigError(key, "no such setting (see 'imdrive show PRESET' for the keys)")
+    parts = key_path(key)
     try:
         value = tomllib.loads(f"v = {raw.strip()}")["v"]
     except tomllib.TOMLDecodeError:
@@ -317,7 +331,7 @@ def set_path(data: dict, parts, value) -> None:
     The one override mechanism: ``--set`` and every sweep axis go through it, and the
     scenario is validated once afterwards (:meth:`Scenario.from_dict`).
     """
-    key = _dotted(parts)
+    key = dotted(parts)
     if any(isinstance(p, int) for p in parts):
         _set_element(data, parts, value, key)
         return
@@ -330,7 +344,7 @@ def set_path(data: dict, parts, value) -> None:
     node[parts[-1]] = value
 
 
-def _dotted(parts) -> str:
+def dotted(parts) -> str:
     out = ""
     for p in parts:
         out += f"[{p}]" if isinstance(p, int) else (f".{p}" if out else p)
@@ -359,7 +373,7 @@ def _set_element(data: dict, parts, value, key: str) -> None:
     (an element is changed, never created)."""
     node = data
     for n, p in enumerate(parts[:-1]):
-        here = _dotted(parts[: n + 1])
+        here = dotted(parts[: n + 1])
         if isinstance(p, int):
             if not isinstance(node, list) or p >= len(node):
                 size = len(node) if isinstance(node, list) else 0

@@ -17,7 +17,11 @@ per-unit key                                SI value
 ``compensator.gate_band_pu``                ``pu x`` the first injection frequency, Hz
 ``compensator.gate_speed_pu``               ``pu x`` the rated slip speed, rpm
 ``compensator.gate_iq_pu``                  ``pu x machine.rated_current_A``, A
-``inverter.Vdc_V`` unset                    ``sqrt(2) x rated line voltage`` (the scenario)
+``inverter.Vdc_V`` unset                    ``sqrt(2) x rated line voltage`` (the scenario);
+                                            the voltage limit is ``Vdc / sqrt(3)``
+``control.current_limit_A`` unset           ``1.5 x`` the rated peak current
+                                            (:func:`current_limit_A`)
+``simulation.divergence_current_A`` unset   ``70 x`` the rated peak current
 ``compensator.thermal_rise_K``              rotor thermal resistance ``rise / P_r,rated``,
                                             K/W (:func:`rotor_thermal_resistance`)
 ==========================================  ===============================================
@@ -81,6 +85,9 @@ class Resolved:
     model_curve, model_inverter_error : bool
         Whether the controller uses ``[controller_model]``'s magnetising curve and its
         inverter-error table.
+    current_limit_A, divergence_current_A : float
+        The controller's current limit and the current that stops a diverging run, A
+        (:func:`current_limit_A`, :func:`divergence_current_A`).
     rotor_Rth : float
         The rotor thermal model's thermal resistance, K/W (:func:`rotor_thermal_resistance`;
         NaN when the model is off).
@@ -113,6 +120,8 @@ class Resolved:
     v_max_V: float = math.nan
     model_curve: bool = False
     model_inverter_error: bool = False
+    current_limit_A: float = math.nan
+    divergence_current_A: float = math.nan
     rotor_Rth: float = math.nan
 
 
@@ -232,6 +241,8 @@ def _resolve(sc) -> Resolved:
         v_max_V=sc.inverter.v_max_V,
         model_curve=sc.controller_model.uses_magnetising_curve,
         model_inverter_error=sc.controller_model.uses_inverter_error,
+        current_limit_A=current_limit_A(sc),
+        divergence_current_A=divergence_current_A(sc),
         rotor_Rth=(
             rotor_thermal_resistance(sc) if comp.enabled and comp.thermal_model else math.nan
         ),
@@ -320,6 +331,49 @@ def speed_tolerance_rpm(sc) -> float:
     except ConfigError:
         n_rated = 60.0 * sc.machine.rated_frequency_Hz / sc.machine.pole_pairs
     return max(SPEED_TOLERANCE_MIN_RPM, SPEED_TOLERANCE_PU * n_rated)
+
+
+#: the controller's default current limit, per-unit of the rated peak current
+CURRENT_LIMIT_PU = 1.5
+#: the default current beyond which a run counts as diverged, per-unit of the rated peak current
+DIVERGENCE_CURRENT_PU = 70.0
+
+
+def rated_peak_current_A(machine) -> float:
+    """The machine's rated current as a peak value, A: ``sqrt(2)`` times the nameplate's rms
+    current (``machine.rated_current_rms_A``, or the circuit's at the rated point,
+    :func:`~imdrive.config.rated.rated_point`). A circuit without a rated point falls back to
+    ``sqrt(2) P / (sqrt(3) V)`` (``machine.rated_current_A``, efficiency and power factor 1).
+    """
+    from imdrive.config.machine import rated_point
+
+    try:
+        return rated_point(machine).current_peak_A
+    except ConfigError:
+        return machine.rated_current_A
+
+
+def current_limit_A(sc) -> float:
+    """The controller's stator current limit (peak), A: ``control.current_limit_A``, or by
+    default :data:`CURRENT_LIMIT_PU` (1.5) times the rated peak current
+    (:func:`rated_peak_current_A`): 17.2 A on Table IV, whose nameplate current is 8.1 A rms.
+
+    The rule: an overload of 1.5 the rated current is what an industrial drive's inverter is
+    commonly rated for over a short time (the "heavy duty" 150 % for 60 s), and it leaves the
+    speed loop the rated torque plus a margin for the magnetising current at every library
+    machine (their rated current is 1.7-3.6 times their magnetising current).
+    """
+    given = sc.control.current_limit_A
+    return given if given is not None else CURRENT_LIMIT_PU * rated_peak_current_A(sc.machine)
+
+
+def divergence_current_A(sc) -> float:
+    """The current beyond which a run counts as diverged, A: ``simulation.divergence_current_A``,
+    or by default :data:`DIVERGENCE_CURRENT_PU` (70) times the rated peak current."""
+    given = sc.simulation.divergence_current_A
+    if given is not None:
+        return given
+    return DIVERGENCE_CURRENT_PU * rated_peak_current_A(sc.machine)
 
 
 #: the speed bandwidth every machine gets at least, Hz (the paper's drive)

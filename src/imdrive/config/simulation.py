@@ -72,7 +72,7 @@ class SimulationSettings:
             "current magnitude that stops a diverging run",
             "A",
             gt=0.0,
-            default_doc="100 × the rated peak current ({divergence_current_A} A for {preset})",
+            default_doc="70 × the rated peak current ({divergence_current_A} A for {preset})",
         ),
     ] = None
     divergence_speed_rpm: Annotated[

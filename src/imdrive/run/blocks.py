@@ -85,8 +85,9 @@ def plant_fields(sc: Scenario, D: Resolved) -> dict:
 
 
 def divergence_current(sc: Scenario, D: Resolved) -> float:
-    """The current beyond which a run counts as diverged, A."""
-    return sc.simulation.divergence_current_A or 100.0 * D.I_rated
+    """The current beyond which a run counts as diverged, A
+    (:func:`imdrive.config.perunit.divergence_current_A`)."""
+    return D.divergence_current_A
 
 
 def sim_fields(sc: Scenario, D: Resolved) -> dict:
@@ -232,8 +233,8 @@ def control_fields(sc: Scenario, D: Resolved, mh: dict, psi0: float) -> tuple[di
 
 
 def current_limit(sc: Scenario, D: Resolved) -> float:
-    """The controller's current limit, A (default twice the rated current)."""
-    return sc.control.current_limit_A or 2.0 * D.I_rated
+    """The controller's current limit, A (:func:`imdrive.config.perunit.current_limit_A`)."""
+    return D.current_limit_A
 
 
 def compensator_fields(sc: Scenario, D: Resolved) -> tuple[dict, dict]:

@@ -77,6 +77,7 @@ __all__ = [
     "compensation_metrics",
     "drive_metrics",
     "lost_control_check",
+    "lost_control_rule",
     "lost_control_time",
     "steady_means",
 ]
@@ -88,6 +89,25 @@ def lost_control_check(scenario) -> tuple[float, float]:
     bound = lost_control_rpm(scenario)
     on = scenario.drive.mode == "vector" and scenario.plant.speed_mode != "imposed" and bound > 0
     return (bound * math.pi / 30.0 if on else 0.0), sim.lost_control_s
+
+
+def lost_control_rule(scenario) -> str:
+    """One line saying how loss of control is checked in ``scenario``: the bound of
+    :func:`~imdrive.config.perunit.lost_control_rpm` (derived from the machine unless the
+    scenario sets ``simulation.lost_control_rpm``) and ``simulation.lost_control_s``."""
+    sim = scenario.simulation
+    bound, _ = lost_control_check(scenario)
+    if bound == 0.0:
+        return "loss of control not checked (open loop, imposed speed, or a bound of 0)"
+    how = (
+        "set in the scenario"
+        if sim.lost_control_rpm is not None
+        else "twice the machine's rated slip, at least 1 % of its rated speed"
+    )
+    return (
+        f"loss of control: the speed more than {lost_control_rpm(scenario):.3g} rpm from its "
+        f"reference for {sim.lost_control_s:g} s or longer (simulation.lost_control_rpm: {how})"
+    )
 
 
 def lost_control_time(time_s, speed_rpm, speed_ref_rpm, bound_rpm, duration_s) -> float:

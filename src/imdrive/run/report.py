@@ -36,6 +36,8 @@ from pathlib import Path
 
 import numpy as np
 
+from imdrive.run.metrics import lost_control_rule
+
 #: Points per trace in the browser at most (two per bucket: its min and its max)
 MAX_POINTS = 8000
 
@@ -452,6 +454,8 @@ def run_report(res, max_points: int = MAX_POINTS) -> str:
         notes.append(f"<span class='bad'>{html.escape(res.divergence_message)}</span>")
     elif res.lost_control:
         notes.append(f"<span class='bad'>{html.escape(res.lost_control_message)}</span>")
+    else:
+        notes.append(html.escape(f"{lost_control_rule(sc)}: none"))
     v = summary["verdict"]  # the run's status (imdrive.run.status): ok, or every cause
     cls = "" if v["verdict_ok"] else " class='bad'"
     notes.append(f"<span{cls}>status: {html.escape(v['verdict_text'])}</span>")

@@ -199,17 +199,19 @@ def detuning_runs(speeds=(1000.0, 150.0, 50.0), ratio=1.2, drives=None) -> pd.Da
     return pd.DataFrame(rows)
 
 
-def markdown(comp: pd.DataFrame, det: pd.DataFrame) -> str:
-    """The two tables as Markdown (the docs' section "On a realistic drive")."""
+def _cell(v, fmt: str) -> str:
+    missing = v is None or (isinstance(v, float) and np.isnan(v))
+    return "—" if missing else format(v, fmt)
+
+
+def compensation_markdown(comp: pd.DataFrame) -> list[str]:
+    """The lines of the compensators' table (:func:`compensation_runs`' rows)."""
+    f = _cell
     lines = [
         "| drive | compensator | speed, rpm | final R̂2 error from +20 % / −20 %, % "
         "| time to 2 %, s (+20 / −20) | speed error at the end, rpm (+20 / −20) |",
         "|---|---|---|---|---|---|",
     ]
-
-    def f(v, fmt):
-        return "—" if v is None or (isinstance(v, float) and np.isnan(v)) else format(v, fmt)
-
     for (drive, compn, rpm), g in comp.groupby(["drive", "compensator", "speed_rpm"], sort=False):
         p = g[g.R2_error_initial_pct > 0].iloc[0]
         n = g[g.R2_error_initial_pct < 0].iloc[0]
@@ -219,15 +221,24 @@ def markdown(comp: pd.DataFrame, det: pd.DataFrame) -> str:
             f"| {f(p.time_to_2pct_s, '.1f')} / {f(n.time_to_2pct_s, '.1f')} "
             f"| {f(p.speed_error_after_rpm, '+.2f')} / {f(n.speed_error_after_rpm, '+.2f')} |"
         )
-    lines += [
-        "",
+    return lines
+
+
+def detuning_markdown(det: pd.DataFrame) -> list[str]:
+    """The lines of the detuning law's table (:func:`detuning_runs`' rows)."""
+    lines = [
         "| drive | speed, rpm | speed error with R̂2 = 1.2 R2, rpm | detuning law, rpm |",
         "|---|---|---|---|",
     ]
     for _, r in det.iterrows():
         sim = "diverged" if r.diverged else f"{r.speed_error_rpm:+.2f}"
         lines.append(f"| {r.drive} | {r.speed_rpm:g} | {sim} | {r.detuning_law_rpm:+.2f} |")
-    return "\n".join(lines) + "\n"
+    return lines
+
+
+def markdown(comp: pd.DataFrame, det: pd.DataFrame) -> str:
+    """The two tables as Markdown (the docs' section "On a realistic drive")."""
+    return "\n".join([*compensation_markdown(comp), "", *detuning_markdown(det)]) + "\n"
 
 
 def bias_markdown(bias: pd.DataFrame) -> str:

@@ -28,6 +28,7 @@ Sweep file (TOML)
     speed_rpm = { min = 100, max = 1500, step = 200 }  # grid: min, min + step, ... <= max
     load_Nm = [0, 6, 12]                               # explicit values
     "mras.bandwidth_Hz" = { values = [20, 40] }        # explicit values, other spelling
+    "load.torque_Nm.changes[0].at" = [1.5, 2.5]        # one element of a profile, as --set
     [axes.variant]                                     # named sets of overrides
     plain = {}
     paper = { compensator.enabled = true, compensator.input = "e_d0" }

@@ -10,7 +10,7 @@ from dataclasses import fields, is_dataclass
 
 import numpy as np
 
-from imdrive.config.overrides import is_setting
+from imdrive.config.overrides import dotted, is_setting, key_path
 from imdrive.config.profiles import Profile
 from imdrive.config.scenario import Scenario
 from imdrive.errors import ConfigError
@@ -39,6 +39,10 @@ def _flatten(table: dict, where: str, prefix: tuple[str, ...] = ()) -> list:
     """
     out = []
     for key, value in table.items():
+        if "[" in key:  # one element of a profile: "control.speed_ref_rpm.changes[0].to"
+            dotted_key = ".".join((*prefix, key.strip()))
+            out.append((key_path(dotted_key, f"{where}.{dotted_key}"), value))
+            continue
         parts = (*prefix, *_split(key))
         if not all(parts):
             raise ConfigError(f"{where}.{key}", "empty part in a key path")
@@ -97,7 +101,7 @@ def _axis_values(
     kind = _axis_kind(name, spec, where)
     if kind == "sets":
         return _set_axis(name, spec, where, random, samples, rng)
-    path = tuple(_split(name)) if kind == "path" else ()
+    path = key_path(name.replace(" ", ""), where) if kind == "path" else ()
     spec = _unwrap_values(spec, where)
     if isinstance(spec, list):
         values = _listed_values(spec, kind, where)
@@ -116,9 +120,7 @@ def _axis_kind(name: str, spec, where: str) -> str:
         return name
     if isinstance(spec, dict) and spec and all(isinstance(v, dict) for v in spec.values()):
         return "sets"
-    parts = _split(name)
-    if not is_setting(parts):
-        raise ConfigError(where, "no such setting (see 'imdrive show PRESET' for the keys)")
+    key_path(name.replace(" ", ""), where)  # a setting, or one element of a profile
     return "path"
 
 
@@ -335,7 +337,7 @@ def _check_disjoint(axes: tuple[Axis, ...]) -> None:
             for k in sorted(keys):
                 hit = next((o for o in sorted(other) if _overlap(k, o)), None)
                 if hit is not None:
-                    both = ".".join(k) if k == hit else f"{'.'.join(k)} / {'.'.join(hit)}"
+                    both = dotted(k) if k == hit else f"{dotted(k)} / {dotted(hit)}"
                     raise ConfigError(
                         f"axes.{a.name}",
                         f"sets {both}, as axis {b.name} does: two axes may not set the same key",

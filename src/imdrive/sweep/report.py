@@ -10,11 +10,14 @@ page of :func:`imdrive.run.report.html_page` (one self-contained file, offline).
 from __future__ import annotations
 
 import html
+import math
 from pathlib import Path
 
 import numpy as np
 
 from imdrive._io import atomic_path
+from imdrive.errors import ConfigError
+from imdrive.run.metrics import lost_control_check, lost_control_rule
 from imdrive.run.report import html_page, html_table
 from imdrive.run.status import verdict_counts
 from imdrive.sweep.figures import (
@@ -28,7 +31,7 @@ from imdrive.sweep.figures import (
     heat_grid,
     panel_selections,
 )
-from imdrive.sweep.spec import Heatmap, Sweep
+from imdrive.sweep.spec import Heatmap, Sweep, _build_one_axis
 
 #: Diverging scale for signed errors (plotly's RdBu: blue below zero, red above, as the PNGs'
 #: matplotlib RdBu_r), sequential otherwise
@@ -155,6 +158,36 @@ def cell_texts(Z, tiny: float, digits: int = 2) -> list[list[str]]:
     return [[_text(float(v), tiny, digits) for v in row] for row in Z]
 
 
+def lost_control_note(sweep: Sweep) -> str:
+    """What "lost control" means in this sweep: the bound of
+    :func:`~imdrive.config.perunit.lost_control_rpm` (``simulation.lost_control_rpm``, by
+    default twice the rated slip of the run's machine, at least 1 % of its rated speed) and
+    ``simulation.lost_control_s``, per value of each axis that changes them."""
+    base = sweep.scenario(0)
+    per_axis = []
+    bounds = {lost_control_check(base)}
+    for a in sweep.axes:
+        here = {}
+        for v in a.points():
+            try:
+                here[v] = lost_control_check(_build_one_axis(sweep, a, v))
+            except ConfigError:  # listed as failing by the sweep's validation
+                continue
+        bounds |= set(here.values())
+        if len(set(here.values())) > 1:
+            per_axis += [
+                f"{a.name} = {v}: {b * 30 / math.pi:.3g} rpm for {t:.3g} s"
+                for v, (b, t) in here.items()
+            ]
+    if len(bounds) == 1:
+        return lost_control_rule(base).capitalize() + "."
+    return (
+        "Loss of control: the speed farther from its reference than the run's bound for its "
+        "duration (simulation.lost_control_rpm, lost_control_s; by default twice the rated slip "
+        "of the run's machine, at least 1 % of its rated speed): " + "; ".join(per_axis) + "."
+    )
+
+
 def _metric_rows(df) -> list[tuple[str, object]]:
     """Each numeric column's finite range over the runs: ``min / median / max (n finite)``."""
     rows = []
@@ -214,6 +247,7 @@ def sweep_report(sweep: Sweep, df) -> str:
             "not be built. Hover a cell for its values; drag to zoom, double-click to reset."
         )
     )
+    notes.append(html.escape(lost_control_note(sweep)))
     notes.append(html.escape(f"status (imdrive.run.status): {verdict_counts(df)}"))
     figures = [heatmap_plot(sweep, df, h, f"heatmap-{i}") for i, h in enumerate(sweep.heatmaps)]
     if not figures:

@@ -1,0 +1,159 @@
+"""The result tables of ``docs/`` that :mod:`imdrive.studies.doctables` generates: for each, its
+renderer (Markdown lines from the data file) and the measurement that writes the data file."""
+
+from __future__ import annotations
+
+import math
+
+from imdrive.studies.doctable import DocTable, register
+
+
+def _signed(v: float, digits: int = 2) -> str:
+    """``+0.23``, ``−14.60`` (a true minus sign, as the pages write)."""
+    return f"{v:+.{digits}f}".replace("-", "−")
+
+
+def _pair(a: float, b: float, digits: int = 2) -> str:
+    return f"{_signed(a, digits)} / {_signed(b, digits)}"
+
+
+# ---------------------------------------------------------------------------------------------
+# docs/paper-reproduction.md, "On a realistic drive" (imdrive.studies.realistic)
+
+
+def _realistic_compensation(df) -> list[str]:
+    from imdrive.studies.realistic import compensation_markdown
+
+    return compensation_markdown(df)
+
+
+def _realistic_detuning(df) -> list[str]:
+    from imdrive.studies.realistic import detuning_markdown
+
+    return detuning_markdown(df)
+
+
+def _measure_realistic_compensation():
+    from imdrive.studies.realistic import compensation_runs
+
+    return compensation_runs()
+
+
+def _measure_realistic_detuning():
+    from imdrive.studies.realistic import detuning_runs
+
+    return detuning_runs()
+
+
+register(
+    DocTable(
+        "realistic-compensation",
+        "paper-reproduction.md",
+        "data/realistic_compensation.csv",
+        _realistic_compensation,
+        _measure_realistic_compensation,
+    )
+)
+
+
+def _realistic_saturation_bias(df) -> list[str]:
+    from imdrive.studies.realistic import bias_markdown
+
+    return bias_markdown(df).rstrip("\n").split("\n")
+
+
+def _measure_realistic_saturation_bias():
+    from imdrive.studies.realistic import saturation_bias_runs
+
+    return saturation_bias_runs()
+
+
+register(
+    DocTable(
+        "realistic-saturation-bias",
+        "paper-reproduction.md",
+        "data/realistic_saturation_bias.csv",
+        _realistic_saturation_bias,
+        _measure_realistic_saturation_bias,
+    )
+)
+register(
+    DocTable(
+        "realistic-detuning",
+        "paper-reproduction.md",
+        "data/realistic_detuning.csv",
+        _realistic_detuning,
+        _measure_realistic_detuning,
+    )
+)
+
+
+# ---------------------------------------------------------------------------------------------
+# docs/paper-reproduction.md, "Gating and the blind band" (imdrive.studies.gating)
+
+
+def _blind_band(df) -> list[str]:
+    out = [
+        "| operating point | f_e | final R̂2 error without → with gating, % (from +15 / −15 %) "
+        "| speed error at the end with gating, rpm |",
+        "|---|---|---|---|",
+    ]
+    for (speed, load), g in df.groupby(["speed_rpm", "load_Nm"], sort=False):
+        regen = " (regenerating)" if load < 0 else ""
+        point = f"{speed:g} rpm, {load:g} N m".replace("-", "−")
+
+        def err(gating, col, g=g):
+            rows = g[g.gating == gating].sort_values("R2_ratio_initial", ascending=False)
+            vals = [math.nan if d else v for d, v in zip(rows.diverged, rows[col], strict=True)]
+            return vals
+
+        off, on = err(False, "R2_error_final_pct"), err(True, "R2_error_final_pct")
+        speed_err = err(True, "speed_error_rpm")
+        out.append(
+            f"| {point}{regen} | {g.f_e_Hz.iloc[0]:.1f} Hz "
+            f"| {_pair(*off)} → {_pair(*on)} | {_pair(*speed_err)} |".replace("nan", "diverged")
+        )
+    return out
+
+
+def _measure_blind_band():
+    from imdrive.studies.gating import blind_band_runs
+
+    return blind_band_runs()
+
+
+register(
+    DocTable(
+        "blind-band",
+        "paper-reproduction.md",
+        "data/blind_band.csv",
+        _blind_band,
+        _measure_blind_band,
+    )
+)
+
+
+# ---------------------------------------------------------------------------------------------
+# docs/estimators.md, "Performance" (benchmarks/bench_estimators.py --csv)
+
+
+def _estimator_timing(df) -> list[str]:
+    out = ["| estimator | × real time, slowest–fastest run | runs |", "|---|---|---|"]
+    for name, g in df.groupby("estimator", sort=False):
+        rtf = g.simulated_s / g.wall_s
+        out.append(f"| {name} | {rtf.min():.0f}–{rtf.max():.0f} | {len(g)} |")
+    return [*out, "", f"Preset `{df.preset.iloc[0]}`; {df.machine.iloc[0]}."]
+
+
+register(
+    DocTable(
+        "estimator-timing",
+        "estimators.md",
+        "data/estimator_timing.csv",
+        _estimator_timing,
+        None,
+        "python benchmarks/bench_estimators.py --csv docs/data/estimator_timing.csv",
+    )
+)
+
+from imdrive.studies import robust_tables, stability_tables  # noqa: E402, F401  (register theirs)
