@@ -3,18 +3,21 @@ a status that says why, and good drives report ok (imdrive.run.status).
 
 Failing, on today's code (measured on both machines, 2026-11-23):
 
-* ``frozen-high-speed``: injection-robust at 96 % of the rated speed (1650 rpm on Table IV)
-  from R2_hat(0) = 1.25 R2: the injection backs off for voltage headroom, the compensator
-  never updates (R2_hat stays 25 % off, the speed 23 rpm off);
+* ``frozen-high-speed``: injection-robust without its estimation headroom and thermal model
+  (``injection.headroom_voltage`` unset, ``compensator.thermal_model = false``: the preset as
+  it was before them; with them it converges there) at 96 % of the rated
+  speed (1650 rpm on Table IV) from R2_hat(0) = 1.25 R2: the injection backs off for voltage
+  headroom, the compensator never updates (R2_hat stays 25 % off, the speed 23 rpm off);
 * ``low-bandwidth``: the sensorless drive with a 0.3 Hz speed loop: the rated-load step
   pulls the speed away (lost control);
 * ``detuned-uncompensated``: the sensorless drive with R2_hat = 1.2 R2 and no compensator
   (R2_hat 20 % off, the speed 0.2 rated slips off).
 
 Good: injection-robust at 58 % of the rated speed and rated load (R2_hat from 1.2 R2 ends
-within 0.03 %), and the sensorless drive with exact resistances. Plus one whose outcome is not
-prescribed: injection-robust on a switching bridge with 2 us dead time compensated with a
-20 % error, regenerating at 30 % of the rated torque (the dead-time bias of the detection);
+within 0.03 %; held only while the injection starts, 10 % of the compensator's time), and
+the sensorless drive with exact resistances. Plus one whose outcome is not prescribed:
+injection-robust on a switching bridge with 2 us dead time compensated with a 20 % error,
+regenerating at 30 % of the rated torque (the dead-time bias of the detection);
 whatever it ends at, its verdict must agree with its numbers.
 """
 
@@ -61,7 +64,7 @@ def _cases():
             (m, "good-sensorless", "sensorless",
              ov(0.5, 0.5, "estimator.R2_ratio=1.0", "simulation.t_end_s=6")),
             (m, "frozen-high-speed", "injection-robust",
-             ov(0.96, 1.0, "estimator.R2_ratio=1.25")),
+             ov(0.96, 1.0, "estimator.R2_ratio=1.25", "compensator.thermal_model=false")),
             (m, "low-bandwidth", "sensorless",
              ov(0.5, 1.0, "control.speed_bandwidth_Hz=0.3", "simulation.t_end_s=4")),
             (m, "detuned-uncompensated", "sensorless",
@@ -75,9 +78,18 @@ def _cases():
 CASES = _cases()
 
 
+def _read(name: str, preset: str, overrides: list) -> Scenario:
+    sc = Scenario.read(preset, overrides)
+    if name != "frozen-high-speed":
+        return sc
+    d = sc.to_dict()  # a key cannot be unset by an override: through the scenario's table
+    d["injection"]["headroom_voltage"] = None
+    return Scenario.from_dict(d)
+
+
 @pytest.fixture(scope="module")
 def runs():
-    scs = [Scenario.read(preset, o) for _, _, preset, o in CASES]
+    scs = [_read(name, preset, o) for _, name, preset, o in CASES]
     res = simulate_batch(scs, logs=True)
     return {(m, name): (row, r) for (m, name, _, _), (_, row), r in
             zip(CASES, res.metrics.iterrows(), res.results, strict=True)}  # fmt: skip
@@ -145,6 +157,8 @@ def test_good_runs_report_ok(runs, machine):
         assert abs(row["R2_error_pct"]) < 2.0
         assert closing_line(res) is None
     row, res = runs[(machine, "good-injection")]
-    assert row["R2_held_pct"] == pytest.approx(0.0)  # estimated throughout
+    # estimated throughout but while the injection starts: its first decision periods are
+    # gated by design (flag 8), measured 10.0 % of the compensator's time on both machines
+    assert row["R2_held_pct"] <= 10.0 + 1e-9
     assert res.verdict["R2_observable"] == "estimated at the end"
     assert math.isnan(row["R2_held_since_s"])

@@ -156,4 +156,58 @@ register(
     )
 )
 
+
+# ---------------------------------------------------------------------------------------------
+# docs/estimators.md, "Low speed on the realistic drive" (imdrive.bench)
+
+#: the low-speed bench: every estimator with its defaults on the commissioned realistic drive
+LOW_SPEED_ESTIMATORS = ("mras", "smo-mras", "ekf", "afo", "reactive-mras")
+LOW_SPEEDS_RPM = (45, 70, 100)
+LOW_SPEED_LOADS_NM = (12, 6, 0, -6, -12)
+
+
+def _measure_low_speed():
+    from imdrive.bench.protocol import ESTIMATORS, Run, steady_cases
+    from imdrive.bench.report import run_protocol
+
+    cases = steady_cases(LOW_SPEEDS_RPM, LOW_SPEED_LOADS_NM)
+    drives = {"sensorless-realistic": "sensorless-realistic"}
+    runs = [
+        Run(e, c, "sensorless-realistic")
+        for e in LOW_SPEED_ESTIMATORS
+        if e in ESTIMATORS
+        for c in cases
+    ]
+    table, _, _ = run_protocol(runs=runs, cases=cases, drives=drives)
+    return table
+
+
+def _low_speed(df) -> list[str]:
+    ests = [e for e in LOW_SPEED_ESTIMATORS if e in set(df.estimator)]
+    out = ["| case | " + " | ".join(ests) + " |", "|---" * (len(ests) + 1) + "|"]
+    for case in dict.fromkeys(df.case):
+        _, rpm, load = case.split("-", 2)
+        load = float(load.removesuffix("Nm"))
+        name = f"{rpm.removesuffix('rpm')} rpm, " + (
+            "0" if load == 0 else f"{_signed(load, 0)} N m"
+        )
+        cells = []
+        for e in ests:
+            r = df[(df.case == case) & (df.estimator == e)].iloc[0]
+            lost = bool(r.lost_control) or bool(r.diverged)
+            cells.append("**lost**" if lost else _signed(r.steady_speed_error_rpm, 1))
+        out.append(f"| {name} | " + " | ".join(cells) + " |")
+    return out
+
+
+register(
+    DocTable(
+        "estimator-low-speed",
+        "estimators.md",
+        "data/estimator_low_speed.csv",
+        _low_speed,
+        _measure_low_speed,
+    )
+)
+
 from imdrive.studies import robust_tables, stability_tables  # noqa: E402, F401  (register theirs)
