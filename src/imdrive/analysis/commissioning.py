@@ -36,14 +36,7 @@ FLUX_PU = tuple(np.round(np.arange(0.2, 1.4001, 0.05), 4))
 def plant_magnetising_curve(sc: Scenario) -> tuple[float, float, float]:
     """``(Lm0, psi_sat, S)`` of the plant's magnetising curve (``[plant.saturation]``; the
     defaults through the machine's ``M_H`` at its rated flux, as the plant builds them)."""
-    sat = sc.plant.saturation
-    m = sc.machine
-    rho, S = sat.rated_ratio, sat.exponent
-    Lm0 = sat.Lm0_H if sat.Lm0_H is not None else m.M_H / rho
-    psi_sat = sat.psi_sat_Wb
-    if psi_sat is None:
-        psi_sat = m.rated_flux_Wb * (rho / (1.0 - rho)) ** (1.0 / S)
-    return Lm0, psi_sat, S
+    return sc.plant.saturation.curve(sc.machine)
 
 
 def plant_secant_inductance(sc: Scenario, psi_m) -> np.ndarray:

@@ -88,6 +88,9 @@ class Resolved:
     current_limit_A, divergence_current_A : float
         The controller's current limit and the current that stops a diverging run, A
         (:func:`current_limit_A`, :func:`divergence_current_A`).
+    sat_curve : tuple of float
+        The plant's magnetising curve ``(Lm0, psi_sat, S)``
+        (:meth:`~imdrive.config.plant.SaturationSettings.curve`).
     rotor_Rth : float
         The rotor thermal model's thermal resistance, K/W (:func:`rotor_thermal_resistance`;
         NaN when the model is off).
@@ -123,6 +126,7 @@ class Resolved:
     current_limit_A: float = math.nan
     divergence_current_A: float = math.nan
     rotor_Rth: float = math.nan
+    sat_curve: tuple = (math.nan, math.nan, math.nan)
 
 
 def _whole_periods(f: float, Ts: float) -> float:
@@ -243,6 +247,7 @@ def _resolve(sc) -> Resolved:
         model_inverter_error=sc.controller_model.uses_inverter_error,
         current_limit_A=current_limit_A(sc),
         divergence_current_A=divergence_current_A(sc),
+        sat_curve=sc.plant.saturation.curve(m),
         rotor_Rth=(
             rotor_thermal_resistance(sc) if comp.enabled and comp.thermal_model else math.nan
         ),

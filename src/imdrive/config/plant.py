@@ -133,6 +133,18 @@ class SaturationSettings:
         ),
     ] = None
 
+    def curve(self, machine) -> tuple[float, float, float]:
+        """``(Lm0, psi_sat, S)`` of the magnetising curve ``Lm = Lm0/(1 + (psi_m/psi_sat)^S)``
+        on ``machine`` (:class:`~imdrive.config.machine.MachineParams`): the given values, or
+        the defaults through the machine's ``M_H`` at its rated flux (``Lm0 = M/rated_ratio``,
+        ``psi_sat`` such that ``Lm(psi_rated) = M``)."""
+        rho, S = self.rated_ratio, self.exponent
+        Lm0 = self.Lm0_H if self.Lm0_H is not None else machine.M_H / rho
+        psi_sat = self.psi_sat_Wb
+        if psi_sat is None:
+            psi_sat = machine.rated_flux_Wb * (rho / (1.0 - rho)) ** (1.0 / S)
+        return Lm0, psi_sat, S
+
 
 @settings("plant")
 class PlantSettings:

@@ -36,17 +36,12 @@ from imdrive.run._profiles import profiles_to_arrays
 RPM = 2.0 * math.pi / 60.0  # rad/s per rpm
 
 
-def saturation_curve(sc: Scenario, psi_rated: float | None = None) -> dict:
-    """The plant's magnetising-curve fields (see ``SaturationSettings``); ``psi_rated``: the
-    machine's rated flux, Wb (default ``machine.rated_flux_Wb``)."""
+def saturation_curve(sc: Scenario, D: Resolved | None = None) -> dict:
+    """The plant's magnetising-curve fields (see ``SaturationSettings``); ``D``: the scenario's
+    resolved per-unit values, when known (they hold the curve)."""
     sat = sc.plant.saturation
     m = sc.machine
-    rho, S = sat.rated_ratio, sat.exponent
-    Lm0 = sat.Lm0_H if sat.Lm0_H is not None else m.M_H / rho
-    psi_sat = sat.psi_sat_Wb
-    if psi_sat is None:
-        psi = m.rated_flux_Wb if psi_rated is None else psi_rated
-        psi_sat = psi * (rho / (1.0 - rho)) ** (1.0 / S)
+    Lm0, psi_sat, S = sat.curve(m) if D is None else D.sat_curve
     fields = {"saturation": sat.enabled, "Lm0": Lm0, "psi_sat": psi_sat, "S": S}
     if sat.enabled:  # the inverse curve tabulated once per run (no Newton loop per step)
         table = saturation_table(m.Ll1_H, m.Ll2_H, Lm0, psi_sat, S)
@@ -80,7 +75,7 @@ def plant_fields(sc: Scenario, D: Resolved) -> dict:
         tau2=th.tau2_s,
         thermal=th.enabled,
         speed_imposed=sc.plant.speed_mode == "imposed",
-        **saturation_curve(sc, D.psi_rated),
+        **saturation_curve(sc, D),
     )
 
 
