@@ -257,6 +257,22 @@ def _resolve(sc) -> Resolved:
     return dataclasses.replace(r, n_comp=n_comp)
 
 
+def _rated_point_or_none(machine):
+    """The machine's rated point (:func:`~imdrive.config.rated.rated_point`), or None for a
+    circuit without one (each caller then falls back on the synchronous speed)."""
+    from imdrive.config.machine import rated_point
+
+    try:
+        return rated_point(machine)
+    except ConfigError:
+        return None
+
+
+def _synchronous_rpm(machine) -> float:
+    """The machine's synchronous speed at its rated frequency, rpm."""
+    return 60.0 * machine.rated_frequency_Hz / machine.pole_pairs
+
+
 def lost_control_rpm(sc) -> float:
     """The loss-of-control bound of scenario ``sc``, rpm: ``simulation.lost_control_rpm``, or
     by default twice the machine's rated slip speed, at least 1 % of its rated speed (a drive
@@ -275,12 +291,9 @@ def lost_control_rpm(sc) -> float:
     given = sc.simulation.lost_control_rpm
     if given is not None:
         return given
-    from imdrive.config.machine import rated_point
-
-    try:
-        rp = rated_point(sc.machine)
-    except ConfigError:  # a circuit without a rated point: the synchronous speed's 10 %
-        return 0.1 * 60.0 * sc.machine.rated_frequency_Hz / sc.machine.pole_pairs
+    rp = _rated_point_or_none(sc.machine)
+    if rp is None:  # a circuit without a rated point: the synchronous speed's 10 %
+        return 0.1 * _synchronous_rpm(sc.machine)
     slip_rpm = rp.synchronous_speed_rpm - rp.speed_rpm
     return max(2.0 * slip_rpm, 0.01 * rp.speed_rpm)
 
@@ -300,12 +313,9 @@ def rated_slip_rpm(sc) -> float:
     float
         rpm.
     """
-    from imdrive.config.machine import rated_point
-
-    try:
-        rp = rated_point(sc.machine)
-    except ConfigError:
-        return 0.05 * 60.0 * sc.machine.rated_frequency_Hz / sc.machine.pole_pairs
+    rp = _rated_point_or_none(sc.machine)
+    if rp is None:
+        return 0.05 * _synchronous_rpm(sc.machine)
     return rp.synchronous_speed_rpm - rp.speed_rpm
 
 
@@ -329,12 +339,8 @@ def speed_tolerance_rpm(sc) -> float:
     float
         rpm.
     """
-    from imdrive.config.machine import rated_point
-
-    try:
-        n_rated = rated_point(sc.machine).speed_rpm
-    except ConfigError:
-        n_rated = 60.0 * sc.machine.rated_frequency_Hz / sc.machine.pole_pairs
+    rp = _rated_point_or_none(sc.machine)
+    n_rated = _synchronous_rpm(sc.machine) if rp is None else rp.speed_rpm
     return max(SPEED_TOLERANCE_MIN_RPM, SPEED_TOLERANCE_PU * n_rated)
 
 
@@ -412,12 +418,9 @@ def speed_bandwidth_Hz(sc) -> float:
     given = sc.control.speed_bandwidth_Hz
     if given is not None:
         return given
-    from imdrive.config.machine import rated_point
-
     m = sc.machine
-    try:
-        rp = rated_point(m)
-    except ConfigError:
+    rp = _rated_point_or_none(m)
+    if rp is None:
         return SPEED_BANDWIDTH_MIN_HZ
     w_rated = rp.speed_rpm * math.pi / 30.0
     w_bw = 0.6 * rp.torque_Nm / (m.J_kgm2 * SPEED_DIP_PU * w_rated)
