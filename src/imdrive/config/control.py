@@ -200,6 +200,26 @@ class ControlSettings:
             default_doc="inverter.dead_time_s (perfect knowledge)",
         ),
     ] = None
+    inverter_error_adaptation_per_s: Annotated[
+        Float,
+        setting(
+            "rate of the online scaling of the inverter-error compensation (dead-time "
+            "feed-forward or the identified table) that nulls the sixth harmonic its residual "
+            "leaves in the current controllers' output; 0: off (the compensation as assumed)",
+            "1/s",
+            ge=0.0,
+            le=100.0,
+        ),
+    ] = 1.0
+    inverter_error_adaptation_fmin_pu: Annotated[
+        Float,
+        setting(
+            "the scaling adapts only above this stator frequency, per-unit of the machine's "
+            "rated frequency (its sixth harmonic then lies well above the R2 injection)",
+            ge=0.0,
+            le=1.0,
+        ),
+    ] = 0.05
     delay_periods: Annotated[
         Int,
         setting(

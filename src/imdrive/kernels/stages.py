@@ -58,6 +58,7 @@ from imdrive.kernels.ifoc import (
     inverter_feedforward,
     log_control,
     open_loop_voltage,
+    standstill_compensation,
 )
 from imdrive.kernels.inverter import MAX_EVENTS, MAX_SEGMENTS, inverter_segments, limit_magnitude
 from imdrive.kernels.machine import integrate_segment, log_plant, stator_current
@@ -271,6 +272,8 @@ def control(sim, pc, x, mdl, ctl, smp, prof, smpl, estm, foc):
     dv_beta = 0.0
     if has_feedforward(pc):  # inverter-error compensation, on the measured current
         dv_alpha, dv_beta = inverter_feedforward(pc, ctl, i_meas_alpha, i_meas_beta, Ts)
+        if pc.ie_r1:
+            standstill_compensation(ctl, dv_alpha, dv_beta, i_meas_alpha, i_meas_beta, w_ref)
         v_ref_alpha += dv_alpha
         v_ref_beta += dv_beta
     v_log_ab = complex(v_ref_alpha, v_ref_beta)

@@ -212,6 +212,13 @@ def control_fields(sc: Scenario, D: Resolved, mh: dict, psi0: float) -> tuple[di
             else 0.0
         ),
         dtc_band=inv.sign_band_A,
+        ie_rate=ctl.inverter_error_adaptation_per_s,
+        ie_wc=2 * math.pi * ctl.current_bandwidth_Hz,
+        ie_wmin=2 * math.pi * m.rated_frequency_Hz * ctl.inverter_error_adaptation_fmin_pu,
+        # the MRAS's standstill R1 identification absorbed the residual the scale learns
+        ie_r1=ctl.inverter_error_adaptation_per_s > 0
+        and ctl.speed_feedback == "mras"
+        and sc.mras.R1_standstill,
         fw=ctl.field_weakening,
         fw_v=ctl.field_weakening_voltage,
         fw_rate=ctl.field_weakening_rate,
