@@ -61,12 +61,18 @@ Axes
     * ``speed_pu``, ``load_pu`` — the same in per-unit of the run's machine: times its rated
       speed (rpm) and rated torque (N m) (:func:`imdrive.config.rated.rated_point`), so one
       sweep means the same operating points on every machine of the library;
+    * ``load_pu_available`` — the final load in per-unit of the torque the machine delivers
+      at the run's final speed reference on rated voltage (rated torque up to rated speed,
+      then constant power, bounded by the breakdown torque:
+      :func:`imdrive.sweep.model.available_torque_Nm`), so a cell above base speed asks for
+      a load the machine can carry;
     * any name whose value is a table of tables — a set axis: each entry names a set of
       overrides (``{}`` for none), its name is what the table records.
 
     For each run, a set axis's overrides are applied first, then the key-path axes (set on the
     base's TOML dictionary and validated once, as ``imdrive run --set`` does), then
-    ``R2_ratio``, ``R1_ratio``, ``speed_rpm``, ``load_Nm``, ``speed_pu``, ``load_pu``. Two
+    ``R2_ratio``, ``R1_ratio``, ``speed_rpm``, ``load_Nm``, ``speed_pu``, ``load_pu``,
+    ``load_pu_available``. Two
     axes may not set the same key (nor a table and a key inside it), whichever their kinds: a
     set axis's keys are those any of its sets overrides.
 

@@ -21,7 +21,15 @@ from imdrive.config.profiles import Profile
 from imdrive.config.scenario import Scenario
 from imdrive.errors import ConfigError
 
-CONVENIENCE = ("R2_ratio", "R1_ratio", "speed_rpm", "load_Nm", "speed_pu", "load_pu")
+CONVENIENCE = (
+    "R2_ratio",
+    "R1_ratio",
+    "speed_rpm",
+    "load_Nm",
+    "speed_pu",
+    "load_pu",
+    "load_pu_available",
+)
 CONVENIENCE_TARGET = {
     "R2_ratio": "estimator.R2_ratio",
     "R1_ratio": "estimator.R1_ratio",
@@ -29,9 +37,10 @@ CONVENIENCE_TARGET = {
     "load_Nm": "load.torque_Nm",
     "speed_pu": "control.speed_ref_rpm",
     "load_pu": "load.torque_Nm",
+    "load_pu_available": "load.torque_Nm",
 }
 #: the convenience axes that change only a profile's last value (cheap to validate)
-PROFILE_AXES = ("speed_rpm", "load_Nm", "speed_pu", "load_pu")
+PROFILE_AXES = ("speed_rpm", "load_Nm", "speed_pu", "load_pu", "load_pu_available")
 TOP_KEYS = (
     "name",
     "description",
@@ -382,6 +391,29 @@ def _with_load_pu(sc: Scenario, pu: float) -> Scenario:
     return _with_load(sc, pu * rated_point(sc.machine).torque_Nm)
 
 
+def available_torque_Nm(sc: Scenario) -> float:
+    """The torque the run's machine delivers at the final speed reference on rated voltage, N m.
+
+    Up to the rated speed the rated torque; above it the rated power's torque
+    ``T_rated w_rated / w`` (field weakening at rated voltage: constant power), but never more
+    than the breakdown torque, which falls as ``(w_rated / w)^2`` at constant voltage (the
+    circuit's, :func:`imdrive.config.rated.rated_point`). Example: Table IV at twice its rated
+    speed, 0.5 of its rated torque (its breakdown torque over four is higher).
+    """
+    from imdrive.config.rated import rated_point
+
+    rp = rated_point(sc.machine)
+    x = abs(sc.control.speed_ref_rpm.points[-1][1]) / rp.speed_rpm
+    if x <= 1.0:
+        return rp.torque_Nm
+    return min(rp.torque_Nm / x, rp.breakdown_torque_Nm / (x * x))
+
+
+def _with_load_pu_available(sc: Scenario, pu: float) -> Scenario:
+    # after the speed axes: the torque available depends on the run's speed
+    return _with_load(sc, pu * available_torque_Nm(sc))
+
+
 # the convenience axes, applied in this order after the overrides
 CONVENIENCE_APPLY = {
     "R2_ratio": _with_R2_ratio,
@@ -390,6 +422,7 @@ CONVENIENCE_APPLY = {
     "load_Nm": _with_load,
     "speed_pu": _with_speed_pu,
     "load_pu": _with_load_pu,
+    "load_pu_available": _with_load_pu_available,
 }
 
 
