@@ -210,4 +210,8 @@ register(
     )
 )
 
-from imdrive.studies import robust_tables, stability_tables  # noqa: E402, F401  (register theirs)
+from imdrive.studies import (  # noqa: E402, F401  (register theirs)
+    compensator_tables,
+    robust_tables,
+    stability_tables,
+)
