@@ -80,8 +80,9 @@ def _injection(speed, torque, r2_ratio, extra=()):
 def test_no_frequency_chatter_midway_between_the_injection_frequencies():
     """65 rpm, 4 N m: the stator frequency (about 2.9 Hz) lies between 2 and 4 Hz. The
     schedule decides once and keeps its choice (a switch at every decision kept the
-    compensator frozen before the hysteresis), and the compensator keeps updating. (R2_hat
-    ends 3.4 % off here: the low-speed bias docs/envelope.md reports.)"""
+    compensator frozen before the hysteresis), and the compensator keeps updating. (Where
+    R2_hat ends here is not what this test checks: docs/envelope.md generates the low-speed
+    cells' errors.)"""
     res = simulate(_injection(65, 4.0, 0.85))
     flags = res["comp_frozen_flags"].astype(int)
     t = res["time_s"]
