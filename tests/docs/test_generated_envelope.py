@@ -32,7 +32,7 @@ def test_stored_runs_cover_the_whole_rating_and_none_is_unflagged():
     df = envelope.classify(pd.read_csv(envelope.CSV_PATH))
     assert df["speed_pu"].min() == -2.0 and df["speed_pu"].max() == 2.0
     assert df["speed_pu"].abs().min() * envelope.rated_speed_rpm() == pytest.approx(20, abs=0.1)
-    assert set(df["load_pu"]) == {-1.0, -0.5, 0.0, 0.5, 1.0}
+    assert set(df["load_pu_available"]) == {-1.0, -0.5, 0.0, 0.5, 1.0}
     assert set(df["inverter"]) == {"ideal", "bridge"} and set(df["thermal"]) == {"constant", "ramp"}
     assert not df["unflagged"].any()
 
@@ -46,7 +46,8 @@ def test_reduced_grid_runs_end_to_end(tmp_path):
     assert len(df) == 8
     stored = pd.read_csv(tmp_path / "e.csv")
     assert list(stored.columns) == list(envelope.KEEP)
-    assert (tmp_path / "f" / "verdict_ok__speed_pu_vs_load_pu_by_inverter_by_thermal.png").is_file()
+    png = "verdict_ok__speed_pu_vs_load_pu_available_by_inverter_by_thermal.png"
+    assert (tmp_path / "f" / png).is_file()
     c = envelope.classify(stored)
     assert not c["unflagged"].any(), c[c["unflagged"]].to_string()
     # twice the rated speed: R2 is not observable there on today's code, and the rows say so

@@ -59,7 +59,7 @@ SHARE_GOAL = {"ideal": 0.99, "bridge": 0.97}
 UNFLAGGED_R2_PCT = 5.0
 #: speeds from here on (rpm on the sweep's machine) must all be within goal on the ideal drive
 HIGH_SPEED_RPM = 1400.0
-AXES = ("speed_pu", "load_pu", "R2_ratio", "R1_ratio", "thermal", "inverter")
+AXES = ("speed_pu", "load_pu_available", "R2_ratio", "R1_ratio", "thermal", "inverter")
 KEEP = (
     "run",
     *AXES,
@@ -222,8 +222,8 @@ def reduced_sweep(path: Path, speeds=(-2.0, 0.0116), loads=(0.5,)) -> Path:
             line = 'name = "envelope-reduced"'
         elif line.startswith("speed_pu ="):
             line = f"speed_pu = {list(speeds)}"
-        elif line.startswith("load_pu ="):
-            line = f"load_pu = {list(loads)}"
+        elif line.startswith("load_pu_available ="):
+            line = f"load_pu_available = {list(loads)}"
         elif line.startswith("R2_ratio ="):
             line = "R2_ratio = [1.3]"
         elif line.startswith("R1_ratio ="):
