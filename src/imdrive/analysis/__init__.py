@@ -15,7 +15,9 @@ see :mod:`imdrive`).
 * :mod:`imdrive.analysis.figures` — :func:`plot_speed_error_vs_R2` (matplotlib, imported
   lazily);
 * :mod:`imdrive.analysis.nameplate` — the equivalent circuit estimated from nameplate and
-  catalogue data (:class:`Nameplate`, :func:`estimate_circuit`).
+  catalogue data (:class:`Nameplate`, :func:`estimate_circuit`, and the published
+  nameplate-only method of Lee, Frank, Sen et al., :func:`estimate_circuit_lee`, whose
+  equations are in :mod:`imdrive.analysis.nameplate_lee`).
 
 Every public name is re-exported here.
 """
@@ -34,7 +36,12 @@ from imdrive.analysis.foc import (
     detuning_speed_error_rpm,
     foc_operating_point,
 )
-from imdrive.analysis.nameplate import Nameplate, NameplateFit, estimate_circuit
+from imdrive.analysis.nameplate import (
+    Nameplate,
+    NameplateFit,
+    estimate_circuit,
+    estimate_circuit_lee,
+)
 
 __all__ = [
     "SteadyState",
@@ -48,4 +55,5 @@ __all__ = [
     "Nameplate",
     "NameplateFit",
     "estimate_circuit",
+    "estimate_circuit_lee",
 ]

@@ -210,4 +210,31 @@ register(
     )
 )
 
+# ---------------------------------------------------------------------------------------------
+# docs/nameplate.md: nameplate -> circuit on the library (imdrive.studies.nameplate_check)
+
+
+def _nameplate_check(df) -> list[str]:
+    from imdrive.studies.nameplate_check import markdown
+
+    return markdown(df)
+
+
+def _measure_nameplate_check():
+    from imdrive.studies.nameplate_check import run
+
+    return run()
+
+
+register(
+    DocTable(
+        "nameplate-check",
+        "nameplate.md",
+        "data/nameplate_check.csv",
+        _nameplate_check,
+        _measure_nameplate_check,
+    )
+)
+
+
 from imdrive.studies import robust_tables, stability_tables  # noqa: E402, F401  (register theirs)
