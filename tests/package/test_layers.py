@@ -119,6 +119,7 @@ INTRA = {
         "nameplate_lee",
         "nameplate",
         "nameplate_cli",
+        "circuit_from_tests",
         "commissioning",
         "headroom",
     ),

@@ -17,7 +17,9 @@ see :mod:`imdrive`).
 * :mod:`imdrive.analysis.nameplate` — the equivalent circuit estimated from nameplate and
   catalogue data (:class:`Nameplate`, :func:`estimate_circuit`, and the published
   nameplate-only method of Lee, Frank, Sen et al., :func:`estimate_circuit_lee`, whose
-  equations are in :mod:`imdrive.analysis.nameplate_lee`).
+  equations are in :mod:`imdrive.analysis.nameplate_lee`);
+* :mod:`imdrive.analysis.circuit_from_tests` — the circuit from a DC stator resistance, a
+  no-load and a locked-rotor test (:func:`circuit_from_tests`).
 
 Every public name is re-exported here.
 """
@@ -29,6 +31,12 @@ from imdrive.analysis.circuit import (
     breakdown,
     breakdown_thevenin,
     equivalent_circuit,
+)
+from imdrive.analysis.circuit_from_tests import (
+    LockedRotorTest,
+    NoLoadTest,
+    TestCircuit,
+    circuit_from_tests,
 )
 from imdrive.analysis.figures import plot_speed_error_vs_R2
 from imdrive.analysis.foc import (
@@ -56,4 +64,8 @@ __all__ = [
     "NameplateFit",
     "estimate_circuit",
     "estimate_circuit_lee",
+    "NoLoadTest",
+    "LockedRotorTest",
+    "TestCircuit",
+    "circuit_from_tests",
 ]
