@@ -3,14 +3,14 @@
 Where a motor has been tested, its circuit comes from measurements instead of a nameplate.
 IEC 60034-28:2012 ("Rotating electrical machines - Part 28: Test methods for determining
 quantities of equivalent circuit diagrams for three-phase low-voltage cage induction motors";
-title, edition and scope checked against the standard's catalogue entry, its clauses and
-formulae not) defines such tests and states its formulae for the star-equivalent circuit; the
-reduction here uses the measurements those tests give (the stator resistance, a no-load test
-at rated voltage and frequency, a locked-rotor test, at reduced frequency if wanted) with the
-classic no-load / locked-rotor reduction of the textbooks and IEEE Std 112, made exact for the
-single-cage T-circuit instead of its usual approximations. It is not a transcription of the
-standard's procedure (which also separates the losses over several voltages and corrects for
-temperature and saturation).
+title, edition and scope checked against the standard's catalogue entry, which says its
+formulae are for the star-equivalent circuit and that the 2012 edition admits a load-curve
+test in place of the reverse-rotation and locked-rotor tests; its clauses and formulae were
+not checked) defines tests of this kind. The reduction here takes a stator resistance, a
+no-load test at rated voltage and frequency and a locked-rotor test (at reduced frequency if
+wanted) through the classic no-load / locked-rotor equations of the textbooks and IEEE Std
+112, made exact for the single-cage T-circuit instead of their usual approximations. It is not
+a transcription of the standard's procedure.
 
 Per phase, star equivalent, rms; ``V_ph = V / sqrt 3``; reactances at the no-load test's
 frequency ``f``, scaled by ``f / f_k`` from the locked-rotor test's ``f_k``::
