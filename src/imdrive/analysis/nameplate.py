@@ -225,16 +225,20 @@ class NameplateFit:
     machine : MachineParams
         The estimated machine (circuit, nameplate fields, J).
     residuals : dict of str to float
-        Relative error of each fitted quantity (``rated_R``, ``rated_X`` of the rated-point
-        impedance over ``|Z_n|``; ``breakdown_torque``; ``starting_current``) and of the
-        efficiency the circuit implies against the given one (``efficiency``).
+        ``method="fit"``: relative error of each fitted quantity (``rated_R``, ``rated_X`` of
+        the rated-point impedance over ``|Z_n|``; ``breakdown_torque``; ``starting_current``)
+        and of the efficiency the circuit implies against the given one (``efficiency``).
+        ``method="lee"``: the circuit's torque and current at the rated slip and voltage
+        against the nameplate's (``rated_torque``, ``rated_current``).
     assumed : tuple of str
         What was assumed for want of data (empty when nothing was).
     method : str
         ``"fit"`` or ``"lee"`` (:data:`METHODS`).
     details : dict
-        ``method="lee"``: the method's own circuit (its core-loss resistance ``RC_ohm``,
-        which the plant model does not carry), its loss split (W) and its sweeps.
+        ``method="lee"``: the core-loss resistance ``RC_ohm`` the plant model does not
+        carry, the locked-rotor current used (``locked_rotor_current_A``), the loss split
+        (``P_in_W``, ``P_core_W``, ``P_mech_W``, ``P_stray_W``, ``P_scl_W``, ``P_rcl_W``,
+        ``P_ag_W``) and the sweeps (``iterations``).
     """
 
     machine: MachineParams

@@ -237,4 +237,31 @@ register(
 )
 
 
+# ---------------------------------------------------------------------------------------------
+# docs/machine-envelope.md: why the large machines lose control at rated speed
+
+
+def _ramp_diagnosis(df) -> list[str]:
+    from imdrive.studies.machines import diagnosis_markdown
+
+    return diagnosis_markdown(df)
+
+
+def _measure_ramp_diagnosis():
+    from imdrive.studies.machines import ramp_diagnosis
+
+    return ramp_diagnosis()
+
+
+register(
+    DocTable(
+        "machine-ramp-diagnosis",
+        "machine-envelope.md",
+        "data/machine_ramp_diagnosis.csv",
+        _ramp_diagnosis,
+        _measure_ramp_diagnosis,
+    )
+)
+
+
 from imdrive.studies import robust_tables, stability_tables  # noqa: E402, F401  (register theirs)
