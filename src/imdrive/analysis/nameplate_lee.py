@@ -243,20 +243,50 @@ def lee_circuit(
     """
     V = voltage_V / math.sqrt(3.0)
     f_stray = stray_loss_fraction(power_W) if stray_fraction is None else stray_fraction
+    L = _loss_split(
+        power_W, slip, efficiency, core_loss_fraction, mechanical_loss_fraction, f_stray
+    )
+    tan_phi = math.sqrt(1.0 - power_factor**2) / power_factor
+    I1 = complex(L["P_in"], -L["P_in"] * tan_phi) / (3.0 * V)  # per phase
+    R1 = L["P_scl"] / 3.0 / abs(I1) ** 2
+    E, R2, X1, X2, XM, sweeps = _sweeps(
+        V,
+        I1,
+        R1,
+        slip,
+        L["P_ag"] / 3.0,
+        locked_rotor_current_A,
+        leakage_split,
+        tol,
+        max_iterations,
+    )
+    RC = abs(E) ** 2 / (L["P_core"] / 3.0) if L["P_core"] > 0 else math.inf
+    return LeeCircuit(
+        R1=R1,
+        R2=R2,
+        X1=X1,
+        X2=X2,
+        XM=XM,
+        RC=RC,
+        iterations=sweeps,
+        losses_W=L,
+    )
+
+
+def _loss_split(power_W, slip, efficiency, f_core, f_mech, f_stray) -> dict:
+    """The machine's input, losses and air-gap power, W (module docstring's first block)."""
     for name, v in (
-        ("core_loss_fraction", core_loss_fraction),
-        ("mechanical_loss_fraction", mechanical_loss_fraction),
+        ("core_loss_fraction", f_core),
+        ("mechanical_loss_fraction", f_mech),
         ("stray_loss_fraction", f_stray),
     ):
         if not (math.isfinite(v) and 0.0 <= v < 1.0):
             raise ConfigError(name, f"must be within 0-1, got {v!r}")
-    if not core_loss_fraction + mechanical_loss_fraction < 1.0:
+    if not f_core + f_mech < 1.0:
         raise ConfigError("core_loss_fraction", "core + mechanical loss fractions must be < 1")
     P_in = power_W / efficiency
     P_loss = P_in - power_W
-    P_core = core_loss_fraction * P_loss
-    P_mech = mechanical_loss_fraction * P_loss
-    P_stray = f_stray * power_W
+    P_core, P_mech, P_stray = f_core * P_loss, f_mech * P_loss, f_stray * power_W
     P_ag = (power_W + P_mech + P_stray) / (1.0 - slip)
     P_scl = P_in - P_ag - P_core
     if not P_scl > 0:
@@ -266,12 +296,22 @@ def lee_circuit(
             f"rotor's {slip * P_ag:.5g} W and the assumed core, mechanical and stray "
             f"{P_core + P_mech + P_stray:.5g} W are taken (lower the loss fractions)",
         )
-    tan_phi = math.sqrt(1.0 - power_factor**2) / power_factor
-    p_in, q_in, p_ag = P_in / 3.0, P_in * tan_phi / 3.0, P_ag / 3.0  # per phase
-    I1 = complex(p_in, -q_in) / V
-    R1 = P_scl / 3.0 / abs(I1) ** 2
-    Z_lr = V / locked_rotor_current_A
+    return dict(
+        P_in=P_in,
+        P_core=P_core,
+        P_mech=P_mech,
+        P_stray=P_stray,
+        P_scl=P_scl,
+        P_rcl=slip * P_ag,
+        P_ag=P_ag,
+    )
 
+
+def _sweeps(V, I1, R1, slip, p_ag, I_lr, k, tol, max_iterations):
+    """The Gauss-Seidel sweeps of the module docstring (per phase): ``E, R2, X1, X2, XM`` and
+    the number of sweeps."""
+    q_in = -(V * I1).imag  # reactive input per phase (V real, I1 lagging)
+    Z_lr = V / I_lr
     E, I2_abs, X2 = complex(V, 0.0), I1.real, 0.0
     old, sweeps = None, 0
     while True:
@@ -282,18 +322,18 @@ def lee_circuit(
         if disc < 0:
             raise ConfigError(
                 "locked_rotor_current",
-                f"{locked_rotor_current_A:.5g} A is too small: its leakage reactance cannot "
-                "carry the air-gap power at rated slip",
+                f"{I_lr:.5g} A is too small: its leakage reactance cannot carry the air-gap "
+                "power at rated slip",
             )
         R2 = slip * (abs(E) ** 2 + math.sqrt(disc)) / (2.0 * p_ag)
         if not Z_lr > R1 + R2:
             raise ConfigError(
                 "locked_rotor_current",
-                f"{locked_rotor_current_A:.5g} A is too large: V / I_LR = {Z_lr:.4g} ohm is "
-                f"not above R1 + R2 = {R1 + R2:.4g} ohm",
+                f"{I_lr:.5g} A is too large: V / I_LR = {Z_lr:.4g} ohm is not above R1 + R2 = "
+                f"{R1 + R2:.4g} ohm",
             )
         X_lr = math.sqrt(Z_lr**2 - (R1 + R2) ** 2)
-        X1, X2 = leakage_split * X_lr, (1.0 - leakage_split) * X_lr
+        X1, X2 = k * X_lr, (1.0 - k) * X_lr
         q_m = q_in - X1 * abs(I1) ** 2 - X2 * I2_abs**2
         if not q_m > 0:
             raise ConfigError(
@@ -308,24 +348,5 @@ def lee_circuit(
         if old is not None and all(
             abs(a - b) <= tol * abs(a) for a, b in zip(new, old, strict=True)
         ):
-            break
+            return E, R2, X1, X2, XM, sweeps
         old = new
-    RC = abs(E) ** 2 / (P_core / 3.0) if P_core > 0 else math.inf
-    return LeeCircuit(
-        R1=R1,
-        R2=R2,
-        X1=X1,
-        X2=X2,
-        XM=XM,
-        RC=RC,
-        iterations=sweeps,
-        losses_W=dict(
-            P_in=P_in,
-            P_core=P_core,
-            P_mech=P_mech,
-            P_stray=P_stray,
-            P_scl=P_scl,
-            P_rcl=slip * P_ag,
-            P_ag=P_ag,
-        ),
-    )

@@ -164,17 +164,19 @@ def markdown(df: pd.DataFrame) -> list[str]:
     cases = list(dict.fromkeys(zip(df["method"], df["data"], strict=True)))
     head = ["machine", "code letter", "published T_bd/T_n"]
     head += [f"T_bd error, {_LABELS.get(c, ' '.join(c))}" for c in cases]
-    head += ["rated torque / speed / current: largest error"]
+    head += ["rated torque, speed, current: largest relative error (speed: of the slip)"]
     lines = ["| " + " | ".join(head) + " |", "|---" * len(head) + "|"]
     for name, g in df.groupby("machine", sort=False):
         row = [f"`{name}`", g["code_letter"].dropna().iloc[0], f"{g['T_bd_ratio'].iloc[0]:.2f}"]
         for method, data in cases:
             r = g[(g["method"] == method) & (g["data"] == data)].iloc[0]
-            row.append(f"{r['breakdown_err_pct']:+.1f} %")
-        row.append(
-            f"{g['torque_err_pct'].abs().max():.0e} % / {g['speed_err_rpm'].abs().max():.0e} rpm"
-            f" / {g['current_err_pct'].abs().max():.0e} %"
+            row.append(f"{round(r['breakdown_err_pct'], 1) + 0.0:+.1f} %")  # no -0.0
+        worst = max(
+            g["torque_err_pct"].abs().max() / 100.0,
+            g["speed_err_pu_slip"].abs().max(),
+            g["current_err_pct"].abs().max() / 100.0,
         )
+        row.append("< 1e-9" if worst < 1e-9 else f"{worst:.1e}")
         lines.append("| " + " | ".join(row) + " |")
     bounds = "; ".join(f"{_LABELS[c]}: {v:g} %" for c, v in BREAKDOWN_TOL_PCT.items())
     lines += [
