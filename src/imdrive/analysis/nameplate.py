@@ -19,8 +19,9 @@ ratio ``I_st / I_n``. Two methods estimate the single-cage T-circuit (``R1``, ``
     no friction or stray loss: loaded to rated torque, the plant turns a little faster and
     draws a little less current than the nameplate says, by the fractions of loss it does not
     carry (reported as ``rated_torque`` and ``rated_current`` residuals). On the library's
-    machines it reproduces the published circuits' breakdown torque from the nameplate alone
-    (docs/machines.md, "From a nameplate").
+    machines, from the nameplate and its code letter alone, it reproduces the published
+    circuits' breakdown torque within the bound docs/nameplate.md states
+    (:mod:`imdrive.studies.nameplate_check`).
 
 ``method="fit"`` (:func:`estimate_circuit`'s default, kept for existing uses)
     ``R1`` from the rated point's power balance, then a least-squares fit of ``R2``,

@@ -5,8 +5,9 @@ induction motor equivalent circuit parameters from nameplate data", Proc. 2012 N
 Power Symposium (NAPS), Urbana, IL, Sep. 2012, pp. 1-6, doi:10.1109/NAPS.2012.6336384.
 (Authors, title and the method's four steps checked against the paper's text; venue, year,
 pages and DOI checked against the reference its co-author S. Frank gives in his MATLAB
-implementation ``fitInductionMotorParam``, from which the default loss split below is taken;
-no code of it is reused here.)
+implementation ``fitInductionMotorParam``. The paper's own equations were not available here:
+the equations below and the default loss split are those of that implementation, written
+anew, no code of it reused.)
 
 The method needs only what a NEMA nameplate prints: rated power ``P``, line voltage ``V``,
 frequency, speed (slip ``s``), efficiency ``eta``, power factor ``cos phi``, NEMA design
