@@ -112,7 +112,17 @@ NUMBA_ALLOWED = ("kernels", "_cache")
 #: order inside a package: a module may import only siblings listed before it
 INTRA = {
     "fuzzy": ("tables", "inference", "fit"),
-    "analysis": ("circuit", "foc", "figures", "nameplate", "commissioning", "headroom"),
+    "analysis": (
+        "circuit",
+        "foc",
+        "figures",
+        "nameplate_lee",
+        "nameplate",
+        "nameplate_cli",
+        "circuit_from_tests",
+        "commissioning",
+        "headroom",
+    ),
 }
 
 MAX_LEVELS = 6

@@ -76,3 +76,17 @@ def test_a_sweep_axis_over_machines_keeps_the_settings_per_unit():
         assert sc.machine_preset == machine
         assert sc.inverter.Vdc_V == pytest.approx(sc.machine.rated_voltage_V * 2**0.5)
         assert resolve(sc).R2_hat == pytest.approx(ratio * sc.machine.R2_ohm)
+
+
+@pytest.mark.slow
+def test_large_machine_is_lost_by_the_estimate_lag_not_by_the_machine():
+    """krause-500hp at rated speed, no load, R2_hat = R2: with the MRAS the speed estimate lags
+    the ramp by a good part of the rated slip, the plant over-fluxes and control is lost; with
+    the measured speed the flux stays at rated and control holds (docs/machine-envelope.md)."""
+    d = study.ramp_diagnosis(
+        [("krause-500hp", "mras", 1.0, 0.5), ("krause-500hp", "measured", 1.0, 0.5)]
+    )
+    mras, measured = d.iloc[0], d.iloc[1]
+    assert mras["lost"] and mras["lag_pu_slip"] > 0.3 and mras["max_flux_pu"] > 1.5
+    assert mras["voltage_limit_at_pu"] < 0.7  # the inverter's limit at about half speed
+    assert not measured["lost"] and measured["max_flux_pu"] < 1.05

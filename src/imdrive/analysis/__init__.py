@@ -15,7 +15,11 @@ see :mod:`imdrive`).
 * :mod:`imdrive.analysis.figures` — :func:`plot_speed_error_vs_R2` (matplotlib, imported
   lazily);
 * :mod:`imdrive.analysis.nameplate` — the equivalent circuit estimated from nameplate and
-  catalogue data (:class:`Nameplate`, :func:`estimate_circuit`).
+  catalogue data (:class:`Nameplate`, :func:`estimate_circuit`, and the published
+  nameplate-only method of Lee, Frank, Sen et al., :func:`estimate_circuit_lee`, whose
+  equations are in :mod:`imdrive.analysis.nameplate_lee`);
+* :mod:`imdrive.analysis.circuit_from_tests` — the circuit from a DC stator resistance, a
+  no-load and a locked-rotor test (:func:`circuit_from_tests`).
 
 Every public name is re-exported here.
 """
@@ -28,13 +32,24 @@ from imdrive.analysis.circuit import (
     breakdown_thevenin,
     equivalent_circuit,
 )
+from imdrive.analysis.circuit_from_tests import (
+    LockedRotorTest,
+    NoLoadTest,
+    TestCircuit,
+    circuit_from_tests,
+)
 from imdrive.analysis.figures import plot_speed_error_vs_R2
 from imdrive.analysis.foc import (
     FOCOperatingPoint,
     detuning_speed_error_rpm,
     foc_operating_point,
 )
-from imdrive.analysis.nameplate import Nameplate, NameplateFit, estimate_circuit
+from imdrive.analysis.nameplate import (
+    Nameplate,
+    NameplateFit,
+    estimate_circuit,
+    estimate_circuit_lee,
+)
 
 __all__ = [
     "SteadyState",
@@ -48,4 +63,9 @@ __all__ = [
     "Nameplate",
     "NameplateFit",
     "estimate_circuit",
+    "estimate_circuit_lee",
+    "NoLoadTest",
+    "LockedRotorTest",
+    "TestCircuit",
+    "circuit_from_tests",
 ]

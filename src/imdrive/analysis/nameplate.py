@@ -1,31 +1,43 @@
 """Nameplate and catalogue data -> T-equivalent circuit (an estimate, with its assumptions).
 
 A motor's nameplate gives rated power ``P``, line voltage ``V``, frequency ``f``, poles,
-speed ``n``, line current ``I``, power factor ``cos phi`` and efficiency ``eta``; a catalogue
-adds the breakdown torque ratio ``T_bd / T_n`` and the starting current ratio ``I_st / I_n``.
-:func:`estimate_circuit` finds the single-cage T-circuit (``R1``, ``R2``, ``X1``, ``X2``,
-``X_M``) that reproduces these exactly: ``R1`` from the rated point's power balance, then a
-least-squares fit of ``R2``, ``X1 + X2`` and ``X_M`` to the rated point's impedance and the
-breakdown torque (equations below). This is the formulation of the *manufacturer-data*
-methods, which fit the circuit to a catalogue's rated point and torque figures:
+speed ``n``, line current ``I``, power factor ``cos phi`` and efficiency ``eta``; a NEMA
+nameplate adds the design letter (the leakage split) and the code letter (locked-rotor kVA
+per hp); a catalogue adds the breakdown torque ratio ``T_bd / T_n`` and the starting current
+ratio ``I_st / I_n``. Two methods estimate the single-cage T-circuit (``R1``, ``R2``, ``X1``,
+``X2``, ``X_M``) that imdrive's plant model simulates:
 
-* J. Pedra, F. Córcoles, "Estimation of induction motor double-cage model parameters from
-  manufacturer data", IEEE Trans. Energy Conversion 19(2), 2004 (its single-cage model:
-  the rated point and the breakdown torque fix the circuit);
-* M. H. Haque, "Determination of NEMA design induction motor parameters from manufacturer
-  data", IEEE Trans. Energy Conversion 23(4), 2008 (the leakage split of IEEE Std 112 by
-  NEMA design letter).
+``method="lee"`` (recommended: :func:`estimate_circuit_lee`)
+    The published nameplate-only iterative method of K. Lee, S. Frank, P. K. Sen,
+    L. Gentile Polese, M. Alahmad, C. Waters, "Estimation of induction motor equivalent
+    circuit parameters from nameplate data", Proc. North American Power Symposium (NAPS),
+    2012, doi:10.1109/NAPS.2012.6336384 (equations and citation check in
+    :mod:`imdrive.analysis.nameplate_lee`). It splits the losses by typical fractions (core,
+    friction and windage, stray load), so ``R1`` is a stator copper resistance, and takes the
+    leakage from the locked-rotor current (code letter, or a catalogue's ``I_st / I_n``). Its
+    core-loss resistance is dropped (the plant has no iron-loss branch), and the plant carries
+    no friction or stray loss: loaded to rated torque, the plant turns a little faster and
+    draws a little less current than the nameplate says, by the fractions of loss it does not
+    carry (reported as ``rated_torque`` and ``rated_current`` residuals). On the library's
+    machines, from the nameplate and its code letter alone, it reproduces the published
+    circuits' breakdown torque within the bound docs/nameplate.md states
+    (:mod:`imdrive.studies.nameplate_check`).
 
-The equations and the lumping of every loss into ``R1`` are this module's; they are not a
-transcription of either paper's algorithm (authors, titles and journals as cited in the
-literature; the papers' equations were not re-checked here). It is *not* the nameplate-only
-iterative method of K. Lee, S. Frank, P. K. Sen, L. Gentile Polese, M. Alahmad, C. Waters,
-"Estimation of induction motor equivalent circuit parameters from nameplate data", North
-American Power Symposium (NAPS), 2012 (authors and title checked against the paper, the
-venue and year not), which needs no breakdown torque: without a breakdown torque this module
-assumes one (:data:`DEFAULT_BREAKDOWN_RATIO`) and says so.
+``method="fit"`` (:func:`estimate_circuit`'s default, kept for existing uses)
+    ``R1`` from the rated point's power balance, then a least-squares fit of ``R2``,
+    ``X1 + X2`` and ``X_M`` to the rated point's impedance and the breakdown torque (equations
+    below): the formulation of the *manufacturer-data* methods, which fit the circuit to a
+    catalogue's rated point and torque figures (J. Pedra, F. Córcoles, "Estimation of induction
+    motor double-cage model parameters from manufacturer data", IEEE Trans. Energy Conversion
+    19(2), 2004; M. H. Haque, "Determination of NEMA design induction motor parameters from
+    manufacturer data", IEEE Trans. Energy Conversion 23(4), 2008; authors, titles and
+    journals as cited in the literature, the papers' equations not re-checked here: the
+    equations and the lumping of every loss into ``R1`` are this module's). It meets a given
+    breakdown torque exactly; without one (nor a starting current) it assumes
+    :data:`DEFAULT_BREAKDOWN_RATIO` and says so, which on the library's machines puts the
+    breakdown torque up to 50 % off.
 
-Equations (per phase, star equivalent, rms; ``s_n = 1 - n / n_sync``)::
+Equations of ``method="fit"`` (per phase, star equivalent, rms; ``s_n = 1 - n / n_sync``)::
 
     Z_n   = V_ph / I_n (cos phi + j sin phi)                 rated-point input impedance
     P_in  = 3 V_ph I_n cos phi,  P_ag = P / (1 - s_n)        (T_n = P / w_m, P_ag = T_n w_s)
@@ -38,8 +50,8 @@ with ``X1 = k (X1 + X2)``. The unknowns ``R2``, ``X1 + X2``, ``X_M`` (and ``k`` 
 starting current is also given) are found by least squares on the logarithms (exact when the
 data are consistent: the residuals are reported).
 
-Assumptions (the circuit is imdrive's plant model: no iron-loss branch, no saturation, no
-deep-bar or double-cage effect):
+Assumptions of ``method="fit"`` (the circuit is imdrive's plant model: no iron-loss branch,
+no saturation, no deep-bar or double-cage effect):
 
 * every loss other than the rotor copper loss (stator copper, iron, friction and windage,
   stray load) is lumped into ``R1``, so that the circuit's input power at the rated point is
@@ -67,16 +79,35 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import least_squares
 
+from imdrive.analysis.circuit import equivalent_circuit
+from imdrive.analysis.nameplate_lee import (
+    CORE_LOSS_FRACTION,
+    MECHANICAL_LOSS_FRACTION,
+    NEMA_CODE_LETTERS,
+    lee_circuit,
+    locked_rotor_current_A,
+)
 from imdrive.config.machine import MachineParams
 from imdrive.errors import ConfigError
 
 __all__ = [
     "DEFAULT_BREAKDOWN_RATIO",
+    "DEFAULT_CODE_LETTER",
     "LEAKAGE_SPLIT",
+    "METHODS",
     "Nameplate",
     "NameplateFit",
     "estimate_circuit",
+    "estimate_circuit_lee",
 ]
+
+#: The estimation methods of :func:`estimate_circuit` (module docstring).
+METHODS = ("lee", "fit")
+
+#: NEMA code letter assumed by ``method="lee"`` when neither it nor the starting current is
+#: given: G (5.6-6.3 kVA/hp, a locked-rotor current of about 6 times rated on a typical
+#: design B machine). An assumption, reported as such.
+DEFAULT_CODE_LETTER = "G"
 
 #: Breakdown torque over rated torque assumed when neither it nor the starting current is given
 #: (a typical NEMA design B / IEC design N value; catalogues print the machine's own).
@@ -121,6 +152,10 @@ class Nameplate:
     J_kgm2 : float or None
         Rotor inertia, kg m^2; ``None``: from an inertia constant of
         :data:`DEFAULT_INERTIA_CONSTANT_S`.
+    code_letter : str or None
+        NEMA code letter (locked-rotor kVA per hp,
+        :data:`~imdrive.analysis.nameplate_lee.NEMA_CODE_LETTERS`), used by ``method="lee"``
+        when no starting current ratio is given.
     """
 
     power_W: float
@@ -135,6 +170,7 @@ class Nameplate:
     starting_current_ratio: float | None = None
     leakage_split: float = 0.5
     J_kgm2: float | None = None
+    code_letter: str | None = None
 
     def __post_init__(self):
         for name in ("power_W", "voltage_V", "frequency_Hz", "speed_rpm", "current_A"):
@@ -160,6 +196,8 @@ class Nameplate:
             raise ConfigError("starting_current_ratio", "must be > 1")
         if self.J_kgm2 is not None and not self.J_kgm2 > 0:
             raise ConfigError("J_kgm2", "must be > 0")
+        if self.code_letter is not None and self.code_letter not in NEMA_CODE_LETTERS:
+            raise ConfigError("code_letter", "must be a NEMA code letter A-V (not I, O, Q)")
         slip = 1.0 - self.speed_rpm / n_sync
         if not self.efficiency < 1.0 - slip:
             raise ConfigError(
@@ -188,16 +226,27 @@ class NameplateFit:
     machine : MachineParams
         The estimated machine (circuit, nameplate fields, J).
     residuals : dict of str to float
-        Relative error of each fitted quantity (``rated_R``, ``rated_X`` of the rated-point
-        impedance over ``|Z_n|``; ``breakdown_torque``; ``starting_current``) and of the
-        efficiency the circuit implies against the given one (``efficiency``).
+        ``method="fit"``: relative error of each fitted quantity (``rated_R``, ``rated_X`` of
+        the rated-point impedance over ``|Z_n|``; ``breakdown_torque``; ``starting_current``)
+        and of the efficiency the circuit implies against the given one (``efficiency``).
+        ``method="lee"``: the circuit's torque and current at the rated slip and voltage
+        against the nameplate's (``rated_torque``, ``rated_current``).
     assumed : tuple of str
         What was assumed for want of data (empty when nothing was).
+    method : str
+        ``"fit"`` or ``"lee"`` (:data:`METHODS`).
+    details : dict
+        ``method="lee"``: the core-loss resistance ``RC_ohm`` the plant model does not
+        carry, the locked-rotor current used (``locked_rotor_current_A``), the loss split
+        (``P_in_W``, ``P_core_W``, ``P_mech_W``, ``P_stray_W``, ``P_scl_W``, ``P_rcl_W``,
+        ``P_ag_W``) and the sweeps (``iterations``).
     """
 
     machine: MachineParams
     residuals: dict = field(default_factory=dict)
     assumed: tuple = ()
+    method: str = "fit"
+    details: dict = field(default_factory=dict)
 
 
 def _impedance(R1, R2, X1, X2, XM, s):
@@ -214,7 +263,9 @@ def _breakdown_torque(R1, X1, X2, XM, V_ph, w_s):
     return 3.0 * abs(V_th) ** 2 / (2.0 * w_s * (Z_th.real + root))
 
 
-def estimate_circuit(plate: Nameplate, description: str = "") -> NameplateFit:
+def estimate_circuit(
+    plate: Nameplate, description: str = "", method: str = "fit", **options
+) -> NameplateFit:
     """Estimate the T-equivalent circuit from nameplate and catalogue data.
 
     Parameters
@@ -223,6 +274,12 @@ def estimate_circuit(plate: Nameplate, description: str = "") -> NameplateFit:
         The data.
     description : str
         Text for the machine's ``description``.
+    method : {"fit", "lee"}
+        ``"fit"``: the least-squares fit (module docstring; the default, as before);
+        ``"lee"``: the published nameplate-only method, :func:`estimate_circuit_lee`
+        (recommended).
+    **options
+        ``method="lee"``: the loss fractions of :func:`estimate_circuit_lee`.
 
     Returns
     -------
@@ -237,8 +294,14 @@ def estimate_circuit(plate: Nameplate, description: str = "") -> NameplateFit:
 
     Notes
     -----
-    The method and its assumptions are in the module docstring.
+    The methods and their assumptions are in the module docstring.
     """
+    if method == "lee":
+        return estimate_circuit_lee(plate, description, **options)
+    if method != "fit":
+        raise ConfigError("method", f"must be one of {', '.join(METHODS)}, got {method!r}")
+    if options:
+        raise ConfigError("method", f"fit takes no options, got {', '.join(options)}")
     p = plate
     V_ph = p.voltage_V / math.sqrt(3.0)
     w_e = 2.0 * math.pi * p.frequency_Hz
@@ -307,12 +370,20 @@ def estimate_circuit(plate: Nameplate, description: str = "") -> NameplateFit:
     fit = dict(zip(names, (float(v) for v in r), strict=True))
     fit["efficiency"] = p.power_W / P_in / p.efficiency - 1.0  # implied over given
 
+    machine = _machine(p, R1, R2, X1, X2, XM, description, assumed)
+    return NameplateFit(machine=machine, residuals=fit, assumed=tuple(assumed))
+
+
+def _machine(p: Nameplate, R1, R2, X1, X2, XM, description: str, assumed: list) -> MachineParams:
+    """The MachineParams of a circuit (ohm at the rated frequency) and its nameplate; J from
+    the plate or an inertia constant (appended to ``assumed``)."""
+    w_e = 2.0 * math.pi * p.frequency_Hz
     J = p.J_kgm2
     if J is None:
         w_m = p.speed_rpm * math.pi / 30.0
         J = 2.0 * DEFAULT_INERTIA_CONSTANT_S * p.power_W / w_m**2
         assumed.append(f"J from an inertia constant H = {DEFAULT_INERTIA_CONSTANT_S:g} s")
-    machine = MachineParams(
+    return MachineParams(
         R1_ohm=R1,
         R2_ohm=R2,
         Ll1_H=X1 / w_e,
@@ -329,139 +400,90 @@ def estimate_circuit(plate: Nameplate, description: str = "") -> NameplateFit:
         rated_efficiency=float(p.efficiency),
         description=description,
     )
-    return NameplateFit(machine=machine, residuals=fit, assumed=tuple(assumed))
 
 
-# ------------------------------------------------------------------------------------------
-# the command line: imdrive machine-from-nameplate
-
-
-def machine_toml(fit: NameplateFit, plate: Nameplate) -> str:
-    """The estimated machine as a TOML file for ``[machine] file = "..."``.
+def estimate_circuit_lee(
+    plate: Nameplate,
+    description: str = "",
+    core_loss_fraction: float = CORE_LOSS_FRACTION,
+    mechanical_loss_fraction: float = MECHANICAL_LOSS_FRACTION,
+    stray_loss_fraction: float | None = None,
+) -> NameplateFit:
+    """Estimate the T-circuit by the nameplate-only method of Lee, Frank, Sen et al. (2012).
 
     Parameters
     ----------
-    fit : NameplateFit
-        The result of :func:`estimate_circuit`.
     plate : Nameplate
-        The data it came from (written into ``source``).
+        The data: power, voltage, frequency, poles, speed, power factor, efficiency and the
+        leakage split (design letter); the locked-rotor current from
+        ``starting_current_ratio`` (a catalogue's ``I_st / I_n``) if given, else from
+        ``code_letter``, else :data:`DEFAULT_CODE_LETTER` is assumed. A breakdown torque
+        ratio is not used (the method has no place for it: ``method="fit"`` has).
+    description : str
+        Text for the machine's ``description``.
+    core_loss_fraction, mechanical_loss_fraction : float
+        Core and friction-and-windage loss over the total loss ``P / eta - P``
+        (defaults: the method's 0.12 and 0.14). A circuit known to carry copper losses only
+        (as imdrive's library machines) has 0 and 0.
+    stray_loss_fraction : float or None
+        Stray-load loss over ``P``; None: IEEE Std 112's by rating
+        (:func:`~imdrive.analysis.nameplate_lee.stray_loss_fraction`).
 
     Returns
     -------
-    str
-        A ``[machine]`` table with every MachineParams field, ``source`` and ``notes``.
+    NameplateFit
+        The machine (the method's circuit without its core-loss branch), and as residuals the
+        plant circuit's relative error at the rated slip and voltage against the nameplate:
+        ``rated_torque`` (``T_e / T_n - 1``: the friction and stray losses the plant does not
+        carry), ``rated_current`` (``|I1| / I_n - 1``: the core-loss current it does not draw,
+        and a nameplate current that differs from ``P / (sqrt 3 V eta cos phi)``);
+        ``details`` holds the method's own circuit and loss split.
+
+    Raises
+    ------
+    ConfigError
+        Data the method cannot meet (:func:`~imdrive.analysis.nameplate_lee.lee_circuit`).
+
+    Notes
+    -----
+    Equations in :mod:`imdrive.analysis.nameplate_lee`. The nameplate current is not an input
+    of the method (``P``, ``eta`` and ``cos phi`` fix the input current); the estimate's
+    ``rated_current_rms_A`` is still the plate's.
     """
-    from imdrive.config.toml_writer import dumps
-
-    data_text = (
-        f"{plate.power_W:g} W, {plate.voltage_V:g} V, {plate.frequency_Hz:g} Hz, "
-        f"{plate.poles} poles, {plate.speed_rpm:g} rpm, {plate.current_A:g} A, "
-        f"cos phi {plate.power_factor:g}, eta {plate.efficiency:g}"
-    )
-    if plate.breakdown_torque_ratio is not None:
-        data_text += f", T_bd/T_n {plate.breakdown_torque_ratio:g}"
-    if plate.starting_current_ratio is not None:
-        data_text += f", I_st/I_n {plate.starting_current_ratio:g}"
-    residuals = ", ".join(f"{k} {v:+.1e}" for k, v in fit.residuals.items())
-    values = {k: v for k, v in fit.machine.to_dict().items() if v is not None and k != "file"}
-    table = {
-        "source": f"imdrive machine-from-nameplate from {data_text}",
-        "notes": (
-            "single-cage T-circuit fitted to the rated point and breakdown torque "
-            "(imdrive.analysis.nameplate; Pedra & Corcoles 2004, Haque 2008); R1 lumps every "
-            "loss but the rotor's; "
-            + (f"assumed: {'; '.join(fit.assumed)}; " if fit.assumed else "")
-            + f"relative residuals: {residuals}"
-        ),
-        **values,
-    }
-    return (
-        "# An induction machine estimated from its nameplate by imdrive machine-from-nameplate.\n"
-        '# Use it in a scenario: [machine] file = "THIS_FILE.toml"\n' + dumps({"machine": table})
-    )
-
-
-def machine_from_nameplate_command(args) -> int:
-    """``imdrive machine-from-nameplate``: estimate, check, write the TOML (or print it).
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line (``power_kW``, ``voltage``, ``frequency``, ``poles``,
-        ``speed``, ``current``, ``pf``, ``efficiency``, ``breakdown_ratio``,
-        ``starting_current_ratio``, ``design``, ``J``, ``description``, ``out``).
-
-    Returns
-    -------
-    int
-        0 (errors are raised as :class:`~imdrive.errors.ConfigError`).
-    """
-    import sys
-    from pathlib import Path
-
-    flags = {
-        "power_W": "--power-kw",
-        "voltage_V": "--voltage",
-        "frequency_Hz": "--frequency",
-        "poles": "--poles",
-        "speed_rpm": "--speed",
-        "current_A": "--current",
-        "power_factor": "--pf",
-        "efficiency": "--efficiency",
-        "breakdown_torque_ratio": "--breakdown-ratio",
-        "starting_current_ratio": "--starting-current-ratio",
-        "J_kgm2": "--J",
-    }
-    try:
-        plate = _plate_from_args(args)
-    except ConfigError as exc:
-        raise ConfigError(flags.get(exc.field, exc.field), exc.rule) from None
-    fit = estimate_circuit(plate, description=args.description or "")
-    text = machine_toml(fit, plate)
-    for what in fit.assumed:
-        print(f"imdrive: note: assumed {what}", file=sys.stderr)
-    eta_error = fit.residuals["efficiency"]
-    if abs(eta_error) > 0.02:
-        print(
-            f"imdrive: note: sqrt(3) V I cos phi eta is {100 * eta_error:+.1f} % off the rated "
-            "power: the circuit meets power, speed, current and power factor, its efficiency "
-            "is P / (sqrt(3) V I cos phi)",
-            file=sys.stderr,
-        )
-    worst = max(abs(v) for k, v in fit.residuals.items() if k != "efficiency")
-    if worst > 1e-3:
-        print(
-            f"imdrive: note: no single-cage circuit meets all the data (largest relative "
-            f"residual {worst:.2g}); the least-squares compromise is written",
-            file=sys.stderr,
-        )
-    if args.out:
-        from imdrive._io import atomic_write_text
-
-        out = Path(args.out)
-        if out.is_dir() or out.name in ("", ".", ".."):
-            raise ConfigError("--out", f"{out} is a folder: name the TOML file to write")
-        if not out.absolute().parent.is_dir():
-            raise ConfigError("--out", f"{out.parent} is not an existing folder")
-        atomic_write_text(out, text)
-        print(f"imdrive: wrote {args.out}", file=sys.stderr)
+    p = plate
+    assumed = []
+    if p.breakdown_torque_ratio is not None:
+        assumed.append("breakdown torque ratio not used (method fit uses it)")
+    if p.starting_current_ratio is not None:
+        I_lr = p.starting_current_ratio * p.current_A
     else:
-        sys.stdout.write(text)
-    return 0
-
-
-def _plate_from_args(args) -> Nameplate:
-    return Nameplate(
-        power_W=args.power_kW * 1e3,
-        voltage_V=args.voltage,
-        frequency_Hz=args.frequency,
-        poles=args.poles,
-        speed_rpm=args.speed,
-        current_A=args.current,
-        power_factor=args.pf,
-        efficiency=args.efficiency,
-        breakdown_torque_ratio=args.breakdown_ratio,
-        starting_current_ratio=args.starting_current_ratio,
-        leakage_split=LEAKAGE_SPLIT[args.design],
-        J_kgm2=args.J,
+        letter = p.code_letter
+        if letter is None:
+            letter = DEFAULT_CODE_LETTER
+            assumed.append(f"NEMA code letter {DEFAULT_CODE_LETTER} (not given)")
+        I_lr = locked_rotor_current_A(letter, p.power_W, p.voltage_V)
+    c = lee_circuit(
+        p.power_W,
+        p.voltage_V,
+        p.slip,
+        p.efficiency,
+        p.power_factor,
+        I_lr,
+        leakage_split=p.leakage_split,
+        core_loss_fraction=core_loss_fraction,
+        mechanical_loss_fraction=mechanical_loss_fraction,
+        stray_fraction=stray_loss_fraction,
     )
+    machine = _machine(p, c.R1, c.R2, c.X1, c.X2, c.XM, description, assumed)
+    ss = equivalent_circuit(machine, p.voltage_V, p.frequency_Hz, p.slip)
+    residuals = {
+        "rated_torque": float(ss.torque_Nm / p.torque_Nm - 1.0),
+        "rated_current": float(ss.I1_rms_A / p.current_A - 1.0),
+    }
+    details = dict(
+        RC_ohm=c.RC,
+        locked_rotor_current_A=I_lr,
+        iterations=c.iterations,
+        **{f"{k}_W": v for k, v in c.losses_W.items()},
+    )
+    return NameplateFit(machine, residuals, tuple(assumed), method="lee", details=details)

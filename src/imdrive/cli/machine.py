@@ -9,7 +9,7 @@ from imdrive.cli._common import _examples
 
 def _cmd_machine_from_nameplate(args) -> int:
     # imported here: the estimate loads scipy, which every other command's start can skip
-    from imdrive.analysis.nameplate import machine_from_nameplate_command
+    from imdrive.analysis.nameplate_cli import machine_from_nameplate_command
 
     return machine_from_nameplate_command(args)
 
@@ -20,12 +20,15 @@ def add_parser(sub) -> None:
         "machine-from-nameplate",
         help="estimate a machine's equivalent circuit from its nameplate (a TOML file)",
         description="Estimate the T-equivalent circuit from nameplate and catalogue data "
-        "(imdrive.analysis.nameplate: method, assumptions) and write a [machine] TOML file "
+        "(imdrive.analysis.nameplate: methods, assumptions) and write a [machine] TOML file "
         'for a scenario\'s [machine] file = "...".',
         epilog=_examples(
             "imdrive machine-from-nameplate --power-kw 2.2 --voltage 400 --frequency 50 "
             "--poles 4 --speed 1436 --current 5 --pf 0.79 --efficiency 0.82 "
-            "--breakdown-ratio 2.9 --out my-motor.toml"
+            "--starting-current-ratio 6 --out my-motor.toml",
+            "imdrive machine-from-nameplate --power-kw 2.2 --voltage 400 --frequency 50 "
+            "--poles 4 --speed 1436 --current 5 --pf 0.79 --efficiency 0.82 "
+            "--breakdown-ratio 2.9 --out my-motor.toml",
         ),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
@@ -48,6 +51,24 @@ def add_parser(sub) -> None:
         default="A",
         help="NEMA design letter: the X1/X2 split (IEEE Std 112); default A (1:1)",
     )
+    mn.add_argument(
+        "--method",
+        choices=("lee", "fit"),
+        help="lee: the published nameplate-only method of Lee, Frank, Sen et al. (NAPS 2012; "
+        "recommended); fit: least squares on the rated point and breakdown torque; default "
+        "lee, or fit when --breakdown-ratio is given",
+    )
+    mn.add_argument(
+        "--code-letter",
+        help="NEMA code letter (locked-rotor kVA/hp), for method lee without "
+        "--starting-current-ratio (default: G assumed)",
+    )
+    for flag, text in (
+        ("--core-loss-fraction", "core loss / total loss (method lee; default 0.12)"),
+        ("--mechanical-loss-fraction", "friction and windage / total loss (lee; default 0.14)"),
+        ("--stray-loss-fraction", "stray-load loss / rated power (lee; default IEEE Std 112's)"),
+    ):
+        mn.add_argument(flag, type=float, help=text)
     mn.add_argument("--J", type=float, help="rotor inertia, kg m^2 (default: H = 0.5 s)")
     mn.add_argument("--description", help="text for the machine's description")
     mn.add_argument("--out", metavar="FILE", help="write the TOML here (default: stdout)")

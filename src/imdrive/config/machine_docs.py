@@ -45,18 +45,19 @@ The file holds `[machine]` keys (at its top level or under a `[machine]` table, 
 rule stops with one line naming the field (exit code 2).
 
 **From a nameplate.** `imdrive machine-from-nameplate` estimates the equivalent circuit from
-rated power, voltage, frequency, poles, speed, current, power factor and efficiency
-(optionally the breakdown torque and starting current ratios) and writes such a file:
+rated power, voltage, frequency, poles, speed, current, power factor and efficiency (and the
+NEMA code letter, or a catalogue's starting current or breakdown torque ratio) and writes such
+a file:
 
 ```
 imdrive machine-from-nameplate --power-kw 2.2 --voltage 400 --frequency 50 --poles 4 \\
-    --speed 1436 --current 5 --pf 0.79 --efficiency 0.82 --breakdown-ratio 2.9 \\
+    --speed 1436 --current 5 --pf 0.79 --efficiency 0.82 --code-letter G \\
     --out my-motor.toml
 ```
 
-The method, its sources and its assumptions are in `imdrive.analysis.nameplate`; on the
-library's machines it reproduces rated torque, current and breakdown torque
-(`tests/config/test_machines.py`).
+The recommended method is the published nameplate-only method of Lee, Frank, Sen et al.
+(`--method lee`, the default unless a breakdown ratio is given); the methods, their sources,
+assumptions and their check on this library are in [nameplate.md](nameplate.md).
 
 **Rated point.** A nameplate field left out (`rated_speed_rpm`, `rated_torque_Nm`,
 `rated_current_rms_A`, `rated_power_factor`, `rated_efficiency`) is derived from the circuit

@@ -25,7 +25,9 @@ hence its decisions, scale with ``1/T2``). Its verdict (:func:`verdict`):
 
 ``python -m imdrive.studies.machines OUT_CSV`` runs the grid (252 drives) and writes
 the runs; ``python -m imdrive.studies.machines --markdown CSV`` prints the table of
-docs/machine-envelope.md, which a test re-renders from the stored CSV.
+docs/machine-envelope.md, which a test re-renders from the stored CSV. :func:`ramp_diagnosis`
+measures why the large machines lose control at rated speed (a table of the same page,
+``python -m imdrive.studies.doctables --run machine-ramp-diagnosis``).
 """
 
 from __future__ import annotations
@@ -200,6 +202,112 @@ def markdown(table: pd.DataFrame) -> str:
             cells.append(f"{c} / {nc} / {lost} of {n} ({100 * c / n:.0f} %)" if n else "–")
         lines.append(f"| {m} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
+
+
+#: The runs of :func:`ramp_diagnosis`: (machine, speed feedback, ramp stretch, ramp start, s)
+DIAGNOSIS_RUNS = (
+    ("paper-table-iv", "mras", 1.0, 0.5),
+    ("krause-500hp", "mras", 1.0, 0.5),
+    ("krause-2250hp", "mras", 1.0, 0.5),
+    ("geyer-3.3kv", "mras", 1.0, 0.5),
+    ("krause-500hp", "measured", 1.0, 0.5),
+    ("krause-500hp", "mras", 4.0, 0.5),
+    ("krause-500hp", "mras", 1.0, 2.5),  # after 3 rotor time constants: magnetised
+)
+
+
+def ramp_diagnosis(runs=DIAGNOSIS_RUNS) -> pd.DataFrame:
+    """Why the sensorless drive loses control at rated speed on the large machines.
+
+    The grid's run at rated speed, no load, ``R2_hat(0) = R2`` (no detuning), up to 3 s after
+    the ramp, with the MRAS or the measured speed as feedback, the ramp as in the grid or
+    stretched, starting at 0.5 s as in the grid or later.
+
+    Parameters
+    ----------
+    runs : sequence of (str, str, float, float)
+        ``(machine, control.speed_feedback, ramp stretch, ramp start in s)``.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Per run: ``machine, feedback, ramp_s, start_s``; ``rated_slip_rpm``;
+        ``estimate_lag_rpm``, the median of speed minus MRAS estimate while the reference is
+        between 5 and 50 % of rated (NaN with the measured speed) and ``lag_pu_slip``, over
+        the rated slip;
+        ``max_flux_pu``, the plant's largest ``|psi_r|`` over the rated flux;
+        ``voltage_limit_at_pu``, the speed reference (per-unit of rated) when the voltage
+        reference first reaches 99 % of the inverter's limit (NaN: never); ``lost``.
+    """
+    from imdrive.config.perunit import resolve
+    from imdrive.run.simulate import simulate
+
+    rows = []
+    for name, feedback, stretch, start in runs:
+        scs, _ = scenarios([name], drives=["sensorless"], speeds=[1.0], loads=[0.0], ratios=[1.0])
+        base = scs[0]
+        rp = rated_point(base.machine)
+        ramp = stretch * timeline(base.machine)[0]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ConfigWarning)
+            sc = base.with_overrides(
+                [
+                    f'control.speed_feedback="{feedback}"',
+                    f"control.speed_ref_rpm={{initial=0, changes=[{{at={start}, "
+                    f"to={rp.speed_rpm}, over={ramp}}}]}}",
+                    f"simulation.t_end_s={start + ramp + 3.0}",
+                ]
+            )
+            res = simulate(sc)
+        df = res.to_pandas()
+        D = resolve(sc)
+        ref = df["speed_ref_rpm"] / rp.speed_rpm
+        during = (ref > 0.05) & (ref < 0.5)
+        lag = float((df["speed_rpm"] - df["speed_est_rpm"])[during].median())
+        at_limit = np.hypot(df["v_ref_alpha_V"], df["v_ref_beta_V"]) >= 0.99 * D.v_max_V
+        slip = rp.synchronous_speed_rpm - rp.speed_rpm
+        rows.append(
+            dict(
+                machine=name,
+                feedback=feedback,
+                ramp_s=ramp,
+                start_s=start,
+                rated_slip_rpm=slip,
+                estimate_lag_rpm=lag if feedback == "mras" else math.nan,
+                lag_pu_slip=lag / slip if feedback == "mras" else math.nan,
+                max_flux_pu=float(df["flux_Wb"].max() / D.psi_rated),
+                voltage_limit_at_pu=float(ref[at_limit].iloc[0]) if at_limit.any() else math.nan,
+                lost=bool(res.summary()["lost_control"]),
+            )
+        )
+    return pd.DataFrame(rows)
+
+
+def diagnosis_markdown(df: pd.DataFrame) -> list[str]:
+    """The table of :func:`ramp_diagnosis` for docs/machine-envelope.md (Markdown lines)."""
+
+    def num(v, fmt):
+        return "–" if pd.isna(v) else format(v, fmt)
+
+    lines = [
+        "| machine | feedback | ramp from, s | ramp, s | rated slip, rpm "
+        "| estimate lag, rpm (× slip) | largest ψr / rated "
+        "| voltage limit reached at, × rated speed | lost control |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for r in df.itertuples():
+        lag = (
+            "–"
+            if pd.isna(r.estimate_lag_rpm)
+            else f"{r.estimate_lag_rpm:.1f} ({r.lag_pu_slip:.2f})"
+        )
+        lines.append(
+            f"| {r.machine} | {r.feedback} | {r.start_s:g} | {r.ramp_s:.2f} "
+            f"| {r.rated_slip_rpm:.1f} | {lag} "
+            f"| {r.max_flux_pu:.2f} | {num(r.voltage_limit_at_pu, '.2f')} "
+            f"| {'yes' if r.lost else 'no'} |"
+        )
+    return lines
 
 
 PAGE = Path(__file__).resolve().parents[3] / "docs" / "machine-envelope.md"

@@ -210,6 +210,60 @@ register(
     )
 )
 
+# ---------------------------------------------------------------------------------------------
+# docs/nameplate.md: nameplate -> circuit on the library (imdrive.studies.nameplate_check)
+
+
+def _nameplate_check(df) -> list[str]:
+    from imdrive.studies.nameplate_check import markdown
+
+    return markdown(df)
+
+
+def _measure_nameplate_check():
+    from imdrive.studies.nameplate_check import run
+
+    return run()
+
+
+register(
+    DocTable(
+        "nameplate-check",
+        "nameplate.md",
+        "data/nameplate_check.csv",
+        _nameplate_check,
+        _measure_nameplate_check,
+    )
+)
+
+
+# ---------------------------------------------------------------------------------------------
+# docs/machine-envelope.md: why the large machines lose control at rated speed
+
+
+def _ramp_diagnosis(df) -> list[str]:
+    from imdrive.studies.machines import diagnosis_markdown
+
+    return diagnosis_markdown(df)
+
+
+def _measure_ramp_diagnosis():
+    from imdrive.studies.machines import ramp_diagnosis
+
+    return ramp_diagnosis()
+
+
+register(
+    DocTable(
+        "machine-ramp-diagnosis",
+        "machine-envelope.md",
+        "data/machine_ramp_diagnosis.csv",
+        _ramp_diagnosis,
+        _measure_ramp_diagnosis,
+    )
+)
+
+
 from imdrive.studies import (  # noqa: E402, F401  (register theirs)
     compensator_tables,
     robust_tables,
