@@ -17,10 +17,13 @@ accumulate by Simpson's rule on their start, middle and end: the torque (the spe
 input power, the copper losses (the energies and the temperatures).
 
 Main-flux saturation: the currents are linear in the fluxes when the magnetising ratio
-``k = |psi_m|/|psi_x|`` is held (:func:`imdrive.kernels.machine.current_coefficients`), so
-each interval holds ``k`` at its value predicted for the interval's middle (first order in
-``|psi_x|`` from the start's slope) and the currents at its end come from the run's table of
-the curve (:func:`imdrive.kernels.machine.magnetising_ratio`).
+``k = |psi_m|/|psi_x|`` is held (:func:`imdrive.kernels.machine.current_coefficients`; the
+coefficients are then linear in ``k``), so each interval holds ``k`` at its value predicted
+for the interval's middle (first order in ``|psi_x|`` from the start's slope, the slope taken
+with ``k`` of the previous interval's middle) and the currents at its end come from the
+curve's series about the period's start (:func:`imdrive.kernels.machine.magnetising_ratio`).
+The end's ``k`` serves the currents only, so the fluxes' chain from one interval to the next
+does not wait for it.
 ``tests/drive/test_realistic_drive.py`` measures the result against solve_ivp with the switching
 instants as breakpoints.
 """
@@ -46,16 +49,6 @@ from imdrive.kernels.machine import (
     magnetising_ratio_series,
     winding_resistances,
 )
-
-
-@njit(cache=True, inline="always")
-def _held(k, g1, g2, R1, R2):
-    """The current coefficients (:func:`imdrive.kernels.machine.current_coefficients`, saturated)
-    and the flux equations' ``a = -R c`` at a held magnetising ratio ``k``."""
-    c_ss = (1.0 - k * g1) * g1
-    c_sr = -k * g1 * g2
-    c_rr = (1.0 - k * g2) * g2
-    return c_ss, c_sr, c_rr, -R1 * c_ss, -R1 * c_sr, -R2 * c_sr, -R2 * c_rr
 
 
 @njit(cache=True, inline="always")
@@ -192,7 +185,24 @@ def switching_period(
     ra = x.psi_r_ab.real
     rb = x.psi_r_ab.imag
     k, k_u, k_uu, u0, xa, xb = _ratio_series(pp, sa, sb, ra, rb, g1, g2)
-    c_ss, c_sr, c_rr = current_coefficients(pp, k)
+    k_uu2 = 0.5 * k_uu
+    # saturated: the coefficients are linear in k (c_ss = g1 - g1^2 k, c_sr = -g1 g2 k,
+    # c_rr = g2 - g2^2 k), so a held k costs one multiply-add per coefficient
+    cs1 = -g1 * g1
+    csr1 = -g1 * g2
+    cr1 = -g2 * g2
+    as0, as1, asr1, ars1, ar0, ar1 = (
+        -R1 * g1,
+        -R1 * cs1,
+        -R1 * csr1,
+        -R2 * csr1,
+        -R2 * g2,
+        -R2 * cr1,
+    )
+    if sat:
+        c_ss, c_sr, c_rr = g1 + cs1 * k, csr1 * k, g2 + cr1 * k
+    else:
+        c_ss, c_sr, c_rr = current_coefficients(pp, k)
     isa, isb, ira, irb = _currents(c_ss, c_sr, c_rr, sa, sb, ra, rb)
     n_p = pp.n_p
     Tk = 1.5 * n_p
@@ -226,24 +236,33 @@ def switching_period(
             h6 = h / 6.0
             for i_step in range(n_step):
                 w_r = n_p * w0 + w_r1 * (t + i_step * h)
+                # saturated: the rates with k of the last step's middle (of the period's start
+                # for the first step) predict |psi_x| at this step's middle
                 d1 = flux_rates(sa, sb, ra, rb, va, vb, a_ss, a_sr, a_rs, a_rr, w_r)
                 if sat:  # k held at its value predicted for the step's middle
                     pxa = xa + 0.5 * h * (d1[0] * g1 + d1[2] * g2)
                     pxb = xb + 0.5 * h * (d1[1] * g1 + d1[3] * g2)
                     du = pxa * pxa + pxb * pxb - u0
-                    k_mid = k + du * (k_u + 0.5 * k_uu * du)
-                    c_ss, c_sr, c_rr, a_ss, a_sr, a_rs, a_rr = _held(k_mid, g1, g2, R1, R2)
+                    k_mid = k + du * (k_u + k_uu2 * du)
+                    a_ss, a_sr, a_rs, a_rr = (
+                        as0 + as1 * k_mid,
+                        asr1 * k_mid,
+                        ars1 * k_mid,
+                        ar0 + ar1 * k_mid,
+                    )
+                    c_ss, c_sr, c_rr = g1 + cs1 * k_mid, csr1 * k_mid, g2 + cr1 * k_mid
                     d1 = flux_rates(sa, sb, ra, rb, va, vb, a_ss, a_sr, a_rs, a_rr, w_r)
                 y = flux_taylor(sa, sb, ra, rb, d1, a_ss, a_sr, a_rs, a_rr, w_r, w_r1, h, order)
                 # the middle: currents with the held coefficients
                 msa, msb, mra, mrb = _currents(c_ss, c_sr, c_rr, y[0], y[1], y[2], y[3])
                 sa, sb, ra, rb = y[4], y[5], y[6], y[7]
-                if sat:  # the end: k of the curve at the end's |psi_x|
+                if sat:  # the end's currents: k of the curve at the end's |psi_x| (the rates
+                    # keep k of the middle: off the fluxes' chain from step to step)
                     xa = sa * g1 + ra * g2
                     xb = sb * g1 + rb * g2
                     du = xa * xa + xb * xb - u0
-                    k_end = k + du * (k_u + 0.5 * k_uu * du)
-                    c_ss, c_sr, c_rr, a_ss, a_sr, a_rs, a_rr = _held(k_end, g1, g2, R1, R2)
+                    k_end = k + du * (k_u + k_uu2 * du)
+                    c_ss, c_sr, c_rr = g1 + cs1 * k_end, csr1 * k_end, g2 + cr1 * k_end
                 esa, esb, era, erb = _currents(c_ss, c_sr, c_rr, sa, sb, ra, rb)
                 Te_m = Tk * (y[0] * msb - y[1] * msa)
                 Te_e = Tk * (sa * esb - sb * esa)
