@@ -150,6 +150,74 @@ def _close_period(pp, x, TL0, Ts, R1, R2, w0, dw0, sa, sb, ra, rb, int_Te, int_W
     x.E_load += load_int * w_avg
 
 
+@njit(cache=True, inline="always")
+def _period_coefficients(pp, R1, R2, sa, sb, ra, rb):
+    """What the period's steps hold: ``(g1, g2, k, dk/du, d2k/du2 / 2, u0, x_alpha, x_beta,
+    coefficients)``, the coefficients ``(cs1, csr1, cr1, as0, as1, asr1, ars1, ar0, ar1,
+    c_ss, c_sr, c_rr)``.
+
+    Saturated, the current coefficients are linear in the magnetising ratio ``k``
+    (``c_ss = g1 - g1^2 k``, ``c_sr = -g1 g2 k``, ``c_rr = g2 - g2^2 k``; ``a = -R c``), so a
+    held ``k`` costs one multiply-add per coefficient; ``c_*`` are those of the period's start.
+    """
+    g1 = 1.0 / pp.Ll1
+    g2 = 1.0 / pp.Ll2
+    k, k_u, k_uu, u0, xa, xb = _ratio_series(pp, sa, sb, ra, rb, g1, g2)
+    cs1 = -g1 * g1
+    csr1 = -g1 * g2
+    cr1 = -g2 * g2
+    if pp.saturation:
+        c_ss, c_sr, c_rr = g1 + cs1 * k, csr1 * k, g2 + cr1 * k
+    else:
+        c_ss, c_sr, c_rr = current_coefficients(pp, k)
+    co = (cs1, csr1, cr1, -R1 * g1, -R1 * cs1, -R1 * csr1, -R2 * csr1, -R2 * g2, -R2 * cr1,
+          c_ss, c_sr, c_rr)  # fmt: skip
+    return g1, g2, k, k_u, 0.5 * k_uu, u0, xa, xb, co
+
+
+@njit(cache=True, inline="always")
+def _rates_held(k, co):
+    """``(a_ss, a_sr, a_rs, a_rr)`` at a held magnetising ratio ``k`` (``co`` of
+    :func:`_period_coefficients`)."""
+    return co[3] + co[4] * k, co[5] * k, co[6] * k, co[7] + co[8] * k
+
+
+@njit(cache=True, inline="always")
+def _currents_held(k, g1, g2, co):
+    """``(c_ss, c_sr, c_rr)`` at a held magnetising ratio ``k``."""
+    return g1 + co[0] * k, co[1] * k, g2 + co[2] * k
+
+
+@njit(cache=True, inline="always")
+def _simpson(h, h3, int_Te, va, vb, Te, Te_m, Te_e, isa, isb, ira, irb, msa, msb, mra, mrb,
+             esa, esb, era, erb):  # fmt: skip
+    """A step's increments of ``(int_W, int_Te, e_in, int_is2, int_ir2)`` by Simpson's rule on
+    its start, middle and end (``h3 = h/3``; ``int_W``'s inner integral quadratic in time)."""
+    h6 = 0.5 * h3  # h/6, exactly
+    return (
+        h * int_Te + h * h6 * (Te + 2.0 * Te_m),
+        h6 * (Te + 4.0 * Te_m + Te_e),
+        h6 * (va * (isa + 4.0 * msa + esa) + vb * (isb + 4.0 * msb + esb)),
+        h6 * (isa * isa + isb * isb + 4.0 * (msa * msa + msb * msb) + esa * esa + esb * esb),
+        h6 * (ira * ira + irb * irb + 4.0 * (mra * mra + mrb * mrb) + era * era + erb * erb),
+    )
+
+
+@njit(cache=True, inline="always")
+def _trapezoid(h, h3, int_Te, va, vb, Te, Te_e, isa, isb, ira, irb, esa, esb, era, erb):
+    """The increments of :func:`_simpson` by the trapezoidal rule (start and end only), for
+    steps far shorter than the currents' time constants (dead times), where the integrands
+    are linear to within ``(h/tau)^2``; ``int_W``: ``h^2/6 (2 T_e(0) + T_e(h))``."""
+    hh = 0.5 * h
+    return (
+        h * int_Te + h * (0.5 * h3) * (2.0 * Te + Te_e),
+        hh * (Te + Te_e),
+        hh * (va * (isa + esa) + vb * (isb + esb)),
+        hh * (isa * isa + isb * isb + esa * esa + esb * esb),
+        hh * (ira * ira + irb * irb + era * era + erb * erb),
+    )
+
+
 @njit(cache=True)
 def switching_period(
     pinv, sinv, pp, x, v_alpha, v_beta, Vdc_meas, R1b, R2b, TL0, Ts, nsub, work, ev, trace
@@ -170,39 +238,18 @@ def switching_period(
     extremes are at these instants.
     """
     d = duty_cycles(v_alpha, v_beta, Vdc_meas)
-    ev_t = ev[0]
-    ev_leg = ev[1]
-    ev_state = ev[2]
+    ev_t, ev_leg, ev_state = ev[0], ev[1], ev[2]
     n = gate_commands(sinv, d, Ts, ev_t, ev_leg, ev_state)
 
     # --- held over the period: resistances, speed; the state at the start
     R1, R2 = winding_resistances(pp, x, R1b, R2b)
     sat = pp.saturation
-    g1 = 1.0 / pp.Ll1
-    g2 = 1.0 / pp.Ll2
     sa = x.psi_s_ab.real
     sb = x.psi_s_ab.imag
     ra = x.psi_r_ab.real
     rb = x.psi_r_ab.imag
-    k, k_u, k_uu, u0, xa, xb = _ratio_series(pp, sa, sb, ra, rb, g1, g2)
-    k_uu2 = 0.5 * k_uu
-    # saturated: the coefficients are linear in k (c_ss = g1 - g1^2 k, c_sr = -g1 g2 k,
-    # c_rr = g2 - g2^2 k), so a held k costs one multiply-add per coefficient
-    cs1 = -g1 * g1
-    csr1 = -g1 * g2
-    cr1 = -g2 * g2
-    as0, as1, asr1, ars1, ar0, ar1 = (
-        -R1 * g1,
-        -R1 * cs1,
-        -R1 * csr1,
-        -R2 * csr1,
-        -R2 * g2,
-        -R2 * cr1,
-    )
-    if sat:
-        c_ss, c_sr, c_rr = g1 + cs1 * k, csr1 * k, g2 + cr1 * k
-    else:
-        c_ss, c_sr, c_rr = current_coefficients(pp, k)
+    g1, g2, k, k_u, k_uu2, u0, xa, xb, co = _period_coefficients(pp, R1, R2, sa, sb, ra, rb)
+    c_ss, c_sr, c_rr = co[9], co[10], co[11]
     isa, isb, ira, irb = _currents(c_ss, c_sr, c_rr, sa, sb, ra, rb)
     n_p = pp.n_p
     Tk = 1.5 * n_p
@@ -213,9 +260,10 @@ def switching_period(
         dw0 = (Te - load_torque(pp, TL0, w0) - pp.B * w0) / pp.J
     w_r1 = n_p * dw0  # the electrical speed, linear over the period from its start's slope
     a_ss, a_sr, a_rs, a_rr = -R1 * c_ss, -R1 * c_sr, -R2 * c_sr, -R2 * c_rr
+    k_end = k  # k at the last step's end (saturated)
 
-    # integrals over the period (Simpson per interval); int_W = int_0^Ts int_0^t T_e ds dt,
-    # for the held speed's correction; acc_* the volt-seconds applied
+    # integrals over the period (Simpson per interval, the trapezoid on short ones); int_W =
+    # int_0^Ts int_0^t T_e ds dt, for the held speed's correction; acc_* the volt-seconds
     int_Te = int_W = int_is2 = int_ir2 = e_in = acc_alpha = acc_beta = 0.0
     short = Ts / (40.0 * nsub)  # intervals up to this long: one second-order step
     t = 0.0
@@ -232,28 +280,24 @@ def switching_period(
             va, vb = pole_voltages_ab(pinv, sinv, pinv.Vdc, isa, isb)
             dt = t_next - t
             n_step, order = (nsub, 4) if dt > short else (1, 2)
-            h = dt / n_step
-            h6 = h / 6.0
+            h = dt if n_step == 1 else dt / n_step  # no division in the common case
+            h3 = h / 3.0
             for i_step in range(n_step):
                 w_r = n_p * w0 + w_r1 * (t + i_step * h)
-                # saturated: the rates with k of the last step's middle (of the period's start
-                # for the first step) predict |psi_x| at this step's middle
+                if sat and order == 2:  # a short step: k held at its start's value
+                    a_ss, a_sr, a_rs, a_rr = _rates_held(k_end, co)
+                # saturated: the rates at k of the last step predict |psi_x| at the middle
                 d1 = flux_rates(sa, sb, ra, rb, va, vb, a_ss, a_sr, a_rs, a_rr, w_r)
-                if sat:  # k held at its value predicted for the step's middle
+                if sat and order == 4:  # k held at its value predicted for the step's middle
                     pxa = xa + 0.5 * h * (d1[0] * g1 + d1[2] * g2)
                     pxb = xb + 0.5 * h * (d1[1] * g1 + d1[3] * g2)
                     du = pxa * pxa + pxb * pxb - u0
                     k_mid = k + du * (k_u + k_uu2 * du)
-                    a_ss, a_sr, a_rs, a_rr = (
-                        as0 + as1 * k_mid,
-                        asr1 * k_mid,
-                        ars1 * k_mid,
-                        ar0 + ar1 * k_mid,
-                    )
-                    c_ss, c_sr, c_rr = g1 + cs1 * k_mid, csr1 * k_mid, g2 + cr1 * k_mid
+                    a_ss, a_sr, a_rs, a_rr = _rates_held(k_mid, co)
+                    c_ss, c_sr, c_rr = _currents_held(k_mid, g1, g2, co)
                     d1 = flux_rates(sa, sb, ra, rb, va, vb, a_ss, a_sr, a_rs, a_rr, w_r)
                 y = flux_taylor(sa, sb, ra, rb, d1, a_ss, a_sr, a_rs, a_rr, w_r, w_r1, h, order)
-                # the middle: currents with the held coefficients
+                # the middle (long steps): currents with the held coefficients
                 msa, msb, mra, mrb = _currents(c_ss, c_sr, c_rr, y[0], y[1], y[2], y[3])
                 sa, sb, ra, rb = y[4], y[5], y[6], y[7]
                 if sat:  # the end's currents: k of the curve at the end's |psi_x| (the rates
@@ -262,19 +306,22 @@ def switching_period(
                     xb = sb * g1 + rb * g2
                     du = xa * xa + xb * xb - u0
                     k_end = k + du * (k_u + k_uu2 * du)
-                    c_ss, c_sr, c_rr = g1 + cs1 * k_end, csr1 * k_end, g2 + cr1 * k_end
+                    c_ss, c_sr, c_rr = _currents_held(k_end, g1, g2, co)
                 esa, esb, era, erb = _currents(c_ss, c_sr, c_rr, sa, sb, ra, rb)
-                Te_m = Tk * (y[0] * msb - y[1] * msa)
                 Te_e = Tk * (sa * esb - sb * esa)
-                int_W += h * int_Te + h * h6 * (Te + 2.0 * Te_m)
-                int_Te += h6 * (Te + 4.0 * Te_m + Te_e)
-                e_in += h6 * (va * (isa + 4.0 * msa + esa) + vb * (isb + 4.0 * msb + esb))
-                int_is2 += h6 * (
-                    isa * isa + isb * isb + 4.0 * (msa * msa + msb * msb) + esa * esa + esb * esb
-                )
-                int_ir2 += h6 * (
-                    ira * ira + irb * irb + 4.0 * (mra * mra + mrb * mrb) + era * era + erb * erb
-                )
+                if order == 4:
+                    Te_m = Tk * (y[0] * msb - y[1] * msa)
+                    dW, dTe, de, ds2, dr2 = _simpson(h, h3, int_Te, va, vb, Te, Te_m, Te_e,
+                                                     isa, isb, ira, irb, msa, msb, mra, mrb,
+                                                     esa, esb, era, erb)  # fmt: skip
+                else:
+                    dW, dTe, de, ds2, dr2 = _trapezoid(h, h3, int_Te, va, vb, Te, Te_e, isa, isb,
+                                                       ira, irb, esa, esb, era, erb)  # fmt: skip
+                int_W += dW
+                int_Te += dTe
+                e_in += de
+                int_is2 += ds2
+                int_ir2 += dr2
                 isa, isb, ira, irb, Te = esa, esb, era, erb, Te_e
             acc_alpha += dt * va
             acc_beta += dt * vb

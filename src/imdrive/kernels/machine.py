@@ -455,7 +455,7 @@ def current_coefficients(p, k):
     return L2 * inv_d, -p.M * inv_d, L1 * inv_d
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def flux_rates(sa, sb, ra, rb, va, vb, a_ss, a_sr, a_rs, a_rr, w_r):
     """``d/dt (psi_s, psi_r)`` of the electrical equations with held coefficients, Wb/s.
 
@@ -471,7 +471,7 @@ def flux_rates(sa, sb, ra, rb, va, vb, a_ss, a_sr, a_rs, a_rr, w_r):
     )
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def flux_taylor(sa, sb, ra, rb, d1, a_ss, a_sr, a_rs, a_rr, w_r, w_r1, h, order):
     """Fluxes at ``h/2`` and ``h`` of the held-coefficient electrical system (8-tuple).
 
@@ -492,15 +492,16 @@ def flux_taylor(sa, sb, ra, rb, d1, a_ss, a_sr, a_rs, a_rr, w_r, w_r1, h, order)
         d4 = flux_rates(d3[0], d3[1], d3[2], d3[3], 0.0, 0.0, a_ss, a_sr, a_rs, a_rr, w_r)
         d4 = (d4[0], d4[1], d4[2] - 3.0 * w_r1 * d2[3], d4[3] + 3.0 * w_r1 * d2[2])
         q = 0.5 * h
+        h3 = h / 3.0
         c2 = 0.5 * q
-        c3 = q / 3.0
+        c3 = 0.5 * h3  # q/3, exactly (one division per step)
         c4 = 0.25 * q
         m0 = sa + q * (d1[0] + c2 * (d2[0] + c3 * (d3[0] + c4 * d4[0])))
         m1 = sb + q * (d1[1] + c2 * (d2[1] + c3 * (d3[1] + c4 * d4[1])))
         m2 = ra + q * (d1[2] + c2 * (d2[2] + c3 * (d3[2] + c4 * d4[2])))
         m3 = rb + q * (d1[3] + c2 * (d2[3] + c3 * (d3[3] + c4 * d4[3])))
         c2 = 0.5 * h
-        c3 = h / 3.0
+        c3 = h3
         c4 = 0.25 * h
         e0 = sa + h * (d1[0] + c2 * (d2[0] + c3 * (d3[0] + c4 * d4[0])))
         e1 = sb + h * (d1[1] + c2 * (d2[1] + c3 * (d3[1] + c4 * d4[1])))
