@@ -42,6 +42,7 @@ from imdrive.kernels.inverter import (
     pole_voltages_ab,
 )
 from imdrive.kernels.machine import (
+    THIRD,
     current_coefficients,
     flux_rates,
     flux_taylor,
@@ -281,7 +282,7 @@ def switching_period(
             dt = t_next - t
             n_step, order = (nsub, 4) if dt > short else (1, 2)
             h = dt if n_step == 1 else dt / n_step  # no division in the common case
-            h3 = h / 3.0
+            h3 = h * THIRD
             for i_step in range(n_step):
                 w_r = n_p * w0 + w_r1 * (t + i_step * h)
                 if sat and order == 2:  # a short step: k held at its start's value

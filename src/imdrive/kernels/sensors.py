@@ -48,7 +48,7 @@ _M1 = np.uint64(0xBF58476D1CE4E5B9)
 _M2 = np.uint64(0x94D049BB133111EB)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _mix(z):
     """splitmix64's finaliser: a 64-bit hash with good avalanche (Steele, Lea, Flood 2014)."""
     z = (z ^ (z >> np.uint64(30))) * _M1
@@ -56,7 +56,7 @@ def _mix(z):
     return z ^ (z >> np.uint64(31))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _uniform(seed, k, channel):
     """A uniform number in (0, 1) for (seed, sample, channel), independent of call order."""
     z = _mix(np.uint64(seed) * _GOLDEN + np.uint64(k))
@@ -64,7 +64,7 @@ def _uniform(seed, k, channel):
     return ((z >> np.uint64(11)) + np.uint64(1)) * (1.0 / 9007199254740994.0)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def gaussian(seed, k, channel):
     """A standard normal number for (seed, sample, channel) (Box-Muller on two uniforms)."""
     u1 = _uniform(seed, k, 2 * channel)
