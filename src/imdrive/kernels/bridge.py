@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
 from imdrive.kernels.inverter import (
@@ -50,6 +51,41 @@ from imdrive.kernels.machine import (
     magnetising_ratio_series,
     winding_resistances,
 )
+from imdrive.kernels.records import f8, record_dtype
+
+#: What the bridge carries from one period to the next (fields of the run loop's scratch
+#: record): the magnetising ratio's series about the state a period ended in, the fluxes it
+#: belongs to, and that state's stator current (bit for bit what
+#: :func:`imdrive.kernels.machine.stator_current` gives), so the saturated curve is solved
+#: once a period: for the check after it and the next period's start alike.
+CARRY_FIELDS = [
+    ("sat_valid", f8),  # 1: the fields below belong to the fluxes sat_sa, ..., sat_rb
+    ("sat_sa", f8),  # psi_s_alpha, Wb
+    ("sat_sb", f8),
+    ("sat_ra", f8),  # psi_r_alpha, Wb
+    ("sat_rb", f8),
+    ("sat_k", f8),  # the series of :func:`_ratio_series`
+    ("sat_k_u", f8),
+    ("sat_k_uu", f8),
+    ("sat_u0", f8),
+    ("sat_xa", f8),
+    ("sat_xb", f8),
+    ("sat_i_alpha", f8),  # the state's stator current, A
+    ("sat_i_beta", f8),
+]
+CARRY = record_dtype(CARRY_FIELDS)
+
+
+@njit(cache=True, inline="always")
+def _trace(trace, n_tr, t, isa, isb):
+    """Row ``n_tr`` of the current trace ``(t, i_alpha, i_beta)`` while it has rows; the next
+    row's index."""
+    if n_tr < trace.shape[0]:
+        trace[n_tr, 0] = t
+        trace[n_tr, 1] = isa
+        trace[n_tr, 2] = isb
+        return n_tr + 1
+    return n_tr
 
 
 @njit(cache=True, inline="always")
@@ -83,9 +119,10 @@ def _next_event(sinv, ev_t, ev_leg, j, n, Ts):
 
 
 @njit(cache=True, inline="always")
-def _ratio_series(pp, sa, sb, ra, rb, g1, g2):
+def _ratio_series(pp, sa, sb, ra, rb):
     """``(k, dk/du, d2k/du2, u0, x_alpha, x_beta)``: the magnetising ratio as a quadratic in
-    ``u = |psi_x|^2`` about the period's start (zeros without saturation)."""
+    ``u = |psi_x|^2`` about the period's start (zeros without saturation); ``psi_x`` and ``k``
+    computed as :func:`imdrive.kernels.machine.saturated_currents` does."""
     k = 0.0
     k_u = 0.0
     k_uu = 0.0
@@ -93,11 +130,37 @@ def _ratio_series(pp, sa, sb, ra, rb, g1, g2):
     xa = 0.0
     xb = 0.0
     if pp.saturation:
-        xa = sa * g1 + ra * g2
-        xb = sb * g1 + rb * g2
+        xa = sa / pp.Ll1 + ra / pp.Ll2
+        xb = sb / pp.Ll1 + rb / pp.Ll2
         u0 = xa * xa + xb * xb
         k, k_u, k_uu = magnetising_ratio_series(pp, math.sqrt(u0))
     return k, k_u, k_uu, u0, xa, xb
+
+
+@njit(cache=True, inline="always")
+def _carried_series(pp, c, sa, sb, ra, rb):
+    """:func:`_ratio_series` at the fluxes ``(sa, sb, ra, rb)``: from the carry record ``c``
+    when it belongs to them (the last period stored it), else solved."""
+    if c.sat_valid == 1.0 and c.sat_sa == sa and c.sat_sb == sb and c.sat_ra == ra:
+        if c.sat_rb == rb:
+            return c.sat_k, c.sat_k_u, c.sat_k_uu, c.sat_u0, c.sat_xa, c.sat_xb
+    return _ratio_series(pp, sa, sb, ra, rb)
+
+
+@njit(cache=True, inline="always")
+def _carry(pp, x, c):
+    """Store in ``c`` the series about the state ``x`` the period ended in, and its stator
+    current (:func:`imdrive.kernels.machine.saturated_currents`' arithmetic)."""
+    sa = x.psi_s_ab.real
+    sb = x.psi_s_ab.imag
+    ra = x.psi_r_ab.real
+    rb = x.psi_r_ab.imag
+    k, k_u, k_uu, u0, xa, xb = _ratio_series(pp, sa, sb, ra, rb)
+    c.sat_sa, c.sat_sb, c.sat_ra, c.sat_rb = sa, sb, ra, rb
+    c.sat_k, c.sat_k_u, c.sat_k_uu, c.sat_u0, c.sat_xa, c.sat_xb = k, k_u, k_uu, u0, xa, xb
+    c.sat_i_alpha = (sa - k * xa) / pp.Ll1
+    c.sat_i_beta = (sb - k * xb) / pp.Ll1
+    c.sat_valid = 1.0
 
 
 @njit(cache=True, inline="always")
@@ -152,7 +215,7 @@ def _close_period(pp, x, TL0, Ts, R1, R2, w0, dw0, sa, sb, ra, rb, int_Te, int_W
 
 
 @njit(cache=True, inline="always")
-def _period_coefficients(pp, R1, R2, sa, sb, ra, rb):
+def _period_coefficients(pp, R1, R2, sa, sb, ra, rb, carry):
     """What the period's steps hold: ``(g1, g2, k, dk/du, d2k/du2 / 2, u0, x_alpha, x_beta,
     coefficients)``, the coefficients ``(cs1, csr1, cr1, as0, as1, asr1, ars1, ar0, ar1,
     c_ss, c_sr, c_rr)``.
@@ -163,7 +226,7 @@ def _period_coefficients(pp, R1, R2, sa, sb, ra, rb):
     """
     g1 = 1.0 / pp.Ll1
     g2 = 1.0 / pp.Ll2
-    k, k_u, k_uu, u0, xa, xb = _ratio_series(pp, sa, sb, ra, rb, g1, g2)
+    k, k_u, k_uu, u0, xa, xb = _carried_series(pp, carry, sa, sb, ra, rb)
     cs1 = -g1 * g1
     csr1 = -g1 * g2
     cr1 = -g2 * g2
@@ -223,6 +286,21 @@ def _trapezoid(h, h3, int_Te, va, vb, Te, Te_e, isa, isb, ira, irb, esa, esb, er
 def switching_period(
     pinv, sinv, pp, x, v_alpha, v_beta, Vdc_meas, R1b, R2b, TL0, Ts, nsub, work, ev, trace
 ):
+    """:func:`bridge_period` with nothing carried from a previous period (``work`` is
+    unused, kept for the call signature)."""
+    carry = np.zeros(1, dtype=CARRY)
+    v = bridge_period(
+        pinv, sinv, pp, x, v_alpha, v_beta, Vdc_meas, R1b, R2b, TL0, Ts, nsub, ev, trace,
+        carry[0],
+    )  # fmt: skip
+    carry[0].sat_valid = 0.0  # the array stays alive while its record is in use
+    return v
+
+
+@njit(cache=True)
+def bridge_period(
+    pinv, sinv, pp, x, v_alpha, v_beta, Vdc_meas, R1b, R2b, TL0, Ts, nsub, ev, trace, carry
+):
     """Integrate the plant over one carrier period of the switching bridge (updates ``x``).
 
     The gate commands of the period (:func:`imdrive.kernels.inverter.gate_commands`) and the
@@ -232,8 +310,10 @@ def switching_period(
     for the rest). The phase current at a command instant (from the integrated state) decides
     its dead-time transition. Returns the period-average voltage applied at the terminals, V.
 
-    ``nsub`` splits every interval longer than ``Ts/(40 nsub)`` into ``nsub`` steps. ``work``
-    is unused (kept for the call signature). ``ev`` is float64[3, MAX_EVENTS] scratch (times,
+    ``nsub`` splits every interval longer than ``Ts/(40 nsub)`` into ``nsub`` steps. ``carry``
+    is a record with :data:`CARRY_FIELDS` (saturated: the curve's series about the period's
+    start if the last period left it, and this period's for the next, with the end state's
+    stator current). ``ev`` is float64[3, MAX_EVENTS] scratch (times,
     legs, states). ``trace``, float64[n, 3], receives ``(t, i_alpha, i_beta)`` at the start
     of every interval while it has rows (pass a zero-row array for none): the current ripple's
     extremes are at these instants.
@@ -249,7 +329,7 @@ def switching_period(
     sb = x.psi_s_ab.imag
     ra = x.psi_r_ab.real
     rb = x.psi_r_ab.imag
-    g1, g2, k, k_u, k_uu2, u0, xa, xb, co = _period_coefficients(pp, R1, R2, sa, sb, ra, rb)
+    g1, g2, k, k_u, k_uu2, u0, xa, xb, co = _period_coefficients(pp, R1, R2, sa, sb, ra, rb, carry)
     c_ss, c_sr, c_rr = co[9], co[10], co[11]
     isa, isb, ira, irb = _currents(c_ss, c_sr, c_rr, sa, sb, ra, rb)
     n_p = pp.n_p
@@ -273,11 +353,7 @@ def switching_period(
     while True:
         t_next, kind, leg = _next_event(sinv, ev_t, ev_leg, j, n, Ts)
         if t_next > t:
-            if n_tr < trace.shape[0]:
-                trace[n_tr, 0] = t
-                trace[n_tr, 1] = isa
-                trace[n_tr, 2] = isb
-                n_tr += 1
+            n_tr = _trace(trace, n_tr, t, isa, isb)
             va, vb = pole_voltages_ab(pinv, sinv, pinv.Vdc, isa, isb)
             dt = t_next - t
             n_step, order = (nsub, 4) if dt > short else (1, 2)
@@ -337,4 +413,6 @@ def switching_period(
     # --- the rest of the state, from the period's integrals
     _close_period(pp, x, TL0, Ts, R1, R2, w0, dw0, sa, sb, ra, rb, int_Te, int_W, int_is2,
                   int_ir2, e_in)  # fmt: skip
+    if sat:
+        _carry(pp, x, carry)
     return acc_alpha / Ts, acc_beta / Ts
