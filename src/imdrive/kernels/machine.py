@@ -485,13 +485,17 @@ def flux_taylor(sa, sb, ra, rb, d1, a_ss, a_sr, a_rs, a_rr, w_r, w_r1, h, order)
     ``y(tau) = y + tau d1 + tau^2/2 d2 + ...`` is exact up to ``order``. Order 4 is the
     classical RK4 of a linear system (local error ``(|lambda| h)^5/120``); order 2 serves
     intervals far shorter than the fastest time constant (dead times).
+
+    The higher derivatives have no voltage: it is passed as ``-0.0``, which the compiler
+    drops from the sums (``-0.0 + x`` is ``x`` exactly; ``0.0 + x`` is not for ``x = -0.0``,
+    so it would stay an addition on the chain from one derivative to the next).
     """
-    d2 = flux_rates(d1[0], d1[1], d1[2], d1[3], 0.0, 0.0, a_ss, a_sr, a_rs, a_rr, w_r)
+    d2 = flux_rates(d1[0], d1[1], d1[2], d1[3], -0.0, -0.0, a_ss, a_sr, a_rs, a_rr, w_r)
     d2 = (d2[0], d2[1], d2[2] - w_r1 * rb, d2[3] + w_r1 * ra)
     if order >= 4:
-        d3 = flux_rates(d2[0], d2[1], d2[2], d2[3], 0.0, 0.0, a_ss, a_sr, a_rs, a_rr, w_r)
+        d3 = flux_rates(d2[0], d2[1], d2[2], d2[3], -0.0, -0.0, a_ss, a_sr, a_rs, a_rr, w_r)
         d3 = (d3[0], d3[1], d3[2] - 2.0 * w_r1 * d1[3], d3[3] + 2.0 * w_r1 * d1[2])
-        d4 = flux_rates(d3[0], d3[1], d3[2], d3[3], 0.0, 0.0, a_ss, a_sr, a_rs, a_rr, w_r)
+        d4 = flux_rates(d3[0], d3[1], d3[2], d3[3], -0.0, -0.0, a_ss, a_sr, a_rs, a_rr, w_r)
         d4 = (d4[0], d4[1], d4[2] - 3.0 * w_r1 * d2[3], d4[3] + 3.0 * w_r1 * d2[2])
         q = 0.5 * h
         h3 = h * THIRD  # a multiply: h/3 to within one rounding
