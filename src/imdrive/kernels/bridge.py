@@ -192,19 +192,20 @@ def _close_period(pp, x, TL0, Ts, R1, R2, w0, dw0, sa, sb, ra, rb, int_Te, int_W
     """The state at the period's end from the fluxes and the period's integrals (the speed
     from the torque's integral, the rotor flux's angle corrected for the speed's change, the
     temperatures from the copper losses, the energies)."""
+    inv_J = 1.0 / pp.J  # one division, off the chain through the period's end
     if pp.speed_imposed:
         w1 = w0
         load_int = Ts * (load_torque(pp, TL0, w0) + pp.B * w0)
     else:
-        w1p = w0 + (int_Te - Ts * (load_torque(pp, TL0, w0) + pp.B * w0)) / pp.J
+        w1p = w0 + (int_Te - Ts * (load_torque(pp, TL0, w0) + pp.B * w0)) * inv_J
         w_mid = 0.5 * (w0 + w1p)
         load_int = Ts * (load_torque(pp, TL0, w_mid) + pp.B * w_mid)
-        w1 = w0 + (int_Te - load_int) / pp.J
+        w1 = w0 + (int_Te - load_int) * inv_J
     w_avg = 0.5 * (w0 + w1)
     # the error of the speed's linear model: int (w(t) - w0 - t dw0) dt over the period, with
     # w(t) from the torque's double integral; the rotor flux turned n_p times that too little
     if not pp.speed_imposed:
-        dth = pp.n_p * ((int_W - 0.5 * Ts * load_int) / pp.J - 0.5 * Ts * Ts * dw0)
+        dth = pp.n_p * ((int_W - 0.5 * Ts * load_int) * inv_J - 0.5 * Ts * Ts * dw0)
         ra, rb = ra - dth * rb, rb + dth * ra
     x.psi_s_ab = complex(sa, sb)
     x.psi_r_ab = complex(ra, rb)
@@ -381,8 +382,8 @@ def bridge_period(
                     c_ss, c_sr, c_rr = _currents_held(k_mid, g1, g2, co)
                     d1 = flux_rates(sa, sb, ra, rb, va, vb, a_ss, a_sr, a_rs, a_rr, w_r)
                 y = flux_taylor(sa, sb, ra, rb, d1, a_ss, a_sr, a_rs, a_rr, w_r, w_r1, h, order)
-                # the middle (long steps): currents with the held coefficients
-                msa, msb, mra, mrb = _currents(c_ss, c_sr, c_rr, y[0], y[1], y[2], y[3])
+                if order > 2:  # the middle (long steps): currents with the held coefficients
+                    msa, msb, mra, mrb = _currents(c_ss, c_sr, c_rr, y[0], y[1], y[2], y[3])
                 sa, sb, ra, rb = y[4], y[5], y[6], y[7]
                 if sat:  # the end's currents: k of the curve at the end's |psi_x| (the rates
                     # keep k of the middle: off the fluxes' chain from step to step)
