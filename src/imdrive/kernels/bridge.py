@@ -19,8 +19,8 @@ rule on their start, middle and end (the trapezoidal rule on the short ones): th
 Main-flux saturation: the currents are linear in the fluxes when the magnetising ratio
 ``k = |psi_m|/|psi_x|`` is held (:func:`imdrive.kernels.machine.current_coefficients`; the
 coefficients are then linear in ``k``), so each interval holds ``k`` at its value predicted
-for the interval's middle (first order in ``|psi_x|`` from the start's slope, the slope taken
-with ``k`` of the previous interval's middle; a short interval holds ``k`` of its start)
+for the interval's middle (first order in ``|psi_x|`` from the start's slope, from the
+start's currents; a short interval holds ``k`` of its start)
 and the currents at its end come from the curve's series about the period's start
 (:func:`imdrive.kernels.machine.magnetising_ratio`). The curve is solved once a period, at
 its end, for the next period's series and the check's current (:data:`CARRY_FIELDS`).
@@ -371,16 +371,16 @@ def bridge_period(
                 w_r = n_p * w0 + w_r1 * (t + i_step * h)
                 if sat and order == 2:  # a short step: k held at its start's value
                     a_ss, a_sr, a_rs, a_rr = _rates_held(k_end, co)
-                # saturated: the rates at k of the last step predict |psi_x| at the middle
-                d1 = flux_rates(sa, sb, ra, rb, va, vb, a_ss, a_sr, a_rs, a_rr, w_r)
-                if sat and order > 2:  # k held at its value predicted for the step's middle
-                    pxa = xa + 0.5 * h * (d1[0] * g1 + d1[2] * g2)
-                    pxb = xb + 0.5 * h * (d1[1] * g1 + d1[3] * g2)
+                elif sat:  # k held at its value predicted for the step's middle, from the
+                    # start's rates (v - R1 i_s, -R2 i_r + j w_r psi_r) of psi_x
+                    hh = 0.5 * h
+                    pxa = xa + hh * (g1 * (va - R1 * isa) - g2 * (R2 * ira + w_r * rb))
+                    pxb = xb + hh * (g1 * (vb - R1 * isb) + g2 * (w_r * ra - R2 * irb))
                     du = pxa * pxa + pxb * pxb - u0
                     k_mid = k + du * (k_u + k_uu2 * du)
                     a_ss, a_sr, a_rs, a_rr = _rates_held(k_mid, co)
                     c_ss, c_sr, c_rr = _currents_held(k_mid, g1, g2, co)
-                    d1 = flux_rates(sa, sb, ra, rb, va, vb, a_ss, a_sr, a_rs, a_rr, w_r)
+                d1 = flux_rates(sa, sb, ra, rb, va, vb, a_ss, a_sr, a_rs, a_rr, w_r)
                 y = flux_taylor(sa, sb, ra, rb, d1, a_ss, a_sr, a_rs, a_rr, w_r, w_r1, h, order)
                 if order > 2:  # the middle (long steps): currents with the held coefficients
                     msa, msb, mra, mrb = _currents(c_ss, c_sr, c_rr, y[0], y[1], y[2], y[3])
@@ -423,4 +423,5 @@ def bridge_period(
                   int_ir2, e_in)  # fmt: skip
     if sat:
         _carry(pp, x, carry)
-    return acc_alpha / Ts, acc_beta / Ts
+    inv_Ts = 1.0 / Ts
+    return acc_alpha * inv_Ts, acc_beta * inv_Ts
