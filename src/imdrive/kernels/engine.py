@@ -258,7 +258,7 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
             log[k // log_every].v_alpha = v_app_ab.real
             log[k // log_every].v_beta = v_app_ab.imag
 
-        status, i_next_ab = check(sim, pp, x, smp, mdl, ctl, est, cmp, estm)
+        status, i_next_ab = check(sim, pp, x, smp, mdl, ctl, est, cmp, estm, scratch[0])
         have_next = True
         if status != S_OK:
             return status, k + 1

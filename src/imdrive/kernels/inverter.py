@@ -168,9 +168,10 @@ def duty_cycles(v_alpha, v_beta, Vdc_meas):
     """
     xa, xb, xc = phase_values(v_alpha, v_beta)
     v0 = -0.5 * (max(xa, xb, xc) + min(xa, xb, xc))
-    da = min(max(0.5 + (xa + v0) / Vdc_meas, 0.0), 1.0)
-    db = min(max(0.5 + (xb + v0) / Vdc_meas, 0.0), 1.0)
-    dc = min(max(0.5 + (xc + v0) / Vdc_meas, 0.0), 1.0)
+    g = 1.0 / Vdc_meas  # one division instead of three
+    da = min(max(0.5 + (xa + v0) * g, 0.0), 1.0)
+    db = min(max(0.5 + (xb + v0) * g, 0.0), 1.0)
+    dc = min(max(0.5 + (xc + v0) * g, 0.0), 1.0)
     return da, db, dc
 
 

@@ -128,15 +128,15 @@ def magnetising_ratio_series(p, X):
     if X <= 1e-9 * p.sat_X_max or X <= 0.0:
         return k, 0.0, 0.0
     m = k * X
-    G = 1.0 / p.Ll1 + 1.0 / p.Ll2
-    r = _power(m / p.psi_sat, p.S)
-    dF = G + (1.0 + (p.S + 1.0) * r) / p.Lm0
-    d2F = (p.S + 1.0) * p.S * r / (m * p.Lm0)
+    inv_X = 1.0 / X  # the divisions below are multiplies by it (one serial division left)
+    r = _power(m * p.sat_inv_psi_sat, p.S)
+    dF = p.sat_G + (1.0 + (p.S + 1.0) * r) * p.sat_inv_Lm0
+    d2F = (p.S + 1.0) * p.S * r * p.sat_inv_Lm0 / m
     m1 = 1.0 / dF
     m2 = -d2F * m1 * m1 * m1
-    k2 = (m2 - 2.0 * k1) / X
-    inv_2X = 0.5 / X
-    return k, k1 * inv_2X, (k2 - k1 / X) * inv_2X * inv_2X
+    k2 = (m2 - 2.0 * k1) * inv_X
+    inv_2X = 0.5 * inv_X
+    return k, k1 * inv_2X, (k2 - k1 * inv_X) * inv_2X * inv_2X
 
 
 def saturation_table(Ll1: float, Ll2: float, Lm0: float, psi_sat: float, S: float) -> dict:

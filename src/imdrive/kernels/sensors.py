@@ -4,8 +4,9 @@ Current sensors
     The vector model (``phase_model`` off, the default) adds a constant offset to the stator current
     space vector. The per-phase model measures phases a and b (two sensors, ``i_c = -i_a - i_b``
     as in most drives), each with its own gain and offset, Gaussian noise (seeded, reproducible:
-    a counter-based generator keyed by seed, drive sample and phase, so a run, a continued run
-    and a batch run draw the same numbers) and ADC quantisation (``bits`` over ``±range``,
+    a counter-based generator keyed by seed and drive sample, so a run, a continued run and a
+    batch run draw the same numbers; the two phases take the two independent normals of one
+    Box-Muller pair) and ADC quantisation (``bits`` over ``±range``,
     mid-tread, clipped at the range)::
 
         i_x,meas = Q(g_x i_x + o_x + n_x),   Q(u) = clip(q round(u/q), -range, range - q),
@@ -48,7 +49,7 @@ _M1 = np.uint64(0xBF58476D1CE4E5B9)
 _M2 = np.uint64(0x94D049BB133111EB)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _mix(z):
     """splitmix64's finaliser: a 64-bit hash with good avalanche (Steele, Lea, Flood 2014)."""
     z = (z ^ (z >> np.uint64(30))) * _M1
@@ -56,7 +57,7 @@ def _mix(z):
     return z ^ (z >> np.uint64(31))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _uniform(seed, k, channel):
     """A uniform number in (0, 1) for (seed, sample, channel), independent of call order."""
     z = _mix(np.uint64(seed) * _GOLDEN + np.uint64(k))
@@ -64,12 +65,25 @@ def _uniform(seed, k, channel):
     return ((z >> np.uint64(11)) + np.uint64(1)) * (1.0 / 9007199254740994.0)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def gaussian(seed, k, channel):
     """A standard normal number for (seed, sample, channel) (Box-Muller on two uniforms)."""
     u1 = _uniform(seed, k, 2 * channel)
     u2 = _uniform(seed, k, 2 * channel + 1)
     return math.sqrt(-2.0 * math.log(u1)) * math.cos(2.0 * math.pi * u2)
+
+
+@njit(cache=True, inline="always")
+def gaussian_pair(seed, k):
+    """Two independent standard normal numbers for (seed, sample): Box and Muller's pair
+    ``r cos(2 pi u2), r sin(2 pi u2)``, ``r = sqrt(-2 ln u1)`` (Ann. Math. Statist. 29, 1958),
+    of the uniforms of :func:`gaussian`'s channel 0, whose value is the first of the pair.
+    One logarithm, one square root and one sine-cosine pair for both phases."""
+    u1 = _uniform(seed, k, 0)
+    u2 = _uniform(seed, k, 1)
+    r = math.sqrt(-2.0 * math.log(u1))
+    a = 2.0 * math.pi * u2
+    return r * math.cos(a), r * math.sin(a)
 
 
 @njit(cache=True)
@@ -92,8 +106,9 @@ def measure_current(p, i_s_alpha, i_s_beta, k):
     ma = p.gain_a * ia + p.offset_a
     mb = p.gain_b * ib + p.offset_b
     if p.noise_rms > 0.0:
-        ma += p.noise_rms * gaussian(p.seed, k, 0)
-        mb += p.noise_rms * gaussian(p.seed, k, 1)
+        n_a, n_b = gaussian_pair(p.seed, k)
+        ma += p.noise_rms * n_a
+        mb += p.noise_rms * n_b
     ma = quantise(ma, p.adc_bits, p.adc_range)
     mb = quantise(mb, p.adc_bits, p.adc_range)
     # two sensors, i_c = -i_a - i_b: alpha = i_a, beta = (i_a + 2 i_b)/sqrt(3)

@@ -32,7 +32,7 @@ from typing import NamedTuple
 
 from numba import njit
 
-from imdrive.kernels.bridge import switching_period
+from imdrive.kernels.bridge import CARRY_FIELDS, bridge_period
 from imdrive.kernels.compensator import (
     compensator_gate_sample,
     compensator_step,
@@ -142,6 +142,7 @@ SCRATCH = record_dtype(
         ("seg_vb", f8, (MAX_SEGMENTS,)),
         ("ev", f8, (3, MAX_EVENTS)),  # the switching bridge's events: times, legs, states
         ("no_trace", f8, (0, 3)),  # the bridge's current trace: none
+        *CARRY_FIELDS,  # what the bridge carries to the next period and the check
     ]
 )
 
@@ -376,9 +377,9 @@ def plant(pinv, sinv, pp, x, prof, mod, switching, Vdc_meas, nsub, scr, Ts):
     true average voltage, V (complex)."""
     if switching:
         v_cmd = mod.v_cmd_ab
-        v_app_alpha, v_app_beta = switching_period(
+        v_app_alpha, v_app_beta = bridge_period(
             pinv, sinv, pp, x, v_cmd.real, v_cmd.imag, Vdc_meas,
-            prof.R1_base, prof.R2_base, prof.T_L0, Ts, nsub, None, scr.ev, scr.no_trace,
+            prof.R1_base, prof.R2_base, prof.T_L0, Ts, nsub, scr.ev, scr.no_trace, scr,
         )  # fmt: skip
         return complex(v_app_alpha, v_app_beta)
     seg_dt = scr.seg_dt
@@ -407,13 +408,17 @@ def _controller_finite(smp, mdl, ctl, cmp):
 
 
 @njit(cache=True, inline="always")
-def check(sim, pp, x, smp, mdl, ctl, est, cmp, estm):
+def check(sim, pp, x, smp, mdl, ctl, est, cmp, estm, scr):
     """Divergence after the period: ``(status, i_s_ab)``.
 
     ``status`` is ``S_OK`` or ``S_NAN``, ``S_CURRENT``, ``S_SPEED``; ``i_s_ab`` the plant's
-    current now, A (complex), which the next :func:`measure` takes.
+    current now, A (complex), which the next :func:`measure` takes: the one the switching
+    bridge left in the scratch record ``scr`` when it solved the saturated curve there.
     """
-    i_s_alpha, i_s_beta = stator_current(pp, x)
+    if scr.sat_valid == 1.0:
+        i_s_alpha, i_s_beta = scr.sat_i_alpha, scr.sat_i_beta
+    else:
+        i_s_alpha, i_s_beta = stator_current(pp, x)
     i_s_ab = complex(i_s_alpha, i_s_beta)
     i_mag = math.sqrt(i_s_alpha * i_s_alpha + i_s_beta * i_s_beta)
     if not (math.isfinite(i_mag) and math.isfinite(x.w_m)):
