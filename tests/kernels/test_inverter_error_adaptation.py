@@ -114,3 +114,20 @@ def test_standstill_apparent_resistance_of_the_compensation():
     assert s["ie_c0"] == pytest.approx((dv_a * 5.0 + dv_b * 1.0) / (1.25 * 26.0), rel=1e-12)
     standstill_compensation(s, 9.0, 9.0, 5.0, 1.0, 1.0)  # the speed reference moved: held
     assert s["ie_c0"] == pytest.approx((dv_a * 5.0 + dv_b * 1.0) / (1.25 * 26.0), rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("preset", "sets", "rate"),
+    [
+        ("sensorless-realistic-uncommissioned", [], 1.0),  # assumed dead time: adapts
+        ("sensorless-realistic", [], 0.0),  # a commissioned table: held as measured
+        ("sensorless-realistic", ["control.inverter_error_adaptation_per_s=0.5"], 0.5),
+        ("sensorless-realistic-uncommissioned", ["control.inverter_error_adaptation_per_s=0"], 0.0),
+    ],
+)
+def test_default_rate_follows_what_the_controller_knows_of_the_inverter(preset, sets, rate):
+    from imdrive import Scenario
+    from imdrive.run.build import build_arrays
+
+    p = build_arrays(Scenario.read(preset, sets)).params.control[0]
+    assert p["ie_rate"] == rate

@@ -162,6 +162,8 @@ def _step_run(sc, npl: Nameplate, model: dict, T2: float, J_max: float, table, t
             "dead_time_compensation": "feedforward",
             "dead_time_compensation_s": u_inverter
             / (sc.inverter.switching_frequency_Hz * npl.Vdc_meas_V),
+            # the error the DC test measured, held: a test is no place for an adaptation
+            "inverter_error_adaptation_per_s": 0.0,
         },
         estimator=model,
     )

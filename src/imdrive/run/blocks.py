@@ -177,6 +177,15 @@ def _assumed_dead_time(sc: Scenario) -> float:
     return sc.inverter.dead_time_s if t is None else t
 
 
+def _inverter_error_adaptation(sc: Scenario, D: Resolved) -> float:
+    """Rate of the online inverter-error scaling, 1/s: the setting, or by default 1 with the
+    assumed dead-time feed-forward and 0 with a commissioned inverter-error table."""
+    rate = sc.control.inverter_error_adaptation_per_s
+    if rate is not None:
+        return rate
+    return 0.0 if D.model_inverter_error else 1.0
+
+
 def control_fields(sc: Scenario, D: Resolved, mh: dict, psi0: float) -> tuple[dict, dict]:
     """``CONTROL_PARAMS`` and the controller's gains (current and speed PI from bandwidths,
     each overridable), from the model ``mh`` of :func:`model_fields` and flux ``psi0``."""
@@ -212,11 +221,11 @@ def control_fields(sc: Scenario, D: Resolved, mh: dict, psi0: float) -> tuple[di
             else 0.0
         ),
         dtc_band=inv.sign_band_A,
-        ie_rate=ctl.inverter_error_adaptation_per_s,
+        ie_rate=_inverter_error_adaptation(sc, D),
         ie_wc=2 * math.pi * ctl.current_bandwidth_Hz,
         ie_wmin=2 * math.pi * m.rated_frequency_Hz * ctl.inverter_error_adaptation_fmin_pu,
         # the MRAS's standstill R1 identification absorbed the residual the scale learns
-        ie_r1=ctl.inverter_error_adaptation_per_s > 0
+        ie_r1=_inverter_error_adaptation(sc, D) > 0
         and ctl.speed_feedback == "mras"
         and sc.mras.R1_standstill,
         fw=ctl.field_weakening,
