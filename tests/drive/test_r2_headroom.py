@@ -154,3 +154,31 @@ def test_headroom_yields_when_the_speed_is_not_held():
     res = simulate(sc)
     assert not res.diverged and not res.lost_control
     assert _tail(res, "comp_live_flag", 3.0).max() == 0.0  # not estimated: says so
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("R2_ratio", [1.0, 0.7])
+def test_no_gate_limit_cycle_at_base_speed_with_rated_load(R2_ratio):
+    # the envelope's cell at the rated speed with the rated load: each trip of the speed gate
+    # used to hand the flux to the field weakening's fast rule, whose flux step tripped the
+    # gate again (+-2.5 rpm, R2_hat held 66 % of the time and 8 % off, measured); the headroom
+    # now only stops lowering the flux unless the torque current is at its limit
+    from imdrive.sweep import load_sweep
+
+    sw = load_sweep("envelope-full")
+    point = dict(
+        speed_pu=1.0,
+        load_pu_available=1.0,
+        R2_ratio=R2_ratio,
+        R1_ratio=1.1,
+        thermal="constant",
+        inverter="ideal",
+    )
+    sc = sw.scenario_for(tuple(point[a.name] for a in sw.axes))
+    res = simulate(sc)  # the sweep's 38 s: from 0.7 R2 the law needs them
+    m = res.metrics()
+    assert m["verdict"] == "ok"
+    assert abs(m["R2_error_pct"]) < 0.5
+    assert m["R2_held_pct"] < 20.0
+    ripple = _tail(res, "speed_est_rpm", 3.0) - _tail(res, "speed_ref_rpm", 3.0)
+    assert ripple.max() - ripple.min() < 1.0

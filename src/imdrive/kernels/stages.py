@@ -194,7 +194,7 @@ def measure(pp, psen, x, ctl, prof, t, k, i_next_ab, have_next):
 
 
 @njit(cache=True, inline="always")
-def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc_meas):
+def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc_meas, i_max):
     """The injection, the selected estimator, the detection and the R2 compensator.
 
     Returns the :class:`Estimate`; updates the estimator's state ``est`` and the compensator's
@@ -218,7 +218,9 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc
             a_inj = injection_headroom(pk, cmp, v_use, 1.0 - ctl.fw_cut, wrapped)
         i_inj = a_inj * pk.inj_amp * sine
         if pk.inj_fw and cmp.v_peak_last > 0.0:  # the field weakening leaves it headroom
-            v_fw = headroom_weakening_input(pk, cmp, v_use)
+            i_ref = ctl.i_ref_dq  # the speed loop's torque current at its limit
+            iq_max = math.sqrt(max(i_max * i_max - i_ref.real * i_ref.real, 0.0))
+            v_fw = headroom_weakening_input(pk, cmp, v_use, abs(i_ref.imag) >= 0.99 * iq_max)
     w_ref = prof.w_ref
 
     # R1 adaptation held from the compensator's start until it first updates and whenever
