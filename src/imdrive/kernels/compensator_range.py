@@ -76,6 +76,10 @@ def headroom_weakening_input(p, s, v_use, torque_limited):
     (the voltage use is nearly proportional to the flux above base speed): 0.4 at 1 /s and
     2 Hz, no overshoot. The cost of the lowered flux in torque per ampere is
     :func:`imdrive.analysis.headroom.torque_per_ampere_at_flux`.
+
+    While the speed gate holds the compensator (``s.frozen & 1``) the slow term only raises
+    the flux, and ``torque_limited`` (the speed loop's torque current at its limit) hands the
+    flux to the field weakening's own rule (returns ``v_use``).
     """
     slow = p.inj_fw_rate * (p.inj_v_peak - s.v_peak_last)
     if int(s.frozen) & 1:
