@@ -10,27 +10,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from data.headroom import HEADROOM, NO_HEADROOM
 
 from imdrive.analysis.headroom import oriented_point, torque_per_ampere_at_flux
 from imdrive.config.machine import rated_point
 from imdrive.config.scenario import Scenario
 from imdrive.errors import ConfigError
 from imdrive.run.simulate import simulate
-
-HEADROOM = (
-    "control.field_weakening=true",
-    "injection.headroom_voltage=0.88",
-    "injection.headroom_from=0.92",
-    "injection.headroom_to=0.98",
-    "compensator.gate_voltage=0.99",
-)
-# the injection preset's headroom undone: the injection backs off from 0.85 of the voltage
-NO_HEADROOM = {
-    "injection.headroom_voltage": None,
-    "injection.headroom_from": 0.85,
-    "injection.headroom_to": 0.95,
-    "compensator.gate_voltage": 0.97,
-}
 
 
 def _run(machine, speed_rpm, torque_Nm, extra, ramp_s=1.0, t_end=14.0):

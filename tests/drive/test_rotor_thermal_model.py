@@ -12,26 +12,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from data.headroom import HEADROOM, NO_HEADROOM
 
 from imdrive.config.machine import rated_point
 from imdrive.config.perunit import rated_rotor_loss_W, rotor_thermal_resistance
 from imdrive.config.scenario import Scenario
 from imdrive.run.simulate import simulate
 
-HEADROOM = (
-    "control.field_weakening=true",
-    "injection.headroom_voltage=0.88",
-    "injection.headroom_from=0.92",
-    "injection.headroom_to=0.98",
-    "compensator.gate_voltage=0.99",
-)
-# the injection preset's headroom undone: the injection backs off from 0.85 of the voltage
-NO_HEADROOM = {
-    "injection.headroom_voltage": None,
-    "injection.headroom_from": 0.85,
-    "injection.headroom_to": 0.95,
-    "compensator.gate_voltage": 0.97,
-}
 # the plant's rotor: 30 s thermal time constant and a rise of 51 K at rated rotor losses
 # (Table IV: 0.5 K/W), the stator's temperature held
 RISE_K = 51.4

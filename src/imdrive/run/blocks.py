@@ -199,6 +199,7 @@ def control_fields(sc: Scenario, D: Resolved, mh: dict, psi0: float) -> tuple[di
         mh["sigma_L1_hat"], R_sigma, 2 * math.pi * ctl.current_bandwidth_Hz
     )
     kp_w, ki_w = default_speed_gains(m.J_kgm2, k_t, 2 * math.pi * D.speed_bandwidth_Hz)
+    ie_rate = _inverter_error_adaptation(sc, D)
     gains = {
         "current_kp": ctl.current_kp if ctl.current_kp is not None else kp_i,
         "current_ki": ctl.current_ki if ctl.current_ki is not None else ki_i,
@@ -221,11 +222,11 @@ def control_fields(sc: Scenario, D: Resolved, mh: dict, psi0: float) -> tuple[di
             else 0.0
         ),
         dtc_band=inv.sign_band_A,
-        ie_rate=_inverter_error_adaptation(sc, D),
+        ie_rate=ie_rate,
         ie_wc=2 * math.pi * ctl.current_bandwidth_Hz,
         ie_wmin=2 * math.pi * m.rated_frequency_Hz * ctl.inverter_error_adaptation_fmin_pu,
         # the MRAS's standstill R1 identification absorbed the residual the scale learns
-        ie_r1=_inverter_error_adaptation(sc, D) > 0
+        ie_r1=ie_rate > 0
         and ctl.speed_feedback == "mras"
         and sc.mras.R1_standstill,
         fw=ctl.field_weakening,
