@@ -381,6 +381,24 @@ class InjectionSettings:
         ),
     ] = 1.0
     t_on_s: Annotated[Float, setting("time the injection starts", "s", ge=0.0)] = 0.0
+    decouple_slip: Annotated[
+        Bool,
+        setting(
+            "detection: subtract from e_d0 the part the slip couples in from the MRAS's "
+            "q-axis flux error, w_s T2_hat/(1 + s T2_hat) e_q0 (kernels/compensator.py, "
+            "slip_coupling); matters at large slip (full load above base speed)"
+        ),
+    ] = True
+    decouple_slip_fmin_pu: Annotated[
+        Float,
+        setting(
+            "decouple_slip: the stator frequency, per-unit of the rated one, from which the "
+            "correction fades in (full at twice it); below it e_q0 is mostly the voltage "
+            "model's error (R1, inverter), not the rotor's q flux",
+            ge=0.0,
+            lt=1.0,
+        ),
+    ] = 0.3
     compensate_filter: Annotated[
         Bool,
         setting(

@@ -179,6 +179,9 @@ COMPENSATOR_PARAMS = record_dtype(
         ("th_tau", f8),  # its thermal time constant, s
         ("th_Rth", f8),  # its thermal resistance, rotor to ambient, K/W
         ("th_alpha", f8),  # temperature coefficient of R2, 1/K
+        ("slip_decouple", b1),  # detection: remove the slip's coupling of e_q0 into e_d0
+        ("cpl_wc", f8),  # the MRAS filter cut-off that decoupling undoes, rad/s (0: none)
+        ("cpl_wmin", f8),  # decoupling from this |w_e| (full at twice it), rad/s (0: always)
     ]
 )
 
@@ -220,6 +223,7 @@ COMPENSATOR_STATE = record_dtype(
         ("th_R2_cold", f8),  # thermal model: R2 at ambient, calibrated (0: not yet), ohm
         ("inj_running", b1),  # the injection has started
         ("inj_new", b1),  # it started since the last decision (adaptive law: a settling period)
+        ("cpl_d", f8),  # the part of e_d0 the slip couples in from e_q0, Wb
     ]
 )
 
@@ -255,7 +259,7 @@ def injection_sine(p, s, t, Ts):
 
 
 @njit(cache=True)
-def demodulate(p, s, e_dq0, sine, cosine, w_e, Ts):
+def demodulate(p, s, e_dq0, sine, cosine, w_e, w_s, T2_hat, Ts):
     """Synchronous detection of e_d0 with the injected sinusoid (updates ``s.demod``).
 
     ``sine``, ``cosine``: ``sin`` and ``cos`` of the injection phase of this sample (both 0
@@ -269,16 +273,54 @@ def demodulate(p, s, e_dq0, sine, cosine, w_e, Ts):
     injection's two side bands at ``w_e +- w_i`` differently when ``|w_e|`` is not far above
     ``wc``; the detection undoes that filter at both side bands.
     """
+    f = s.inj_f if s.inj_f > 0.0 else p.inj_freq
     if p.inj_hp_wc > 0.0:
-        f = s.inj_f if s.inj_f > 0.0 else p.inj_freq
         prod = compensated_product(e_dq0, sine, cosine, w_e, 2.0 * math.pi * f, p.inj_hp_wc)
     else:
         prod = 2.0 * e_dq0.real * sine
+    if p.slip_decouple:
+        c_d = slip_coupling(s, e_dq0, w_e, p.cpl_wc, w_s, T2_hat, Ts)
+        # faded in from cpl_wmin to twice that: below, e_q0 is mostly the voltage model's
+        # error (R1, inverter: ~1/w_e), not the rotor's q flux
+        k = min(max(abs(w_e) / p.cpl_wmin - 1.0, 0.0), 1.0) if p.cpl_wmin > 0.0 else 1.0
+        prod -= 2.0 * k * c_d * sine
     w_lp = p.inj_lpf
     if w_lp > 0.0:
         s.demod += (1.0 - math.exp(-w_lp * Ts)) * (prod - s.demod)
     else:
         s.demod = prod
+
+
+@njit(cache=True)
+def slip_coupling(s, e_dq0, w_e, wc, w_s, T2_hat, Ts):
+    """The part of the d-axis flux error that the slip couples in from the q-axis error, Wb
+    (integrated in ``s.cpl_d``).
+
+    In the controller's frame the rotor flux obeys
+    ``dpsi_d/dt = (M i_d - psi_d)/T2 + (w_e - w_r) psi_q``, and the adjustable model is held on
+    the d axis (``psi_hat_q = 0``); so a q-axis flux error drives the d-axis error through
+
+        G(s) = w_s T2 / (1 + s T2),     w_s = w_e - w_r (the slip).
+
+    The MRAS's speed loop holds ``e_q0`` near 0 but not at 0 through the injection's torque
+    ripple (its bandwidth is finite), and at a large slip (``w_s T2 = i_q/i_d``: 3-5 at full
+    load above base speed) that part is as large as the R2 signal and has the sign of
+    ``w_s``: R2_hat ended 2 % low at 1.5 x base speed and drifted 28 % low at 2 x base speed,
+    motoring, from R2_hat(0) = R2. ``G`` is integrated in the time domain (forward Euler), not
+    as a phasor at the injection frequency, because there the speed loop's own oscillation
+    puts most of ``e_q0`` at other frequencies.
+
+    ``e_q0`` is the error after the MRAS's comparison filter ``s/(s + wc)`` in the stationary
+    frame, which near ``w_e ~ wc`` leaks a share ``wc/w_e`` of the d error (the R2 signal
+    itself) into q; it is undone at the stator frequency, ``q = e_q0 - (wc/w_e) e_d0`` (the
+    ratio bounded by :data:`MAX_HP_CORRECTION`; wc = 0: no filter).
+    """
+    q = e_dq0.imag
+    if wc > 0.0:
+        c = wc / max(abs(w_e), wc / MAX_HP_CORRECTION)
+        q -= (c if w_e >= 0.0 else -c) * e_dq0.real
+    s.cpl_d += Ts * (w_s * q - s.cpl_d / T2_hat)
+    return s.cpl_d
 
 
 #: Largest correction ``wc/|w|`` of one side band (``|H| >= 0.32``): nearer DC the side band

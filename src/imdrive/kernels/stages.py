@@ -62,6 +62,7 @@ from imdrive.kernels.ifoc import (
 )
 from imdrive.kernels.inverter import MAX_EVENTS, MAX_SEGMENTS, inverter_segments, limit_magnitude
 from imdrive.kernels.machine import integrate_segment, log_plant, stator_current
+from imdrive.kernels.model import incremental_L2
 from imdrive.kernels.profiles import (
     PR_FLUX_REF,
     PR_FREQ,
@@ -233,7 +234,8 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc
     w_r_hat, e_dq0 = estimator_step(pe, mdl, est, inp)
 
     if pk.inj_amp != 0.0:
-        demodulate(pk, cmp, e_dq0, sine, cosine, ctl.w_e, Ts)
+        T2_hat = incremental_L2(mdl) / mdl.R2_hat
+        demodulate(pk, cmp, e_dq0, sine, cosine, ctl.w_e, ctl.w_e - w_r_hat, T2_hat, Ts)
     if pk.enabled:
         if pk.gate and t >= pk.t_on:  # the compensator's gating signals
             w_fb_g = w_r_hat / pp.n_p if sim.sensorless else x.w_m

@@ -226,9 +226,7 @@ def control_fields(sc: Scenario, D: Resolved, mh: dict, psi0: float) -> tuple[di
         ie_wc=2 * math.pi * ctl.current_bandwidth_Hz,
         ie_wmin=2 * math.pi * m.rated_frequency_Hz * ctl.inverter_error_adaptation_fmin_pu,
         # the MRAS's standstill R1 identification absorbed the residual the scale learns
-        ie_r1=ie_rate > 0
-        and ctl.speed_feedback == "mras"
-        and sc.mras.R1_standstill,
+        ie_r1=ie_rate > 0 and ctl.speed_feedback == "mras" and sc.mras.R1_standstill,
         fw=ctl.field_weakening,
         fw_v=ctl.field_weakening_voltage,
         fw_rate=ctl.field_weakening_rate,
@@ -277,6 +275,9 @@ def compensator_fields(sc: Scenario, D: Resolved) -> tuple[dict, dict]:
         inj_lpf=inj.lowpass_rad_s,
         inj_t_on=inj.t_on_s,
         inj_hp_wc=sc.mras.wc_rad_s if inj.compensate_filter else 0.0,
+        slip_decouple=inj.decouple_slip,
+        cpl_wc=sc.mras.wc_rad_s,
+        cpl_wmin=2 * math.pi * sc.machine.rated_frequency_Hz * inj.decouple_slip_fmin_pu,
         **_gating(sc, r),
         **_thermal(sc, D),
     )

@@ -1,0 +1,63 @@
+"""The slip's coupling of the MRAS's q-axis flux error into the detected R2 signal, and its removal.
+
+Mechanism (kernels/compensator.py ``slip_coupling``, docs/envelope.md): in the controller's
+frame the rotor's d flux is driven by ``w_s psi_q``; the adjustable model is held on the d axis,
+so the q-axis error the MRAS's finite bandwidth leaves through the injection's torque ripple
+reaches the d-axis error through ``w_s T2/(1 + s T2)``. At full load above base speed
+(``w_s T2 = i_q/i_d``, 3-5) that is of the size of the R2 signal, of the sign of the slip:
+motoring with the torque the machine delivers there, R2_hat ends 33 % off on Table IV at 1.5 x
+the rated speed from R2_hat(0) = 1.3 R2, and drifts 28 % low on Krause's 3 hp machine at twice
+the rated speed from R2_hat(0) = R2; with the correction both end within 0.1 %. (On the Aalto
+2.2 kW machine the part is small: within 0.15 % either way at 1.5 x.) The speed error falls with
+R2_hat's; at twice the rated speed 2.4 rpm remain (0.07 % of the speed), a second-order
+discretisation residual of the 100 us control period (1.5 rpm less at 50 us).
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from imdrive import Scenario, simulate_batch
+from imdrive.config.rated import rated_point
+from imdrive.sweep.model import available_torque_Nm
+
+pytestmark = pytest.mark.slow  # end to end: 4 closed-loop runs of 24 s
+
+
+def _runs(machine: str, speed_pu: float, R2_ratio: float):
+    base = Scenario.read("injection-robust", [f'machine.preset="{machine}"'])
+    rp = rated_point(base.machine)
+    keys, scs = [], []
+    for on in (False, True):
+        o = {
+            "injection.decouple_slip": on,
+            "estimator.R2_ratio": R2_ratio,
+            "estimator.R1_ratio": 1.0,
+            "control.speed_ref_rpm": {
+                "initial": 0,
+                "changes": [{"at": 0.5, "to": speed_pu * rp.speed_rpm, "over": 3.0}],
+            },
+            "injection.t_on_s": 5.0,
+            "compensator.t_on_s": 5.0,
+            "simulation.t_end_s": 24.0,
+        }
+        sc = base.with_overrides(o)
+        T = available_torque_Nm(sc)
+        load = {"initial": 0, "changes": [{"at": 4.0, "to": T}]}
+        sc = sc.with_overrides({"load.torque_Nm": load})
+        keys.append(on)
+        scs.append(sc)
+    b = simulate_batch(scs)
+    return {k: row for k, row in zip(keys, b.metrics.itertuples(), strict=True)}
+
+
+@pytest.mark.parametrize(
+    "machine, speed_pu, R2_ratio", [("paper-table-iv", 1.5, 1.3), ("krause-3hp", 2.0, 1.0)]
+)
+def test_decoupling_removes_the_bias_at_full_load_above_base_speed(machine, speed_pu, R2_ratio):
+    r = _runs(machine, speed_pu, R2_ratio)
+    off, on = r[False], r[True]
+    assert abs(off.R2_error_pct) > 10.0  # the mechanism: biased without the correction
+    assert off.verdict != "ok"  # and flagged
+    assert abs(on.R2_error_pct) < 0.5
+    assert abs(on.speed_error_rpm) < 0.1 * abs(off.speed_error_rpm)
