@@ -239,8 +239,7 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
         estm = NO_ESTIMATE
         if foc:
             estm = estimate(
-                sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc_meas,
-                pc.i_max,
+                sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc_meas, pc,
             )  # fmt: skip
         cmd = control(sim, pc, x, mdl, ctl, smp, prof, smpl, estm, foc)
         mod = modulate(pinv, pc, smp, smpl, cmd, switching, Vdc_meas, scratch[0], Ts)

@@ -76,6 +76,7 @@ CONTROL_PARAMS = record_dtype(
         ("fw_v", f8),  # voltage use it holds, fraction of v_max
         ("fw_rate", f8),  # its integral gain, 1/s per unit of voltage use
         ("fw_min", f8),  # lowest flux factor
+        ("r1_settle", f8),  # online R1 law held this long after the speed reference moved, s
     ]
 )
 
@@ -94,6 +95,8 @@ CONTROL_STATE = record_dtype(
         ("ie_dk", f8),  # the inverter-error compensation's scale less 1 (online, ie_rate)
         ("ie_vm", f8),  # running mean of the current PI's output across the current, V
         ("ie_c0", f8),  # the compensation's apparent resistance at standstill, per unit scale, ohm
+        ("w_ref_prev", f8),  # the speed reference at the last sample, mechanical rad/s
+        ("ref_moved_at", f8),  # when the speed reference last moved, s (-inf: never)
     ]
 )
 

@@ -195,7 +195,7 @@ def measure(pp, psen, x, ctl, prof, t, k, i_next_ab, have_next):
 
 
 @njit(cache=True, inline="always")
-def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc_meas, i_max):
+def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc_meas, pc):
     """The injection, the selected estimator, the detection and the R2 compensator.
 
     Returns the :class:`Estimate`; updates the estimator's state ``est`` and the compensator's
@@ -220,13 +220,19 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc
         i_inj = a_inj * pk.inj_amp * sine
         if pk.inj_fw and cmp.v_peak_last > 0.0:  # the field weakening leaves it headroom
             i_ref = ctl.i_ref_dq  # the speed loop's torque current at its limit
-            iq_max = math.sqrt(max(i_max * i_max - i_ref.real * i_ref.real, 0.0))
+            iq_max = math.sqrt(max(pc.i_max * pc.i_max - i_ref.real * i_ref.real, 0.0))
             v_fw = headroom_weakening_input(pk, cmp, v_use, abs(i_ref.imag) >= 0.99 * iq_max)
     w_ref = prof.w_ref
 
     # R1 adaptation held from the compensator's start until it first updates and whenever
     # its gating freezes it (transients)
     hold_R1 = pk.enabled and pk.gate and (t < pk.t_on or cmp.frozen != 0.0)
+    # and, whatever the compensator, while the speed reference moves and the drive settles:
+    # the law reads the flux error as a resistance error, and a ramp's is the estimator's lag
+    if w_ref != ctl.w_ref_prev:
+        ctl.ref_moved_at = t
+        ctl.w_ref_prev = w_ref
+    hold_R1 = hold_R1 or t - ctl.ref_moved_at < pc.r1_settle
     inp = EstimatorInput(
         smp.v_prev_ab, smp.i_prev_ab, smpl.i_meas_ab, smpl.theta_k, ctl.w_e, ctl.i_ref_dq,
         w_ref, i_inj, hold_R1, Ts, t,

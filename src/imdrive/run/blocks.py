@@ -186,6 +186,13 @@ def _inverter_error_adaptation(sc: Scenario, D: Resolved) -> float:
     return 0.0 if D.model_inverter_error else 1.0
 
 
+def _r1_settle_s(D: Resolved) -> float:
+    """How long the online R1 law stays held after the speed reference last moved, s: three
+    rotor time constants of the estimate (the flux error a transient leaves) plus three time
+    constants of the speed loop."""
+    return 3.0 * D.T2_s + 3.0 / (2 * math.pi * D.speed_bandwidth_Hz)
+
+
 def control_fields(sc: Scenario, D: Resolved, mh: dict, psi0: float) -> tuple[dict, dict]:
     """``CONTROL_PARAMS`` and the controller's gains (current and speed PI from bandwidths,
     each overridable), from the model ``mh`` of :func:`model_fields` and flux ``psi0``."""
@@ -231,6 +238,7 @@ def control_fields(sc: Scenario, D: Resolved, mh: dict, psi0: float) -> tuple[di
         fw_v=ctl.field_weakening_voltage,
         fw_rate=ctl.field_weakening_rate,
         fw_min=ctl.field_weakening_min,
+        r1_settle=_r1_settle_s(D),
     )
     cm = sc.controller_model
     if D.model_inverter_error:  # the identified inverter-error table replaces dtc_u
