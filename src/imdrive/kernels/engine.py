@@ -76,6 +76,7 @@ SAMPLE_STATE = record_dtype(
         ("i_prev_ab", c16),  # current measured at the last sample, A
         ("v_hold_ab", c16),  # with a one-period delay: the reference waiting for the next period
         ("dv_hold_ab", c16),  # and the dead-time compensation it contains, V
+        ("v_use", f8),  # the last commanded voltage, compensation included, over Vdc/sqrt 3
     ]
 )
 

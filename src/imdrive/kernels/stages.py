@@ -203,7 +203,10 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc
     """
     t = smpl.t
     Ts = sim.Ts
-    v_use = abs(smp.v_prev_ab) / (Vdc_meas / math.sqrt(3.0))
+    # the modulator's share used, the inverter-error compensation included: the field
+    # weakening and the headroom must leave it room (without it, at twice the rated speed on
+    # the dead-time bridge the compensation's few percent pushed the sum into the limit)
+    v_use = smp.v_use
     v_fw = v_use
     sine = 0.0
     cosine = 0.0
@@ -354,6 +357,7 @@ def modulate(pinv, pc, smp, smpl, cmd, switching, Vdc_meas, scr, Ts):
         smp.v_prev_ab = complex(v_cmd_alpha - cmd.dv_ab.real, v_cmd_beta - cmd.dv_ab.imag)
     else:
         smp.v_prev_ab = complex(v_cmd_alpha, v_cmd_beta)
+    smp.v_use = abs(complex(v_cmd_alpha, v_cmd_beta)) / (Vdc_meas / math.sqrt(3.0))
     smp.i_prev_ab = smpl.i_meas_ab
     return Modulation(complex(v_cmd_alpha, v_cmd_beta), v_app_ab, n_seg)
 
