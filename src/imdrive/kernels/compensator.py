@@ -224,6 +224,7 @@ COMPENSATOR_STATE = record_dtype(
         ("inj_running", b1),  # the injection has started
         ("inj_new", b1),  # it started since the last decision (adaptive law: a settling period)
         ("cpl_d", f8),  # the part of e_d0 the slip couples in from e_q0, Wb
+        ("cpl_ws", f8),  # the slip command it uses, low-passed over T2_hat, rad/s
     ]
 )
 
@@ -306,7 +307,10 @@ def slip_coupling(s, e_dq0, w_e, wc, w_s, T2_hat, Ts):
     ripple (its bandwidth is finite), and at a large slip (``w_s T2 = i_q/i_d``: 3-5 at full
     load above base speed) that part is as large as the R2 signal and has the sign of
     ``w_s``: R2_hat ended 2 % low at 1.5 x base speed and drifted 28 % low at 2 x base speed,
-    motoring, from R2_hat(0) = R2. ``G`` is integrated in the time domain (forward Euler), not
+    motoring, from R2_hat(0) = R2. ``w_s`` is the controller's slip command low-passed over
+    ``T2_hat`` (``s.cpl_ws``): the raw command carries the speed loop's response to the
+    estimate's PWM ripple, which on the dead-time bridge correlates with ``e_q0``'s and biased
+    R2_hat 4-6 % low at no load. ``G`` is integrated in the time domain (forward Euler), not
     as a phasor at the injection frequency, because there the speed loop's own oscillation
     puts most of ``e_q0`` at other frequencies.
 
@@ -319,7 +323,10 @@ def slip_coupling(s, e_dq0, w_e, wc, w_s, T2_hat, Ts):
     if wc > 0.0:
         c = wc / max(abs(w_e), wc / MAX_HP_CORRECTION)
         q -= (c if w_e >= 0.0 else -c) * e_dq0.real
-    s.cpl_d += Ts * (w_s * q - s.cpl_d / T2_hat)
+    # the slip command low-passed over T2: on a switching bridge its sample-to-sample ripple
+    # (the speed loop's response to the estimate's PWM ripple) correlates with e_q0's
+    s.cpl_ws += Ts / T2_hat * (w_s - s.cpl_ws)
+    s.cpl_d += Ts * (s.cpl_ws * q - s.cpl_d / T2_hat)
     return s.cpl_d
 
 

@@ -95,6 +95,7 @@ CONTROL_STATE = record_dtype(
         ("ie_dk", f8),  # the inverter-error compensation's scale less 1 (online, ie_rate)
         ("ie_vm", f8),  # running mean of the current PI's output across the current, V
         ("ie_c0", f8),  # the compensation's apparent resistance at standstill, per unit scale, ohm
+        ("w_sl", f8),  # the slip command of the last period, electrical rad/s
         ("w_ref_prev", f8),  # the speed reference at the last sample, mechanical rad/s
         ("ref_moved_at", f8),  # when the speed reference last moved, s (-inf: never)
     ]
@@ -184,6 +185,7 @@ def foc_step(p, m, s, i_alpha, i_beta, w_fb_m, w_ref_m, psi_ref, i_inj, Ts):
     i_d = cs * i_alpha + sn * i_beta
     i_q = -sn * i_alpha + cs * i_beta
     w_sl = M * iq_ref / (T2_hat * psi_div)
+    s.w_sl = w_sl
     s.psi_hat = g * psi_hat + (1.0 - g) * M * id_ref
     w_e = n_p * w_fb_m + w_sl
 

@@ -244,7 +244,7 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc
 
     if pk.inj_amp != 0.0:
         T2_hat = incremental_L2(mdl) / mdl.R2_hat
-        demodulate(pk, cmp, e_dq0, sine, cosine, ctl.w_e, ctl.w_e - w_r_hat, T2_hat, Ts)
+        demodulate(pk, cmp, e_dq0, sine, cosine, ctl.w_e, ctl.w_sl, T2_hat, Ts)
     if pk.enabled:
         if pk.gate and t >= pk.t_on:  # the compensator's gating signals
             w_fb_g = w_r_hat / pp.n_p if sim.sensorless else x.w_m
