@@ -284,7 +284,8 @@ def demodulate(p, s, e_dq0, sine, cosine, w_e, w_s, T2_hat, Ts):
         # faded in from cpl_wmin to twice that: below, e_q0 is mostly the voltage model's
         # error (R1, inverter: ~1/w_e), not the rotor's q flux
         k = min(max(abs(w_e) / p.cpl_wmin - 1.0, 0.0), 1.0) if p.cpl_wmin > 0.0 else 1.0
-        prod -= 2.0 * k * c_d * sine
+        if k > 0.0:  # (a zero term would turn a -0.0 product into +0.0 in the log)
+            prod -= 2.0 * k * c_d * sine
     w_lp = p.inj_lpf
     if w_lp > 0.0:
         s.demod += (1.0 - math.exp(-w_lp * Ts)) * (prod - s.demod)
