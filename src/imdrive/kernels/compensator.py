@@ -430,7 +430,8 @@ def compensator_gate_sample(p, s, w_ref, w_fb, iq_ref, v_use, w_e):
     """Accumulate the gating signals of one control period (only with ``p.gate``).
 
     ``w_ref``, ``w_fb``: speed reference and feedback, mechanical rad/s; ``iq_ref``: the
-    controller's iq* of the last period, A; ``v_use``: magnitude of the last commanded voltage
+    controller's iq* of the last period times the field weakening's flux factor (a torque in
+    units of rated-flux current), A; ``v_use``: magnitude of the last commanded voltage
     over the inverter's limit ``Vdc/sqrt 3``; ``w_e``: the controller's stator frequency,
     electrical rad/s (its period mean drives the frequency schedule).
     """

@@ -248,7 +248,12 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc
     if pk.enabled:
         if pk.gate and t >= pk.t_on:  # the compensator's gating signals
             w_fb_g = w_r_hat / pp.n_p if sim.sensorless else x.w_m
-            compensator_gate_sample(pk, cmp, w_ref, w_fb_g, ctl.i_ref_dq.imag, v_use, ctl.w_e)
+            # the load-transient gate compares torques: iq* at the reference flux, scaled by
+            # the field weakening's flux factor (in deep field weakening the speed loop's iq*
+            # swings by 1/k more for the same torque, and the gate held R2_hat 80 % of the time
+            # at 2 x rated speed)
+            iq_torque = ctl.i_ref_dq.imag * (1.0 - ctl.fw_cut)
+            compensator_gate_sample(pk, cmp, w_ref, w_fb_g, iq_torque, v_use, ctl.w_e)
         compensator_step(pk, cmp, mdl, table, e_dq0.real, t, smpl.k, ctl.w_e)
         if pk.th_on:  # the rotor thermal model carries R2_hat while it is held
             thermal_step(pk, cmp, mdl, ctl.i_s_dq.imag, t, Ts)
