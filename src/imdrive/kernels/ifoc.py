@@ -291,9 +291,11 @@ def adapt_inverter_error(p, s, m, u_d, u_q, i_d, i_q, th, w_e, Ts):
     :func:`standstill_compensation`) leaves ``m.R1_hat``, so the reference model does not
     keep a resistance error the residual no longer offsets.
     """
-    i_mag = math.hypot(i_d, i_q)
     u_c = p.ie_u[p.ie_n - 1] if p.ie_n > 0 else p.dtc_u
-    if i_mag < 1e-6 or u_c <= 0.0:
+    if u_c <= 0.0:  # nothing to scale (before the hypot: the average model runs this path)
+        return
+    i_mag = math.hypot(i_d, i_q)
+    if i_mag < 1e-6:
         return
     u_perp = (i_d * u_q - i_q * u_d) / i_mag
     # the mean runs at any speed (from its first sample), so it has settled when the
