@@ -21,7 +21,8 @@ the script prints the range (lowest-highest, median, number of rounds) of the ti
 ratios. It also prints the record sizes of ``DriveParams``/``DriveState`` per drive and, with
 ``--batch N``, the process CPU time per drive of N realistic 1 s drives in ``simulate_batch``
 (both cores) beside a single run's kernel time; with ``--envelope N``, N realistic 14.5 s
-drives of an envelope (load 0-12 N m) in one batch, extrapolated to 800 runs; with
+drives of an envelope (load 0-12 N m) in one batch (``--envelope 800``: the whole envelope,
+measured; fewer: extrapolated to 800 runs); with
 ``--memory``, what a realistic drive costs in memory in a batch (tracemalloc).
 """
 
@@ -113,24 +114,34 @@ def bench_batch(n: int, t_end: float) -> dict:
             "batch_kernel_wall_s": res.wall_time_s, "single_cpu_s": single}  # fmt: skip
 
 
+#: The kernel's stop codes (``imdrive.kernels.stages.S_*``) and the batch's failed build.
+_STATUS = {0: "ran to the end", 1: "NaN", 2: "current limit", 3: "speed limit", -1: "failed"}
+
+
 def bench_envelope(n: int) -> dict:
-    """A subset of an 800-run envelope: ``n`` realistic drives of 14.5 s (load torque 0-12 N m
-    in ``n`` steps, one sensor seed each) in one ``simulate_batch`` call; the 800 runs are
-    extrapolated from its process CPU time (both cores) and wall time."""
+    """An envelope of ``n`` realistic drives of 14.5 s (load torque 0-12 N m in ``n`` steps,
+    one sensor seed each) in one ``simulate_batch`` call (``n = 800``: the whole envelope;
+    fewer: a subset, 800 runs extrapolated from its process CPU time, both cores, and wall
+    time). ``read_s`` is the wall time of reading the ``n`` scenarios before the batch."""
     from imdrive.config.scenario import Scenario
     from imdrive.run.batch import simulate_batch
 
+    r0 = time.perf_counter()
     scs = [
         Scenario.read("sensorless-realistic", ["simulation.t_end_s=14.5",
                       f"load.torque_Nm={12.0 * j / max(n - 1, 1):.4f}", f"sensor.seed={j}"])
         for j in range(n)
     ]  # fmt: skip
+    read = time.perf_counter() - r0
     simulate_batch(scs[:1])  # compile or load
     c0, w0 = time.process_time(), time.perf_counter()
     res = simulate_batch(scs)
     cpu, wall = time.process_time() - c0, time.perf_counter() - w0
     periods = int(res.control_periods)
-    return {"n": n, "cpu_s": cpu, "wall_s": wall, "control_periods": periods,
+    return {"n": n, "cpu_s": cpu, "wall_s": wall, "read_s": read, "control_periods": periods,
+            "statuses": {_STATUS.get(int(k), str(k)): int(v)
+                         for k, v in res.metrics["status"].value_counts().items()},
+            "kernel_wall_s": res.wall_time_s,
             "cpu_800_s": 800 * cpu / n, "wall_800_s": 800 * wall / n}  # fmt: skip
 
 
@@ -217,12 +228,20 @@ def main(argv=None) -> int:
         result["batch"] = b
     if args.envelope:
         e = bench_envelope(args.envelope)
-        print(
-            f"  envelope subset, {e['n']} drives of 14.5 s: {e['cpu_s']:.1f} s CPU, "
-            f"{e['wall_s']:.1f} s wall; 800 runs: {e['cpu_800_s']:.0f} s CPU "
-            f"({e['cpu_800_s'] / (os.cpu_count() or 1):.0f} s on {os.cpu_count()} cores), "
-            f"{e['wall_800_s']:.0f} s at this run's wall time"
+        what = "envelope" if e["n"] >= 800 else "envelope subset"
+        line = (
+            f"  {what}, {e['n']} drives of 14.5 s ({e['control_periods']:.3g} periods): "
+            f"{e['cpu_s']:.1f} s CPU, {e['wall_s']:.1f} s wall in the batch "
+            f"(kernels {e['kernel_wall_s']:.1f} s; + {e['read_s']:.1f} s reading the scenarios); "
+            f"statuses {e['statuses']}"
         )
+        if e["n"] < 800:
+            line += (
+                f"; 800 runs: {e['cpu_800_s']:.0f} s CPU "
+                f"({e['cpu_800_s'] / (os.cpu_count() or 1):.0f} s on {os.cpu_count()} cores), "
+                f"{e['wall_800_s']:.0f} s at this run's wall time"
+            )
+        print(line)
         result["envelope"] = e
     if args.memory:
         m = bench_memory()

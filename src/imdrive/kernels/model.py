@@ -73,8 +73,32 @@ def table_interp(x, xs, ys, n):
     if x >= xs[n - 1]:
         return ys[n - 1], 0.0
     lo = _find_cell(x, xs, n)
-    slope = (ys[lo + 1] - ys[lo]) / (xs[lo + 1] - xs[lo])
+    dy = ys[lo + 1] - ys[lo]
+    # a flat cell's slope is dy itself (+-0, as dy/dx with dx > 0): no division
+    slope = dy if dy == 0.0 else dy / (xs[lo + 1] - xs[lo])
     return ys[lo] + slope * (x - xs[lo]), slope
+
+
+@njit(cache=True)
+def _hermite_cell(m, psi_m):
+    """The cell ``k`` of the table holding ``|psi_m|`` (Wb, strictly inside the nodes), its
+    width ``h`` (Wb), the position ``t`` in it and ``t^2``, ``t^3``."""
+    xs = m.sat_psi
+    k = _find_cell(psi_m, xs, m.sat_n)
+    h = xs[k + 1] - xs[k]
+    t = (psi_m - xs[k]) / h
+    t2 = t * t
+    return k, h, t, t2, t2 * t
+
+
+@njit(cache=True)
+def _hermite_current(m, k, h, t, t2, t3):
+    """The magnetising current ``i_m`` (A) of cell ``k`` at ``t`` (cubic Hermite)."""
+    d0 = h * m.sat_dim[k]
+    d1 = h * m.sat_dim[k + 1]
+    i_m = (2 * t3 - 3 * t2 + 1) * m.sat_im[k] + (t3 - 2 * t2 + t) * d0
+    i_m += (3 * t2 - 2 * t3) * m.sat_im[k + 1]
+    return i_m + (t3 - t2) * d1
 
 
 @njit(cache=True)
@@ -96,19 +120,28 @@ def magnetising_inductances(m, psi_m):
         d = m.sat_dim[n - 1]
         i_m = m.sat_im[n - 1] + d * (psi_m - xs[n - 1])
         return psi_m / i_m, 1.0 / d
-    k = _find_cell(psi_m, xs, n)
-    h = xs[k + 1] - xs[k]
-    t = (psi_m - xs[k]) / h
-    t2 = t * t
-    t3 = t2 * t
+    k, h, t, t2, t3 = _hermite_cell(m, psi_m)
+    i_m = _hermite_current(m, k, h, t, t2, t3)
     y0 = m.sat_im[k]
     y1 = m.sat_im[k + 1]
     d0 = h * m.sat_dim[k]
     d1 = h * m.sat_dim[k + 1]
-    i_m = (2 * t3 - 3 * t2 + 1) * y0 + (t3 - 2 * t2 + t) * d0 + (3 * t2 - 2 * t3) * y1
-    i_m += (t3 - t2) * d1
     di = ((6 * t2 - 6 * t) * (y0 - y1) + (3 * t2 - 4 * t + 1) * d0 + (3 * t2 - 2 * t) * d1) / h
     return psi_m / i_m, 1.0 / di
+
+
+@njit(cache=True)
+def magnetising_secant(m, psi_m):
+    """The secant ``Lm`` of :func:`magnetising_inductances` alone (H), the same number:
+    without the incremental inductance's derivative and its two divisions."""
+    n = m.sat_n
+    xs = m.sat_psi
+    if psi_m <= xs[0]:
+        return m.sat_Lm0
+    if psi_m >= xs[n - 1]:
+        return psi_m / (m.sat_im[n - 1] + m.sat_dim[n - 1] * (psi_m - xs[n - 1]))
+    k, h, t, t2, t3 = _hermite_cell(m, psi_m)
+    return psi_m / _hermite_current(m, k, h, t, t2, t3)
 
 
 @njit(cache=True)
@@ -143,8 +176,7 @@ def reference_magnetising(m, psi_ref, i_q):
         return m.M_hat
     M = m.M_hat
     pm_q = M * m.Ll2_hat / (m.Ll2_hat + M) * i_q
-    Lm, _ = magnetising_inductances(m, (psi_ref * psi_ref + pm_q * pm_q) ** 0.5)
-    return Lm
+    return magnetising_secant(m, (psi_ref * psi_ref + pm_q * pm_q) ** 0.5)
 
 
 @njit(cache=True)

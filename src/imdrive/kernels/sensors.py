@@ -96,20 +96,75 @@ def quantise(u, bits, full_scale):
     return min(max(v, -full_scale), full_scale - q)
 
 
-@njit(cache=True)
-def measure_current(p, i_s_alpha, i_s_beta, k):
-    """Measured stator current ``(i_alpha, i_beta)`` at sample ``k``, A."""
-    if not p.phase_model:
-        return i_s_alpha + p.i_offset_ab.real, i_s_beta + p.i_offset_ab.imag
+#: Samples of the current sensors' noise drawn at a time by the loop (:func:`noise_pair`).
+NOISE_BLOCK = 16
+
+#: The noise the loop draws ahead, fields of its scratch record
+#: (:data:`imdrive.kernels.stages.SCRATCH`): one run_drive call's, not a drive's state.
+NOISE_FIELDS = [
+    ("noise_k0", i8),  # the sample of the block's first pair
+    ("noise_n", i8),  # pairs in the block (0: none drawn yet)
+    ("noise_a", f8, (NOISE_BLOCK,)),  # the pairs (gaussian_pair) of samples noise_k0, ...
+    ("noise_b", f8, (NOISE_BLOCK,)),
+]
+
+
+@njit(cache=True)  # a call: inlined in numba's IR into run_drive, its loop drew other numbers
+def noise_pair(seed, k, buf):
+    """:func:`gaussian_pair` of sample ``k``, from the block of :data:`NOISE_BLOCK` pairs kept
+    in ``buf`` (a record with :data:`NOISE_FIELDS`); a ``k`` outside it draws the block from
+    ``k`` on. The same numbers as :func:`gaussian_pair` (a function of the seed and the sample
+    alone), drawn in a loop of their own: the logarithms and sine-cosines, which do not depend
+    on the drive, then run back to back instead of in the middle of the period's chain."""
+    j = k - buf.noise_k0
+    if j < 0 or j >= buf.noise_n:
+        for i in range(NOISE_BLOCK):
+            n_a, n_b = gaussian_pair(seed, k + i)
+            buf.noise_a[i] = n_a
+            buf.noise_b[i] = n_b
+        buf.noise_k0 = k
+        buf.noise_n = NOISE_BLOCK
+        j = 0
+    return buf.noise_a[j], buf.noise_b[j]
+
+
+@njit(cache=True, inline="always")
+def phase_sensors(p, i_s_alpha, i_s_beta, n_a, n_b):
+    """The per-phase model's measured current ``(i_alpha, i_beta)`` (A), with the standard
+    normal numbers ``n_a``, ``n_b`` of the sample (used only if ``p.noise_rms > 0``)."""
     ia = i_s_alpha
     ib = -0.5 * i_s_alpha + 0.5 * math.sqrt(3.0) * i_s_beta
     ma = p.gain_a * ia + p.offset_a
     mb = p.gain_b * ib + p.offset_b
     if p.noise_rms > 0.0:
-        n_a, n_b = gaussian_pair(p.seed, k)
         ma += p.noise_rms * n_a
         mb += p.noise_rms * n_b
     ma = quantise(ma, p.adc_bits, p.adc_range)
     mb = quantise(mb, p.adc_bits, p.adc_range)
     # two sensors, i_c = -i_a - i_b: alpha = i_a, beta = (i_a + 2 i_b)/sqrt(3)
     return ma + p.i_offset_ab.real, (ma + 2.0 * mb) / math.sqrt(3.0) + p.i_offset_ab.imag
+
+
+@njit(cache=True)
+def measure_current(p, i_s_alpha, i_s_beta, k):
+    """Measured stator current ``(i_alpha, i_beta)`` at sample ``k``, A."""
+    if not p.phase_model:
+        return i_s_alpha + p.i_offset_ab.real, i_s_beta + p.i_offset_ab.imag
+    n_a = 0.0
+    n_b = 0.0
+    if p.noise_rms > 0.0:
+        n_a, n_b = gaussian_pair(p.seed, k)
+    return phase_sensors(p, i_s_alpha, i_s_beta, n_a, n_b)
+
+
+@njit(cache=True, inline="always")
+def measure_current_drawn(p, i_s_alpha, i_s_beta, k, buf):
+    """:func:`measure_current` with the noise from the block in ``buf`` (:func:`noise_pair`):
+    the same numbers; the loop's."""
+    if not p.phase_model:
+        return i_s_alpha + p.i_offset_ab.real, i_s_beta + p.i_offset_ab.imag
+    n_a = 0.0
+    n_b = 0.0
+    if p.noise_rms > 0.0:
+        n_a, n_b = noise_pair(p.seed, k, buf)
+    return phase_sensors(p, i_s_alpha, i_s_beta, n_a, n_b)

@@ -75,7 +75,7 @@ from imdrive.kernels.profiles import (
     profile_at,
 )
 from imdrive.kernels.records import f8, record_dtype
-from imdrive.kernels.sensors import measure_current
+from imdrive.kernels.sensors import NOISE_FIELDS, measure_current_drawn
 
 S_OK = 0
 S_NAN = 1
@@ -144,6 +144,7 @@ SCRATCH = record_dtype(
         ("ev", f8, (3, MAX_EVENTS)),  # the switching bridge's events: times, legs, states
         ("no_trace", f8, (0, 3)),  # the bridge's current trace: none
         *CARRY_FIELDS,  # what the bridge carries to the next period and the check
+        *NOISE_FIELDS,  # the current sensors' noise, drawn a block of samples ahead
     ]
 )
 
@@ -175,11 +176,12 @@ def profiles(pp, pt, pv, pn, t, foc):
 
 
 @njit(cache=True, inline="always")
-def measure(pp, psen, x, ctl, prof, t, k, i_next_ab, have_next):
+def measure(pp, psen, x, ctl, prof, t, k, i_next_ab, have_next, scr):
     """The plant's current and the current sensors at ``t``: the :class:`Sample`.
 
     ``i_next_ab`` is the current :func:`check` computed from this same state after the last
-    period (``have_next``), so a saturated machine's curve is solved once a period.
+    period (``have_next``), so a saturated machine's curve is solved once a period; the
+    sensors' noise comes from the block drawn ahead in the :data:`SCRATCH` record ``scr``.
     """
     if pp.speed_imposed:
         x.w_m = prof.w_imposed
@@ -188,7 +190,7 @@ def measure(pp, psen, x, ctl, prof, t, k, i_next_ab, have_next):
         i_s_beta = i_next_ab.imag
     else:
         i_s_alpha, i_s_beta = stator_current(pp, x)
-    i_meas_alpha, i_meas_beta = measure_current(psen, i_s_alpha, i_s_beta, k)
+    i_meas_alpha, i_meas_beta = measure_current_drawn(psen, i_s_alpha, i_s_beta, k, scr)
     return Sample(
         t, k, complex(i_s_alpha, i_s_beta), complex(i_meas_alpha, i_meas_beta), ctl.theta_e
     )
