@@ -60,4 +60,6 @@ def test_decoupling_removes_the_bias_at_full_load_above_base_speed(machine, spee
     assert abs(off.R2_error_pct) > 10.0  # the mechanism: biased without the correction
     assert off.verdict != "ok"  # and flagged
     assert abs(on.R2_error_pct) < 0.5
-    assert abs(on.speed_error_rpm) < 0.1 * abs(off.speed_error_rpm)
+    # what remains of the speed error is the discretisation residual (module docstring): a
+    # few hundredths of the rated slip
+    assert abs(on.speed_error_pu_slip) < 0.05
