@@ -184,6 +184,14 @@ class ControlSettings:
     field_weakening_min: Annotated[
         Float, setting("field weakening: lowest flux factor", gt=0.0, le=1.0)
     ] = 0.2
+    reorientation: Annotated[
+        Bool,
+        setting(
+            "above half the rated stator frequency, realign the controller's frame on the "
+            "rotor flux (seen in the back-emf) when the voltage limit has left it more than 60 "
+            "degrees off for 50 ms (kernels/ifoc.py, check_orientation)"
+        ),
+    ] = True
     dead_time_compensation: Annotated[
         Literal["none", "feedforward"],
         setting(

@@ -77,6 +77,8 @@ CONTROL_PARAMS = record_dtype(
         ("fw_rate", f8),  # its integral gain, 1/s per unit of voltage use
         ("fw_min", f8),  # lowest flux factor
         ("r1_settle", f8),  # online R1 law held this long after the speed reference moved, s
+        ("or_wmin", f8),  # orientation check from this |w_e|, rad/s (0: off)
+        ("or_trip", f8),  # misoriented and voltage-limited this long: realign, s
     ]
 )
 
@@ -98,6 +100,8 @@ CONTROL_STATE = record_dtype(
         ("w_sl", f8),  # the slip command of the last period, electrical rad/s
         ("w_ref_prev", f8),  # the speed reference at the last sample, mechanical rad/s
         ("ref_moved_at", f8),  # when the speed reference last moved, s (-inf: never)
+        ("or_time", f8),  # how long the orientation check has seen the frame off, s
+        ("or_count", f8),  # realignments so far
     ]
 )
 
@@ -209,8 +213,13 @@ def foc_step(p, m, s, i_alpha, i_beta, w_fb_m, w_ref_m, psi_ref, i_inj, Ts):
         s.int_dq.real + (ki * Ts * e_d + (v_d - v_d_unsat)),
         s.int_dq.imag + (ki * Ts * e_q + (v_q - v_q_unsat)),
     )
+    dth = 0.0
     if p.ie_rate > 0.0 and v_q_unsat == v_q and v_d_unsat == v_d:
         adapt_inverter_error(p, s, m, v_d - ff_d, v_q - ff_q, i_d, i_q, th, w_e, Ts)
+    elif p.or_wmin > 0.0 and (v_q_unsat != v_q or v_d_unsat != v_d):
+        dth = check_orientation(p, s, m, v_d, v_q, i_d, i_q, w_e, sigma_L1, Ts)
+    elif s.or_time > 0.0:
+        s.or_time = 0.0
 
     # back to the stationary frame at the middle of the period where the held voltage acts:
     # half a period ahead, or 1.5 periods with a one-period computation delay
@@ -221,13 +230,50 @@ def foc_step(p, m, s, i_alpha, i_beta, w_fb_m, w_ref_m, psi_ref, i_inj, Ts):
     v_beta = sm * v_d + cm * v_q
     v_alpha, v_beta = limit_magnitude(v_alpha, v_beta, v_max)
 
-    s.theta_e = wrap_angle(th + w_e * Ts)
+    s.theta_e = wrap_angle(th + dth + w_e * Ts)
     s.w_e = w_e
     s.i_ref_dq = complex(id_ref, iq_ref)
     s.i_s_dq = complex(i_d, i_q)
     # saturation-aware model: M_hat at the magnetising flux of the new flux estimate
     update_magnetising(m, s.psi_hat, s.i_ref_dq)
     return v_alpha, v_beta
+
+
+@njit(cache=True)
+def check_orientation(p, s, m, v_d, v_q, i_d, i_q, w_e, sigma_L1, Ts):
+    """Realign the controller's frame on the rotor flux when the voltage limit has cost the
+    current control its orientation (updates ``s``; returns the turn of the frame from the
+    next period on, rad; 0: none).
+
+    Indirect field orientation integrates the stator frequency and has no feedback on the
+    angle: if the current control is lost in the voltage limit (a ramp into deep field
+    weakening with the current at its limit), the frame can slip from the flux and stay
+    there. At twice the rated speed the frame was found 90 degrees off, the d-axis voltage at
+    the limit against the back-emf of a flux on the controller's q axis, a stable state.
+    Above ``p.or_wmin`` the back-emf dominates the stator voltage, so its steady-state
+    estimate ``e = v - R1 i - j w_e sigma_L1 i`` (controller's frame) shows where the flux is:
+    ``e = j w_e (M/L2) psi exp(j delta)``. Called only while the voltage is limited; when
+    ``|delta| > pi/3`` for ``p.or_trip`` the frame turns by ``delta`` and the current PIs'
+    integral states turn with it (the same stationary-frame voltage). A correctly oriented
+    drive never comes near the threshold.
+    """
+    if abs(w_e) < p.or_wmin:
+        s.or_time = 0.0
+        return 0.0
+    e_d = v_d - m.R1_hat * i_d + w_e * sigma_L1 * i_q
+    e_q = v_q - m.R1_hat * i_q - w_e * sigma_L1 * i_d
+    sg = 1.0 if w_e > 0.0 else -1.0
+    delta = math.atan2(-sg * e_d, sg * e_q)
+    if abs(delta) <= math.pi / 3.0:
+        s.or_time = 0.0
+        return 0.0
+    s.or_time += Ts
+    if s.or_time < p.or_trip:
+        return 0.0
+    s.or_time = 0.0
+    s.or_count += 1.0
+    s.int_dq = s.int_dq * complex(math.cos(delta), -math.sin(delta))
+    return delta
 
 
 @njit(cache=True)

@@ -186,6 +186,13 @@ def _inverter_error_adaptation(sc: Scenario, D: Resolved) -> float:
     return 0.0 if D.model_inverter_error else 1.0
 
 
+#: The orientation check (kernels/ifoc.py ``check_orientation``) runs from this stator
+#: frequency, per-unit of the rated one (the back-emf then dominates the stator voltage) ...
+ORIENTATION_FROM_PU = 0.5
+#: ... and realigns after the frame has been seen this long more than 60 degrees off, s
+ORIENTATION_TRIP_S = 0.05
+
+
 def _r1_settle_s(D: Resolved) -> float:
     """How long the online R1 law stays held after the speed reference last moved, s: three
     rotor time constants of the estimate (the flux error a transient leaves) plus three time
@@ -239,6 +246,10 @@ def control_fields(sc: Scenario, D: Resolved, mh: dict, psi0: float) -> tuple[di
         fw_rate=ctl.field_weakening_rate,
         fw_min=ctl.field_weakening_min,
         r1_settle=_r1_settle_s(D),
+        or_wmin=(
+            2 * math.pi * m.rated_frequency_Hz * ORIENTATION_FROM_PU if ctl.reorientation else 0.0
+        ),
+        or_trip=ORIENTATION_TRIP_S,
     )
     cm = sc.controller_model
     if D.model_inverter_error:  # the identified inverter-error table replaces dtc_u
