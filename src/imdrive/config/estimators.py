@@ -31,7 +31,7 @@ from imdrive.design.estimators import (
     default_ekf_noise,
     default_reactive_mras_gains,
 )
-from imdrive.design.gains import default_mras_gains
+from imdrive.design.gains import default_mras_gains, mras_type2_gains
 
 
 @settings("estimator")
@@ -395,6 +395,16 @@ class MrasSettings:
             gt=0.0,
         ),
     ] = 30.0
+    acceleration_tracking: Annotated[
+        Bool | None,
+        setting(
+            "type-2 adaptation: a second integral of the error, so the estimate follows a "
+            "constant acceleration without lag (K2, K3 from bandwidth_Hz; "
+            "design/gains.py mras_type2_gains)",
+            default_doc="on when the type-1 lag at the machine's rated acceleration exceeds "
+            "half the rotor's corner frequency 1/T2 (config/perunit.py mras_ramp_lag_pu)",
+        ),
+    ] = None
 
     def records(self, ctx: EstimatorContext) -> EstimatorRecords:
         """K1, K2 from the bandwidth (:func:`default_mras_gains`), each overridable; the R1
@@ -410,9 +420,13 @@ class MrasSettings:
         EstimatorRecords
         """
         sc = ctx.scenario
-        K1, K2 = default_mras_gains(
-            ctx.psi0, ctx.L2_hat / ctx.R2_hat, 2 * math.pi * self.bandwidth_Hz
-        )
+        T2_hat = ctx.L2_hat / ctx.R2_hat
+        a = 2 * math.pi * self.bandwidth_Hz
+        K3 = 0.0
+        if mras_type2(sc, self, T2_hat):
+            K1, K2, K3 = mras_type2_gains(ctx.psi0, T2_hat, a)
+        else:
+            K1, K2 = default_mras_gains(ctx.psi0, T2_hat, a)
         K1 = self.K1 if self.K1 is not None else K1
         K2 = self.K2 if self.K2 is not None else K2
         normalise = self.normalise if self.normalise is not None else sc.control.field_weakening
@@ -420,6 +434,7 @@ class MrasSettings:
             wc=self.wc_rad_s,
             K1=K1,
             K2=K2,
+            K3=K3,
             k_R1=self.R1_rate_per_s,
             R1_fmax=self.R1_max_freq_Hz,
             R1_min=0.5 * ctx.R1_hat,
@@ -436,7 +451,22 @@ class MrasSettings:
             "mras_K1": "mras.K1" if self.K1 is not None else "mras.bandwidth_Hz",
             "mras_K2": "mras.K2" if self.K2 is not None else "mras.bandwidth_Hz",
         }
-        return EstimatorRecords(params, derived={"mras_K1": K1, "mras_K2": K2}, sources=src)
+        derived = {"mras_K1": K1, "mras_K2": K2}
+        if K3 > 0.0:
+            derived["mras_K3"] = K3
+            src["mras_K3"] = "mras.bandwidth_Hz"
+        return EstimatorRecords(params, derived=derived, sources=src)
+
+
+def mras_type2(sc, mras: MrasSettings, T2_hat: float) -> bool:
+    """Whether the MRAS of scenario ``sc`` runs the type-2 adaptation: ``acceleration_tracking``
+    as set, or by default when :func:`imdrive.config.perunit.mras_ramp_lag_pu` exceeds
+    :data:`imdrive.config.perunit.MRAS_RAMP_LAG_MAX_PU`."""
+    from imdrive.config.perunit import MRAS_RAMP_LAG_MAX_PU, mras_ramp_lag_pu
+
+    if mras.acceleration_tracking is not None:
+        return mras.acceleration_tracking
+    return mras_ramp_lag_pu(sc, mras.bandwidth_Hz, T2_hat) > MRAS_RAMP_LAG_MAX_PU
 
 
 @estimator_settings(
