@@ -399,12 +399,22 @@ class MrasSettings:
         Bool | None,
         setting(
             "type-2 adaptation: a second integral of the error, so the estimate follows a "
-            "constant acceleration without lag (K2, K3 from bandwidth_Hz; "
+            "constant acceleration without lag (its corner from bandwidth_Hz; "
             "design/gains.py mras_type2_gains)",
             default_doc="on when the type-1 lag at the machine's rated acceleration exceeds "
             "half the rotor's corner frequency 1/T2 (config/perunit.py mras_ramp_lag_pu)",
         ),
     ] = None
+    acceleration_tracking_from_pu: Annotated[
+        Float,
+        setting(
+            "the type-2 adaptation's second integral runs above this stator frequency, "
+            "per-unit of the machine's rated frequency (below it, where the voltage model has "
+            "little signal, it is held)",
+            ge=0.0,
+            lt=1.0,
+        ),
+    ] = 0.1
 
     def records(self, ctx: EstimatorContext) -> EstimatorRecords:
         """K1, K2 from the bandwidth (:func:`default_mras_gains`), each overridable; the R1
@@ -422,9 +432,10 @@ class MrasSettings:
         sc = ctx.scenario
         T2_hat = ctx.L2_hat / ctx.R2_hat
         a = 2 * math.pi * self.bandwidth_Hz
-        K3 = 0.0
+        b2 = 0.0
+        f_rated = sc.machine.rated_frequency_Hz
         if mras_type2(sc, self, T2_hat):
-            K1, K2, K3 = mras_type2_gains(ctx.psi0, T2_hat, a)
+            K1, K2, b2 = mras_type2_gains(ctx.psi0, T2_hat, a)
         else:
             K1, K2 = default_mras_gains(ctx.psi0, T2_hat, a)
         K1 = self.K1 if self.K1 is not None else K1
@@ -434,7 +445,8 @@ class MrasSettings:
             wc=self.wc_rad_s,
             K1=K1,
             K2=K2,
-            K3=K3,
+            b2=b2,
+            b2_wmin=self.acceleration_tracking_from_pu * 2 * math.pi * f_rated,
             k_R1=self.R1_rate_per_s,
             R1_fmax=self.R1_max_freq_Hz,
             R1_min=0.5 * ctx.R1_hat,
@@ -452,9 +464,9 @@ class MrasSettings:
             "mras_K2": "mras.K2" if self.K2 is not None else "mras.bandwidth_Hz",
         }
         derived = {"mras_K1": K1, "mras_K2": K2}
-        if K3 > 0.0:
-            derived["mras_K3"] = K3
-            src["mras_K3"] = "mras.bandwidth_Hz"
+        if b2 > 0.0:
+            derived["mras_b2"] = b2
+            src["mras_b2"] = "mras.bandwidth_Hz"
         return EstimatorRecords(params, derived=derived, sources=src)
 
 

@@ -75,24 +75,27 @@ MRAS_TYPE2_CORNER = 0.25
 def mras_type2_gains(
     flux_ref_Wb: float, T2_s: float, bandwidth_rad_s: float
 ) -> tuple[float, float, float]:
-    """MRAS gains of the type-2 adaptation ``w_r_hat = K1 e + K2 int e + K3 int int e``.
+    """MRAS gains of the type-2 adaptation ``w_r_hat = u + b \\int u dt``, with ``u`` the PI's
+    output ``K1 e + K2 \\int e dt``.
 
     The PI of :func:`default_mras_gains` cancels the adjustable model's pole and leaves the
     loop ``a / s``: a type-1 tracker, whose estimate lags a constant acceleration ``alpha``
-    (electrical rad/s^2) by ``alpha / a``. A second integrator with its zero at ``b``,
-    ``C(s) = K1 (1 + 1/(s T2)) (1 + b/s)``, makes the loop ``a (s + b) / s^2``: type 2, so
-    the estimate follows a constant acceleration with no steady lag (the loop types and
+    (electrical rad/s^2) by ``alpha / a``. A second integrator after the PI, with its zero at
+    ``b``, ``C(s) = K1 (1 + 1/(s T2)) (1 + b/s)``, makes the loop ``a (s + b) / s^2``: type 2,
+    so the estimate follows a constant acceleration with no steady lag (the loop types and
     their steady-state errors under a ramp: Gardner, *Phaselock Techniques*, 3rd ed., Wiley,
     2005, ch. 2; the type-II tracking loop of resolver-to-digital converters is the same
-    structure). Expanded::
+    structure)::
 
-        K1 = a / |lam|^2,   K2 = K1 (1/T2 + b),   K3 = K1 b / T2,   b = MRAS_TYPE2_CORNER a
+        K1 = a / |lam|^2,   K2 = K1 / T2   (as the type-1 loop),   b = MRAS_TYPE2_CORNER a
 
     With ``b = a/4`` the closed loop ``a (s + b) / (s + a/2)^2`` is critically damped; the
     error's response to the speed is ``s^2 / (s + a/2)^2``, so when a ramp of acceleration
     ``alpha`` starts the error is ``alpha t exp(-a t / 2)``: at most ``2 alpha / (e a)``
     (0.74 of the type-1 loop's steady lag), at ``t = 2/a``, and below 1 % of that peak after
-    ``16 / a`` (0.13 s at 20 Hz).
+    ``16 / a`` (0.13 s at 20 Hz). The second integrator in series (rather than a third gain
+    on the double integral of ``e``) leaves the PI as it is, so holding the integrator
+    leaves the type-1 loop.
 
     Parameters
     ----------
@@ -109,9 +112,8 @@ def mras_type2_gains(
         Proportional gain, (rad/s)/Wb^2.
     K2 : float
         Integral gain, (rad/s^2)/Wb^2.
-    K3 : float
-        Double-integral gain, (rad/s^3)/Wb^2.
+    b : float
+        Corner of the second integrator, rad/s.
     """
-    K1 = bandwidth_rad_s / flux_ref_Wb**2
-    b = MRAS_TYPE2_CORNER * bandwidth_rad_s
-    return K1, K1 * (1.0 / T2_s + b), K1 * b / T2_s
+    K1, K2 = default_mras_gains(flux_ref_Wb, T2_s, bandwidth_rad_s)
+    return K1, K2, MRAS_TYPE2_CORNER * bandwidth_rad_s

@@ -116,8 +116,8 @@ def stationary_drive(sc: Scenario, speeds_rad_s, torques_Nm) -> StationaryDrive:
         )
     a = build_arrays(replace(sc, simulation=replace(sc.simulation, t_end_s=sc.simulation.Ts_s)))
     est = a.params.est
-    if "K3" in (est.dtype.names or ()) and np.any(est["K3"] > 0.0):
-        # the reduced state carries the type-1 MRAS (one integral of the error)
+    if "b2" in (est.dtype.names or ()) and np.any(est["b2"] > 0.0):
+        # the reduced state carries the type-1 MRAS (no second integrator)
         raise ConfigError(
             "mras.acceleration_tracking",
             "stability maps linearise the type-1 MRAS: set it to false",

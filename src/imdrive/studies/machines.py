@@ -9,7 +9,7 @@ setting the presets leave derived or state in per-unit (config/perunit.py), whic
 this study checks.
 
 Times follow the machine too (:func:`timeline`): the speed reference ramps from 0 once the
-rotor is magnetised (:func:`ramp_start_s`: three rotor time constants, at least 0.5 s, the
+rotor is magnetised (:func:`ramp_start_s`: four rotor time constants, at least 0.5 s, the
 presets' start; the compensator and the injection start as much later) over
 ``max(1 s, 2 tau_m)`` (``tau_m = J w_rated / T_rated``, the time the rated torque takes to
 reach the rated speed, so the ramp needs at most half the rated torque), the load steps 0.5 s
@@ -65,8 +65,10 @@ def tolerance_rpm(rated_speed_rpm: float) -> float:
 
 #: Table IV's rotor time constant L2/R2, s (the time scale the presets' timings were set for)
 T2_TABLE_IV = 0.0870
-#: The ramp starts once the rotor is magnetised: after this many rotor time constants ...
-RAMP_START_T2 = 3.0
+#: The ramp starts once the rotor is magnetised and the standstill R1 identification of
+#: ``injection-robust`` is done (its window opens 3.5 rotor time constants into the
+#: magnetisation, kernels/estimators/mras.py): after this many rotor time constants ...
+RAMP_START_T2 = 4.0
 #: ... and not before this (the presets' own start), s
 RAMP_START_MIN_S = 0.5
 
@@ -78,9 +80,9 @@ def rotor_time_constant_s(machine) -> float:
 
 def ramp_start_s(machine) -> float:
     """When the grid's speed ramp starts on ``machine``, s: ``RAMP_START_T2`` rotor time
-    constants (the flux is then within 5 % of its reference), at least ``RAMP_START_MIN_S``
-    (0.5 s on Table IV and the machines up to 50 hp; 2.35, 4.80 and 2.57 s on Krause
-    500 hp, 2250 hp and the 3.3 kV machine)."""
+    constants (the flux is then within 2 % of its reference), at least ``RAMP_START_MIN_S``
+    (0.5 s on Table IV, Krause 3 hp and the Aalto machine; 0.62 s on Krause 50 hp; 3.13,
+    6.40 and 3.43 s on Krause 500 hp, 2250 hp and the 3.3 kV machine)."""
     return max(RAMP_START_MIN_S, RAMP_START_T2 * rotor_time_constant_s(machine))
 
 
