@@ -140,14 +140,14 @@ def test_on_a_large_machine_the_type_1_lag_overfluxes_and_type_2_does_not(machin
 def test_the_second_integrator_is_held_at_low_stator_frequency():
     """Krause 2250 hp starting to 10 % of rated speed, R2_hat = 1.2 R2: run through the start,
     where the voltage model has little signal, the type-2 loop turns the start-up ringing into
-    an excursion of hundreds of rpm and control is lost; held below 10 % of the rated
+    an excursion of hundreds of rpm and control is lost; held below 5 % of the rated
     frequency (the default), the estimate stays within 60 rpm and control holds."""
     from imdrive.studies.machines import scenarios
 
     scs, _ = scenarios(["krause-2250hp"], drives=["sensorless"], speeds=[0.1], loads=[0.0])
     sc = scs[1]  # R2_hat(0) = 1.2 R2
     figures = {}
-    for from_pu in (0.0, 0.1):
+    for from_pu in (0.0, 0.05):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", ConfigWarning)
             run = sc.with_overrides(
@@ -158,4 +158,4 @@ def test_the_second_integrator_is_held_at_low_stator_frequency():
         err = float((df["speed_rpm"] - df["speed_est_rpm"]).abs().max())
         figures[from_pu] = (err, bool(res.summary()["lost_control"]))
     assert figures[0.0][0] > 300.0 and figures[0.0][1]
-    assert figures[0.1][0] < 60.0 and not figures[0.1][1]
+    assert figures[0.05][0] < 60.0 and not figures[0.05][1]

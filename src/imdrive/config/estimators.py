@@ -414,7 +414,7 @@ class MrasSettings:
             ge=0.0,
             lt=1.0,
         ),
-    ] = 0.1
+    ] = 0.05
 
     def records(self, ctx: EstimatorContext) -> EstimatorRecords:
         """K1, K2 from the bandwidth (:func:`default_mras_gains`), each overridable; the R1

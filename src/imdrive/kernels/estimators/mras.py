@@ -32,8 +32,12 @@ frequency: near zero stator frequency the voltage model has little signal and th
 mode of the estimate rings (docs/stability.md); there the integral is held, which leaves
 the type-1 loop with a constant added. Run through the whole start, the type-2 loop turned
 that ringing into excursions of the estimate of 955 rpm on the 2250 hp machine starting to
-10 % speed (R2_hat = 1.2 R2), and lost control; held below 10 % of the rated stator
-frequency (``mras.acceleration_tracking_from_pu``), 50 rpm and control kept.
+10 % speed (R2_hat = 1.2 R2), and lost control; held below 5 % of the rated stator
+frequency (``mras.acceleration_tracking_from_pu``; just above the filter's cut-off
+``wc = 15 rad/s``, 0.04 of 60 Hz), 37 rpm and control kept. The threshold must stay below
+the stator frequencies the drive holds: at 10 % it sat on the grid's 10 %-speed points, and
+the speed dip of a rated-load step there held the integrator while the loop needed it
+(lost control on Krause 500 hp and 2250 hp, R2_hat = 0.8 R2; held at 5 %, both keep it).
 
 Discretisation at the control period Ts, with the voltage applied over the last period known
 exactly (it was held) and the current taken as the mean of its two end samples:
