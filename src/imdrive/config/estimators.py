@@ -323,7 +323,11 @@ _WB = ("Wb", 1.0)
 class MrasSettings:
     """Schauder's MRAS speed estimator (``[mras]``).
 
-    ``K1``, ``K2`` default from ``bandwidth_Hz`` (:func:`imdrive.design.gains.default_mras_gains`).
+    ``K1``, ``K2`` default from ``bandwidth_Hz`` (:func:`imdrive.design.gains.default_mras_gains`);
+    with ``acceleration_tracking`` (by default on machines whose rated acceleration the
+    type-1 loop would lag by more than half the rotor's corner frequency) a second
+    integrator after the PI, corner ``bandwidth/4``
+    (:func:`imdrive.design.gains.mras_type2_gains`).
     """
 
     wc_rad_s: Annotated[

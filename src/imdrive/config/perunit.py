@@ -24,6 +24,10 @@ per-unit key                                SI value
 ``simulation.divergence_current_A`` unset   ``70 x`` the rated peak current
 ``compensator.thermal_rise_K``              rotor thermal resistance ``rise / P_r,rated``,
                                             K/W (:func:`rotor_thermal_resistance`)
+``mras.acceleration_tracking`` unset        on when the type-1 MRAS's lag at the rated
+                                            acceleration exceeds ``0.5 / T2``
+                                            (:func:`mras_ramp_lag_pu`)
+``mras.acceleration_tracking_from_pu``      ``pu x`` the rated stator frequency
 ==========================================  ===============================================
 
 ``psi_rated`` is :attr:`~imdrive.config.machine.MachineParams.rated_flux_Wb` (the no-load
