@@ -166,6 +166,10 @@ def _step_run(sc, npl: Nameplate, model: dict, T2: float, J_max: float, table, t
             "inverter_error_adaptation_per_s": 0.0,
         },
         estimator=model,
+        # the type-1 MRAS: its stiff speed loop (above) limit-cycled by +-15 rpm at the low
+        # speed with the type-2 one (mras.acceleration_tracking, on by default for the 2.2 kW
+        # Aalto machine) and the test failed; the fit needs no tracking of the acceleration
+        mras={"acceleration_tracking": False},
     )
     res = run_test(scen, "acceleration")
     t = res["time_s"]

@@ -31,7 +31,7 @@ from imdrive.design.estimators import (
     default_ekf_noise,
     default_reactive_mras_gains,
 )
-from imdrive.design.gains import default_mras_gains
+from imdrive.design.gains import default_mras_gains, mras_type2_gains
 
 
 @settings("estimator")
@@ -323,7 +323,11 @@ _WB = ("Wb", 1.0)
 class MrasSettings:
     """Schauder's MRAS speed estimator (``[mras]``).
 
-    ``K1``, ``K2`` default from ``bandwidth_Hz`` (:func:`imdrive.design.gains.default_mras_gains`).
+    ``K1``, ``K2`` default from ``bandwidth_Hz`` (:func:`imdrive.design.gains.default_mras_gains`);
+    with ``acceleration_tracking`` (by default on machines whose rated acceleration the
+    type-1 loop would lag by more than half the rotor's corner frequency) a second
+    integrator after the PI, corner ``bandwidth/4``
+    (:func:`imdrive.design.gains.mras_type2_gains`).
     """
 
     wc_rad_s: Annotated[
@@ -395,6 +399,26 @@ class MrasSettings:
             gt=0.0,
         ),
     ] = 30.0
+    acceleration_tracking: Annotated[
+        Bool | None,
+        setting(
+            "type-2 adaptation: a second integral of the error, so the estimate follows a "
+            "constant acceleration without lag (its corner from bandwidth_Hz; "
+            "design/gains.py mras_type2_gains)",
+            default_doc="on when the type-1 lag at the machine's rated acceleration exceeds "
+            "half the rotor's corner frequency 1/T2 (config/perunit.py mras_ramp_lag_pu)",
+        ),
+    ] = None
+    acceleration_tracking_from_pu: Annotated[
+        Float,
+        setting(
+            "the type-2 adaptation's second integral runs above this stator frequency, "
+            "per-unit of the machine's rated frequency (below it, where the voltage model has "
+            "little signal, it is held)",
+            ge=0.0,
+            lt=1.0,
+        ),
+    ] = 0.05
 
     def records(self, ctx: EstimatorContext) -> EstimatorRecords:
         """K1, K2 from the bandwidth (:func:`default_mras_gains`), each overridable; the R1
@@ -410,9 +434,14 @@ class MrasSettings:
         EstimatorRecords
         """
         sc = ctx.scenario
-        K1, K2 = default_mras_gains(
-            ctx.psi0, ctx.L2_hat / ctx.R2_hat, 2 * math.pi * self.bandwidth_Hz
-        )
+        T2_hat = ctx.L2_hat / ctx.R2_hat
+        a = 2 * math.pi * self.bandwidth_Hz
+        b2 = 0.0
+        f_rated = sc.machine.rated_frequency_Hz
+        if mras_type2(sc, self, T2_hat):
+            K1, K2, b2 = mras_type2_gains(ctx.psi0, T2_hat, a)
+        else:
+            K1, K2 = default_mras_gains(ctx.psi0, T2_hat, a)
         K1 = self.K1 if self.K1 is not None else K1
         K2 = self.K2 if self.K2 is not None else K2
         normalise = self.normalise if self.normalise is not None else sc.control.field_weakening
@@ -420,6 +449,8 @@ class MrasSettings:
             wc=self.wc_rad_s,
             K1=K1,
             K2=K2,
+            b2=b2,
+            b2_wmin=self.acceleration_tracking_from_pu * 2 * math.pi * f_rated,
             k_R1=self.R1_rate_per_s,
             R1_fmax=self.R1_max_freq_Hz,
             R1_min=0.5 * ctx.R1_hat,
@@ -436,7 +467,22 @@ class MrasSettings:
             "mras_K1": "mras.K1" if self.K1 is not None else "mras.bandwidth_Hz",
             "mras_K2": "mras.K2" if self.K2 is not None else "mras.bandwidth_Hz",
         }
-        return EstimatorRecords(params, derived={"mras_K1": K1, "mras_K2": K2}, sources=src)
+        derived = {"mras_K1": K1, "mras_K2": K2}
+        if b2 > 0.0:
+            derived["mras_b2"] = b2
+            src["mras_b2"] = "mras.bandwidth_Hz"
+        return EstimatorRecords(params, derived=derived, sources=src)
+
+
+def mras_type2(sc, mras: MrasSettings, T2_hat: float) -> bool:
+    """Whether the MRAS of scenario ``sc`` runs the type-2 adaptation: ``acceleration_tracking``
+    as set, or by default when :func:`imdrive.config.perunit.mras_ramp_lag_pu` exceeds
+    :data:`imdrive.config.perunit.MRAS_RAMP_LAG_MAX_PU`."""
+    from imdrive.config.perunit import MRAS_RAMP_LAG_MAX_PU, mras_ramp_lag_pu
+
+    if mras.acceleration_tracking is not None:
+        return mras.acceleration_tracking
+    return mras_ramp_lag_pu(sc, mras.bandwidth_Hz, T2_hat) > MRAS_RAMP_LAG_MAX_PU
 
 
 @estimator_settings(

@@ -63,3 +63,57 @@ def default_mras_gains(
     """
     K1 = bandwidth_rad_s / flux_ref_Wb**2
     return K1, K1 / T2_s
+
+
+#: Corner of the type-2 adaptation's second integrator over the loop's bandwidth, ``b / a``:
+#: with ``b = a / 4`` the loop ``a (s + b) / s^2`` has a double closed-loop pole at ``-a/2``
+#: (critically damped), as the speed PI's zero at a quarter of its crossover
+#: (:func:`default_speed_gains`).
+MRAS_TYPE2_CORNER = 0.25
+
+
+def mras_type2_gains(
+    flux_ref_Wb: float, T2_s: float, bandwidth_rad_s: float
+) -> tuple[float, float, float]:
+    """MRAS gains of the type-2 adaptation ``w_r_hat = u + b \\int u dt``, with ``u`` the PI's
+    output ``K1 e + K2 \\int e dt``.
+
+    The PI of :func:`default_mras_gains` cancels the adjustable model's pole and leaves the
+    loop ``a / s``: a type-1 tracker, whose estimate lags a constant acceleration ``alpha``
+    (electrical rad/s^2) by ``alpha / a``. A second integrator after the PI, with its zero at
+    ``b``, ``C(s) = K1 (1 + 1/(s T2)) (1 + b/s)``, makes the loop ``a (s + b) / s^2``: type 2,
+    so the estimate follows a constant acceleration with no steady lag (the loop types and
+    their steady-state errors under a ramp: Gardner, *Phaselock Techniques*, 3rd ed., Wiley,
+    2005, ch. 2; the type-II tracking loop of resolver-to-digital converters is the same
+    structure)::
+
+        K1 = a / |lam|^2,   K2 = K1 / T2   (as the type-1 loop),   b = MRAS_TYPE2_CORNER a
+
+    With ``b = a/4`` the closed loop ``a (s + b) / (s + a/2)^2`` is critically damped; the
+    error's response to the speed is ``s^2 / (s + a/2)^2``, so when a ramp of acceleration
+    ``alpha`` starts the error is ``alpha t exp(-a t / 2)``: at most ``2 alpha / (e a)``
+    (0.74 of the type-1 loop's steady lag), at ``t = 2/a``, and below 1 % of that peak after
+    ``16 / a`` (0.13 s at 20 Hz). The second integrator in series (rather than a third gain
+    on the double integral of ``e``) leaves the PI as it is, so holding the integrator
+    leaves the type-1 loop.
+
+    Parameters
+    ----------
+    flux_ref_Wb : float
+        Rotor-flux magnitude, Wb.
+    T2_s : float
+        The estimator's rotor time constant L2/R2_hat, s.
+    bandwidth_rad_s : float
+        The loop's crossover ``a``, rad/s.
+
+    Returns
+    -------
+    K1 : float
+        Proportional gain, (rad/s)/Wb^2.
+    K2 : float
+        Integral gain, (rad/s^2)/Wb^2.
+    b : float
+        Corner of the second integrator, rad/s.
+    """
+    K1, K2 = default_mras_gains(flux_ref_Wb, T2_s, bandwidth_rad_s)
+    return K1, K2, MRAS_TYPE2_CORNER * bandwidth_rad_s

@@ -115,6 +115,13 @@ def stationary_drive(sc: Scenario, speeds_rad_s, torques_Nm) -> StationaryDrive:
             "control.delay_periods", "stability maps model the drive without computation delay"
         )
     a = build_arrays(replace(sc, simulation=replace(sc.simulation, t_end_s=sc.simulation.Ts_s)))
+    est = a.params.est
+    if "b2" in (est.dtype.names or ()) and np.any(est["b2"] > 0.0):
+        # the reduced state carries the type-1 MRAS (no second integrator)
+        raise ConfigError(
+            "mras.acceleration_tracking",
+            "stability maps linearise the type-1 MRAS: set it to false",
+        )
     n = len(speeds_rad_s)
     rep = lambda arr: np.repeat(arr, n, axis=0)  # noqa: E731
     pv = a.params.prof_v[0]

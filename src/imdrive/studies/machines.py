@@ -8,7 +8,9 @@ starting ``R2_hat(0)/R2``. Only ``[machine]`` and the operating point change: ev
 setting the presets leave derived or state in per-unit (config/perunit.py), which is what
 this study checks.
 
-Times follow the machine too (:func:`timeline`): the speed reference ramps from 0 at 0.5 s over
+Times follow the machine too (:func:`timeline`): the speed reference ramps from 0 once the
+rotor is magnetised (:func:`ramp_start_s`: four rotor time constants, at least 0.5 s, the
+presets' start; the compensator and the injection start as much later) over
 ``max(1 s, 2 tau_m)`` (``tau_m = J w_rated / T_rated``, the time the rated torque takes to
 reach the rated speed, so the ramp needs at most half the rated torque), the load steps 0.5 s
 after the ramp, and the run ends ``T_END_S - 2 s`` later, stretched by ``T2 / T2_TableIV``
@@ -63,6 +65,25 @@ def tolerance_rpm(rated_speed_rpm: float) -> float:
 
 #: Table IV's rotor time constant L2/R2, s (the time scale the presets' timings were set for)
 T2_TABLE_IV = 0.0870
+#: The ramp starts once the rotor is magnetised and the standstill R1 identification of
+#: ``injection-robust`` is done (its window opens 3.5 rotor time constants into the
+#: magnetisation, kernels/estimators/mras.py): after this many rotor time constants ...
+RAMP_START_T2 = 4.0
+#: ... and not before this (the presets' own start), s
+RAMP_START_MIN_S = 0.5
+
+
+def rotor_time_constant_s(machine) -> float:
+    """The machine's rotor time constant ``L2 / R2``, s."""
+    return (machine.Ll2_H + machine.M_H) / machine.R2_ohm
+
+
+def ramp_start_s(machine) -> float:
+    """When the grid's speed ramp starts on ``machine``, s: ``RAMP_START_T2`` rotor time
+    constants (the flux is then within 2 % of its reference), at least ``RAMP_START_MIN_S``
+    (0.5 s on Table IV, Krause 3 hp and the Aalto machine; 0.62 s on Krause 50 hp; 3.13,
+    6.40 and 3.43 s on Krause 500 hp, 2250 hp and the 3.3 kV machine)."""
+    return max(RAMP_START_MIN_S, RAMP_START_T2 * rotor_time_constant_s(machine))
 
 
 def timeline(machine) -> tuple[float, float, float]:
@@ -71,9 +92,20 @@ def timeline(machine) -> tuple[float, float, float]:
     w_rated = rp.speed_rpm * math.pi / 30.0
     tau_m = machine.J_kgm2 * w_rated / rp.torque_Nm
     ramp = max(1.0, 2.0 * tau_m)
-    load_at = 0.5 + ramp + 0.5
-    T2 = (machine.Ll2_H + machine.M_H) / machine.R2_ohm
+    load_at = ramp_start_s(machine) + ramp + 0.5
+    T2 = rotor_time_constant_s(machine)
     return ramp, load_at, load_at + (T_END_S - 2.0) * max(1.0, T2 / T2_TABLE_IV)
+
+
+def _later_start(base, delay: float) -> list[str]:
+    """Overrides moving the compensator's and the injection's start by ``delay`` s (the ramp
+    starts that much later than in the preset), none when ``delay`` is 0."""
+    if delay <= 0.0 or not base.compensator.enabled:
+        return []
+    return [
+        f"compensator.t_on_s={base.compensator.t_on_s + delay}",
+        f"injection.t_on_s={base.injection.t_on_s + delay}",
+    ]
 
 
 def scenarios(machines=None, drives=DRIVES, speeds=SPEEDS_PU, loads=LOADS_PU, ratios=R2_RATIOS):
@@ -104,20 +136,22 @@ def scenarios(machines=None, drives=DRIVES, speeds=SPEEDS_PU, loads=LOADS_PU, ra
                 base = Scenario.read(drive, [f'machine.preset="{m}"'])
             rp = rated_point(base.machine)
             ramp, load_at, t_end = timeline(base.machine)
+            start = ramp_start_s(base.machine)
+            later = _later_start(base, start - RAMP_START_MIN_S)
             for s in speeds:
                 for load in loads:
                     for r in ratios:
                         n, T = s * rp.speed_rpm, load * rp.torque_Nm
                         ov = [
-                            f"control.speed_ref_rpm={{initial=0, changes=[{{at=0.5, to={n}, "
-                            f"over={ramp}}}]}}",
+                            f"control.speed_ref_rpm={{initial=0, changes=[{{at={start}, "
+                            f"to={n}, over={ramp}}}]}}",
                             f"load.torque_Nm={{initial=0, changes=[{{at={load_at}, to={T}}}]}}",
                             f"simulation.t_end_s={t_end}",
                             f"estimator.R2_ohm={r * base.machine.R2_ohm}",
                         ]
                         if base.estimator.R2_ratio is not None:
                             ov[-1] = f"estimator.R2_ratio={r}"
-                        out.append(base.with_overrides(ov))
+                        out.append(base.with_overrides(later + ov))
                         rows.append(
                             dict(
                                 machine=m,
@@ -204,77 +238,102 @@ def markdown(table: pd.DataFrame) -> str:
     return "\n".join(lines) + "\n"
 
 
-#: The runs of :func:`ramp_diagnosis`: (machine, speed feedback, ramp stretch, ramp start, s)
+#: The runs of :func:`ramp_diagnosis`: (machine, speed feedback, ramp stretch, ramp start in s
+#: or None for the grid's, ``mras.acceleration_tracking`` or None for its default)
 DIAGNOSIS_RUNS = (
-    ("paper-table-iv", "mras", 1.0, 0.5),
-    ("krause-500hp", "mras", 1.0, 0.5),
-    ("krause-2250hp", "mras", 1.0, 0.5),
-    ("geyer-3.3kv", "mras", 1.0, 0.5),
-    ("krause-500hp", "measured", 1.0, 0.5),
-    ("krause-500hp", "mras", 4.0, 0.5),
-    ("krause-500hp", "mras", 1.0, 2.5),  # after 3 rotor time constants: magnetised
+    ("paper-table-iv", "mras", 1.0, None, None),
+    ("krause-500hp", "mras", 1.0, None, False),
+    ("krause-2250hp", "mras", 1.0, None, False),
+    ("geyer-3.3kv", "mras", 1.0, None, False),
+    ("krause-500hp", "measured", 1.0, None, False),
+    ("krause-500hp", "mras", 4.0, None, False),
+    ("krause-500hp", "mras", 1.0, None, None),
+    ("krause-2250hp", "mras", 1.0, None, None),
+    ("geyer-3.3kv", "mras", 1.0, None, None),
+    ("krause-2250hp", "mras", 1.0, 0.5, None),  # type 2, before the rotor is magnetised
 )
 
 
+def _diagnosis_scenario(name, feedback, stretch, start, tracking):
+    """The scenario of one :func:`ramp_diagnosis` run and its rated point, ramp and start."""
+    scs, _ = scenarios([name], drives=["sensorless"], speeds=[1.0], loads=[0.0], ratios=[1.0])
+    base = scs[0]
+    rp = rated_point(base.machine)
+    ramp = stretch * timeline(base.machine)[0]
+    start = ramp_start_s(base.machine) if start is None else start
+    ov = [
+        f'control.speed_feedback="{feedback}"',
+        f"control.speed_ref_rpm={{initial=0, changes=[{{at={start}, "
+        f"to={rp.speed_rpm}, over={ramp}}}]}}",
+        f"simulation.t_end_s={start + ramp + 3.0}",
+    ]
+    if tracking is not None:
+        ov.append(f"mras.acceleration_tracking={str(tracking).lower()}")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConfigWarning)
+        return base.with_overrides(ov), rp, ramp, start
+
+
 def ramp_diagnosis(runs=DIAGNOSIS_RUNS) -> pd.DataFrame:
-    """Why the sensorless drive loses control at rated speed on the large machines.
+    """Why the sensorless drive lost control at rated speed on the large machines, and what
+    the type-2 adaptation of the MRAS changes (docs/machine-envelope.md).
 
     The grid's run at rated speed, no load, ``R2_hat(0) = R2`` (no detuning), up to 3 s after
-    the ramp, with the MRAS or the measured speed as feedback, the ramp as in the grid or
-    stretched, starting at 0.5 s as in the grid or later.
+    the ramp, with the MRAS (type 1 or type 2, ``mras.acceleration_tracking``) or the
+    measured speed as feedback, the ramp as in the grid or stretched, starting as in the grid
+    (:func:`ramp_start_s`) or at a given time.
 
     Parameters
     ----------
-    runs : sequence of (str, str, float, float)
-        ``(machine, control.speed_feedback, ramp stretch, ramp start in s)``.
+    runs : sequence of tuple
+        ``(machine, control.speed_feedback, ramp stretch, ramp start in s or None,
+        mras.acceleration_tracking or None)``; the last may be left out (None).
 
     Returns
     -------
     pandas.DataFrame
-        Per run: ``machine, feedback, ramp_s, start_s``; ``rated_slip_rpm``;
+        Per run: ``machine, feedback, adaptation`` (``type 1`` or ``type 2``, as the MRAS
+        ran), ``ramp_s, start_s``; ``rated_slip_rpm``; ``corner_rpm``, the rotor's corner
+        frequency ``1/T2`` as a mechanical speed (the MRAS's linear range);
         ``estimate_lag_rpm``, the median of speed minus MRAS estimate while the reference is
-        between 5 and 50 % of rated (NaN with the measured speed) and ``lag_pu_slip``, over
-        the rated slip;
-        ``max_flux_pu``, the plant's largest ``|psi_r|`` over the rated flux;
-        ``voltage_limit_at_pu``, the speed reference (per-unit of rated) when the voltage
-        reference first reaches 99 % of the inverter's limit (NaN: never); ``lost``.
+        between 5 and 50 % of rated (also with the measured speed as feedback, where the
+        MRAS runs beside), ``lag_pu_slip`` and ``lag_pu_corner``, over the rated slip and
+        over ``corner_rpm``; ``max_flux_pu``, the plant's largest ``|psi_r|`` over the rated
+        flux; ``voltage_limit_at_pu``, the speed reference (per-unit of rated) when the
+        voltage reference first reaches 99 % of the inverter's limit (NaN: never); ``lost``.
     """
+    from imdrive.config.estimators import mras_type2
     from imdrive.config.perunit import resolve
     from imdrive.run.simulate import simulate
 
     rows = []
-    for name, feedback, stretch, start in runs:
-        scs, _ = scenarios([name], drives=["sensorless"], speeds=[1.0], loads=[0.0], ratios=[1.0])
-        base = scs[0]
-        rp = rated_point(base.machine)
-        ramp = stretch * timeline(base.machine)[0]
+    for run_ in runs:
+        name, feedback, stretch, start, tracking = (*run_, None)[:5]
+        sc, rp, ramp, start = _diagnosis_scenario(name, feedback, stretch, start, tracking)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", ConfigWarning)
-            sc = base.with_overrides(
-                [
-                    f'control.speed_feedback="{feedback}"',
-                    f"control.speed_ref_rpm={{initial=0, changes=[{{at={start}, "
-                    f"to={rp.speed_rpm}, over={ramp}}}]}}",
-                    f"simulation.t_end_s={start + ramp + 3.0}",
-                ]
-            )
             res = simulate(sc)
         df = res.to_pandas()
         D = resolve(sc)
+        T2_hat = (D.Ll2_hat + D.M_hat) / D.R2_hat
         ref = df["speed_ref_rpm"] / rp.speed_rpm
         during = (ref > 0.05) & (ref < 0.5)
         lag = float((df["speed_rpm"] - df["speed_est_rpm"])[during].median())
         at_limit = np.hypot(df["v_ref_alpha_V"], df["v_ref_beta_V"]) >= 0.99 * D.v_max_V
         slip = rp.synchronous_speed_rpm - rp.speed_rpm
+        corner = 30.0 / (math.pi * T2_hat * sc.machine.pole_pairs)
         rows.append(
             dict(
                 machine=name,
                 feedback=feedback,
+                adaptation="type 2" if mras_type2(sc, sc.mras, T2_hat) else "type 1",
                 ramp_s=ramp,
                 start_s=start,
                 rated_slip_rpm=slip,
-                estimate_lag_rpm=lag if feedback == "mras" else math.nan,
-                lag_pu_slip=lag / slip if feedback == "mras" else math.nan,
+                corner_rpm=corner,
+                estimate_lag_rpm=lag,
+                lag_pu_slip=lag / slip,
+                lag_pu_corner=lag / corner,
                 max_flux_pu=float(df["flux_Wb"].max() / D.psi_rated),
                 voltage_limit_at_pu=float(ref[at_limit].iloc[0]) if at_limit.any() else math.nan,
                 lost=bool(res.summary()["lost_control"]),
@@ -290,20 +349,16 @@ def diagnosis_markdown(df: pd.DataFrame) -> list[str]:
         return "–" if pd.isna(v) else format(v, fmt)
 
     lines = [
-        "| machine | feedback | ramp from, s | ramp, s | rated slip, rpm "
-        "| estimate lag, rpm (× slip) | largest ψr / rated "
+        "| machine | feedback | MRAS | ramp from, s | ramp, s | rated slip, rpm | 1/T2, rpm "
+        "| estimate lag, rpm (× slip, × 1/T2) | largest ψr / rated "
         "| voltage limit reached at, × rated speed | lost control |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in df.itertuples():
-        lag = (
-            "–"
-            if pd.isna(r.estimate_lag_rpm)
-            else f"{r.estimate_lag_rpm:.1f} ({r.lag_pu_slip:.2f})"
-        )
+        lag = f"{r.estimate_lag_rpm:.2f} ({r.lag_pu_slip:.2f}, {r.lag_pu_corner:.2f})"
         lines.append(
-            f"| {r.machine} | {r.feedback} | {r.start_s:g} | {r.ramp_s:.2f} "
-            f"| {r.rated_slip_rpm:.1f} | {lag} "
+            f"| {r.machine} | {r.feedback} | {r.adaptation} | {r.start_s:.2f} | {r.ramp_s:.2f} "
+            f"| {r.rated_slip_rpm:.1f} | {r.corner_rpm:.1f} | {lag} "
             f"| {r.max_flux_pu:.2f} | {num(r.voltage_limit_at_pu, '.2f')} "
             f"| {'yes' if r.lost else 'no'} |"
         )

@@ -16,6 +16,29 @@ adjustable model's derivative through the same filter, so the two outputs stay c
 
 (d, q here are the stationary axes alpha, beta).
 
+Type-2 adaptation (opt-in ``b2 > 0``; ``mras.acceleration_tracking``): a second integrator
+after the PI, ``w_r_hat = u + b2 \\int u dt`` with ``u = K1 e + K2 \\int e dt``. The PI
+alone, its zero cancelling the adjustable model's pole, leaves the loop ``a / s``
+(``a = K1 |lam|^2``): the estimate lags a constant acceleration ``alpha`` by ``alpha / a``.
+The error signal is linear in the speed error only within about the rotor's corner
+frequency ``1/T2`` (``e ~ x / (1 + x^2)``, ``x = T2 (w_r - w_r_hat)`` at small slip), so on
+a machine with a large ``T2`` this lag leaves the linear range; and the indirect field
+orientation, which runs on the estimate, then misplaces its slip by the lag: measured on
+Krause's 2250 hp machine (T2 = 1.6 s, ``1/T2`` = 3 rpm) ramping to rated speed at half the
+rated torque, a 5.7 rpm lag raised the rotor flux to 2.5 times rated and lost control. The
+second integrator removes the steady lag (gains:
+:func:`imdrive.design.gains.mras_type2_gains`). It runs only above ``b2_wmin`` of stator
+frequency: near zero stator frequency the voltage model has little signal and the start-up
+mode of the estimate rings (docs/stability.md); there the integral is held, which leaves
+the type-1 loop with a constant added. Run through the whole start, the type-2 loop turned
+that ringing into excursions of the estimate of 955 rpm on the 2250 hp machine starting to
+10 % speed (R2_hat = 1.2 R2), and lost control; held below 5 % of the rated stator
+frequency (``mras.acceleration_tracking_from_pu``; just above the filter's cut-off
+``wc = 15 rad/s``, 0.04 of 60 Hz), 37 rpm and control kept. The threshold must stay below
+the stator frequencies the drive holds: at 10 % it sat on the grid's 10 %-speed points, and
+the speed dip of a rated-load step there held the integrator while the loop needed it
+(lost control on Krause 500 hp and 2250 hp, R2_hat = 0.8 R2; held at 5 %, both keep it).
+
 Discretisation at the control period Ts, with the voltage applied over the last period known
 exactly (it was held) and the current taken as the mean of its two end samples:
 
@@ -87,6 +110,8 @@ MRAS_PARAMS = record_dtype(
         ("wc", f8),  # cut-off of the low-pass replacing the integrators, rad/s (0: pure)
         ("K1", f8),  # proportional adaptation gain, (rad/s)/Wb^2
         ("K2", f8),  # integral adaptation gain, (rad/s^2)/Wb^2
+        ("b2", f8),  # corner of the type-2 adaptation's second integrator, rad/s (0: type 1)
+        ("b2_wmin", f8),  # the second integrator runs above this stator frequency, rad/s
         ("k_R1", f8),  # R1 adaptation rate, 1/s (0: off)
         ("R1_fmax", f8),  # R1 adaptation only below this stator frequency, Hz
         ("R1_min", f8),  # clamps of R1_hat, ohm
@@ -106,6 +131,8 @@ MRAS_STATE = record_dtype(
         ("lam_i_ab", c16),  # adjustable (current) model rotor flux, unfiltered, Wb
         ("lam_f_ab", c16),  # adjustable model passed through the same filter, Wb
         ("int_e", f8),  # integral of the error signal, Wb^2 s
+        ("int_w", f8),  # integral of the PI's output (the type-2 adaptation), electrical rad
+        ("int_w_run", b1),  # the second integrator runs (stator frequency above b2_wmin)
         ("w_r_hat", f8),  # speed estimate, electrical rad/s
         ("e_dq0", c16),  # flux error (reference - adjustable) in the controller's frame, Wb
         ("dlam_i_ab", c16),  # adjustable model's change over the last period, Wb
@@ -209,7 +236,16 @@ def mras_step(
         lam2 = lam_new.real * lam_new.real + lam_new.imag * lam_new.imag
         e *= p.psi2_norm / max(lam2, 0.0625 * p.psi2_norm)
     s.int_e += Ts * e
-    s.w_r_hat = p.K1 * e + p.K2 * s.int_e
+    w_pi = p.K1 * e + p.K2 * s.int_e
+    if p.b2 > 0.0:
+        # type-2 adaptation (imdrive.design.gains.mras_type2_gains): the PI's output and b2
+        # times its integral, no lag behind a constant acceleration; at low stator frequency
+        # the integral is held, which leaves the type-1 loop (plus a constant)
+        if s.int_w_run:
+            s.int_w += Ts * w_pi
+        s.w_r_hat = w_pi + p.b2 * s.int_w
+    else:
+        s.w_r_hat = w_pi
 
     # flux error (reference minus adjustable) in the controller's synchronous frame
     cs = math.cos(theta_e)
@@ -418,6 +454,7 @@ def mras_estimate(p, m, s, inp):
     i0 = inp.i_prev_ab
     i1 = inp.i_ab
     Ts = inp.Ts
+    s.int_w_run = abs(inp.w_e) >= p.b2_wmin
     mras_step(p, m, s, v.real, v.imag, i0.real, i0.imag, i1.real, i1.imag, inp.theta_e, Ts)
     w_hat = s.w_r_hat
     if p.R1_dc:  # the DC test at every start
@@ -446,7 +483,7 @@ def log_mras_own(row, p, s, n_p):
 def mras_finite(s):
     """Whether every state of the MRAS is finite."""
     c = cmath.isfinite
-    ok = c(s.lam_v_ab) and c(s.lam_i_ab) and c(s.lam_f_ab) and math.isfinite(s.int_e)
+    ok = c(s.lam_v_ab) and c(s.lam_i_ab) and c(s.lam_f_ab) and math.isfinite(s.int_e + s.int_w)
     return ok and math.isfinite(s.w_r_hat) and c(s.e_dq0)
 
 
