@@ -189,9 +189,12 @@ class ControlSettings:
         setting(
             "above half the rated stator frequency, realign the controller's frame on the "
             "rotor flux (seen in the back-emf) when the voltage limit has left it more than 60 "
-            "degrees off for 50 ms (kernels/ifoc.py, check_orientation)"
+            "degrees off for 50 ms (kernels/ifoc.py, check_orientation); off by default: "
+            "it rescues the ideal drive's frame locked 90 degrees off at twice the rated "
+            "speed but on the dead-time bridge more runs lost control with it "
+            "(docs/envelope.md)"
         ),
-    ] = True
+    ] = False
     dead_time_compensation: Annotated[
         Literal["none", "feedforward"],
         setting(
