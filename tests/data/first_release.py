@@ -2,10 +2,11 @@
 
 The injection presets (``injection-fig5``, ``-fig6``, their ``-150rpm`` twins) now carry the
 recommended mechanisms (adaptive step law, three frequencies, R1 estimation, field weakening
-with the estimation headroom, the rotor thermal model, the slip decoupling of the detection). A test that shows what a mechanism
-fixes starts from the tuning the presets had before: :data:`FIRST_RELEASE` restores it, and
-``tests/drive/test_first_release_tuning.py`` checks that it does, bit for bit, against the
-fingerprints the presets had then (``first_release_baseline.json``).
+with the estimation headroom, the rotor thermal model, the slip decoupling of the detection).
+A test that shows what a mechanism fixes starts from the tuning the presets had before:
+:data:`FIRST_RELEASE` restores it, and ``tests/drive/test_first_release_tuning.py`` checks
+that it does, bit for bit, against the fingerprints the presets had then
+(``first_release_baseline.json``).
 """
 
 from __future__ import annotations

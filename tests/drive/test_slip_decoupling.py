@@ -1,6 +1,6 @@
 """The slip's coupling of the MRAS's q-axis flux error into the detected R2 signal, and its removal.
 
-Mechanism (kernels/compensator.py ``slip_coupling``, docs/envelope.md): in the controller's
+Mechanism (kernels/detection.py ``slip_coupling``, docs/envelope.md): in the controller's
 frame the rotor's d flux is driven by ``w_s psi_q``; the adjustable model is held on the d axis,
 so the q-axis error the MRAS's finite bandwidth leaves through the injection's torque ripple
 reaches the d-axis error through ``w_s T2/(1 + s T2)``. At full load above base speed

@@ -8,7 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from imdrive.kernels.compensator import COMPENSATOR_STATE, MAX_HP_CORRECTION, slip_coupling
+from imdrive.kernels.compensator import COMPENSATOR_STATE
+from imdrive.kernels.detection import MAX_HP_CORRECTION, slip_coupling
 
 
 def _state():

@@ -385,7 +385,7 @@ class InjectionSettings:
         Bool,
         setting(
             "detection: subtract from e_d0 the part the slip couples in from the MRAS's "
-            "q-axis flux error, w_s T2_hat/(1 + s T2_hat) e_q0 (kernels/compensator.py, "
+            "q-axis flux error, w_s T2_hat/(1 + s T2_hat) e_q0 (kernels/detection.py, "
             "slip_coupling); matters at large slip (full load above base speed)"
         ),
     ] = True
