@@ -13,34 +13,21 @@ rated speed the drive lost control (Table IV at 1.5 x the rated speed, no load, 
 from __future__ import annotations
 
 import pytest
+from data.ramp import BRIDGE, ramp_scenario
 
 from imdrive import Scenario, simulate_batch
-from imdrive.config.rated import rated_point
 
 pytestmark = pytest.mark.slow  # end to end: switching-bridge runs of 12 s
 
 
 def _scenario(machine: str, speed_pu: float) -> Scenario:
-    base = Scenario.read("injection-robust", [f'machine.preset="{machine}"'])
-    rp = rated_point(base.machine)
-    return base.with_overrides(
-        {
-            "inverter.model": "switching",
-            "inverter.dead_time_s": 2e-6,
-            "control.dead_time_compensation": "feedforward",
-            "control.dead_time_compensation_s": 1.6e-6,
-            "estimator.R2_ratio": 1.3,
-            "estimator.R1_ratio": 1.1,
-            "control.speed_ref_rpm": {
-                "initial": 0,
-                "changes": [{"at": 0.5, "to": speed_pu * rp.speed_rpm, "over": 3.0}],
-            },
-            "load.torque_Nm": 0.0,
-            "injection.t_on_s": 5.0,
-            "compensator.t_on_s": 5.0,
-            "simulation.t_end_s": 12.0,
-        }
-    )
+    overrides = BRIDGE | {
+        "estimator.R2_ratio": 1.3,
+        "estimator.R1_ratio": 1.1,
+        "load.torque_Nm": 0.0,
+        "simulation.t_end_s": 12.0,
+    }
+    return ramp_scenario(machine, speed_pu, overrides)
 
 
 @pytest.mark.parametrize("machine", ["paper-table-iv", "aalto-2.2kw"])

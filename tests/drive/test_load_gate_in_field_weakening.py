@@ -11,32 +11,16 @@ Krause's 3 hp machine.
 from __future__ import annotations
 
 import pytest
+from data.ramp import ramp_scenario
 
 from imdrive import Scenario, simulate_batch
-from imdrive.config.rated import rated_point
-from imdrive.sweep.model import available_torque_Nm
 
 pytestmark = pytest.mark.slow  # end to end: closed-loop runs of 38 s
 
 
 def _scenario(machine: str, speed_pu: float, load_pu: float) -> Scenario:
-    base = Scenario.read("injection-robust", [f'machine.preset="{machine}"'])
-    rp = rated_point(base.machine)
-    sc = base.with_overrides(
-        {
-            "estimator.R2_ratio": 0.7,
-            "estimator.R1_ratio": 1.0,
-            "control.speed_ref_rpm": {
-                "initial": 0,
-                "changes": [{"at": 0.5, "to": speed_pu * rp.speed_rpm, "over": 3.0}],
-            },
-            "injection.t_on_s": 5.0,
-            "compensator.t_on_s": 5.0,
-            "simulation.t_end_s": 38.0,
-        }
-    )
-    load = {"initial": 0, "changes": [{"at": 4.0, "to": load_pu * available_torque_Nm(sc)}]}
-    return sc.with_overrides({"load.torque_Nm": load})
+    overrides = {"estimator.R2_ratio": 0.7, "estimator.R1_ratio": 1.0, "simulation.t_end_s": 38.0}
+    return ramp_scenario(machine, speed_pu, overrides, load_pu_available=load_pu)
 
 
 @pytest.mark.parametrize("machine", ["paper-table-iv", "krause-3hp"])

@@ -13,33 +13,23 @@ still finds R1 once the speed is steady.
 from __future__ import annotations
 
 import pytest
+from data.ramp import ramp_scenario
 
-from imdrive import Scenario, simulate_batch
-from imdrive.config.rated import rated_point
+from imdrive import simulate_batch
 
 pytestmark = pytest.mark.slow  # end to end: closed-loop runs of 8 s
 
 
 def _run(machine: str, speed_pu: float, load_pu: float, R1_ratio: float):
-    base = Scenario.read("injection-robust", [f'machine.preset="{machine}"'])
-    rp = rated_point(base.machine)
-    return base.with_overrides(
-        {
-            "compensator.enabled": False,
-            "injection.amplitude_pu": 0.0,
-            "estimator.R2_ratio": 1.0,
-            "estimator.R1_ratio": R1_ratio,
-            "control.speed_ref_rpm": {
-                "initial": 0,
-                "changes": [{"at": 0.5, "to": speed_pu * rp.speed_rpm, "over": 3.0}],
-            },
-            "load.torque_Nm": {
-                "initial": 0,
-                "changes": [{"at": 4.0, "to": load_pu * rp.torque_Nm}],
-            },
-            "simulation.t_end_s": 8.0,
-        }
-    )
+    overrides = {
+        "compensator.enabled": False,
+        "injection.amplitude_pu": 0.0,
+        "estimator.R2_ratio": 1.0,
+        "estimator.R1_ratio": R1_ratio,
+        "simulation.t_end_s": 8.0,
+    }
+    # up to the rated speed the torque available is the rated torque
+    return ramp_scenario(machine, speed_pu, overrides, load_pu_available=load_pu)
 
 
 @pytest.mark.parametrize("machine", ["paper-table-iv", "krause-3hp"])

@@ -18,31 +18,22 @@ runs it had held (docs/envelope.md).
 from __future__ import annotations
 
 import pytest
+from data.ramp import ramp_scenario
 
 from imdrive import Scenario, simulate_batch
-from imdrive.config.rated import rated_point
 
 pytestmark = pytest.mark.slow  # end to end: closed-loop runs of 38 s
 
 
 def _scenario(machine: str, on: bool) -> Scenario:
-    base = Scenario.read("injection-robust", [f'machine.preset="{machine}"'])
-    rp = rated_point(base.machine)
-    return base.with_overrides(
-        {
-            "control.reorientation": on,
-            "estimator.R2_ratio": 0.7,
-            "estimator.R1_ratio": 1.1,
-            "control.speed_ref_rpm": {
-                "initial": 0,
-                "changes": [{"at": 0.5, "to": 2.0 * rp.speed_rpm, "over": 3.0}],
-            },
-            "load.torque_Nm": 0.0,
-            "injection.t_on_s": 5.0,
-            "compensator.t_on_s": 5.0,
-            "simulation.t_end_s": 38.0,
-        }
-    )
+    overrides = {
+        "control.reorientation": on,
+        "estimator.R2_ratio": 0.7,
+        "estimator.R1_ratio": 1.1,
+        "load.torque_Nm": 0.0,
+        "simulation.t_end_s": 38.0,
+    }
+    return ramp_scenario(machine, 2.0, overrides)
 
 
 def test_realigned_frame_lets_r2_be_estimated_at_twice_rated_speed():

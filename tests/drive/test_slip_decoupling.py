@@ -16,39 +16,30 @@ discretisation residual of the 100 us control period (1.5 rpm less at 50 us).
 from __future__ import annotations
 
 import pytest
+from data.ramp import ramp_scenario
 
-from imdrive import Scenario, simulate_batch
-from imdrive.config.rated import rated_point
-from imdrive.sweep.model import available_torque_Nm
+from imdrive import simulate_batch
 
 pytestmark = pytest.mark.slow  # end to end: 4 closed-loop runs of 24 s
 
 
 def _runs(machine: str, speed_pu: float, R2_ratio: float):
-    base = Scenario.read("injection-robust", [f'machine.preset="{machine}"'])
-    rp = rated_point(base.machine)
-    keys, scs = [], []
-    for on in (False, True):
-        o = {
-            "injection.decouple_slip": on,
-            "estimator.R2_ratio": R2_ratio,
-            "estimator.R1_ratio": 1.0,
-            "control.speed_ref_rpm": {
-                "initial": 0,
-                "changes": [{"at": 0.5, "to": speed_pu * rp.speed_rpm, "over": 3.0}],
+    scs = [
+        ramp_scenario(
+            machine,
+            speed_pu,
+            {
+                "injection.decouple_slip": on,
+                "estimator.R2_ratio": R2_ratio,
+                "estimator.R1_ratio": 1.0,
+                "simulation.t_end_s": 24.0,
             },
-            "injection.t_on_s": 5.0,
-            "compensator.t_on_s": 5.0,
-            "simulation.t_end_s": 24.0,
-        }
-        sc = base.with_overrides(o)
-        T = available_torque_Nm(sc)
-        load = {"initial": 0, "changes": [{"at": 4.0, "to": T}]}
-        sc = sc.with_overrides({"load.torque_Nm": load})
-        keys.append(on)
-        scs.append(sc)
-    b = simulate_batch(scs)
-    return {k: row for k, row in zip(keys, b.metrics.itertuples(), strict=True)}
+            load_pu_available=1.0,
+        )
+        for on in (False, True)
+    ]
+    off, on = simulate_batch(scs).metrics.itertuples()
+    return {False: off, True: on}
 
 
 @pytest.mark.parametrize(

@@ -101,7 +101,6 @@ CONTROL_STATE = record_dtype(
         ("w_ref_prev", f8),  # the speed reference at the last sample, mechanical rad/s
         ("ref_moved_at", f8),  # when the speed reference last moved, s (-inf: never)
         ("or_time", f8),  # how long the orientation check has seen the frame off, s
-        ("or_count", f8),  # realignments so far
     ]
 )
 
@@ -271,7 +270,6 @@ def check_orientation(p, s, m, v_d, v_q, i_d, i_q, w_e, sigma_L1, Ts):
     if s.or_time < p.or_trip:
         return 0.0
     s.or_time = 0.0
-    s.or_count += 1.0
     s.int_dq = s.int_dq * complex(math.cos(delta), -math.sin(delta))
     return delta
 
@@ -384,18 +382,19 @@ def has_feedforward(p):
 
 
 @njit(cache=True)
-def r1_masked_by_inverter_error(p, s, m, i_mag):
+def r1_masked_by_inverter_error(p, s, m, i_ab):
     """Whether the stator resistance's drop is below the inverter's voltage error the
     controller compensates, ``R1_hat |i| < (4/3) k u_c`` (the compensation's six-step vector,
     ``(4/3) k u_c`` long on the average, :func:`adapt_inverter_error`): there an online R1
     law reads what is left of that error (its shape at the current's zero crossings, which no
     sign model describes) as a resistance. Measured on the dead-time bridge at 0.1-0.3 of the
     rated speed: the law drove the speed 18-39 rpm off at no load and R2_hat 4 % low; the
-    standstill identification alone left both within goal. False without compensation."""
+    standstill identification alone left both within goal. ``i_ab``: the measured current
+    (complex), A. False without compensation."""
     if not has_feedforward(p):
         return False
     u_c = p.ie_u[p.ie_n - 1] if p.ie_n > 0 else p.dtc_u
-    return m.R1_hat * i_mag < (4.0 / 3.0) * (1.0 + s.ie_dk) * u_c
+    return m.R1_hat * abs(i_ab) < (4.0 / 3.0) * (1.0 + s.ie_dk) * u_c
 
 
 @njit(cache=True)

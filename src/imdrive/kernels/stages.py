@@ -240,7 +240,7 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc
         ctl.w_ref_prev = w_ref
     hold_R1 = hold_R1 or t - ctl.ref_moved_at < pc.r1_settle
     # and where its drop is below the inverter error the controller compensates
-    hold_R1 = hold_R1 or r1_masked_by_inverter_error(pc, ctl, mdl, abs(smpl.i_meas_ab))
+    hold_R1 = hold_R1 or r1_masked_by_inverter_error(pc, ctl, mdl, smpl.i_meas_ab)
     inp = EstimatorInput(
         smp.v_prev_ab, smp.i_prev_ab, smpl.i_meas_ab, smpl.theta_k, ctl.w_e, ctl.i_ref_dq,
         w_ref, i_inj, hold_R1, Ts, t,
