@@ -2,7 +2,8 @@
 
 The injection presets (``injection-fig5``, ``-fig6``, their ``-150rpm`` twins) now carry the
 recommended mechanisms (adaptive step law, three frequencies, R1 estimation, field weakening
-with the estimation headroom, the rotor thermal model, the slip decoupling of the detection).
+with the estimation headroom, the rotor thermal model, the slip decoupling of the detection,
+the MRAS's period-mean current).
 A test that shows what a mechanism fixes starts from the tuning the presets had before:
 :data:`FIRST_RELEASE` restores it, and ``tests/drive/test_first_release_tuning.py`` checks
 that it does, bit for bit, against the fingerprints the presets had then
@@ -28,6 +29,7 @@ FIRST_RELEASE = {
     "compensator.gate_voltage": 0.97,
     "compensator.thermal_model": False,
     "injection.decouple_slip": False,
+    "mras.period_mean_current": False,
 }
 
 

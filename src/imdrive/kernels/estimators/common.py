@@ -8,6 +8,13 @@ is linear in ``lam`` for a given speed, so it is advanced over one control perio
 a current varying linearly between its two samples (first-order hold), with the complex
 exponential of ``z = (-1/T2 + j w_r) Ts`` and the functions ``phi1 = (e^z - 1)/z``,
 ``phi2 = (e^z - 1 - z)/z^2``.
+
+The two samples miss the current's curvature inside the period (:func:`period_mean_offset`):
+the voltage is held over the period while the back-emf turns, so the current bends away
+from the chord between its samples by a mean of ``Ts^2 (e' + R1 i')/(12 sigma_L1)``. Its share
+of the rotor flux, ``M/sqrt(1 + (w_s T2)^2)`` times that mean, turned the adjustable model by
+2.2 mrad at twice the rated speed and full load on Table IV (100 us), and the MRAS read it
+as a speed error of 1.9 rpm; second order in the period (0.5 rpm at 50 us).
 """
 
 from __future__ import annotations
@@ -15,6 +22,50 @@ from __future__ import annotations
 import math
 
 from numba import njit
+
+
+@njit(cache=True)
+def period_mean_offset(lam, w_r, R1, R2, L2, M, sigma_L1, i0, i1, Ts):
+    """The stator current's mean over the period less the mean of its two samples, A (complex).
+
+    With the voltage held over the period, ``sigma_L1 di/dt = v - R1 i - e`` bends the current
+    by the turning back-emf ``e = (M/L2) dlam/dt``: ``i'' = -(R1 i' + e')/sigma_L1``; the mean
+    of a curve over ``Ts`` less the mean of its end values is ``-Ts^2 i''/12`` (the
+    trapezoidal rule's error), so
+
+        offset = Ts^2 (e' + R1 i') / (12 sigma_L1),
+        e' = (M/L2) (z p lam + beta i'),   p lam = z lam + beta i,
+
+    from the rotor current model itself (``z = -R2/L2 + j w_r``, ``beta = M R2/L2``; ``lam``
+    at the period's middle, ``i' = (i1 - i0)/Ts``). In steady state ``e' = j w_e e``: at
+    twice the rated speed of Table IV and 100 us the offset is 0.15 % of the current, at a
+    right angle to the back-emf. Add it to both samples before :func:`current_model_step`
+    and to the sample mean of the voltage model's resistive drop.
+
+    Parameters
+    ----------
+    lam : complex
+        Rotor flux of the model at the start of the period, Wb.
+    w_r : float
+        Electrical rotor speed of the model, rad/s.
+    R1, R2 : float
+        Stator and rotor resistance of the model, ohm.
+    L2, M, sigma_L1 : float
+        Rotor, magnetising and stator transient inductance, H.
+    i0, i1 : complex
+        Stator current at the start and at the end of the period, A.
+    Ts : float
+        Period, s.
+    """
+    if not sigma_L1 > 0.0:  # a degenerate model (no leakage left in floating point)
+        return 0j
+    z = complex(-R2 / L2, w_r)
+    beta = M * R2 / L2
+    di = (i1 - i0) / Ts
+    lam_mid = lam + 0.5 * Ts * (z * lam + beta * i0)
+    dlam_mid = z * lam_mid + beta * 0.5 * (i0 + i1)
+    e_dot = (M / L2) * (z * dlam_mid + beta * di)
+    return Ts * Ts * (e_dot + R1 * di) / (12.0 * sigma_L1)
 
 
 @njit(cache=True)

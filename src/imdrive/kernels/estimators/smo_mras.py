@@ -74,10 +74,10 @@ import math
 
 from numba import njit
 
-from imdrive.kernels.estimators.common import current_model_step
+from imdrive.kernels.estimators.common import current_model_step, period_mean_offset
 from imdrive.kernels.estimators.registry import register_kernel
 from imdrive.kernels.model import model_inductances
-from imdrive.kernels.records import c16, f8, record_dtype
+from imdrive.kernels.records import b1, c16, f8, record_dtype
 
 #: Parameters (from :class:`imdrive.config.estimators.SmoMrasSettings`).
 SMO_MRAS_PARAMS = record_dtype(
@@ -87,6 +87,7 @@ SMO_MRAS_PARAMS = record_dtype(
         ("phi", f8),  # boundary layer of the sliding variable, rad (0: pure sign function)
         ("w_f", f8),  # bandwidth of the equivalent-control low-pass, rad/s
         ("psi2_min", f8),  # floor of |lam_hat|^2 in the normalisation of sigma, Wb^2
+        ("bend", b1),  # the current model gets the current's mean over the period
     ]
 )
 
@@ -193,7 +194,15 @@ def smo_mras_estimate(p, m, s, inp):
     lam_v_b = g * s.lam_v_ab.imag + k_in * d.imag
 
     # adjustable (current) model driven by the switching control held over the period
-    lam_new = current_model_step(s.lam_i_ab, s.u, m.R2_hat, L2, M, inp.i_prev_ab, inp.i_ab, Ts)
+    # (the current's mean over the period: its samples' plus the back-emf's bend)
+    i0 = inp.i_prev_ab
+    i1 = inp.i_ab
+    i_bend = 0j
+    if p.bend:
+        i_bend = period_mean_offset(
+            s.lam_i_ab, s.u, m.R1_hat, m.R2_hat, L2, M, sigma_L1, i0, i1, Ts
+        )
+    lam_new = current_model_step(s.lam_i_ab, s.u, m.R2_hat, L2, M, i0 + i_bend, i1 + i_bend, Ts)
     dlam = lam_new - s.lam_i_ab
     lam_f_a = g * s.lam_f_ab.real + k_in * dlam.real
     lam_f_b = g * s.lam_f_ab.imag + k_in * dlam.imag
