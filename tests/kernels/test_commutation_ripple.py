@@ -1,6 +1,6 @@
 """The phase current's deviation at its leg's commutations on the switching bridge
 (:func:`imdrive.kernels.ifoc.commutation_ripple`) against the carrier period integrated
-directly, and the dead-time compensation's band it bounds."""
+directly, and the dead-time compensation that follows the loss's shape it gives."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from imdrive.kernels.ifoc import CONTROL_PARAMS, commutation_ripple, dead_time_feedforward
-from imdrive.kernels.inverter import duty_cycles, phase_values
+from imdrive.kernels.inverter import clarke, duty_cycles, phase_values
 from imdrive.kernels.records import new_record
 
 VDC = 311.127
@@ -56,17 +56,35 @@ def _params(ripple):
     )[0]
 
 
-def test_the_band_is_bounded_by_the_ripple_and_only_there():
-    # phase a at 0.12 A, past the ripple at the commutations (0.113 A): full compensation with
-    # the bound, 0.6 of it with the fixed 0.2 A band; phases b and c are far from zero
-    i_alpha, i_beta = 0.12, 6.0
-    ia, _, _ = phase_values(i_alpha, i_beta)
-    full = dead_time_feedforward(_params(VDC * TS / SIGMA_L1), i_alpha, i_beta, 19.6, 0.0)
+@pytest.mark.parametrize(
+    ("i_a", "share"),
+    [
+        (0.12, 1.0),  # past the ripple at the commutations (0.113 A): the whole loss
+        (0.05, 0.0),  # the ripple straddles zero: no loss, no compensation
+        (-0.03, 0.0),
+        (-0.2, -1.0),
+    ],
+)
+def test_the_compensation_follows_the_bridge_loss_shape(i_a, share):
+    # phase a near zero at its voltage peak (0.1 of the rated speed, no load on Table IV);
+    # phases b and c far from zero
+    i_alpha = i_a
+    i_beta = 6.0
+    ia, ib, ic = phase_values(i_alpha, i_beta)
+    assert ia == pytest.approx(i_a)
+    got = dead_time_feedforward(_params(VDC * TS / SIGMA_L1), i_alpha, i_beta, 19.6, 0.0)
+    want = clarke(share * 5.0, math.copysign(5.0, ib), math.copysign(5.0, ic))
+    assert got == pytest.approx(want, abs=1e-12)
+    # the fixed band's sign model: a share i_a / 0.2 of the loss inside its band
     fixed = dead_time_feedforward(_params(0.0), i_alpha, i_beta, 19.6, 0.0)
-    assert ia == pytest.approx(0.12)
-    # alpha of the compensation = (2/3)(u_a - (u_b + u_c)/2); b and c are whole in both
-    assert full[0] - fixed[0] == pytest.approx((2 / 3) * 5.0 * (1.0 - 0.12 / 0.2), rel=1e-9)
-    # far from zero the two agree to the bit
-    assert dead_time_feedforward(_params(1.0), 3.0, 6.0, 19.6, 0.0) == dead_time_feedforward(
-        _params(0.0), 3.0, 6.0, 19.6, 0.0
+    share_fixed = min(max(i_a / 0.2, -1.0), 1.0)
+    assert fixed == pytest.approx(
+        clarke(share_fixed * 5.0, math.copysign(5.0, ib), math.copysign(5.0, ic)), abs=1e-12
+    )
+
+
+def test_far_from_zero_the_shapes_agree_to_the_bit():
+    args = (3.0, 6.0, 19.6, 0.0)
+    assert dead_time_feedforward(_params(VDC * TS / SIGMA_L1), *args) == dead_time_feedforward(
+        _params(0.0), *args
     )
