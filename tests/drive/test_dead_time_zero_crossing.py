@@ -11,15 +11,18 @@ at each zero crossing and its fundamental lags by an angle that falls as ``1/|i|
 injection's ``delta i_d`` modulates ``|i|``, hence the lag: a voltage error across the current
 in phase with the injection (measured on Table IV at no load: 0.038 V per ampere injected on
 the q axis; 0.0004 V on the average model with the same dead time), which the MRAS's voltage
-model turns into an in-phase d-axis flux error, read as R2 error. With the band bounded by the
-ripple at the commutations the compensation is whole wherever the loss is.
+model turns into an in-phase d-axis flux error, read as R2 error. Following the loss's shape
+(none inside ``0.75 delta``, whole from ``delta``) the compensation is whole wherever the loss
+is.
 
 Measured here on the envelope's cells at 0.1 of the rated speed, at no load and regenerating at
 the rated torque, on two machines (Table IV from R1_hat = 0.9 R1: -3.4 and -6.6 % with the
 fixed band; the Aalto 2.2 kW machine, 400 V 50 Hz, from R1_hat = R1: -6.0 % at no load), on
 the envelope's bridge (2 us dead time compensated as 1.6 us, the online scaling on) from
-R2_hat(0) = R2: with the ripple's bound within 1 % (-0.4, -0.5; 0.0, -0.4 %). The sign of the
-bias is not a law: the stall's lag depends on the load angle; at 0.12 of the rated speed from
+R2_hat(0) = R2: with the loss's shape within 1 %. And the online scale of the compensation,
+which nulls the residual's sixth harmonic, learns the true ratio once the compensation has the
+loss's shape (Table IV at 0.3 of the rated speed, no load). The bias's sign and size are not a
+law: the stall's lag depends on the load angle and R1_hat; at 0.12 of the rated speed from
 R1_hat = R1 Table IV ended +0.5 / +1.6 % with the fixed band.
 """
 
@@ -30,7 +33,7 @@ import pytest
 from imdrive import simulate_batch
 from imdrive.sweep import load_sweep
 
-pytestmark = pytest.mark.slow  # end to end: 8 closed-loop runs of 38 s on the switching bridge
+pytestmark = pytest.mark.slow  # end to end: 10 closed-loop runs of 38 s on the switching bridge
 
 
 def _runs(machine: str, R1_ratio: float):
