@@ -60,8 +60,9 @@ def _params(ripple):
     ("i_a", "share"),
     [
         (0.12, 1.0),  # past the ripple at the commutations (0.113 A): the whole loss
-        (0.05, 0.0),  # the ripple straddles zero: no loss, no compensation
-        (-0.03, 0.0),
+        (0.0, 0.0),  # the ripple straddles zero: no loss, no compensation
+        (-0.01, 0.0),
+        (0.03, None),  # on the edge, smooth over a quarter of the 0.2 A band
         (-0.2, -1.0),
     ],
 )
@@ -72,6 +73,10 @@ def test_the_compensation_follows_the_bridge_loss_shape(i_a, share):
     i_beta = 6.0
     ia, ib, ic = phase_values(i_alpha, i_beta)
     assert ia == pytest.approx(i_a)
+    if share is None:  # centred at delta - 0.05 A, so whole from delta on
+        delta = commutation_ripple(19.6, 0.0, VDC, VDC * TS / SIGMA_L1)[0]
+        share = 0.5 * (1.0 + (i_a - (delta - 0.05)) / 0.05)
+        assert 0.0 < share < 1.0
     got = dead_time_feedforward(_params(VDC * TS / SIGMA_L1), i_alpha, i_beta, 19.6, 0.0)
     want = clarke(share * 5.0, math.copysign(5.0, ib), math.copysign(5.0, ic))
     assert got == pytest.approx(want, abs=1e-12)
