@@ -202,6 +202,19 @@ class ControlSettings:
             "(measured current, smooth over inverter.sign_band_A)"
         ),
     ] = "none"
+    dead_time_compensation_band: Annotated[
+        Literal["ripple", "fixed"],
+        setting(
+            '"ripple": on the switching bridge each phase\'s compensation has the shape of the '
+            "bridge's loss, none while the current's ripple at the leg's commutations "
+            "(computed from the voltage reference) straddles zero and whole beyond it "
+            "(kernels/ifoc.py, commutation_ripple; the fixed band, wider than that ripple at "
+            "low speed, stalled the current at its zero crossings and biased R2_hat 2-7 % low "
+            'at 0.1 of the rated speed); "fixed": the sign smooth over inverter.sign_band_A '
+            "throughout. The average model's loss changes sign over inverter.sign_band_A, so "
+            "there the band is that in either case"
+        ),
+    ] = "ripple"
     dead_time_compensation_s: Annotated[
         Float | None,
         setting(

@@ -295,7 +295,9 @@ def control(sim, pc, x, mdl, ctl, smp, prof, smpl, estm, foc):
     dv_alpha = 0.0
     dv_beta = 0.0
     if has_feedforward(pc):  # inverter-error compensation, on the measured current
-        dv_alpha, dv_beta = inverter_feedforward(pc, ctl, i_meas_alpha, i_meas_beta, Ts)
+        dv_alpha, dv_beta = inverter_feedforward(
+            pc, ctl, i_meas_alpha, i_meas_beta, Ts, v_ref_alpha, v_ref_beta
+        )
         if pc.ie_r1:
             standstill_compensation(ctl, dv_alpha, dv_beta, i_meas_alpha, i_meas_beta, w_ref)
         v_ref_alpha += dv_alpha

@@ -236,6 +236,13 @@ def control_fields(sc: Scenario, D: Resolved, mh: dict, psi0: float) -> tuple[di
             else 0.0
         ),
         dtc_band=inv.sign_band_A,
+        # the switching bridge's dead-time loss has the shape of the current's ripple at the
+        # commutations; the compensation follows it (kernels/ifoc.py, commutation_ripple)
+        dtc_ripple=(
+            Vdc_meas * sc.simulation.Ts_s / mh["sigma_L1_hat"]
+            if inv.model == "switching" and ctl.dead_time_compensation_band == "ripple"
+            else 0.0
+        ),
         ie_rate=ie_rate,
         ie_wc=2 * math.pi * ctl.current_bandwidth_Hz,
         ie_wmin=2 * math.pi * m.rated_frequency_Hz * ctl.inverter_error_adaptation_fmin_pu,
