@@ -28,7 +28,9 @@ BISECTION_STEPS = 12
 
 
 def _sensorless(overrides=()) -> Scenario:
-    return Scenario.read("sensorless", list(overrides))
+    # the maps linearise the type-1 MRAS; at a 10 Hz bandwidth the machine-dependent default
+    # would turn the type-2 adaptation on (config/perunit.py mras_ramp_lag_pu)
+    return Scenario.read("sensorless", ["mras.acceleration_tracking=false", *overrides])
 
 
 def r1_limit(sc: Scenario, speeds, torque: float, lo: float = 1.0, hi: float = 1.5) -> float:
