@@ -315,8 +315,8 @@ def headroom_rate_per_s(rate_per_s: float, gain_per_period: float, f_inj_Hz: flo
     the next one, so the flux factor moves ``rate T_inj (v_target - v_peak)`` per period on a
     sample up to a period old: a sampled integral loop whose gain per period must stay below
     one. Table IV's 1 /s at 2 Hz is 0.5. The injection is set in per-unit of the rotor's
-    corner frequency, 0.1-0.2 Hz on the large machines of the library, where 1 /s was 5-14
-    per period: the flux cycled between rated and the field weakening's floor over tens of
+    corner frequency, 0.07-0.22 Hz on the large machines of the library, where 1 /s was
+    4.5-14 per period: the flux cycled between rated and the field weakening's floor over tens of
     seconds (R2_hat 17 % off at no load on Krause 2250 hp), and from one stale peak (the
     load step's) it fell until the torque current saturated (Krause 500 hp, rated speed,
     regenerating: control lost).
@@ -333,8 +333,8 @@ def headroom_rate_per_s(rate_per_s: float, gain_per_period: float, f_inj_Hz: flo
     Returns
     -------
     float
-        ``min(rate_per_s, gain_per_period f_inj_Hz)``, 1/s (the setting itself where the
-        injection is at 2 Hz or faster with the default 0.6).
+        ``min(rate_per_s, gain_per_period f_inj_Hz)``, 1/s (with the defaults 1 /s and
+        0.6, the setting itself where the injection is at 1.67 Hz or faster).
     """
     return min(rate_per_s, gain_per_period * f_inj_Hz)
 
