@@ -7,7 +7,8 @@ rated speed (docs/machine-envelope.md).
   R2_hat(0)/L2_hat, 0.15-0.2 Hz on Krause 500 hp and the 3.3 kV machine; the absolute 0.3 /s
   was a third of that angular frequency: R1_hat walked to +78 % (Krause 500 hp), the MRAS
   broke into a 50 Hz oscillation every two injection periods, and the speed gate held R2_hat
-  at its start (20 % and 18 % off). ``mras.R1_rate_pu`` states it per-unit of the same corner.
+  at its start (20 % and 18 % off). ``mras.R1_rate_pu`` states it per-unit of the machine's
+  rotor corner R2/L2 (0.3 /s on Table IV).
 * The adaptive step law decides every half injection period, which needs an even number of
   control periods per injection period; on an odd one it fell back to whole-period decisions,
   half the rate: the per-unit injection periods of Krause 50 hp, 500 hp and 2250 hp came out
@@ -41,8 +42,8 @@ def _half_speed_run(machine, ratio, t_end_s):
 @pytest.mark.parametrize(("machine", "ratio"), [("krause-500hp", 0.8), ("geyer-3.3kv", 1.2)])
 def test_r1_law_rate_follows_the_rotor_corner(machine, ratio):
     # R1_hat(0) = 1.1 R1. With 0.3 /s, R1_hat ranged over -45 % (its clamp) to +78 % (Krause
-    # 500 hp) and +114 % (3.3 kV) of R1 after the compensator's start. At 0.022 of the corner
-    # (0.033 and 0.031 /s) it stays within -13 % to +6 %
+    # 500 hp) and +114 % (3.3 kV) of R1 after the compensator's start. At 0.026 of R2/L2
+    # (0.033 and 0.031 /s) it stays within -13 % to +10 %
     sc, res = _half_speed_run(machine, ratio, 40.0)
     df = res.to_pandas()
     live = df["time_s"] > sc.compensator.t_on_s

@@ -376,8 +376,8 @@ class MrasSettings:
     R1_rate_pu: Annotated[
         Float | None,
         setting(
-            "online R1 estimation: rate per-unit of the rotor corner R2_hat(0)/L2_hat, so it "
-            "stays as far below the injection (injection.frequency_pu) on every machine",
+            "online R1 estimation: rate per-unit of the machine's rotor corner 1/T2 = R2/L2, "
+            "so it stays as far below the injection (injection.frequency_pu) on every machine",
             gt=0.0,
             default_doc="unset: R1_rate_per_s",
         ),
@@ -457,7 +457,7 @@ class MrasSettings:
         normalise = self.normalise if self.normalise is not None else sc.control.field_weakening
         if self.R1_rate_pu is not None and self.R1_rate_per_s != 0.0:
             raise ConfigError("mras.R1_rate_pu", "set mras.R1_rate_per_s or this, not both")
-        k_R1 = self.R1_rate_per_s if self.R1_rate_pu is None else self.R1_rate_pu / T2_hat
+        k_R1 = self.R1_rate_per_s if self.R1_rate_pu is None else self.R1_rate_pu / sc.machine.T2_s
         params = dict(
             wc=self.wc_rad_s,
             K1=K1,
