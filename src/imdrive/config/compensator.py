@@ -380,6 +380,18 @@ class InjectionSettings:
             gt=0.0,
         ),
     ] = 1.0
+    headroom_gain_per_period: Annotated[
+        Float,
+        setting(
+            "estimation headroom: the largest integral gain per injection period "
+            "(headroom_rate_per_s x the lowest injection frequency's period), so the gain "
+            "in use is min(headroom_rate_per_s, this x f_inj): the loop samples the peak "
+            "voltage use once per period, and on a machine with a slow rotor (injection "
+            "at 0.07-0.22 Hz) 1 /s was 4.5-14 per period, a limit cycle of the flux "
+            "(run/blocks.py, headroom_rate_per_s)",
+            gt=0.0,
+        ),
+    ] = 0.6
     t_on_s: Annotated[Float, setting("time the injection starts", "s", ge=0.0)] = 0.0
     decouple_slip: Annotated[
         Bool,

@@ -32,6 +32,7 @@ from imdrive.design.estimators import (
     default_reactive_mras_gains,
 )
 from imdrive.design.gains import default_mras_gains, mras_type2_gains
+from imdrive.errors import ConfigError
 
 
 @settings("estimator")
@@ -372,6 +373,15 @@ class MrasSettings:
             ge=0.0,
         ),
     ] = 0.0
+    R1_rate_pu: Annotated[
+        Float | None,
+        setting(
+            "online R1 estimation: rate per-unit of the machine's rotor corner 1/T2 = R2/L2, "
+            "so it stays as far below the injection (injection.frequency_pu) on every machine",
+            gt=0.0,
+            default_doc="unset: R1_rate_per_s",
+        ),
+    ] = None
     normalise: Annotated[
         Bool | None,
         setting(
@@ -454,13 +464,16 @@ class MrasSettings:
         K1 = self.K1 if self.K1 is not None else K1
         K2 = self.K2 if self.K2 is not None else K2
         normalise = self.normalise if self.normalise is not None else sc.control.field_weakening
+        if self.R1_rate_pu is not None and self.R1_rate_per_s != 0.0:
+            raise ConfigError("mras.R1_rate_pu", "set mras.R1_rate_per_s or this, not both")
+        k_R1 = self.R1_rate_per_s if self.R1_rate_pu is None else self.R1_rate_pu / sc.machine.T2_s
         params = dict(
             wc=self.wc_rad_s,
             K1=K1,
             K2=K2,
             b2=b2,
             b2_wmin=self.acceleration_tracking_from_pu * 2 * math.pi * f_rated,
-            k_R1=self.R1_rate_per_s,
+            k_R1=k_R1,
             R1_fmax=self.R1_max_freq_Hz,
             R1_min=0.5 * ctx.R1_hat,
             R1_max=2.0 * ctx.R1_hat,
@@ -478,6 +491,8 @@ class MrasSettings:
             "mras_K2": "mras.K2" if self.K2 is not None else "mras.bandwidth_Hz",
         }
         derived = {"mras_K1": K1, "mras_K2": K2}
+        if self.R1_rate_pu is not None:
+            derived["mras_R1_rate_per_s"], src["mras_R1_rate_per_s"] = k_R1, "mras.R1_rate_pu"
         if b2 > 0.0:
             derived["mras_b2"] = b2
             src["mras_b2"] = "mras.bandwidth_Hz"

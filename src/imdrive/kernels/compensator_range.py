@@ -74,25 +74,30 @@ def headroom_weakening_input(p, s, v_use, torque_limited):
 
     The sampled slow loop's gain per injection period is about ``inj_fw_rate T_inj v``
     (the voltage use is nearly proportional to the flux above base speed): 0.4 at 1 /s and
-    2 Hz, no overshoot. The cost of the lowered flux in torque per ampere is
+    2 Hz, no overshoot; hence the cap on ``inj_fw_rate`` per injection period where the
+    injection is slow (large machines). The cost of the lowered flux in torque per ampere is
     :func:`imdrive.analysis.headroom.torque_per_ampere_at_flux`.
 
-    While the speed gate holds the compensator (``s.frozen & 1``) the slow term only raises
-    the flux, and ``torque_limited`` (the speed loop's torque current at its limit) hands the
-    flux to the field weakening's own rule (returns ``v_use``).
+    ``torque_limited`` (the speed loop's torque current at its limit) hands the flux to the
+    field weakening's own rule (returns ``v_use``); otherwise, while the speed gate holds the
+    compensator (``s.frozen & 1``), the slow term only raises the flux. The gain
+    ``inj_fw_rate`` is at most ``injection.headroom_gain_per_period`` (0.6) per injection
+    period (:func:`imdrive.run.blocks.headroom_rate_per_s`).
     """
     slow = p.inj_fw_rate * (p.inj_v_peak - s.v_peak_last)
+    if torque_limited:
+        # a torque beyond what the lowered flux gives: the field weakening's own rule, so the
+        # estimation never costs control, whether or not the speed gate has tripped yet
+        # (measured at 1.4 x base speed, rated motoring torque: the lowered flux let the load
+        # run the drive away; on Krause 500 hp at rated speed, regenerating, the flux kept
+        # falling with the torque current at its limit while the gate was still open)
+        return v_use
     if int(s.frozen) & 1:
-        # the speed is not held. With the torque current at its limit (a torque beyond what
-        # the lowered flux gives) the field weakening's own rule, so the estimation never
-        # costs control (measured at 1.4 x base speed, rated motoring torque: the lowered flux
-        # let the load run the drive away). Otherwise (a transient) the flux is only not
-        # lowered further and rises back at the slow rate where the voltage leaves room: the
-        # fast rule at every trip of the speed gate raised the flux at 20 /s, and at base
-        # speed with rated load that step tripped the gate again, a limit cycle of +-2.5 rpm
-        # that held R2_hat 66 % of the time and left it 8 % off
-        if torque_limited:
-            return v_use
+        # the speed is not held (a transient): the flux is only not lowered further and
+        # rises back at the slow rate where the voltage leaves room: the fast rule at every
+        # trip of the speed gate raised the flux at 20 /s, and at base speed with rated load
+        # that step tripped the gate again, a limit cycle of +-2.5 rpm that held R2_hat 66 %
+        # of the time and left it 8 % off
         slow = max(slow, 0.0)
     dk = slow + p.fw_rate * min(p.fw_v - v_use, 0.0)
     return p.fw_v - dk / p.fw_rate

@@ -315,6 +315,37 @@ def compensator_fields(sc: Scenario, D: Resolved) -> tuple[dict, dict]:
     return record, derived
 
 
+def headroom_rate_per_s(rate_per_s: float, gain_per_period: float, f_inj_Hz: float) -> float:
+    """The estimation headroom's integral gain in use, 1/s.
+
+    Its slow term acts on the peak voltage use of the last whole injection period, held over
+    the next one, so the flux factor moves ``rate T_inj (v_target - v_peak)`` per period on a
+    sample up to a period old: a sampled integral loop whose gain per period must stay below
+    one. Table IV's 1 /s at 2 Hz is 0.5. The injection is set in per-unit of the rotor's
+    corner frequency, 0.07-0.22 Hz on the large machines of the library, where 1 /s was
+    4.5-14 per period: the flux cycled between rated and the field weakening's floor over tens of
+    seconds (R2_hat 17 % off at no load on Krause 2250 hp), and from one stale peak (the
+    load step's) it fell until the torque current saturated (Krause 500 hp, rated speed,
+    regenerating: control lost).
+
+    Parameters
+    ----------
+    rate_per_s : float
+        ``injection.headroom_rate_per_s``, 1/s.
+    gain_per_period : float
+        ``injection.headroom_gain_per_period``: the largest ``rate / f_inj``.
+    f_inj_Hz : float
+        The lowest injection frequency, Hz (its period is the longest the loop holds a sample).
+
+    Returns
+    -------
+    float
+        ``min(rate_per_s, gain_per_period f_inj_Hz)``, 1/s (with the defaults 1 /s and
+        0.6, the setting itself where the injection is at 1.67 Hz or faster).
+    """
+    return min(rate_per_s, gain_per_period * f_inj_Hz)
+
+
 def _gating(sc, r) -> dict:
     """The compensator's gating, frequency-schedule and step-law parameters (off: zeros)."""
     comp = sc.compensator
@@ -336,7 +367,9 @@ def _gating(sc, r) -> dict:
         out |= {
             "inj_fw": True,
             "inj_v_peak": inj.headroom_voltage,
-            "inj_fw_rate": inj.headroom_rate_per_s,
+            "inj_fw_rate": headroom_rate_per_s(
+                inj.headroom_rate_per_s, inj.headroom_gain_per_period, r.inj_f1
+            ),
             "fw_v": fw_v,
             "fw_rate": sc.control.field_weakening_rate,
         }

@@ -51,7 +51,7 @@ COLUMN_DOCS = {
     "i_q_A": "measured current in the controller's synchronous frame, q",
     "R2_hat_ohm": "the controller's rotor-resistance estimate R2_hat",
     "R1_hat_ohm": "the controller's stator-resistance estimate R1_hat (constant unless "
-    "mras.R1_rate_per_s > 0 or the AFO adapts it)",
+    "mras.R1_rate_per_s or mras.R1_rate_pu > 0, or the AFO adapts it)",
     "e_d0_Wb": "MRAS flux error (reference minus adjustable model) in the controller's frame, d "
     "(the paper's e_d0; negative when R2_hat > R2 by the paper's reading)",
     "e_q0_Wb": "the same, q",

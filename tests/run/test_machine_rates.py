@@ -1,0 +1,52 @@
+"""The per-unit rates of the R2-tracking preset on the library machines: the online R1 law's
+rate per-unit of the machine's rotor corner R2/L2 (``mras.R1_rate_pu``) and the estimation
+headroom's gain bounded per injection period (``injection.headroom_gain_per_period``), as the
+drive's records receive them."""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import pytest
+
+from imdrive.config.perunit import resolve
+from imdrive.config.scenario import Scenario
+from imdrive.errors import ConfigError, ConfigWarning
+from imdrive.run.blocks import headroom_rate_per_s
+from imdrive.run.build import build_arrays
+
+
+def _robust(machine, *overrides):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConfigWarning)
+        return Scenario.read("injection-robust", [f'machine.preset="{machine}"', *overrides])
+
+
+@pytest.mark.parametrize("machine", ["paper-table-iv", "krause-500hp", "geyer-3.3kv"])
+def test_r1_rate_keeps_its_ratio_to_the_injection(machine):
+    sc = _robust(machine)
+    arrays = build_arrays(sc)
+    k_R1 = float(arrays.params.est["k_R1"][0])
+    assert arrays.derived["mras_R1_rate_per_s"] == pytest.approx(k_R1)
+    # the injection's lowest angular frequency is 0.915 of the corner R2_hat(0)/L2_hat, here
+    # 1.2 times the machine's: 42 times the rate on every machine
+    w_inj = 2.0 * math.pi * resolve(sc).inj_f1
+    assert w_inj / k_R1 == pytest.approx(0.915 * 1.2 / 0.02621, rel=2e-3)
+    if machine == "paper-table-iv":
+        assert k_R1 == pytest.approx(0.3, rel=3e-4)  # the value the envelope was measured with
+
+
+def test_r1_rate_in_both_units_is_refused():
+    sc = _robust("paper-table-iv", "mras.R1_rate_per_s=0.3")
+    with pytest.raises(ConfigError, match="mras.R1_rate_pu"):
+        build_arrays(sc)
+
+
+def test_headroom_gain_is_bounded_per_injection_period():
+    assert headroom_rate_per_s(1.0, 0.6, 2.0) == 1.0  # Table IV's preset: unchanged
+    assert headroom_rate_per_s(1.0, 0.6, 0.15) == pytest.approx(0.09)
+    for machine in ("krause-500hp", "krause-2250hp"):
+        sc = _robust(machine)
+        rate = float(build_arrays(sc).params.comp["inj_fw_rate"][0])
+        assert rate / resolve(sc).inj_f1 == pytest.approx(0.6)
