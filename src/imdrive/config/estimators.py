@@ -20,6 +20,7 @@ from imdrive.config.registry import (  # noqa: F401  (re-exported: the settings 
     ESTIMATOR_SETTINGS,
     EstimatorContext,
     EstimatorRecords,
+    PeriodMeanCurrent,
     estimator_names,
     estimator_settings,
     package_sections,
@@ -409,15 +410,7 @@ class MrasSettings:
             gt=0.0,
         ),
     ] = 30.0
-    period_mean_current: Annotated[
-        Bool,
-        setting(
-            "feed the current model the stator current's mean over the control period: the "
-            "mean of its two samples plus the bend the turning back-emf gives it "
-            "(kernels/estimators/common.py period_mean_offset; without it the estimate is "
-            "off by 1.9 rpm at twice the rated speed and full load on Table IV)"
-        ),
-    ] = True
+    period_mean_current: PeriodMeanCurrent = True
     acceleration_tracking: Annotated[
         Bool | None,
         setting(

@@ -6,8 +6,13 @@ from __future__ import annotations
 import math
 from typing import Annotated
 
-from imdrive.config.registry import EstimatorContext, EstimatorRecords, estimator_settings
-from imdrive.config.validation import Bool, Float, setting
+from imdrive.config.registry import (
+    EstimatorContext,
+    EstimatorRecords,
+    PeriodMeanCurrent,
+    estimator_settings,
+)
+from imdrive.config.validation import Float, setting
 
 
 @estimator_settings(
@@ -74,15 +79,7 @@ class SmoMrasSettings:
         ),
     ] = None
 
-    period_mean_current: Annotated[
-        Bool,
-        setting(
-            "feed the current model the stator current's mean over the control period: the "
-            "mean of its two samples plus the bend the turning back-emf gives it "
-            "(kernels/estimators/common.py period_mean_offset; without it the estimate is "
-            "off by 1.9 rpm at twice the rated speed and full load on Table IV)"
-        ),
-    ] = True
+    period_mean_current: PeriodMeanCurrent = True
 
     def records(self, ctx: EstimatorContext) -> EstimatorRecords:
         """Switching gain, boundary layer and equivalent-control filter, each overridable.
