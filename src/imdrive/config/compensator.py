@@ -215,7 +215,8 @@ class CompensatorSettings:
             "mean stator frequency is above this, and reset below it (kernels/compensator.py)",
             "Hz",
             ge=0.0,
-            default_doc="the higher injection frequency (0 without injection)",
+            default_doc="the higher injection frequency, at least 1.75 x the MRAS filter's corner "
+            "mras.wc_rad_s/2π (0 without injection)",
         ),
     ] = None
     drift_max_ohm: Annotated[

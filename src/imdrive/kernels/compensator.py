@@ -57,11 +57,16 @@ period, lagged by 8 %). With ``p.fine`` the update is a second-order tracking lo
   integrated only inside the fine band, so the large initial steps do not wind it up, and it
   is not applied while the gating freezes R2_hat.
 * below the stator frequency ``p.drift_fmin`` (period mean, with the gating on; default the
-  higher injection frequency) the drift term is reset and not integrated: there the type-2
-  loop limit-cycled (measured at 50 rpm, 6 N m, R2_hat(0) = 0.8 R2: R2_hat swinging +-7 %
-  with a 3 s period, where the type-1 loop converges to 0.7 %). The speed and slip respond
-  to an R2_hat change through the speed loop and the MRAS more slowly there, and the second
-  integrator took the phase margin. A heating ramp is then followed with a lag, not zero;
+  higher injection frequency, and at least 1.75 times the MRAS filter's corner
+  ``wc/2 pi``, above which that filter lags by less than 30 degrees) the drift term is reset
+  and not integrated: there the type-2 loop limit-cycled (measured at 50 rpm, 6 N m,
+  R2_hat(0) = 0.8 R2: R2_hat swinging +-7 % with a 3 s period, where the type-1 loop
+  converges to 0.7 %; at 0.1 x rated speed regenerating at the rated torque from 0.8 R2, a
+  swing with a 10 s period at 3.2 Hz on Table IV and Krause 3 hp and at 2.5 Hz on Krause
+  50 hp, 1.3 and 1.05 times the corner, above the higher injection frequency of 2.7 and
+  1.5 Hz). The speed and slip respond to an R2_hat change through the speed loop and the
+  MRAS's filtered voltage model more slowly there, and the second integrator took the phase
+  margin. A heating ramp is then followed with a lag, not zero;
 * decisions every half compensator period, each on the mean over the last whole period
   (a sliding window of two half-period sums, still whole injection periods): a measurement
   window of 0.5 s alone lets R2 move 3 % (the ramp above) before its error is seen. The

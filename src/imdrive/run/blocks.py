@@ -415,13 +415,15 @@ def _thermal(sc, D: Resolved) -> dict:
 
 
 def _drift_fmin(sc, r) -> float:
-    """Stator frequency below which the adaptive law has no drift term, Hz (0: never)."""
+    """Stator frequency below which the adaptive law has no drift term, Hz (0: never): the
+    higher injection frequency, at least 1.75 times the MRAS filter's corner (its lag 30
+    degrees there; kernels/compensator.py, the adaptive law)."""
     comp = sc.compensator
     if comp.drift_min_freq_Hz is not None:
         return comp.drift_min_freq_Hz
     if r.inj_amp <= 0.0:
         return 0.0
-    return max(r.inj_f1, r.inj_f2)
+    return max(r.inj_f1, r.inj_f2, 1.75 * sc.mras.wc_rad_s / (2.0 * math.pi))
 
 
 def fuzzy_lookup_table(sc: Scenario) -> np.ndarray:

@@ -1,0 +1,31 @@
+"""The adaptive law's drift term is off near the MRAS filter's corner (run/blocks.py
+``_drift_fmin``; kernels/compensator.py, the adaptive law).
+
+At 0.1 x rated speed, regenerating at the rated torque, from R2_hat(0) = 0.8 R2, the stator
+frequency (3.2 Hz on Krause 3 hp, 2.5 Hz on Krause 50 hp) was above the higher injection
+frequency (2.7 and 1.5 Hz), so the drift term ran, and R2_hat swung around R2 with a period of
+about 10 s: the machine envelope's runs ended -2.5 and -2.9 % off. Off below 1.75 times the
+filter's corner (4.2 Hz with wc = 15 rad/s), they end within 2 %.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from imdrive import simulate_batch
+from imdrive.studies.machines import scenarios
+
+pytestmark = pytest.mark.slow
+
+
+@pytest.mark.parametrize("machine", ["krause-3hp", "krause-50hp"])
+def test_low_frequency_regeneration_converges_without_the_drift_term(machine):
+    scs, _ = scenarios([machine], drives=["injection-robust"], speeds=[0.1], loads=[-1.0],
+                       ratios=[0.8])  # fmt: skip
+    old = scs[0].with_overrides({"compensator.drift_min_freq_Hz": 0.0})  # drift term always on
+    new, was = simulate_batch([scs[0], old]).metrics.itertuples()
+    # with the drift term on the swing is still running at the end (measured -2.5 / -2.9 %
+    # with the higher injection frequency as the bound; larger with none)
+    assert abs(was.R2_error_pct) > 2.0, was.R2_error_pct
+    assert abs(new.R2_error_pct) < 2.0, new.R2_error_pct  # measured -0.15 / -1.5 %
+    assert new.verdict == "ok", new.verdict_text
