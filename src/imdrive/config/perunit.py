@@ -28,7 +28,12 @@ per-unit key                                SI value
                                             acceleration exceeds ``0.5 / T2``
                                             (:func:`mras_ramp_lag_pu`)
 ``mras.acceleration_tracking_from_pu``      ``pu x`` the rated stator frequency
+``mras.R1_rate_pu``                         ``pu x`` the rotor corner ``R2 / L2``, 1/s
 ==========================================  ===============================================
+
+A per-unit key and its absolute twin are one setting: :data:`imdrive.config.pairs.PAIRS`
+declares every pair once, and an override of one member clears the other (see
+:mod:`imdrive.config.pairs`).
 
 ``psi_rated`` is :attr:`~imdrive.config.machine.MachineParams.rated_flux_Wb` (the no-load
 rotor flux at rated voltage and frequency) and ``psi_rated / M`` the rated magnetising
