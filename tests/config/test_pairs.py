@@ -178,6 +178,7 @@ def test_both_members_in_one_override_list_are_refused_naming_both(pair):
         ("estimator", "M_H = 0.03\nM_ratio = 1.1"),
         ("compensator", "R2_max_ohm = 2.0\nR2_max_ratio = 2.5"),
         ("mras", "R1_rate_per_s = 0.3\nR1_rate_pu = 0.02"),
+        ("mras", "R1_max_freq_Hz = 20.0\nR1_max_freq_pu = 0.4"),
     ],
 )
 def test_both_members_in_one_file_are_refused(tmp_path, section, both):

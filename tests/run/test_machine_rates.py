@@ -46,6 +46,20 @@ def test_r1_rate_in_the_old_key_replaces_the_presets_per_unit_rate():
         _robust("paper-table-iv", "mras.R1_rate_per_s=0.3", "mras.R1_rate_pu=0.02")
 
 
+@pytest.mark.parametrize(
+    "machine, f_max",
+    [("paper-table-iv", 30.0), ("krause-50hp", 30.0), ("aalto-2.2kw", 25.0), ("geyer-3.3kv", 25.0)],
+)
+def test_r1_law_bound_is_half_the_rated_frequency(machine, f_max):
+    sc = _robust(machine)
+    assert sc.machine.rated_frequency_Hz == 2.0 * f_max
+    # exactly the 30 Hz the law was measured with on Table IV (the preset baseline)
+    assert float(build_arrays(sc).params.est["R1_fmax"][0]) == f_max
+    # the absolute twin of the last release still sets it
+    sc = _robust(machine, "mras.R1_max_freq_Hz=20")
+    assert float(build_arrays(sc).params.est["R1_fmax"][0]) == 20.0
+
+
 def test_headroom_gain_is_bounded_per_injection_period():
     assert headroom_rate_per_s(1.0, 0.6, 2.0) == 1.0  # Table IV's preset: unchanged
     assert headroom_rate_per_s(1.0, 0.6, 0.15) == pytest.approx(0.09)

@@ -29,6 +29,7 @@ per-unit key                                SI value
                                             (:func:`mras_ramp_lag_pu`)
 ``mras.acceleration_tracking_from_pu``      ``pu x`` the rated stator frequency
 ``mras.R1_rate_pu``                         ``pu x`` the rotor corner ``R2 / L2``, 1/s
+``mras.R1_max_freq_pu`` (default 0.5)       ``pu x`` the rated stator frequency, Hz
 ==========================================  ===============================================
 
 A per-unit key and its absolute twin are one setting: :data:`imdrive.config.pairs.PAIRS`
