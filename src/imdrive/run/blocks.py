@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from imdrive.config.controller_model import inverter_error_half, magnetising_table
-from imdrive.config.perunit import Resolved
+from imdrive.config.perunit import Resolved, adc_range_A
 from imdrive.config.profiles import Profile
 from imdrive.config.scenario import Scenario
 from imdrive.design.gains import default_current_gains, default_speed_gains
@@ -126,7 +126,7 @@ def sensor_fields(sc: Scenario) -> dict:
         offset_b=sen.offset_b_A,
         noise_rms=sen.noise_rms_A,
         adc_bits=sen.adc_bits or 0,
-        adc_range=sen.adc_range_A,
+        adc_range=adc_range_A(sc),
         seed=sen.seed,
         vdc_gain=sen.vdc_gain,
     )
