@@ -104,6 +104,7 @@ PAIRS: tuple[Pair, ...] = (
     _pair("mras.R1_rate_per_s", "mras.R1_rate_pu", "the rotor corner R2/L2"),
     _pair("mras.R1_max_freq_Hz", "mras.R1_max_freq_pu", "the rated frequency"),
     _pair("sensor.adc_range_A", "sensor.adc_range_pu", "the rated peak current"),
+    _pair("inverter.sign_band_A", "inverter.sign_band_pu", "the rated peak current"),
     _pair(
         "smo_mras.switching_gain_rad_s",
         "smo_mras.speed_error_pu",

@@ -30,9 +30,10 @@ per-unit key                                SI value
 ``mras.acceleration_tracking_from_pu``      ``pu x`` the rated stator frequency
 ``mras.R1_rate_pu``                         ``pu x`` the rotor corner ``R2 / L2``, 1/s
 ``mras.R1_max_freq_pu`` (default 0.5)       ``pu x`` the rated stator frequency, Hz
-``sensor.adc_range_pu``                     ``pu x`` the rated peak current, A; unset (and
-                                            ``adc_range_A`` unset): Table IV's 50 A scaled
-                                            by it (:func:`adc_range_A`)
+``sensor.adc_range_pu``,                    ``pu x`` the rated peak current, A; unset (and
+``inverter.sign_band_pu``                   the absolute twin unset): Table IV's 50 A, 0.2 A
+                                            scaled by it (:func:`adc_range_A`,
+                                            :func:`sign_band_A`)
 ==========================================  ===============================================
 
 A per-unit key and its absolute twin are one setting: :data:`imdrive.config.pairs.PAIRS`
@@ -431,6 +432,20 @@ def adc_range_A(sc) -> float:
     if sen.adc_range_pu is not None:
         return sen.adc_range_pu * rated_peak_current_A(sc.machine)
     return table_iv_scaled(ADC_RANGE_TABLE_IV_A, rated_peak_current_A, sc.machine)
+
+
+def sign_band_A(sc) -> float:
+    """The current band of the dead-time error's and compensation's smooth sign, A:
+    ``inverter.sign_band_A``, ``inverter.sign_band_pu`` times the rated peak current, or by
+    default Table IV's 0.2 A scaled by it (:func:`table_iv_scaled`): the current's ripple
+    at the commutations, ``Vdc Ts / (sigma L1)``, is 0.2-0.7 of the rated peak current on
+    every library machine at 10 kHz, where in amperes it spans 2.7-274 A."""
+    inv = sc.inverter
+    if inv.sign_band_A is not None:
+        return inv.sign_band_A
+    if inv.sign_band_pu is not None:
+        return inv.sign_band_pu * rated_peak_current_A(sc.machine)
+    return table_iv_scaled(0.2, rated_peak_current_A, sc.machine)
 
 
 def divergence_current_A(sc) -> float:
