@@ -10,11 +10,14 @@ import pytest
 from imdrive.config.machine import machine_presets, rated_point
 from imdrive.config.perunit import (
     CURRENT_LIMIT_PU,
+    adc_range_A,
     current_limit_A,
     divergence_current_A,
     rated_peak_current_A,
+    sign_band_A,
 )
 from imdrive.config.scenario import Scenario
+from imdrive.errors import ConfigWarning
 
 
 def _foc_current_at_rated_torque(m) -> float:
@@ -92,3 +95,47 @@ def test_preset_times_too_short_for_the_machine_are_warned_of():
         warnings.simplefilter("error", ConfigWarning)
         Scenario.read("sensorless", [ramp])
         Scenario.read("sensorless", [ramp, "machine.preset=krause-2250hp"])
+
+
+@pytest.mark.parametrize("name", sorted(machine_presets()))
+def test_adc_full_scale_follows_the_rated_current(name):
+    sc = Scenario.read("sensorless", [f"machine.preset={name}", "sensor.adc_bits=12"])
+    I_peak = rated_peak_current_A(sc.machine)
+    I_tab4 = rated_peak_current_A(Scenario.read("sensorless").machine)
+    # Table IV's 50 A, in the same ratio to every machine's rated peak current
+    assert adc_range_A(sc) == pytest.approx(50.0 * I_peak / I_tab4, rel=1e-12)
+    assert adc_range_A(sc) / I_peak == pytest.approx(4.362, rel=1e-3)
+    assert adc_range_A(sc) > 2.9 * current_limit_A(sc)  # the limit is never clipped
+    with pytest.warns(ConfigWarning, match="replaces sensor.adc_range_A = 50"):
+        pu = sc.with_overrides(["sensor.adc_range_A=50"]).with_overrides(["sensor.adc_range_pu=3"])
+    assert adc_range_A(pu) == pytest.approx(3.0 * I_peak, rel=1e-12)
+
+
+def test_adc_full_scale_on_table_iv_is_exactly_50_A():
+    assert adc_range_A(Scenario.read("sensorless")) == 50.0
+    # the absolute key of the last release still sets it; the realistic presets state it
+    assert adc_range_A(Scenario.read("sensorless", ["sensor.adc_range_A=20"])) == 20.0
+    assert (
+        adc_range_A(Scenario.read("sensorless-realistic", ["machine.preset=krause-2250hp"])) == 50.0
+    )
+
+
+def test_sign_band_follows_the_rated_current_as_the_ripple_does():
+    assert sign_band_A(Scenario.read("sensorless")) == 0.2  # Table IV: exactly as before
+    ripple_pu, ripple_A = [], []
+    for name in sorted(machine_presets()):
+        sc = Scenario.read("sensorless", [f"machine.preset={name}"])
+        m, I_peak = sc.machine, rated_peak_current_A(sc.machine)
+        assert sign_band_A(sc) / I_peak == pytest.approx(0.2 / 11.4629, rel=1e-4)
+        ripple = sc.inverter.Vdc_V * sc.simulation.Ts_s / (m.sigma * (m.Ll1_H + m.M_H))
+        ripple_A.append(ripple)
+        ripple_pu.append(ripple / I_peak)
+    # the commutation ripple the band stands for: a few tenths of the rated current on every
+    # machine, where in amperes it spans two decades
+    assert 0.2 < min(ripple_pu) and max(ripple_pu) < 0.7
+    assert 2.5 < min(ripple_A) and max(ripple_A) > 270.0
+    sc = Scenario.read("sensorless", ["inverter.sign_band_pu=0.05"])
+    assert sign_band_A(sc) == pytest.approx(0.05 * rated_peak_current_A(sc.machine))
+    with pytest.warns(ConfigWarning, match="replaces inverter.sign_band_A = 0.2"):
+        sc = Scenario.read("sensorless-realistic").with_overrides(["inverter.sign_band_pu=0.05"])
+    assert sc.inverter.sign_band_A is None

@@ -27,6 +27,7 @@ import sys
 
 import numpy as np
 
+from imdrive.config.perunit import sign_band_A
 from imdrive.config.scenario import Scenario
 
 #: The no-load test's flux levels, per unit of the rated flux.
@@ -70,7 +71,7 @@ def ideal_commissioning(sc: Scenario, flux_pu=FLUX_PU) -> dict[str, list[float]]
         out["magnetising_Lm_H"] = [float(f"{v:.6g}") for v in plant_secant_inductance(sc, psi)]
     u = plant_inverter_error(sc)
     if u > 0.0:
-        band = sc.inverter.sign_band_A
+        band = sign_band_A(sc)
         i_top = 2.0 * sc.control.current_limit_A if sc.control.current_limit_A else 0.0
         i_top = max(i_top, 4.0 * sc.machine.rated_current_A, 2.0 * band)
         out["inverter_error_i_A"] = [0.0, float(f"{band:.6g}"), float(f"{i_top:.6g}")]

@@ -23,6 +23,7 @@ import annotated_types
 
 from imdrive.config.estimators import package_sections
 from imdrive.config.machine import machine_preset, machine_presets
+from imdrive.config.pairs import PAIRS
 from imdrive.config.perunit import (
     CURRENT_LIMIT_PU,
     DIVERGENCE_CURRENT_PU,
@@ -80,6 +81,38 @@ _RAMP_EXAMPLE = (
     "speed_ref_rpm = { initial = 0, changes = "
     "[{ at = 0.5, to = 1000, over = 1.0 }, { at = 3, to = 500 }] }"
 )
+
+_PAIRS_INTRO = """
+## Absolute and per-unit pairs
+
+Some settings can be given as an absolute value or in per-unit of the machine (the per-unit
+key keeps a preset tuned when `[machine]` changes; `src/imdrive/config/perunit.py` turns it
+into the SI value). A scenario is read in layers: the preset or file, then the overrides on
+top (`--set`, a sweep's `[set]` on its `base`, a sweep axis, `Scenario.with_overrides`). An
+override of one member of a pair clears the other member the layer underneath carries, with
+a one-line note (`imdrive: warning: mras.R1_rate_per_s: replaces mras.R1_rate_pu = 0.02621 of
+the scenario underneath`), so a key of an older release still works on a preset written in
+per-unit. Both members in one layer (one file, or one list of overrides) are refused, naming
+both (exit code 2); where the table says which member is used, both still run that way, with a
+warning that it is deprecated. The injection frequencies switch units together: an override
+of any one of them clears every one of the other unit.
+
+| absolute | per-unit | per-unit of | both in one layer |
+|---|---|---|---|
+"""
+
+
+def _pairs_section() -> list[str]:
+    """The table of the absolute / per-unit pairs (:data:`imdrive.config.pairs.PAIRS`)."""
+    rows = []
+    for p in PAIRS:
+        both = "refused" if p.both == "error" else f"`{getattr(p, p.both)[0]}` used (deprecated)"
+        rows.append(
+            f"| {', '.join(f'`{k}`' for k in p.absolute)} "
+            f"| {', '.join(f'`{k}`' for k in p.per_unit)} | {p.base} | {both} |"
+        )
+    return [_PAIRS_INTRO.rstrip("\n"), *rows]
+
 
 _OUTRO = """
 ## JSON Schema
@@ -263,6 +296,7 @@ def markdown() -> str:
                 f"`{DEFAULT_MACHINE_PRESET}`."
             )
         out += _table(f"`[{table.dotted}]`", intro, members, machine)
+    out += _pairs_section()
     out.append(_OUTRO)
     return "\n".join(out).rstrip("\n") + "\n"
 

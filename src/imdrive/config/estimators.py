@@ -403,13 +403,24 @@ class MrasSettings:
         ),
     ] = False
     R1_max_freq_Hz: Annotated[
-        Float,
+        Float | None,
         setting(
-            "online R1 estimation runs below this stator frequency (and in motoring only)",
+            "online R1 estimation runs below this stator frequency (and in motoring only); "
+            "the absolute twin of R1_max_freq_pu",
             "Hz",
             gt=0.0,
+            default_doc="R1_max_freq_pu × the rated frequency",
         ),
-    ] = 30.0
+    ] = None
+    R1_max_freq_pu: Annotated[
+        Float,
+        setting(
+            "online R1 estimation runs below this stator frequency, per-unit of the machine's "
+            "rated frequency (0.5: 30 Hz on Table IV, the bound the law was measured with; "
+            "unless R1_max_freq_Hz is set)",
+            gt=0.0,
+        ),
+    ] = 0.5
     period_mean_current: PeriodMeanCurrent = True
     acceleration_tracking: Annotated[
         Bool | None,
@@ -460,7 +471,9 @@ class MrasSettings:
         K2 = self.K2 if self.K2 is not None else K2
         normalise = self.normalise if self.normalise is not None else sc.control.field_weakening
         if self.R1_rate_pu is not None and self.R1_rate_per_s != 0.0:
-            raise ConfigError("mras.R1_rate_pu", "set mras.R1_rate_per_s or this, not both")
+            raise ConfigError(
+                "mras.R1_rate_pu", "set mras.R1_rate_per_s or mras.R1_rate_pu, not both"
+            )
         k_R1 = self.R1_rate_per_s if self.R1_rate_pu is None else self.R1_rate_pu / sc.machine.T2_s
         params = dict(
             wc=self.wc_rad_s,
@@ -469,7 +482,7 @@ class MrasSettings:
             b2=b2,
             b2_wmin=self.acceleration_tracking_from_pu * 2 * math.pi * f_rated,
             k_R1=k_R1,
-            R1_fmax=self.R1_max_freq_Hz,
+            R1_fmax=r1_max_freq_Hz(self, f_rated),
             R1_min=0.5 * ctx.R1_hat,
             R1_max=2.0 * ctx.R1_hat,
             psi2_norm=ctx.psi0 * ctx.psi0 if normalise else 0.0,
@@ -492,6 +505,15 @@ class MrasSettings:
             derived["mras_b2"] = b2
             src["mras_b2"] = "mras.bandwidth_Hz"
         return EstimatorRecords(params, derived=derived, sources=src)
+
+
+def r1_max_freq_Hz(mras: MrasSettings, f_rated: float) -> float:
+    """The online R1 law's upper stator-frequency bound, Hz: ``mras.R1_max_freq_Hz``, or
+    ``mras.R1_max_freq_pu`` times the machine's rated frequency ``f_rated`` (Hz): 30 Hz on
+    Table IV and the 60 Hz Krause machines, 25 Hz on the 50 Hz ones."""
+    if mras.R1_max_freq_Hz is not None:
+        return mras.R1_max_freq_Hz
+    return mras.R1_max_freq_pu * f_rated
 
 
 def mras_type2(sc, mras: MrasSettings, T2_hat: float) -> bool:

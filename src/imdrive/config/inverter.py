@@ -77,14 +77,25 @@ class InverterParams:
         Float, setting("forward voltage drop of the conducting switch or diode", "V", ge=0.0)
     ] = 0.0
     sign_band_A: Annotated[
-        Float,
+        Float | None,
         setting(
             "current band over which the averaged dead-time error (average model) and the "
-            "dead-time compensation change sign linearly",
+            "dead-time compensation change sign linearly; the absolute twin of sign_band_pu",
             "A",
             gt=0.0,
+            default_doc="Table IV's 0.2 A scaled by the machine's rated peak current "
+            "(0.0174 × it; config/perunit.py sign_band_A)",
         ),
-    ] = 0.2
+    ] = None
+    sign_band_pu: Annotated[
+        Float | None,
+        setting(
+            "sign_band_A in per-unit of the machine's rated peak current (instead of "
+            "sign_band_A; config/perunit.py sign_band_A)",
+            gt=0.0,
+            default_doc="unset: sign_band_A",
+        ),
+    ] = None
 
     @model_validator(mode="after")
     def _dead_time_fits(self):

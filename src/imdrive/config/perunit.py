@@ -31,7 +31,17 @@ per-unit key                                SI value
                                             rated speed with field weakening on
                                             (:func:`mras_type2_for_field_weakening`)
 ``mras.acceleration_tracking_from_pu``      ``pu x`` the rated stator frequency
+``mras.R1_rate_pu``                         ``pu x`` the rotor corner ``R2 / L2``, 1/s
+``mras.R1_max_freq_pu`` (default 0.5)       ``pu x`` the rated stator frequency, Hz
+``sensor.adc_range_pu``,                    ``pu x`` the rated peak current, A; unset (and
+``inverter.sign_band_pu``                   the absolute twin unset): Table IV's 50 A, 0.2 A
+                                            scaled by it (:func:`adc_range_A`,
+                                            :func:`sign_band_A`)
 ==========================================  ===============================================
+
+A per-unit key and its absolute twin are one setting: :data:`imdrive.config.pairs.PAIRS`
+declares every pair once, and an override of one member clears the other (see
+:mod:`imdrive.config.pairs`).
 
 ``psi_rated`` is :attr:`~imdrive.config.machine.MachineParams.rated_flux_Wb` (the no-load
 rotor flux at rated voltage and frequency) and ``psi_rated / M`` the rated magnetising
@@ -389,6 +399,56 @@ def current_limit_A(sc) -> float:
     """
     given = sc.control.current_limit_A
     return given if given is not None else CURRENT_LIMIT_PU * rated_peak_current_A(sc.machine)
+
+
+def table_iv_scaled(value: float, base, machine) -> float:
+    """A default first set in SI on the Table IV machine, scaled to ``machine``:
+    ``value x base(machine) / base(Table IV)``, exactly ``value`` on Table IV.
+
+    Parameters
+    ----------
+    value : float
+        The default on Table IV, SI.
+    base : callable
+        The machine's quantity the setting scales with (``rated_peak_current_A``).
+    machine : MachineParams
+        The scenario's machine.
+    """
+    from imdrive.config.machine import machine_preset
+
+    return value * (base(machine) / base(machine_preset("paper-table-iv")))
+
+
+#: the current sensors' ADC full scale on Table IV, A (:func:`adc_range_A`)
+ADC_RANGE_TABLE_IV_A = 50.0
+
+
+def adc_range_A(sc) -> float:
+    """The current sensors' ADC full scale (±), A: ``sensor.adc_range_A``, ``sensor.adc_range_pu``
+    times the rated peak current (:func:`rated_peak_current_A`), or by default Table IV's
+    50 A scaled by the machine's rated peak current (:func:`table_iv_scaled`; 4.36 times it,
+    2.9 times the default current limit on every machine; a fixed 50 A was below the rated
+    peak current of the 500 hp, 2250 hp and 3.3 kV machines: 149, 650 and 503 A)."""
+    sen = sc.sensor
+    if sen.adc_range_A is not None:
+        return sen.adc_range_A
+    if sen.adc_range_pu is not None:
+        return sen.adc_range_pu * rated_peak_current_A(sc.machine)
+    return table_iv_scaled(ADC_RANGE_TABLE_IV_A, rated_peak_current_A, sc.machine)
+
+
+def sign_band_A(sc) -> float:
+    """The current band of the dead-time error's and compensation's smooth sign, A:
+    ``inverter.sign_band_A``, ``inverter.sign_band_pu`` times the rated peak current, or by
+    default Table IV's 0.2 A scaled by it (:func:`table_iv_scaled`): the current's ripple
+    at the commutations, ``Vdc Ts / (sigma L1)``, is 0.2-0.7 of the rated peak current on
+    every library machine at 10 kHz, where in amperes it spans 2.7-274 A."""
+    inv = sc.inverter
+    if inv.sign_band_A is not None:
+        return inv.sign_band_A
+    if inv.sign_band_pu is not None:
+        return inv.sign_band_pu * rated_peak_current_A(sc.machine)
+    return table_iv_scaled(0.2, rated_peak_current_A, sc.machine)
 
 
 def divergence_current_A(sc) -> float:

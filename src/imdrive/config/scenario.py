@@ -82,6 +82,7 @@ from imdrive.config.overrides import (  # noqa: F401  (the private ones: re-expo
     setting_paths,
     table_paths,
 )
+from imdrive.config.pairs import apply_overrides, check_pairs, set_layer
 from imdrive.config.perunit import resolve
 from imdrive.config.plant import (  # noqa: F401  (C and the profile types: re-exports)
     C,
@@ -307,6 +308,7 @@ class Scenario:
 
     def _rules_between_sections(self):
         self._machine_defaults()
+        check_pairs(self)  # before the per-unit values are resolved
         est, m = self.estimator, self.machine
         if (est.Ll1_H, est.Ll2_H, est.M_H) != (None, None, None):  # the controller's model
             given = [k for k in ("M_H", "Ll1_H", "Ll2_H") if getattr(est, k) is not None]
@@ -430,8 +432,7 @@ class Scenario:
             raise ConfigError("text", f"must be the TOML text (a str), got {type(text).__name__}")
         data = parse_toml(text, "scenario")
         resolve_machine_file(data, base_dir)
-        for ov in overrides:
-            apply_override(data, ov)
+        apply_overrides(data, overrides)  # one layer on the file (config/pairs.py)
         return cls.from_dict(data)
 
     @classmethod
@@ -485,8 +486,7 @@ class Scenario:
         if not isinstance(data, dict) or not isinstance(data.get("scenario"), dict):
             raise ConfigError("scenario", f'{path} holds no "scenario" table (a summary.json)')
         data = data["scenario"]
-        for ov in overrides:
-            apply_override(data, ov)
+        apply_overrides(data, overrides)
         return cls.from_dict(data)
 
     def with_(self, **changes) -> Scenario:
@@ -550,10 +550,7 @@ class Scenario:
                 for k, v in data["machine"].items()
                 if k == "preset" or k not in base or base[k] != v
             }
-        for parts, value in items:
-            if parts[0] == "machine" and parts[-1] != "preset":
-                data.setdefault("machine", {})
-            set_path(data, parts, value)
+        set_layer(data, items, "the overrides")  # a pair's other member is cleared
         return Scenario.from_dict(data)
 
     # -- export ----------------------------------------------------------------------------

@@ -30,8 +30,24 @@ class SensorSettings:
         setting("ADC resolution of the current sensors", "bit", ge=2, le=32, default_doc="none"),
     ] = None
     adc_range_A: Annotated[
-        Float, setting("ADC full scale of the current sensors (±)", "A", gt=0.0)
-    ] = 50.0
+        Float | None,
+        setting(
+            "ADC full scale of the current sensors (±); the absolute twin of adc_range_pu",
+            "A",
+            gt=0.0,
+            default_doc="Table IV's 50 A scaled by the machine's rated peak current "
+            "(4.36 × it; config/perunit.py adc_range_A)",
+        ),
+    ] = None
+    adc_range_pu: Annotated[
+        Float | None,
+        setting(
+            "ADC full scale of the current sensors (±) in per-unit of the machine's rated peak "
+            "current (instead of adc_range_A)",
+            gt=0.0,
+            default_doc="unset: adc_range_A",
+        ),
+    ] = None
     seed: Annotated[
         Int,
         setting(

@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from imdrive.config.controller_model import inverter_error_half, magnetising_table
-from imdrive.config.perunit import Resolved
+from imdrive.config.perunit import Resolved, adc_range_A, sign_band_A
 from imdrive.config.profiles import Profile
 from imdrive.config.scenario import Scenario
 from imdrive.design.gains import default_current_gains, default_speed_gains
@@ -109,7 +109,7 @@ def inverter_fields(sc: Scenario) -> dict:
         model=INVERTER_CODES[inv.model],
         t_d=inv.dead_time_s,
         v_drop=inv.device_drop_V,
-        i_band=inv.sign_band_A,
+        i_band=sign_band_A(sc),
         f_sw=inv.switching_frequency_Hz,
     )
 
@@ -126,7 +126,7 @@ def sensor_fields(sc: Scenario) -> dict:
         offset_b=sen.offset_b_A,
         noise_rms=sen.noise_rms_A,
         adc_bits=sen.adc_bits or 0,
-        adc_range=sen.adc_range_A,
+        adc_range=adc_range_A(sc),
         seed=sen.seed,
         vdc_gain=sen.vdc_gain,
     )
@@ -235,7 +235,7 @@ def control_fields(sc: Scenario, D: Resolved, mh: dict, psi0: float) -> tuple[di
             if ctl.dead_time_compensation == "feedforward"
             else 0.0
         ),
-        dtc_band=inv.sign_band_A,
+        dtc_band=sign_band_A(sc),
         # the switching bridge's dead-time loss has the shape of the current's ripple at the
         # commutations; the compensation follows it (kernels/ifoc.py, commutation_ripple)
         dtc_ripple=(

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from imdrive.config.overrides import set_path
+from imdrive.config.pairs import set_layer
 from imdrive.config.profiles import Profile
 from imdrive.config.scenario import Scenario
 from imdrive.errors import ConfigError
@@ -349,7 +349,7 @@ def _apply(sc: Scenario, parts: tuple[str, ...], value) -> Scenario:
     data = sc.to_dict()
     if tuple(parts) == ("machine", "preset"):
         data["machine"] = {}
-    set_path(data, parts, value)
+    set_layer(data, [(tuple(parts), value)], "the sweep axis")
     return Scenario.from_dict(data)
 
 
@@ -449,13 +449,11 @@ def _overridden(sweep: Sweep, point: dict) -> Scenario:
     sc = sweep._scenarios.get(key)
     if sc is None:
         data = copy.deepcopy(sweep.base_data)
-        for a in axes:
-            if a.kind == "sets":
-                for parts, value in a.sets[point[a.name]]:
-                    set_path(data, parts, value)
-        for a in axes:
-            if a.kind == "path":
-                set_path(data, a.path, point[a.name])
+        # the point's overrides are one layer on the base: an axis over one member of a pair
+        # clears the other in the base (config/pairs.py), two axes setting both are refused
+        items = [pv for a in axes if a.kind == "sets" for pv in a.sets[point[a.name]]]
+        items += [(a.path, point[a.name]) for a in axes if a.kind == "path"]
+        set_layer(data, items, "the sweep's axes")
         sc = Scenario.from_dict(data)
         if len(sweep._scenarios) >= _CACHE_MAX:
             sweep._scenarios.clear()

@@ -12,7 +12,7 @@ Every run's scenario is built and validated when the sweep is read, so bad input
 Notes
 -----
 A run's scenario goes through the same override mechanism as ``imdrive run --set``
-(:func:`imdrive.config.overrides.set_path` on the base's TOML dictionary, then
+(:func:`imdrive.config.pairs.set_layer` on the base's TOML dictionary, then
 :meth:`Scenario.from_dict <imdrive.config.scenario.Scenario.from_dict>`); only the convenience
 axes ``R2_ratio``, ``R1_ratio``, ``speed_rpm`` and ``load_Nm`` then replace fields of the
 validated scenario.
@@ -30,7 +30,8 @@ from pathlib import Path
 
 import numpy as np
 
-from imdrive.config.overrides import parse_toml, set_path
+from imdrive.config.overrides import parse_toml
+from imdrive.config.pairs import set_layer
 from imdrive.config.presets import scenario_text
 from imdrive.config.scenario import Scenario
 from imdrive.config.validation import check_name, slug
@@ -212,8 +213,7 @@ def _base_data(data: dict, folder: Path | None) -> dict:
     sets = data.get("set", {})
     if not isinstance(sets, dict):
         raise ConfigError("set", "must be a table of scenario keys")
-    for parts, value in _flatten(sets, "set"):
-        set_path(base_data, parts, value)
+    set_layer(base_data, _flatten(sets, "set"), "[set]")  # one layer on the base (pairs)
     return base_data
 
 

@@ -1,0 +1,241 @@
+"""Settings given either as an absolute value or in per-unit of the machine: the pairs, and
+how an override of one member treats the other.
+
+Several settings exist twice, an absolute key and its per-unit twin (``estimator.R2_ohm`` and
+``estimator.R2_ratio``, ``mras.R1_rate_per_s`` and ``mras.R1_rate_pu``, ...): both say the same
+thing, and the per-unit one follows the machine (:mod:`imdrive.config.perunit` turns it into
+the SI value). :data:`PAIRS` declares every such pair once.
+
+A scenario is built in layers: a preset or scenario file, then the overrides on top of it
+(``imdrive run --set``, a sweep's ``[set]`` table on its ``base``, a sweep axis,
+:meth:`~imdrive.config.scenario.Scenario.with_overrides`). When an override sets one member
+of a pair while the layer underneath carries the other, the other is cleared (it takes its
+default) and a :class:`~imdrive.errors.ConfigWarning` says which key replaced which
+(:func:`set_layer`): ``--set mras.R1_rate_per_s=0.5`` on a preset that states
+``mras.R1_rate_pu`` runs at 0.5 /s. Both members set in one layer (one file, one list of
+overrides) are refused with a :class:`~imdrive.errors.ConfigError` naming both
+(:func:`check_pairs`); for the pairs whose per-unit member was documented to replace the
+absolute one, that still works, with a warning that it is deprecated.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import warnings
+from dataclasses import dataclass
+from typing import Literal
+
+from imdrive.config.overrides import dotted, parse_override, scenario_keys, set_path
+from imdrive.errors import ConfigError, ConfigWarning
+
+__all__ = ["PAIRS", "Pair", "apply_overrides", "check_pairs", "pair_of", "set_layer"]
+
+
+@dataclass(frozen=True)
+class Pair:
+    """One setting stated as an absolute value or in per-unit of the machine.
+
+    Attributes
+    ----------
+    absolute : tuple of str
+        The absolute key(s), dotted (``("estimator.R2_ohm",)``). A group of keys (the injection
+        frequencies) is one setting: an override of any member clears every member of the
+        other group.
+    per_unit : tuple of str
+        The per-unit twin(s), in the same order.
+    base : str
+        What the per-unit value multiplies (for the docs).
+    both : {"error", "per_unit", "absolute"}
+        Both set in one layer: ``"error"`` refuses it; ``"per_unit"`` / ``"absolute"`` names
+        the member the run then uses, as documented before the pairs were declared
+        (deprecated: a warning says so).
+    """
+
+    absolute: tuple[str, ...]
+    per_unit: tuple[str, ...]
+    base: str
+    both: Literal["error", "per_unit", "absolute"] = "error"
+
+    @property
+    def keys(self) -> tuple[str, ...]:
+        return self.absolute + self.per_unit
+
+    def twins(self, key: str) -> tuple[str, ...]:
+        """The keys an override of ``key`` clears (the other group)."""
+        return self.per_unit if key in self.absolute else self.absolute
+
+
+def _pair(absolute: str, per_unit: str, base: str, both: str = "error") -> Pair:
+    return Pair((absolute,), (per_unit,), base, both)
+
+
+_IN_F = "injection.frequency"
+#: Every absolute / per-unit pair of the scenario file.
+PAIRS: tuple[Pair, ...] = (
+    _pair("estimator.R1_ohm", "estimator.R1_ratio", "the plant's R1"),
+    _pair("estimator.R2_ohm", "estimator.R2_ratio", "the plant's R2"),
+    _pair("estimator.M_H", "estimator.M_ratio", "the plant's M"),
+    _pair("compensator.R2_min_ohm", "compensator.R2_min_ratio", "the initial R̂2"),
+    _pair("compensator.R2_max_ohm", "compensator.R2_max_ratio", "the initial R̂2"),
+    _pair("compensator.G_CR_ohm", "compensator.G_CR_pu", "the initial R̂2", "per_unit"),
+    _pair("compensator.gain_E_per_Wb", "compensator.gain_E_pu", "1/ψ_rated", "per_unit"),
+    _pair("compensator.gain_DE_per_Wb", "compensator.gain_DE_pu", "1/ψ_rated", "per_unit"),
+    _pair(
+        "compensator.gate_band_Hz",
+        "compensator.gate_band_pu",
+        "the first injection frequency",
+        "per_unit",
+    ),
+    _pair(
+        "compensator.gate_speed_rpm",
+        "compensator.gate_speed_pu",
+        "the rated slip speed",
+        "per_unit",
+    ),
+    _pair("compensator.gate_iq_A", "compensator.gate_iq_pu", "the rated current", "per_unit"),
+    _pair("injection.amplitude_A", "injection.amplitude_pu", "ψ_rated / M", "per_unit"),
+    Pair(
+        (f"{_IN_F}_Hz", f"{_IN_F}2_Hz", f"{_IN_F}3_Hz"),
+        (f"{_IN_F}_pu", f"{_IN_F}2_pu", f"{_IN_F}3_pu"),
+        "the rotor corner R̂2/(2π L̂2)",
+        "per_unit",
+    ),
+    _pair("mras.R1_rate_per_s", "mras.R1_rate_pu", "the rotor corner R2/L2"),
+    _pair("mras.R1_max_freq_Hz", "mras.R1_max_freq_pu", "the rated frequency"),
+    _pair("sensor.adc_range_A", "sensor.adc_range_pu", "the rated peak current"),
+    _pair("inverter.sign_band_A", "inverter.sign_band_pu", "the rated peak current"),
+    _pair(
+        "smo_mras.switching_gain_rad_s",
+        "smo_mras.speed_error_pu",
+        "2π × the rated frequency",
+        "absolute",
+    ),
+)
+
+
+@functools.cache
+def _by_key() -> dict[str, Pair]:
+    return {k: p for p in PAIRS for k in p.keys}
+
+
+def pair_of(key: str) -> Pair | None:
+    """The pair dotted ``key`` belongs to, or None."""
+    return _by_key().get(key)
+
+
+@functools.cache
+def _default(key: str):
+    k = next(k for k in scenario_keys() if k.dotted == key)
+    return None if k.default is dataclasses.MISSING else k.default
+
+
+def _is_set(key: str, value) -> bool:
+    """Whether ``value`` states ``key``: given and not its default (an absolute key whose
+    default is a number, ``mras.R1_rate_per_s = 0``, is unset at that number)."""
+    return value is not None and value != _default(key)
+
+
+def _section(data: dict, key: str) -> tuple[dict | None, str]:
+    *head, name = key.split(".")
+    node = data
+    for p in head:
+        node = node.get(p) if isinstance(node, dict) else None
+    return (node if isinstance(node, dict) else None), name
+
+
+def _check_layer(items: list[tuple[str, object]], where: str) -> None:
+    """Both members of a pair stated in one layer of overrides: refused (or, for a pair whose
+    ``both`` names a member, warned and left to :func:`check_pairs`)."""
+    given = {k for k, v in items if pair_of(k) is not None and v is not None}
+    for p in PAIRS:
+        a = [k for k in p.absolute if k in given and _is_set(k, dict(items)[k])]
+        u = [k for k in p.per_unit if k in given and _is_set(k, dict(items)[k])]
+        if a and u and p.both == "error":
+            raise ConfigError(u[0], f"set {a[0]} or {u[0]}, not both (both in {where})")
+
+
+def set_layer(data: dict, items, where: str = "the overrides") -> None:
+    """Set one layer of overrides on a TOML-shaped scenario dictionary.
+
+    Each ``(path, value)`` goes through :func:`~imdrive.config.overrides.set_path`; a member of
+    a pair (:data:`PAIRS`) set to a value clears the other member(s) from ``data`` unless this
+    layer sets them too, with a :class:`ConfigWarning` naming both when the cleared one was
+    stated.
+
+    Parameters
+    ----------
+    data : dict
+        The scenario's tables (changed in place).
+    items : iterable of (tuple, object)
+        Paths (as :func:`~imdrive.config.overrides.parse_override` returns them) and values.
+    where : str
+        What the layer is, for the message (``"--set"``, ``"[set]"``).
+
+    Raises
+    ------
+    ConfigError
+        Both members of a pair stated in this layer (naming both).
+    """
+    items = list(items)
+    keys = [(dotted(parts), value) for parts, value in items]
+    _check_layer(keys, where)
+    here = {k for k, _ in keys}
+    for (parts, value), (key, _) in zip(items, keys, strict=True):
+        set_path(data, parts, value)
+        pair = pair_of(key)
+        if pair is None or value is None:
+            continue
+        for twin in pair.twins(key):
+            node, name = _section(data, twin)
+            if twin in here or node is None or name not in node:
+                continue
+            old = node.pop(name)
+            if _is_set(twin, old):
+                warnings.warn(
+                    ConfigWarning(key, f"replaces {twin} = {old!r} of the scenario underneath"),
+                    stacklevel=2,
+                )
+
+
+def apply_overrides(data: dict, overrides, where: str = "--set") -> None:
+    """Apply a list of ``key.path=value`` strings as one layer (:func:`set_layer`)."""
+    set_layer(data, [parse_override(ov) for ov in overrides], where)
+
+
+def _value(sc, key: str):
+    node = sc
+    for p in key.split("."):
+        node = getattr(node, p)
+    return node
+
+
+def check_pairs(sc) -> None:
+    """Refuse a scenario that states both members of a pair (:data:`PAIRS`), naming both; a
+    pair whose ``both`` names the member used is warned about (deprecated).
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+
+    Raises
+    ------
+    ConfigError
+        Both members of a strict pair stated.
+    """
+    for p in PAIRS:
+        a = [k for k in p.absolute if _is_set(k, _value(sc, k))]
+        u = [k for k in p.per_unit if _is_set(k, _value(sc, k))]
+        if not (a and u):
+            continue
+        if p.both == "error":
+            raise ConfigError(u[0], f"set {a[0]} or {u[0]}, not both")
+        used = u[0] if p.both == "per_unit" else a[0]
+        warnings.warn(
+            ConfigWarning(
+                u[0],
+                f"{a[0]} and {u[0]} both set: {used} is used (deprecated: set one of them)",
+            ),
+            stacklevel=4,
+        )
