@@ -1,5 +1,5 @@
 """The type-2 MRAS adaptation by default when the drive goes into field weakening
-(config/perunit.py ``mras_type2_for_field_weakening``).
+(config/mras_type.py ``mras_type2_for_field_weakening``).
 
 Accelerating in field weakening at the current limit, the slip per-unit of the rotor's corner
 frequency ``x = M iq / psi`` rises as the flux falls, and the type-1 loop's low-frequency gain

@@ -429,7 +429,7 @@ class MrasSettings:
             "constant acceleration without lag (its corner from bandwidth_Hz; "
             "design/gains.py mras_type2_gains)",
             default_doc="on when the type-1 lag at the machine's rated acceleration exceeds "
-            "half the rotor's corner frequency 1/T2 (config/perunit.py mras_ramp_lag_pu), and "
+            "half the rotor's corner frequency 1/T2 (config/mras_type.py mras_ramp_lag_pu), and "
             "when the speed reference goes above 1.1 x the rated speed with field weakening on "
             "(mras_type2_for_field_weakening)",
         ),
@@ -519,10 +519,10 @@ def r1_max_freq_Hz(mras: MrasSettings, f_rated: float) -> float:
 def mras_type2(sc, mras: MrasSettings, T2_hat: float) -> bool:
     """Whether the MRAS of scenario ``sc`` runs the type-2 adaptation: ``acceleration_tracking``
     as set, or by default when the speed reference takes the drive into field weakening
-    (:func:`imdrive.config.perunit.mras_type2_for_field_weakening`) or when
-    :func:`imdrive.config.perunit.mras_ramp_lag_pu` exceeds
-    :data:`imdrive.config.perunit.MRAS_RAMP_LAG_MAX_PU`."""
-    from imdrive.config.perunit import (
+    (:func:`imdrive.config.mras_type.mras_type2_for_field_weakening`) or when
+    :func:`imdrive.config.mras_type.mras_ramp_lag_pu` exceeds
+    :data:`imdrive.config.mras_type.MRAS_RAMP_LAG_MAX_PU`."""
+    from imdrive.config.mras_type import (
         MRAS_RAMP_LAG_MAX_PU,
         mras_ramp_lag_pu,
         mras_type2_for_field_weakening,
