@@ -338,7 +338,7 @@ def detuning_speed_error_rpm(
         phase) it holds, V (``control.field_weakening_voltage`` times ``Vdc/sqrt 3``). The
         flux is then :func:`field_weakened_flux_Wb`'s, not ``flux_ref_Wb``. Default: none.
     flux_min_pu : float
-        The field weakening's lowest flux factor (``control.field_weakening_min``).
+        The field weakening's lowest flux factor, dimensionless (``control.field_weakening_min``).
 
     Returns
     -------

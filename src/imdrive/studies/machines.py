@@ -213,8 +213,9 @@ def detuning_law_rpm(sc, speed_rpm: float, load_Nm: float, R2_ratio: float) -> f
 
     The MRAS detuning law ``slip (R2_hat/R2 - 1)`` (:func:`imdrive.analysis.foc`) at the flux
     the drive runs (:func:`law_flux_Wb`). The slip grows as ``1/psi_r^2``: at rated speed and
-    torque the field weakening settles at 0.80-0.93 of the rated flux on the Aalto machine,
-    Krause 500 hp and the 3.3 kV machine, and the law is 1.2-1.6 times the rated-flux one.
+    the rated torque the field weakening settles at 0.80-0.88 of the rated flux motoring,
+    0.89-0.93 regenerating on the three large machines, and the law is up to 1.56 times the
+    rated-flux one (the Aalto machine, motoring).
     """
     psi = law_flux_Wb(sc, speed_rpm, load_Nm, R2_ratio)
     return float(detuning_speed_error_rpm(sc.machine, speed_rpm, load_Nm, R2_ratio, psi))
