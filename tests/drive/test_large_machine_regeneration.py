@@ -7,8 +7,10 @@ and the linearised drive is stable at half speed. The rated regenerating load st
 accelerates the machine before the speed loop answers; the type-1 estimate lags, the field
 orientation runs at too large a slip, the flux falls, the torque per ampere with it, the
 torque current reaches its limit and the load runs the machine away. The type-2 MRAS holds.
-On the 3.3 kV machine at rated speed the loss that is left is the inverter's voltage: the
-DC link of sqrt(2) x V_rated leaves no margin for the current loops at the step.
+On the 3.3 kV machine at rated speed the loss that is left without field weakening is the
+inverter's voltage: the DC link of sqrt(2) x V_rated leaves no margin for the current loops at
+the step; the voltage-feedback field weakening of the envelope's sensorless drive holds it
+(tests/drive/test_sensorless_voltage_limit.py).
 """
 
 from __future__ import annotations
@@ -66,6 +68,8 @@ def test_half_speed_regeneration_is_lost_by_the_type_1_lag_and_held_by_type_2(ma
 
 @pytest.mark.slow
 def test_rated_speed_regeneration_of_the_3_3_kv_machine_needs_voltage_margin():
+    """Without field weakening: lost at the DC link of sqrt(2) x V_rated, held 10 % above it;
+    with the field weakening (the envelope's sensorless drive) held at sqrt(2) x V_rated."""
     from imdrive.config.perunit import resolve
     from imdrive.config.scenario import Scenario
 
@@ -73,6 +77,10 @@ def test_rated_speed_regeneration_of_the_3_3_kv_machine_needs_voltage_margin():
         warnings.simplefilter("ignore", ConfigWarning)
         base = Scenario.read("sensorless", ['machine.preset="geyer-3.3kv"'])
     vdc = resolve(base).v_max_V * 3**0.5
-    lost, _ = _regenerating_run("geyer-3.3kv", 1.0, 1.2)
-    lost_margin, _ = _regenerating_run("geyer-3.3kv", 1.0, 1.2, [f"inverter.Vdc_V={1.1 * vdc}"])
-    assert lost and not lost_margin
+    bare = "control.field_weakening=false"
+    lost, _ = _regenerating_run("geyer-3.3kv", 1.0, 1.2, [bare])
+    lost_margin, _ = _regenerating_run(
+        "geyer-3.3kv", 1.0, 1.2, [bare, f"inverter.Vdc_V={1.1 * vdc}"]
+    )
+    lost_fw, _ = _regenerating_run("geyer-3.3kv", 1.0, 1.2)
+    assert lost and not lost_margin and not lost_fw

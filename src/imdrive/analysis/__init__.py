@@ -42,6 +42,7 @@ from imdrive.analysis.figures import plot_speed_error_vs_R2
 from imdrive.analysis.foc import (
     FOCOperatingPoint,
     detuning_speed_error_rpm,
+    field_weakened_flux_Wb,
     foc_operating_point,
 )
 from imdrive.analysis.nameplate import (
@@ -59,6 +60,7 @@ __all__ = [
     "breakdown_thevenin",
     "foc_operating_point",
     "detuning_speed_error_rpm",
+    "field_weakened_flux_Wb",
     "plot_speed_error_vs_R2",
     "Nameplate",
     "NameplateFit",

@@ -63,7 +63,12 @@ from imdrive.analysis.circuit import _RPM_PER_RAD_S, _scalar_or_array
 from imdrive.config.machine import MachineParams
 from imdrive.errors import ConfigError
 
-__all__ = ["FOCOperatingPoint", "foc_operating_point", "detuning_speed_error_rpm"]
+__all__ = [
+    "FOCOperatingPoint",
+    "foc_operating_point",
+    "detuning_speed_error_rpm",
+    "field_weakened_flux_Wb",
+]
 
 # ------------------------------------------------------------------------------------------
 # field-oriented steady state
@@ -311,6 +316,8 @@ def detuning_speed_error_rpm(
     load_Nm: float,
     R2_ratio,
     flux_ref_Wb: float | None = None,
+    voltage_hold_V: float | None = None,
+    flux_min_pu: float = 0.2,
 ):
     """Steady-state speed error of the MRAS-sensorless IFOC drive due to ``R2_hat != R2``, rpm.
 
@@ -326,18 +333,97 @@ def detuning_speed_error_rpm(
         ``R2_hat / R2``, dimensionless.
     flux_ref_Wb : float, optional
         Rotor-flux reference, Wb (default ``machine.rated_flux_Wb``).
+    voltage_hold_V : float, optional
+        A drive with voltage-feedback field weakening: the stator-voltage magnitude (peak
+        phase) it holds, V (``control.field_weakening_voltage`` times ``Vdc/sqrt 3``). The
+        flux is then :func:`field_weakened_flux_Wb`'s, not ``flux_ref_Wb``. Default: none.
+    flux_min_pu : float
+        The field weakening's lowest flux factor, dimensionless (``control.field_weakening_min``).
 
     Returns
     -------
     float or ndarray
         ``n_actual - n_ref = slip_mech_rpm (R2_ratio - 1)``, rpm, where
-        ``slip_mech_rpm = (30/pi) R2 T_e / (1.5 n_p^2 psi_r^2)`` is the true mechanical slip.
+        ``slip_mech_rpm = (30/pi) R2 T_e / (1.5 n_p^2 psi_r^2)`` is the true mechanical slip
+        (``psi_r`` the field-weakened flux when ``voltage_hold_V`` is given: the slip grows as
+        ``1/psi_r^2``).
     """
     ratios = np.asarray(R2_ratio, dtype=float)
-    out = np.array(
-        [
-            foc_operating_point(machine, speed_rpm, load_Nm, r, flux_ref_Wb, True).speed_error_rpm
-            for r in ratios.ravel()
-        ]
-    ).reshape(ratios.shape)
-    return _scalar_or_array(out)
+    out = []
+    for r in ratios.ravel():
+        psi = flux_ref_Wb
+        if voltage_hold_V is not None:
+            psi = field_weakened_flux_Wb(
+                machine, speed_rpm, load_Nm, r, voltage_hold_V, flux_ref_Wb, flux_min_pu
+            )
+        out.append(foc_operating_point(machine, speed_rpm, load_Nm, r, psi, True).speed_error_rpm)
+    return _scalar_or_array(np.array(out).reshape(ratios.shape))
+
+
+#: step of the downward search for the field weakening's settling point, per-unit of the flux
+_FW_SCAN_STEP = 0.005
+
+
+def field_weakened_flux_Wb(
+    machine: MachineParams,
+    speed_rpm: float,
+    load_Nm: float,
+    R2_ratio: float = 1.0,
+    voltage_hold_V: float = math.inf,
+    flux_ref_Wb: float | None = None,
+    flux_min_pu: float = 0.2,
+    sensorless: bool = True,
+) -> float:
+    """The rotor flux a voltage-feedback field weakening settles at, Wb.
+
+    The drive scales its flux reference by ``k``, ``dk/dt = rate (v_hold - |v_s|)``,
+    ``flux_min_pu <= k <= 1`` (kernels/ifoc.py ``field_weakening``). In steady state either
+    ``k = 1`` and ``|v_s| <= v_hold``, or ``|v_s(k psi_ref)| = v_hold``: coming down from 1 the
+    integrator stops at the first (largest) such ``k``, or at the floor. ``|v_s|`` is the
+    stator voltage of the steady state (:func:`foc_operating_point`: ``v_s = R1 i_s +
+    j w_e psi_s`` with the speed loop's torque current at that flux, the MRAS detuning law's
+    speed and slip when ``sensorless``).
+
+    Parameters
+    ----------
+    machine : MachineParams
+        The true machine.
+    speed_rpm : float
+        Speed reference, mechanical rpm.
+    load_Nm : float
+        Load torque, N m (friction added).
+    R2_ratio : float
+        ``R2_hat / R2``, dimensionless.
+    voltage_hold_V : float
+        Stator-voltage magnitude the field weakening holds (peak phase), V.
+    flux_ref_Wb : float, optional
+        Unweakened flux reference, Wb (default ``machine.rated_flux_Wb``).
+    flux_min_pu : float
+        Lowest flux factor, dimensionless (0, 1].
+    sensorless : bool
+        MRAS speed feedback (True) or measured speed.
+
+    Returns
+    -------
+    float
+        ``k psi_ref``, Wb.
+    """
+    if not (voltage_hold_V > 0.0):
+        raise ConfigError("voltage_hold_V", "must be > 0")
+    if not (0.0 < flux_min_pu <= 1.0):
+        raise ConfigError("flux_min_pu", "must be in (0, 1]")
+    psi_ref = machine.rated_flux_Wb if flux_ref_Wb is None else float(flux_ref_Wb)
+
+    def excess(k):
+        op = foc_operating_point(machine, speed_rpm, load_Nm, R2_ratio, k * psi_ref, sensorless)
+        return op.V_s_peak_V - voltage_hold_V
+
+    if excess(1.0) <= 0.0:
+        return psi_ref
+    k_hi = 1.0
+    while k_hi - _FW_SCAN_STEP >= flux_min_pu:
+        k_lo = k_hi - _FW_SCAN_STEP
+        if excess(k_lo) <= 0.0:
+            return psi_ref * brentq(excess, k_lo, k_hi, xtol=1e-12)
+        k_hi = k_lo
+    return psi_ref * flux_min_pu
