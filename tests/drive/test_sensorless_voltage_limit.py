@@ -62,15 +62,15 @@ def test_regenerating_at_rated_speed_is_held_by_the_field_weakening(machine, loa
     assert v_use.iloc[j - 20 : j + 1].min() > 0.999
     assert df["i_d_A"].iloc[j] < 0.85 * df["id_ref_A"].iloc[j]
 
-    # with it: held, the voltage at the field weakening's 0.9, the flux where the steady
-    # state's voltage is that, and the speed error the detuning law's at that flux
+    # with it: held, the voltage at most the field weakening's 0.9 (regenerating, the bound
+    # at the no-load voltage may hold the flux a little below the feedback's level), the
+    # flux where the steady state meets both, and the speed error the detuning law's there
     assert held["status"] == 0 and not held["lost_control"]
     res = batch.results[0]
     df = res.to_pandas()
     v_end = float(np.hypot(df["v_ref_alpha_V"], df["v_ref_beta_V"]).iloc[-1])
-    assert v_end / sc.inverter.v_max_V == pytest.approx(
-        sc.control.field_weakening_voltage, abs=1e-4
-    )
+    assert v_end / sc.inverter.v_max_V < sc.control.field_weakening_voltage + 1e-4
+    assert v_end / sc.inverter.v_max_V > sc.control.field_weakening_voltage - 0.01
     k = 1.0 - float(res.state_final.control[0]["fw_cut"])
     psi_pu = law_flux_Wb(sc, row.speed_rpm, row.load_Nm, ratio) / sc.machine.rated_flux_Wb
     assert 0.85 < psi_pu < 0.95

@@ -373,6 +373,7 @@ def field_weakened_flux_Wb(
     flux_ref_Wb: float | None = None,
     flux_min_pu: float = 0.2,
     sensorless: bool = True,
+    no_load_bound: bool = True,
 ) -> float:
     """The rotor flux a voltage-feedback field weakening settles at, Wb.
 
@@ -402,6 +403,10 @@ def field_weakened_flux_Wb(
         Lowest flux factor, dimensionless (0, 1].
     sensorless : bool
         MRAS speed feedback (True) or measured speed.
+    no_load_bound : bool
+        The drive bounds ``k`` by the flux whose no-load voltage ``w_e (L1/M) k psi_ref`` is
+        ``v_hold`` (``control.field_weakening_bound``, on by default): the steady state is
+        then the largest ``k`` that meets both.
 
     Returns
     -------
@@ -414,9 +419,15 @@ def field_weakened_flux_Wb(
         raise ConfigError("flux_min_pu", "must be in (0, 1]")
     psi_ref = machine.rated_flux_Wb if flux_ref_Wb is None else float(flux_ref_Wb)
 
+    L1_over_M = (machine.M_H + machine.Ll1_H) / machine.M_H
+
     def excess(k):
+        # > 0 where k is beyond either bound, in units of v_hold
         op = foc_operating_point(machine, speed_rpm, load_Nm, R2_ratio, k * psi_ref, sensorless)
-        return op.V_s_peak_V - voltage_hold_V
+        out = op.V_s_peak_V / voltage_hold_V - 1.0
+        if no_load_bound and op.w_e != 0.0:
+            out = max(out, abs(op.w_e) * L1_over_M * k * psi_ref / voltage_hold_V - 1.0)
+        return out
 
     if excess(1.0) <= 0.0:
         return psi_ref

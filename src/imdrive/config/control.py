@@ -184,6 +184,10 @@ class ControlSettings:
     field_weakening_min: Annotated[
         Float, setting("field weakening: lowest flux factor", gt=0.0, le=1.0)
     ] = 0.2
+    field_weakening_bound: Annotated[
+        Bool,
+        setting("field weakening: flux factor at most the no-load one at field_weakening_voltage"),
+    ] = True
     reorientation: Annotated[
         Bool,
         setting(

@@ -85,6 +85,7 @@ CONTROL_PARAMS = record_dtype(
         ("fw_v", f8),  # voltage use it holds, fraction of v_max
         ("fw_rate", f8),  # its integral gain, 1/s per unit of voltage use
         ("fw_min", f8),  # lowest flux factor
+        ("fw_bound", b1),  # the flux factor is bounded by the no-load voltage at fw_v
         ("r1_settle", f8),  # online R1 law held this long after the speed reference moved, s
         ("or_wmin", f8),  # orientation check from this |w_e|, rad/s (0: off)
         ("or_trip", f8),  # misoriented and voltage-limited this long: realign, s
@@ -537,7 +538,7 @@ def inverter_feedforward(p, s, i_alpha, i_beta, Ts, v_alpha=0.0, v_beta=0.0):
 
 
 @njit(cache=True)
-def field_weakening(p, s, v_use, Ts):
+def field_weakening(p, s, v_use, Ts, k_max=1.0):
     """The field-weakening flux factor for this period (``p.fw``; updates ``s.fw_cut``).
 
     Voltage feedback: the factor ``k = 1 - s.fw_cut`` integrates the headroom,
@@ -548,9 +549,15 @@ def field_weakening(p, s, v_use, Ts):
     reference ``k psi*`` falls roughly as ``1/w`` to hold the voltage at ``fw_v`` of the
     inverter's limit. No base speed or machine data enter: the voltage the current
     controllers need decides. ``v_use``: magnitude of the last commanded voltage over
-    ``Vdc_meas/sqrt 3``. Returns ``k``.
+    ``Vdc_meas/sqrt 3``. ``k_max`` (``control.field_weakening_bound``; kernels/stages.py
+    computes it from the controller's model): the flux factor whose no-load voltage
+    ``w_e (L1/M) k psi*`` is ``fw_v`` of the limit. Regenerating, the voltage needed falls
+    below the no-load one and the feedback alone raised ``k`` back towards 1; the rotor flux
+    followed a rotor time constant later and overshot the limit. The bound is the
+    conventional ``1/w`` flux programme, here an upper limit of the voltage feedback (the
+    two are compared in Kim and Sul, IEEE Trans. Ind. Electron. 44(4), 1997). Returns ``k``.
     """
     k = 1.0 - s.fw_cut + Ts * p.fw_rate * (p.fw_v - v_use)
-    k = min(max(k, p.fw_min), 1.0)
+    k = min(max(k, p.fw_min), 1.0, max(k_max, p.fw_min))
     s.fw_cut = 1.0 - k
     return k

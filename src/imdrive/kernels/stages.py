@@ -63,7 +63,7 @@ from imdrive.kernels.ifoc import (
 )
 from imdrive.kernels.inverter import MAX_EVENTS, MAX_SEGMENTS, inverter_segments, limit_magnitude
 from imdrive.kernels.machine import integrate_segment, log_plant, stator_current
-from imdrive.kernels.model import incremental_L2
+from imdrive.kernels.model import incremental_L2, model_inductances
 from imdrive.kernels.profiles import (
     PR_FLUX_REF,
     PR_FREQ,
@@ -282,7 +282,11 @@ def control(sim, pc, x, mdl, ctl, smp, prof, smpl, estm, foc):
         w_ref = prof.w_ref
         psi_ref = prof.psi_ref
         if pc.fw:  # field weakening above base speed (voltage feedback)
-            psi_ref *= field_weakening(pc, ctl, estm.v_fw, Ts)
+            k_max = 1.0
+            if pc.fw_bound and ctl.w_e != 0.0 and psi_ref > 0.0:
+                M_h, L1_h, _, _ = model_inductances(mdl)
+                k_max = pc.fw_v * pc.v_max * M_h / (abs(ctl.w_e) * L1_h * psi_ref)
+            psi_ref *= field_weakening(pc, ctl, estm.v_fw, Ts, k_max)
         if sim.flux_inj_amp != 0.0:  # excitation for R2 adaptation (Kubota & Matsuse 1994)
             psi_ref *= 1.0 + sim.flux_inj_amp * math.sin(2.0 * math.pi * sim.flux_inj_freq * t)
         w_fb = estm.w_r_hat / pc.n_p if sim.sensorless else x.w_m

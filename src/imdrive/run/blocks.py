@@ -252,6 +252,7 @@ def control_fields(sc: Scenario, D: Resolved, mh: dict, psi0: float) -> tuple[di
         fw_v=ctl.field_weakening_voltage,
         fw_rate=ctl.field_weakening_rate,
         fw_min=ctl.field_weakening_min,
+        fw_bound=ctl.field_weakening_bound,
         r1_settle=_r1_settle_s(D),
         or_wmin=(
             2 * math.pi * m.rated_frequency_Hz * ORIENTATION_FROM_PU if ctl.reorientation else 0.0

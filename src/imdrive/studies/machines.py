@@ -204,7 +204,14 @@ def law_flux_Wb(sc, speed_rpm: float, load_Nm: float, R2_ratio: float) -> float:
         return psi
     hold = sc.control.field_weakening_voltage * sc.inverter.v_max_V
     return field_weakened_flux_Wb(
-        sc.machine, speed_rpm, load_Nm, R2_ratio, hold, psi, sc.control.field_weakening_min
+        sc.machine,
+        speed_rpm,
+        load_Nm,
+        R2_ratio,
+        hold,
+        psi,
+        sc.control.field_weakening_min,
+        no_load_bound=sc.control.field_weakening_bound,
     )
 
 
