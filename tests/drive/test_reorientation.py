@@ -12,9 +12,11 @@ default (``control.reorientation``): over the whole-rating envelope it turned 12
 the ideal drive at twice the rated speed into good ones (and 5 good ones into speed errors),
 but on the dead-time bridge 26 cells
 that had kept control lost it, and on the library's large machines the sensorless drive lost
-runs it had held (docs/envelope.md). The case is run with the type-1 MRAS: the type-2 loop,
-the default now when the drive goes into field weakening (config/mras_type.py), keeps its
-estimate on the ramp and the frame no longer slips here.
+runs it had held (docs/envelope.md). The case is run with the type-1 MRAS and the field
+weakening's flux unbounded: the type-2 loop, the default now when the drive goes into field
+weakening (config/mras_type.py), keeps its estimate on the ramp, and the bound at the no-load
+voltage (``control.field_weakening_bound``) keeps the flux from overshooting; with either the
+frame no longer slips here.
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ def _scenario(machine: str, on: bool) -> Scenario:
     overrides = {
         "control.reorientation": on,
         "mras.acceleration_tracking": False,  # the type-1 loop, whose lag lets the frame slip
+        "control.field_weakening_bound": False,  # with it the frame does not slip either
         "estimator.R2_ratio": 0.7,
         "estimator.R1_ratio": 1.1,
         "load.torque_Nm": 0.0,
