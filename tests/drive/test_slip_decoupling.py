@@ -11,6 +11,11 @@ the rated speed from R2_hat(0) = R2; with the correction both end within 0.1 %. 
 2.2 kW machine the part is small: within 0.15 % either way at 1.5 x.) The speed error falls with
 R2_hat's; at twice the rated speed 2.4 rpm remain (0.07 % of the speed), a second-order
 discretisation residual of the 100 us control period (1.5 rpm less at 50 us).
+
+The runs pin the type-1 MRAS, with which the mechanism was measured: the type-2 loop, the
+default now when the drive goes into field weakening (config/mras_type.py), leaves a far
+smaller q-axis error to couple (without the correction, measured 0.00 % on Table IV and
+-0.99 % on Krause 3 hp, the latter still flagged `speed-error`; with it both within 0.01 %).
 """
 
 from __future__ import annotations
@@ -20,10 +25,31 @@ from data.ramp import ramp_scenario
 
 from imdrive import simulate_batch
 
-pytestmark = pytest.mark.slow  # end to end: 4 closed-loop runs of 24 s
+pytestmark = pytest.mark.slow  # end to end: 6 closed-loop runs of 24 s
 
 
 def _runs(machine: str, speed_pu: float, R2_ratio: float):
+    scs = [
+        ramp_scenario(
+            machine,
+            speed_pu,
+            {
+                "injection.decouple_slip": on,
+                "mras.acceleration_tracking": False,  # the type-1 loop: the whole coupling
+                "estimator.R2_ratio": R2_ratio,
+                "estimator.R1_ratio": 1.0,
+                "simulation.t_end_s": 24.0,
+            },
+            load_pu_available=1.0,
+        )
+        for on in (False, True)
+    ]
+    off, on = simulate_batch(scs).metrics.itertuples()
+    return {False: off, True: on}
+
+
+@pytest.mark.parametrize("machine, speed_pu, R2_ratio", [("krause-3hp", 2.0, 1.0)])
+def test_decoupling_still_needed_with_the_default_type2_loop(machine, speed_pu, R2_ratio):
     scs = [
         ramp_scenario(
             machine,
@@ -39,7 +65,8 @@ def _runs(machine: str, speed_pu: float, R2_ratio: float):
         for on in (False, True)
     ]
     off, on = simulate_batch(scs).metrics.itertuples()
-    return {False: off, True: on}
+    assert off.verdict != "ok" and abs(off.R2_error_pct) > 0.5  # measured -0.99 %, speed-error
+    assert on.verdict == "ok" and abs(on.R2_error_pct) < 0.1
 
 
 @pytest.mark.parametrize(
