@@ -29,7 +29,6 @@ from imdrive.config.validation import Bool, Float, setting, settings
 from imdrive.design.estimators import (
     afo_regeneration_gain,
     default_afo_gains,
-    default_ekf_noise,
     default_reactive_mras_gains,
 )
 from imdrive.design.gains import default_mras_gains, mras_type2_gains
@@ -240,64 +239,9 @@ class AfoSettings:
         return EstimatorRecords(params, derived=derived)
 
 
-@estimator_settings("ekf", "ekf", description="extended Kalman filter for speed and R2")
-class EkfSettings:
-    """Extended Kalman filter for speed and R2 (``[ekf]``); noise as standard deviations.
-
-    Per-period variances: currents ``(voltage_noise_V Ts / σL1)²``, fluxes
-    ``(flux_noise_Wb_per_s Ts)²``... see :func:`imdrive.design.estimators.default_ekf_noise`.
-    """
-
-    voltage_noise_V: Annotated[
-        Float, setting("voltage uncertainty behind the current's process noise", "V", gt=0.0)
-    ] = 5.0
-    flux_noise_Wb_per_s: Annotated[
-        Float, setting("rotor-flux process noise density", "Wb/s", gt=0.0)
-    ] = 0.1
-    acceleration_noise_rad_s2: Annotated[
-        Float, setting("speed process noise: electrical acceleration uncertainty", "rad/s²", gt=0.0)
-    ] = 2000.0
-    R2_drift_ohm_per_s: Annotated[
-        Float, setting("R2 process noise: drift-rate uncertainty", "ohm/s", gt=0.0)
-    ] = 0.5
-    current_noise_A: Annotated[
-        Float, setting("measurement noise per current component (rms)", "A", gt=0.0)
-    ] = 0.05
-
-    def records(self, ctx: EstimatorContext) -> EstimatorRecords:
-        """Process and measurement noise (:func:`default_ekf_noise`).
-
-        Parameters
-        ----------
-        ctx : EstimatorContext
-            The controller's model and the drive.
-
-        Returns
-        -------
-        EstimatorRecords
-        """
-        q, r, p0 = default_ekf_noise(
-            ctx.Ts,
-            ctx.sigma_L1_hat,
-            ctx.psi0,
-            ctx.R2_hat,
-            self.voltage_noise_V,
-            self.flux_noise_Wb_per_s,
-            self.acceleration_noise_rad_s2,
-            self.R2_drift_ohm_per_s,
-            self.current_noise_A,
-        )
-        on = ctx.scenario.estimator.R2_adaptation == "ekf"
-        params = dict(
-            q=q,
-            r=r,
-            p0=p0,
-            estimate_R2=on,
-            R2_min=0.5 * ctx.R2_hat,
-            R2_max=2.0 * ctx.R2_hat,
-            write_R2=on,
-        )
-        return EstimatorRecords(params)
+# the EKF's settings live in their own module (this one's size); imported here so it registers
+# in its place among the others, and the old import path works
+from imdrive.config.estimators_ekf import EkfSettings  # noqa: E402,F401
 
 
 @settings("flux_injection")

@@ -105,6 +105,15 @@ PAIRS: tuple[Pair, ...] = (
     _pair("mras.R1_max_freq_Hz", "mras.R1_max_freq_pu", "the rated frequency"),
     _pair("sensor.adc_range_A", "sensor.adc_range_pu", "the rated peak current"),
     _pair("inverter.sign_band_A", "inverter.sign_band_pu", "the rated peak current"),
+    _pair("ekf.voltage_noise_V", "ekf.voltage_noise_pu", "the rated phase voltage's peak"),
+    _pair("ekf.flux_noise_Wb_per_s", "ekf.flux_noise_pu", "ψ_rated / T2"),
+    _pair(
+        "ekf.acceleration_noise_rad_s2",
+        "ekf.acceleration_noise_pu",
+        "the rated acceleration n_p T_rated / J",
+    ),
+    _pair("ekf.R2_drift_ohm_per_s", "ekf.R2_drift_pu", "the plant's R2 / T2"),
+    _pair("ekf.current_noise_A", "ekf.current_noise_pu", "the rated peak current"),
     _pair(
         "smo_mras.switching_gain_rad_s",
         "smo_mras.speed_error_pu",

@@ -1,0 +1,111 @@
+"""Machine-dependent settings first tuned in SI on the paper's Table IV machine, resolved on the
+scenario's machine: the absolute key when given, its per-unit twin times the machine's base
+quantity, or by default Table IV's number scaled by that base
+(:func:`imdrive.config.perunit.table_iv_scaled`: exactly the old number on Table IV).
+
+==============================================  ==============================================
+per-unit key                                    base it multiplies
+==============================================  ==============================================
+``ekf.voltage_noise_pu``                        the rated phase voltage's peak
+                                                ``sqrt(2/3) V_ll`` (:func:`rated_phase_peak_V`)
+``ekf.current_noise_pu``                        the rated peak current
+``ekf.flux_noise_pu``                           ``psi_rated / T2``, the rotor flux's own rate
+``ekf.acceleration_noise_pu``                   the rated acceleration ``n_p T_rated / J``
+                                                (electrical, :func:`rated_acceleration_rad_s2`)
+``ekf.R2_drift_pu``                             ``R2 / T2``: R2 per rotor time constant
+==============================================  ==============================================
+
+Each pair is declared in :data:`imdrive.config.pairs.PAIRS`. :mod:`imdrive.config.perunit`
+resolves the settings the compensator, injection and limits share; this module holds the
+others (perunit's size), and imports it, never the other way.
+"""
+
+from __future__ import annotations
+
+import math
+
+from imdrive.config.perunit import rated_peak_current_A, table_iv_scaled
+from imdrive.errors import ConfigError
+
+__all__ = [
+    "EKF_NOISE",
+    "ekf_noise",
+    "rated_acceleration_rad_s2",
+    "rated_phase_peak_V",
+    "rotor_flux_rate_Wb_s",
+    "rotor_resistance_rate_ohm_s",
+]
+
+
+def rated_phase_peak_V(machine) -> float:
+    """The rated phase voltage's peak, the space vector's magnitude, V: ``sqrt(2/3) V_ll``."""
+    return math.sqrt(2.0 / 3.0) * machine.rated_voltage_V
+
+
+def rated_acceleration_rad_s2(machine) -> float:
+    """The electrical acceleration the rated torque gives the machine's inertia, rad/s^2:
+    ``n_p T_rated / J`` (Table IV 360, Aalto 2.2 kW 1947, Krause 500 hp 363). A circuit without
+    a rated point takes the rated power at the synchronous speed for ``T_rated``."""
+    from imdrive.config.machine import rated_point
+
+    try:
+        torque = rated_point(machine).torque_Nm
+    except ConfigError:
+        torque = (
+            machine.rated_power_W * machine.pole_pairs / (2 * math.pi * machine.rated_frequency_Hz)
+        )
+    return machine.pole_pairs * torque / machine.J_kgm2
+
+
+def rotor_flux_rate_Wb_s(machine) -> float:
+    """``psi_rated / T2``, Wb/s: the rate at which the rotor flux settles, the scale of its
+    model's R2-dependent term ``(M i - psi) / T2``."""
+    return machine.rated_flux_Wb / machine.T2_s
+
+
+def rotor_resistance_rate_ohm_s(machine) -> float:
+    """``R2 / T2``, ohm/s: R2 over one rotor time constant. The R2 error shows in the flux
+    through the rotor's corner ``1/T2``, so the R2 state's random walk, which sets how fast
+    the filter lets R̂2 move, is stated in this unit, as ``mras.R1_rate_pu`` states the online
+    R1 law's rate in ``1/T2``: the estimate's bandwidth then stays as far below the flux
+    injection (whose frequency scales with the corner) on every machine."""
+    return machine.R2_ohm / machine.T2_s
+
+
+#: The EKF's noise settings: ``(absolute key, per-unit key, Table IV's value, base)``; each
+#: process noise is the uncertainty of its state's derivative, the measurement noise the
+#: sensors'; each scales with the machine's quantity named (module docstring).
+EKF_NOISE: tuple[tuple[str, str, float, object], ...] = (
+    ("voltage_noise_V", "voltage_noise_pu", 5.0, rated_phase_peak_V),
+    ("flux_noise_Wb_per_s", "flux_noise_pu", 0.1, rotor_flux_rate_Wb_s),
+    ("acceleration_noise_rad_s2", "acceleration_noise_pu", 2000.0, rated_acceleration_rad_s2),
+    ("R2_drift_ohm_per_s", "R2_drift_pu", 0.5, rotor_resistance_rate_ohm_s),
+    ("current_noise_A", "current_noise_pu", 0.05, rated_peak_current_A),
+)
+
+
+def ekf_noise(ekf, machine) -> tuple[float, float, float, float, float]:
+    """The EKF's noise settings in SI on ``machine``, in the order of :data:`EKF_NOISE`
+    (voltage V, flux Wb/s, acceleration rad/s^2, R2 drift ohm/s, current A): each absolute key
+    when set, its per-unit twin times the base, or Table IV's value scaled by the base.
+
+    Parameters
+    ----------
+    ekf : EkfSettings
+        The ``[ekf]`` section.
+    machine : MachineParams
+        The scenario's machine.
+
+    Returns
+    -------
+    tuple of float
+    """
+    out = []
+    for absolute, per_unit, table_iv, base in EKF_NOISE:
+        if getattr(ekf, absolute) is not None:
+            out.append(getattr(ekf, absolute))
+        elif getattr(ekf, per_unit) is not None:
+            out.append(getattr(ekf, per_unit) * base(machine))
+        else:
+            out.append(table_iv_scaled(table_iv, base, machine))
+    return tuple(out)
