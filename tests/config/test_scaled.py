@@ -13,8 +13,11 @@ from imdrive.config.pairs import pair_of
 from imdrive.config.perunit import rated_peak_current_A
 from imdrive.config.scaled import (
     EKF_NOISE,
+    RISE_BASE_K,
     ekf_noise,
+    plant_thermal_resistances,
     rated_acceleration_rad_s2,
+    rated_copper_losses_W,
     rated_phase_peak_V,
     rotor_flux_rate_Wb_s,
     rotor_resistance_rate_ohm_s,
@@ -94,3 +97,85 @@ def test_ekf_old_absolute_keys_work_and_are_paired(absolute, per_unit, table_iv,
     with pytest.warns(ConfigWarning, match=f"replaces ekf.{absolute}"):
         sc = _ekf("paper-table-iv", f"ekf.{absolute}=1").with_overrides([f"ekf.{per_unit}=0.01"])
     assert getattr(sc.ekf, absolute) is None
+
+
+# -- the plant's thermal model ----------------------------------------------------------------
+
+
+def _thermal(machine: str = "paper-table-iv", *overrides: str) -> Scenario:
+    return Scenario.read(
+        "sensorless", [f"machine.preset={machine}", "plant.thermal.enabled=true", *overrides]
+    )
+
+
+def test_plant_thermal_resistances_on_table_iv_are_exactly_the_old_ones():
+    from imdrive.run.build import build_arrays
+
+    assert plant_thermal_resistances(_thermal()) == (0.4, 0.4)
+    plant = build_arrays(_thermal()).params.plant[0]
+    assert (plant["Rth1"], plant["Rth2"]) == (0.4, 0.4)
+    # the time constants stay absolute (no published scaling with the machine's size)
+    assert (_thermal().plant.thermal.tau1_s, _thermal().plant.thermal.tau2_s) == (1200.0, 1200.0)
+
+
+@pytest.mark.parametrize("machine", OTHERS)
+def test_plant_thermal_resistance_gives_table_iv_s_rise_at_rated_losses(machine):
+    from imdrive.run.build import build_arrays
+
+    sc = _thermal(machine)
+    Rth = plant_thermal_resistances(sc)
+    losses, losses_iv = rated_copper_losses_W(sc.machine), rated_copper_losses_W(_thermal().machine)
+    for i in range(2):
+        # the steady rise at the winding's rated losses is Table IV's (34 K stator, 41 K rotor)
+        assert Rth[i] * losses[i] == pytest.approx(0.4 * losses_iv[i], rel=1e-12)
+        assert not math.isclose(Rth[i], 0.4, rel_tol=0.05)
+    assert 0.4 * losses_iv[1] == pytest.approx(41.1, abs=0.1)
+    plant = build_arrays(sc).params.plant[0]
+    assert (plant["Rth1"], plant["Rth2"]) == Rth  # what the plant runs on
+
+
+def test_rated_copper_losses_are_the_rated_point_s():
+    from imdrive.config.machine import rated_point
+    from imdrive.config.perunit import rated_rotor_loss_W
+
+    sc = _thermal("aalto-2.2kw", "compensator.thermal_model=true")
+    p1, p2 = rated_copper_losses_W(sc.machine)
+    assert p1 == pytest.approx(
+        1.5 * sc.machine.R1_ohm * rated_point(sc.machine).current_peak_A ** 2
+    )
+    assert p2 == rated_rotor_loss_W(sc)  # the compensator's thermal model's base
+    # the base rise is the compensator's default class B rise
+    assert RISE_BASE_K == Scenario.read("sensorless").compensator.thermal_rise_K
+
+
+@pytest.mark.parametrize("n", ("1", "2"))
+def test_plant_thermal_old_absolute_keys_work_and_are_paired(n):
+    absolute, per_unit = f"plant.thermal.Rth{n}_K_per_W", f"plant.thermal.Rth{n}_pu"
+    assert pair_of(absolute).per_unit == (per_unit,)
+    i = int(n) - 1
+    assert plant_thermal_resistances(_thermal("krause-500hp", f"{absolute}=0.4"))[i] == 0.4
+    sc = _thermal("krause-500hp", f"{per_unit}=0.5")
+    loss = rated_copper_losses_W(sc.machine)[i]
+    assert plant_thermal_resistances(sc)[i] == pytest.approx(0.5 * RISE_BASE_K / loss)
+    with pytest.raises(ConfigError, match=per_unit):
+        _thermal("paper-table-iv", f"{absolute}=1", f"{per_unit}=0.5")
+    with pytest.warns(ConfigWarning, match=f"replaces {absolute}"):
+        sc = _thermal("paper-table-iv", f"{absolute}=1").with_overrides([f"{per_unit}=0.5"])
+    table_iv_loss = rated_copper_losses_W(sc.machine)[i]
+    assert plant_thermal_resistances(sc)[i] == pytest.approx(0.5 * RISE_BASE_K / table_iv_loss)
+
+
+def test_plant_thermal_model_without_a_rated_point_names_the_setting():
+    # a circuit whose rated point cannot be found: the thermal model asks for Rth in K/W
+    from imdrive.config.machine import machine_preset
+
+    m = machine_preset("paper-table-iv")
+    sc = Scenario.read("sensorless")
+    with pytest.raises(ConfigError, match="plant.thermal.enabled"):
+        rated_copper_losses_W(m.with_(rated_power_W=1e9))
+    assert plant_thermal_resistances(
+        _thermal(
+            "paper-table-iv", "plant.thermal.Rth1_K_per_W=0.3", "plant.thermal.Rth2_K_per_W=0.2"
+        )
+    ) == (0.3, 0.2)
+    assert sc.plant.thermal.Rth1_K_per_W is None

@@ -114,6 +114,8 @@ PAIRS: tuple[Pair, ...] = (
     ),
     _pair("ekf.R2_drift_ohm_per_s", "ekf.R2_drift_pu", "the plant's R2 / T2"),
     _pair("ekf.current_noise_A", "ekf.current_noise_pu", "the rated peak current"),
+    _pair("plant.thermal.Rth1_K_per_W", "plant.thermal.Rth1_pu", "80 K / the rated stator losses"),
+    _pair("plant.thermal.Rth2_K_per_W", "plant.thermal.Rth2_pu", "80 K / the rated rotor losses"),
     _pair(
         "smo_mras.switching_gain_rad_s",
         "smo_mras.speed_error_pu",

@@ -13,6 +13,9 @@ per-unit key                                    base it multiplies
 ``ekf.acceleration_noise_pu``                   the rated acceleration ``n_p T_rated / J``
                                                 (electrical, :func:`rated_acceleration_rad_s2`)
 ``ekf.R2_drift_pu``                             ``R2 / T2``: R2 per rotor time constant
+``plant.thermal.Rth1_pu``, ``Rth2_pu``          ``80 K / P_cu,rated``: the class B temperature
+                                                rise over the winding's rated copper losses
+                                                (:func:`plant_thermal_resistances`)
 ==============================================  ==============================================
 
 Each pair is declared in :data:`imdrive.config.pairs.PAIRS`. :mod:`imdrive.config.perunit`
@@ -29,7 +32,10 @@ from imdrive.errors import ConfigError
 
 __all__ = [
     "EKF_NOISE",
+    "RISE_BASE_K",
     "ekf_noise",
+    "plant_thermal_resistances",
+    "rated_copper_losses_W",
     "rated_acceleration_rad_s2",
     "rated_phase_peak_V",
     "rotor_flux_rate_Wb_s",
@@ -108,4 +114,76 @@ def ekf_noise(ekf, machine) -> tuple[float, float, float, float, float]:
             out.append(getattr(ekf, per_unit) * base(machine))
         else:
             out.append(table_iv_scaled(table_iv, base, machine))
+    return tuple(out)
+
+
+#: The temperature rise the plant's thermal resistances are stated in, K: the class B limit of
+#: IEC 60034-1 (the default of ``compensator.thermal_rise_K``, the controller's own model).
+RISE_BASE_K = 80.0
+
+#: The plant's thermal resistances on Table IV, K/W (stator, rotor).
+RTH_TABLE_IV_K_PER_W = (0.4, 0.4)
+
+
+def rated_copper_losses_W(machine) -> tuple[float, float]:
+    """The machine's copper losses at its rated point, W: stator ``1.5 R1 I_peak^2`` (the
+    rated current, amplitude-invariant), rotor ``s T_rated w_sync`` (the slip times the
+    air-gap power; :func:`imdrive.config.perunit.rated_rotor_loss_W`).
+
+    Raises
+    ------
+    ConfigError
+        The machine has no rated point (naming ``plant.thermal.enabled``).
+    """
+    from imdrive.config.machine import rated_point
+
+    try:
+        rp = rated_point(machine)
+    except ConfigError as exc:
+        raise ConfigError(
+            "plant.thermal.enabled",
+            f"needs the machine's rated point or Rth1_K_per_W and Rth2_K_per_W ({exc})",
+        ) from exc
+    w_sync = rp.synchronous_speed_rpm * math.pi / 30.0
+    return 1.5 * machine.R1_ohm * rp.current_peak_A**2, rp.slip * rp.torque_Nm * w_sync
+
+
+def plant_thermal_resistances(sc) -> tuple[float, float]:
+    """The plant's winding-to-ambient thermal resistances (stator, rotor), K/W.
+
+    Each is ``plant.thermal.RthN_K_per_W`` when set; else ``RthN_pu`` times
+    ``RISE_BASE_K / P_cu,rated`` (:func:`rated_copper_losses_W`), so the per-unit value is the
+    winding's steady rise at its rated losses over the class B limit; unset, Table IV's
+    0.4 K/W scaled by ``1 / P_cu,rated`` (:func:`table_iv_scaled`: exactly 0.4 on Table IV,
+    whose rated losses 85.7 W and 102.8 W then rise 34 K and 41 K; a fixed 0.4 K/W would put
+    the rotor of Krause 500 hp, 5.7 kW, at 2300 K).
+
+    The thermal time constants ``tau1_s``, ``tau2_s`` stay absolute (1200 s): a published
+    scaling of a winding's thermal time constant with the machine's size was not found; it
+    depends on the enclosure and cooling as much as on the rating.
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+
+    Returns
+    -------
+    tuple of float
+    """
+    th = sc.plant.thermal
+    given = (th.Rth1_K_per_W, th.Rth2_K_per_W)
+    per_unit = (th.Rth1_pu, th.Rth2_pu)
+    if all(v is not None for v in given):
+        return given
+    losses = rated_copper_losses_W(sc.machine)
+    out = []
+    for i in range(2):
+        if given[i] is not None:
+            out.append(given[i])
+        elif per_unit[i] is not None:
+            out.append(per_unit[i] * RISE_BASE_K / losses[i])
+        else:
+            inverse_loss = lambda m, i=i: 1.0 / rated_copper_losses_W(m)[i]  # noqa: E731
+            out.append(table_iv_scaled(RTH_TABLE_IV_K_PER_W[i], inverse_loss, sc.machine))
     return tuple(out)
