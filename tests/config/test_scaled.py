@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from imdrive.config.pairs import pair_of
@@ -15,10 +16,12 @@ from imdrive.config.scaled import (
     EKF_NOISE,
     RISE_BASE_K,
     ekf_noise,
+    flux_injection_frequency_Hz,
     plant_thermal_resistances,
     rated_acceleration_rad_s2,
     rated_copper_losses_W,
     rated_phase_peak_V,
+    rotor_corner_Hz,
     rotor_flux_rate_Wb_s,
     rotor_resistance_rate_ohm_s,
 )
@@ -179,3 +182,61 @@ def test_plant_thermal_model_without_a_rated_point_names_the_setting():
         )
     ) == (0.3, 0.2)
     assert sc.plant.thermal.Rth1_K_per_W is None
+
+
+# -- the flux-command injection's frequency ---------------------------------------------------
+
+
+def _afo(machine: str = "paper-table-iv", *overrides: str) -> Scenario:
+    return Scenario.read(
+        "sensorless",
+        [
+            f"machine.preset={machine}",
+            'control.speed_feedback="afo"',
+            "flux_injection.amplitude=0.1",
+            *overrides,
+        ],
+    )
+
+
+@pytest.mark.parametrize("start", ("estimator.R2_ratio=1.0", "estimator.R2_ratio=1.3"))
+def test_flux_injection_on_table_iv_is_exactly_2_Hz_whatever_the_start(start):
+    from imdrive.run.build import build_arrays
+
+    sc = _afo("paper-table-iv", start)
+    assert flux_injection_frequency_Hz(sc) == 2.0
+    new, old = (
+        build_arrays(sc),
+        build_arrays(_afo("paper-table-iv", start, "flux_injection.frequency_Hz=2")),
+    )
+    assert new.params.sim[0]["flux_inj_freq"] == 2.0
+    for f in new.params.est.dtype.names:  # the AFO's gains designed on it: bit for bit
+        assert np.array_equal(new.params.est[f], old.params.est[f]), f
+
+
+@pytest.mark.parametrize("machine", OTHERS)
+def test_flux_injection_frequency_is_a_fixed_multiple_of_the_rotor_corner(machine):
+    sc, iv = _afo(machine), _afo()
+    f, f_iv = flux_injection_frequency_Hz(sc), flux_injection_frequency_Hz(iv)
+    # w T2 the same as Table IV's: 1.098 x the corner
+    assert f * sc.machine.T2_s == pytest.approx(f_iv * iv.machine.T2_s, rel=1e-12)
+    assert f / rotor_corner_Hz(sc.machine) == pytest.approx(1.0980, abs=1e-4)
+    assert not math.isclose(f, 2.0, rel_tol=0.05)
+
+
+def test_flux_injection_old_key_works_and_is_paired():
+    assert pair_of("flux_injection.frequency_Hz").per_unit == ("flux_injection.frequency_pu",)
+    assert flux_injection_frequency_Hz(_afo("krause-500hp", "flux_injection.frequency_Hz=2")) == 2.0
+    # the per-unit twin: of the controller's corner R2_hat(0)/(2 pi L2_hat), as injection's
+    sc = _afo("krause-500hp", "estimator.R2_ratio=1.2", "flux_injection.frequency_pu=0.5")
+    m = sc.machine
+    assert flux_injection_frequency_Hz(sc) == pytest.approx(
+        0.5 * 1.2 * m.R2_ohm / (2 * math.pi * m.L2_H)
+    )
+    with pytest.raises(ConfigError, match="flux_injection.frequency_pu"):
+        _afo("paper-table-iv", "flux_injection.frequency_Hz=3", "flux_injection.frequency_pu=1")
+    with pytest.warns(ConfigWarning, match="replaces flux_injection.frequency_Hz"):
+        sc = _afo("paper-table-iv", "flux_injection.frequency_Hz=3").with_overrides(
+            ["flux_injection.frequency_pu=1"]
+        )
+    assert flux_injection_frequency_Hz(sc) == pytest.approx(rotor_corner_Hz(sc.machine))

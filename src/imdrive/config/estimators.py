@@ -25,6 +25,7 @@ from imdrive.config.registry import (  # noqa: F401  (re-exported: the settings 
     estimator_settings,
     package_sections,
 )
+from imdrive.config.scaled import flux_injection_frequency_Hz
 from imdrive.config.validation import Bool, Float, setting, settings
 from imdrive.design.estimators import (
     afo_regeneration_gain,
@@ -213,7 +214,7 @@ class AfoSettings:
             self.R1_bandwidth_rad_s,
             self.R2_bandwidth_rad_s,
             sc.flux_injection.amplitude,
-            2 * math.pi * sc.flux_injection.frequency_Hz,
+            2 * math.pi * flux_injection_frequency_Hz(sc),
         )
         regen = self.gain == "regeneration"
         g2 = self.g2_ohm
@@ -252,7 +253,25 @@ class FluxInjectionSettings:
     amplitude: Annotated[
         Float, setting("relative amplitude of the sinusoid on the flux command", ge=0.0, lt=1.0)
     ] = 0.0
-    frequency_Hz: Annotated[Float, setting("frequency of the sinusoid", "Hz", gt=0.0)] = 2.0
+    frequency_Hz: Annotated[
+        Float | None,
+        setting(
+            "frequency of the sinusoid; the absolute twin of frequency_pu",
+            "Hz",
+            gt=0.0,
+            default_doc="Table IV's 2 Hz scaled by the machine's rotor corner R2/(2π L2) "
+            "(1.098 × it; config/scaled.py flux_injection_frequency_Hz)",
+        ),
+    ] = None
+    frequency_pu: Annotated[
+        Float | None,
+        setting(
+            "frequency_Hz in per-unit of the controller's rotor corner R̂2(0)/(2π L̂2), as "
+            "injection.frequency_pu: the flux follows its command through the rotor's corner",
+            gt=0.0,
+            default_doc="unset: frequency_Hz",
+        ),
+    ] = None
 
 
 _WB = ("Wb", 1.0)

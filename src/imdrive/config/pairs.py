@@ -117,6 +117,11 @@ PAIRS: tuple[Pair, ...] = (
     _pair("plant.thermal.Rth1_K_per_W", "plant.thermal.Rth1_pu", "80 K / the rated stator losses"),
     _pair("plant.thermal.Rth2_K_per_W", "plant.thermal.Rth2_pu", "80 K / the rated rotor losses"),
     _pair(
+        "flux_injection.frequency_Hz",
+        "flux_injection.frequency_pu",
+        "the rotor corner R̂2/(2π L̂2)",
+    ),
+    _pair(
         "smo_mras.switching_gain_rad_s",
         "smo_mras.speed_error_pu",
         "2π × the rated frequency",

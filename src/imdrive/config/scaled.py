@@ -16,6 +16,11 @@ per-unit key                                    base it multiplies
 ``plant.thermal.Rth1_pu``, ``Rth2_pu``          ``80 K / P_cu,rated``: the class B temperature
                                                 rise over the winding's rated copper losses
                                                 (:func:`plant_thermal_resistances`)
+``flux_injection.frequency_pu``                 the controller's rotor corner
+                                                ``R2_hat(0) / (2 pi L2_hat)``, as
+                                                ``injection.frequency_pu``; unset, Table IV's
+                                                2 Hz scaled by the machine's corner
+                                                (:func:`flux_injection_frequency_Hz`)
 ==============================================  ==============================================
 
 Each pair is declared in :data:`imdrive.config.pairs.PAIRS`. :mod:`imdrive.config.perunit`
@@ -27,17 +32,19 @@ from __future__ import annotations
 
 import math
 
-from imdrive.config.perunit import rated_peak_current_A, table_iv_scaled
+from imdrive.config.perunit import rated_peak_current_A, resolve, table_iv_scaled
 from imdrive.errors import ConfigError
 
 __all__ = [
     "EKF_NOISE",
     "RISE_BASE_K",
     "ekf_noise",
+    "flux_injection_frequency_Hz",
     "plant_thermal_resistances",
     "rated_copper_losses_W",
     "rated_acceleration_rad_s2",
     "rated_phase_peak_V",
+    "rotor_corner_Hz",
     "rotor_flux_rate_Wb_s",
     "rotor_resistance_rate_ohm_s",
 ]
@@ -187,3 +194,44 @@ def plant_thermal_resistances(sc) -> tuple[float, float]:
             inverse_loss = lambda m, i=i: 1.0 / rated_copper_losses_W(m)[i]  # noqa: E731
             out.append(table_iv_scaled(RTH_TABLE_IV_K_PER_W[i], inverse_loss, sc.machine))
     return tuple(out)
+
+
+#: The flux-command injection's frequency on Table IV, Hz (1.098 x its rotor corner, 1.82 Hz).
+FLUX_INJECTION_TABLE_IV_HZ = 2.0
+
+
+def rotor_corner_Hz(machine) -> float:
+    """The machine's rotor corner frequency ``R2 / (2 pi L2)``, Hz."""
+    return 1.0 / (2.0 * math.pi * machine.T2_s)
+
+
+def flux_injection_frequency_Hz(sc) -> float:
+    """The frequency of the sinusoid on the flux command (``[flux_injection]``), Hz.
+
+    ``flux_injection.frequency_Hz`` when set; else ``frequency_pu`` times the controller's rotor
+    corner ``R2_hat(0) / (2 pi L2_hat)`` (:func:`imdrive.config.perunit.resolve`, the base of
+    ``injection.frequency_pu``); unset, Table IV's 2 Hz scaled by the machine's corner
+    ``R2 / (2 pi L2)`` (:func:`table_iv_scaled`: exactly 2 Hz on Table IV whatever the
+    controller's starting R̂2; 0.22 Hz on Krause 500 hp, 1.6 Hz on Aalto 2.2 kW). The
+    excitation is Kubota & Matsuse's (IEEE Trans. Ind. Appl. 30(5), 1994); the rotor flux's
+    response to the flux current, ``M / (1 + j w T2)``, depends on R2 through ``w T2`` alone,
+    so the R2 information in the swing is the same on every machine at a fixed multiple of
+    the corner, not at a fixed frequency (2 Hz is 20 times the corner of Krause 2250 hp,
+    where the swing's R2 dependence has all but vanished).
+
+    Parameters
+    ----------
+    sc : Scenario
+        The scenario.
+
+    Returns
+    -------
+    float
+    """
+    fi = sc.flux_injection
+    if fi.frequency_Hz is not None:
+        return fi.frequency_Hz
+    if fi.frequency_pu is not None:
+        r = resolve(sc)
+        return fi.frequency_pu * r.R2_hat / (2.0 * math.pi * (r.Ll2_hat + r.M_hat))
+    return table_iv_scaled(FLUX_INJECTION_TABLE_IV_HZ, rotor_corner_Hz, sc.machine)

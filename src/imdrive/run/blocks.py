@@ -18,7 +18,7 @@ import numpy as np
 from imdrive.config.controller_model import inverter_error_half, magnetising_table
 from imdrive.config.perunit import Resolved, adc_range_A, sign_band_A
 from imdrive.config.profiles import Profile
-from imdrive.config.scaled import plant_thermal_resistances
+from imdrive.config.scaled import flux_injection_frequency_Hz, plant_thermal_resistances
 from imdrive.config.scenario import Scenario
 from imdrive.design.gains import default_current_gains, default_speed_gains
 from imdrive.errors import ConfigError
@@ -100,7 +100,7 @@ def sim_fields(sc: Scenario, D: Resolved) -> dict:
         sensorless=ctl.speed_feedback != "measured",
         delay=ctl.delay_periods,
         flux_inj_amp=sc.flux_injection.amplitude,
-        flux_inj_freq=sc.flux_injection.frequency_Hz,
+        flux_inj_freq=flux_injection_frequency_Hz(sc),
     )
 
 
