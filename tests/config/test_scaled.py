@@ -15,6 +15,7 @@ from imdrive.config.perunit import rated_peak_current_A
 from imdrive.config.scaled import (
     EKF_NOISE,
     RISE_BASE_K,
+    afo_resistance_bandwidths,
     ekf_noise,
     flux_injection_frequency_Hz,
     plant_thermal_resistances,
@@ -240,3 +241,54 @@ def test_flux_injection_old_key_works_and_is_paired():
             ["flux_injection.frequency_pu=1"]
         )
     assert flux_injection_frequency_Hz(sc) == pytest.approx(rotor_corner_Hz(sc.machine))
+
+
+# -- the AFO's resistance adaptation rates ----------------------------------------------------
+
+
+def test_afo_resistance_rates_on_table_iv_are_exactly_2_rad_s():
+    from imdrive.run.build import build_arrays
+
+    sc = _afo("paper-table-iv", 'estimator.R2_adaptation="afo"', "afo.R1_adaptation=true")
+    assert afo_resistance_bandwidths(sc.afo, sc.machine) == (2.0, 2.0)
+    old = _afo(
+        "paper-table-iv",
+        'estimator.R2_adaptation="afo"',
+        "afo.R1_adaptation=true",
+        "afo.R1_bandwidth_rad_s=2",
+        "afo.R2_bandwidth_rad_s=2",
+    )
+    new, given = build_arrays(sc).params.est, build_arrays(old).params.est
+    for f in ("k_R1", "k_R2", "Kp", "Ki"):
+        assert new[f] == given[f], f  # bit for bit
+
+
+@pytest.mark.parametrize("machine", OTHERS)
+def test_afo_resistance_rates_scale_with_the_rotor_corner_below_the_injection(machine):
+    sc, iv = _afo(machine), _afo()
+    for rate, rate_iv in zip(
+        afo_resistance_bandwidths(sc.afo, sc.machine),
+        afo_resistance_bandwidths(iv.afo, iv.machine),
+        strict=True,
+    ):
+        assert rate * sc.machine.T2_s == pytest.approx(rate_iv * iv.machine.T2_s, rel=1e-12)
+        # as far below the flux injection's angular frequency as on Table IV
+        w_inj, w_inj_iv = (2 * math.pi * flux_injection_frequency_Hz(x) for x in (sc, iv))
+        assert w_inj / rate == pytest.approx(w_inj_iv / rate_iv, rel=1e-12)
+        assert not math.isclose(rate, 2.0, rel_tol=0.05)
+
+
+@pytest.mark.parametrize("n", ("1", "2"))
+def test_afo_old_rate_keys_work_and_are_paired(n):
+    absolute, per_unit = f"afo.R{n}_bandwidth_rad_s", f"afo.R{n}_bandwidth_pu"
+    assert pair_of(absolute).per_unit == (per_unit,)
+    i = int(n) - 1
+    sc = _afo("krause-500hp", f"{absolute}=2")
+    assert afo_resistance_bandwidths(sc.afo, sc.machine)[i] == 2.0
+    sc = _afo("krause-500hp", f"{per_unit}=0.1")
+    assert afo_resistance_bandwidths(sc.afo, sc.machine)[i] == pytest.approx(0.1 / sc.machine.T2_s)
+    with pytest.raises(ConfigError, match=per_unit):
+        _afo("paper-table-iv", f"{absolute}=1", f"{per_unit}=0.1")
+    with pytest.warns(ConfigWarning, match=f"replaces {absolute}"):
+        sc = _afo("paper-table-iv", f"{absolute}=1").with_overrides([f"{per_unit}=0.1"])
+    assert getattr(sc.afo, absolute.split(".")[1]) is None

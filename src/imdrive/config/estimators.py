@@ -25,7 +25,7 @@ from imdrive.config.registry import (  # noqa: F401  (re-exported: the settings 
     estimator_settings,
     package_sections,
 )
-from imdrive.config.scaled import flux_injection_frequency_Hz
+from imdrive.config.scaled import afo_resistance_bandwidths, flux_injection_frequency_Hz
 from imdrive.config.validation import Bool, Float, setting, settings
 from imdrive.design.estimators import (
     afo_regeneration_gain,
@@ -178,16 +178,45 @@ class AfoSettings:
     ] = None
     R1_adaptation: Annotated[Bool, setting("adapt R̂1 (Kubota et al. 1993)")] = False
     R1_bandwidth_rad_s: Annotated[
-        Float, setting("R̂1 adaptation rate the gain is derived from", "rad/s", gt=0.0)
-    ] = 2.0
-    R2_bandwidth_rad_s: Annotated[
-        Float,
+        Float | None,
         setting(
-            'R̂2 adaptation rate (estimator.R2_adaptation = "afo"; needs [flux_injection])',
+            "R̂1 adaptation rate the gain is derived from; the absolute twin of R1_bandwidth_pu",
             "rad/s",
             gt=0.0,
+            default_doc="Table IV's 2 rad/s scaled by the rotor corner 1/T2 (0.175 × it; "
+            "config/scaled.py afo_resistance_bandwidths)",
         ),
-    ] = 2.0
+    ] = None
+    R1_bandwidth_pu: Annotated[
+        Float | None,
+        setting(
+            "R1_bandwidth_rad_s in per-unit of the machine's rotor corner 1/T2 = R2/L2 (as "
+            "mras.R1_rate_pu)",
+            gt=0.0,
+            default_doc="unset: R1_bandwidth_rad_s",
+        ),
+    ] = None
+    R2_bandwidth_rad_s: Annotated[
+        Float | None,
+        setting(
+            'R̂2 adaptation rate (estimator.R2_adaptation = "afo"; needs [flux_injection]); '
+            "the absolute twin of R2_bandwidth_pu",
+            "rad/s",
+            gt=0.0,
+            default_doc="Table IV's 2 rad/s scaled by the rotor corner 1/T2 (0.175 × it; "
+            "config/scaled.py afo_resistance_bandwidths)",
+        ),
+    ] = None
+    R2_bandwidth_pu: Annotated[
+        Float | None,
+        setting(
+            "R2_bandwidth_rad_s in per-unit of the machine's rotor corner 1/T2 = R2/L2, so it "
+            "stays as far below the flux injection (flux_injection.frequency_pu) on every "
+            "machine",
+            gt=0.0,
+            default_doc="unset: R2_bandwidth_rad_s",
+        ),
+    ] = None
 
     def records(self, ctx: EstimatorContext) -> EstimatorRecords:
         """Adaptation gains (:func:`default_afo_gains`) and the observer gain.
@@ -211,8 +240,7 @@ class AfoSettings:
             ctx.L2_hat,
             self.g1_per_s,
             2 * math.pi * self.bandwidth_Hz,
-            self.R1_bandwidth_rad_s,
-            self.R2_bandwidth_rad_s,
+            *afo_resistance_bandwidths(self, sc.machine),
             sc.flux_injection.amplitude,
             2 * math.pi * flux_injection_frequency_Hz(sc),
         )

@@ -116,6 +116,8 @@ PAIRS: tuple[Pair, ...] = (
     _pair("ekf.current_noise_A", "ekf.current_noise_pu", "the rated peak current"),
     _pair("plant.thermal.Rth1_K_per_W", "plant.thermal.Rth1_pu", "80 K / the rated stator losses"),
     _pair("plant.thermal.Rth2_K_per_W", "plant.thermal.Rth2_pu", "80 K / the rated rotor losses"),
+    _pair("afo.R1_bandwidth_rad_s", "afo.R1_bandwidth_pu", "the rotor corner R2/L2"),
+    _pair("afo.R2_bandwidth_rad_s", "afo.R2_bandwidth_pu", "the rotor corner R2/L2"),
     _pair(
         "flux_injection.frequency_Hz",
         "flux_injection.frequency_pu",

@@ -16,6 +16,9 @@ per-unit key                                    base it multiplies
 ``plant.thermal.Rth1_pu``, ``Rth2_pu``          ``80 K / P_cu,rated``: the class B temperature
                                                 rise over the winding's rated copper losses
                                                 (:func:`plant_thermal_resistances`)
+``afo.R1_bandwidth_pu``, ``R2_bandwidth_pu``    the rotor corner ``1 / T2`` (rad/s), as
+                                                ``mras.R1_rate_pu``
+                                                (:func:`afo_resistance_bandwidths`)
 ``flux_injection.frequency_pu``                 the controller's rotor corner
                                                 ``R2_hat(0) / (2 pi L2_hat)``, as
                                                 ``injection.frequency_pu``; unset, Table IV's
@@ -37,6 +40,7 @@ from imdrive.errors import ConfigError
 
 __all__ = [
     "EKF_NOISE",
+    "afo_resistance_bandwidths",
     "RISE_BASE_K",
     "ekf_noise",
     "flux_injection_frequency_Hz",
@@ -235,3 +239,45 @@ def flux_injection_frequency_Hz(sc) -> float:
         r = resolve(sc)
         return fi.frequency_pu * r.R2_hat / (2.0 * math.pi * (r.Ll2_hat + r.M_hat))
     return table_iv_scaled(FLUX_INJECTION_TABLE_IV_HZ, rotor_corner_Hz, sc.machine)
+
+
+#: The AFO's R1 and R2 adaptation rates on Table IV, rad/s (0.175 x its 1/T2 = 11.4 /s).
+AFO_BANDWIDTHS_TABLE_IV_RAD_S = (2.0, 2.0)
+
+
+def _rotor_corner_rad_s(machine) -> float:
+    return 1.0 / machine.T2_s
+
+
+def afo_resistance_bandwidths(afo, machine) -> tuple[float, float]:
+    """The adaptive flux observer's R̂1 and R̂2 adaptation rates, rad/s.
+
+    Each is ``afo.RN_bandwidth_rad_s`` when set; else ``RN_bandwidth_pu`` times the machine's
+    rotor corner ``1 / T2``; unset, Table IV's 2 rad/s scaled by it (:func:`table_iv_scaled`:
+    exactly 2 rad/s on Table IV, 0.22 on Krause 500 hp, 1.6 on Aalto 2.2 kW). The resistances
+    show in the flux through the rotor's corner, and the R2 law runs on the flux injection,
+    whose frequency scales with the corner (:func:`flux_injection_frequency_Hz`): a fixed
+    2 rad/s is 3.2 times the corner of Krause 2250 hp, and above that injection's 0.69 rad/s.
+
+    Parameters
+    ----------
+    afo : AfoSettings
+        The ``[afo]`` section.
+    machine : MachineParams
+        The scenario's machine.
+
+    Returns
+    -------
+    tuple of float
+    """
+    out = []
+    given = (afo.R1_bandwidth_rad_s, afo.R2_bandwidth_rad_s)
+    per_unit = (afo.R1_bandwidth_pu, afo.R2_bandwidth_pu)
+    for g, pu, table_iv in zip(given, per_unit, AFO_BANDWIDTHS_TABLE_IV_RAD_S, strict=True):
+        if g is not None:
+            out.append(g)
+        elif pu is not None:
+            out.append(pu * _rotor_corner_rad_s(machine))
+        else:
+            out.append(table_iv_scaled(table_iv, _rotor_corner_rad_s, machine))
+    return tuple(out)
