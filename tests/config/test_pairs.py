@@ -73,6 +73,12 @@ def test_every_per_unit_key_with_an_absolute_twin_is_declared():
 # -- one override on a layer carrying the other member ---------------------------------------
 
 
+def _table(data: dict, path: list[str]) -> dict:
+    for p in path:
+        data = data.setdefault(p, {})
+    return data
+
+
 @pytest.mark.parametrize("pair", PAIRS, ids=lambda p: p.per_unit[0])
 @pytest.mark.parametrize("direction", ["absolute over per-unit", "per-unit over absolute"])
 def test_setting_one_member_clears_the_other_with_a_note(pair, direction):
@@ -81,12 +87,12 @@ def test_setting_one_member_clears_the_other_with_a_note(pair, direction):
         new, old = old, new
     data: dict = {}
     for k in old:
-        sec, name = k.split(".")
-        data.setdefault(sec, {})[name] = 123.0  # not a default of any member
+        *sec, name = k.split(".")  # a section may be nested (plant.thermal)
+        _table(data, sec)[name] = 123.0  # not a default of any member
     with pytest.warns(ConfigWarning) as seen:
         set_layer(data, [(tuple(new[0].split(".")), 7.0)])
-    sec, name = new[0].split(".")
-    assert data[sec] == {name: 7.0}
+    *sec, name = new[0].split(".")
+    assert _table(data, sec) == {name: 7.0}
     notes = [str(w.message) for w in seen]
     assert len(notes) == len(old)
     for k, note in zip(old, notes, strict=True):

@@ -25,11 +25,11 @@ from imdrive.config.registry import (  # noqa: F401  (re-exported: the settings 
     estimator_settings,
     package_sections,
 )
+from imdrive.config.scaled import afo_resistance_bandwidths, flux_injection_frequency_Hz
 from imdrive.config.validation import Bool, Float, setting, settings
 from imdrive.design.estimators import (
     afo_regeneration_gain,
     default_afo_gains,
-    default_ekf_noise,
     default_reactive_mras_gains,
 )
 from imdrive.design.gains import default_mras_gains, mras_type2_gains
@@ -178,16 +178,45 @@ class AfoSettings:
     ] = None
     R1_adaptation: Annotated[Bool, setting("adapt R̂1 (Kubota et al. 1993)")] = False
     R1_bandwidth_rad_s: Annotated[
-        Float, setting("R̂1 adaptation rate the gain is derived from", "rad/s", gt=0.0)
-    ] = 2.0
-    R2_bandwidth_rad_s: Annotated[
-        Float,
+        Float | None,
         setting(
-            'R̂2 adaptation rate (estimator.R2_adaptation = "afo"; needs [flux_injection])',
+            "R̂1 adaptation rate the gain is derived from; the absolute twin of R1_bandwidth_pu",
             "rad/s",
             gt=0.0,
+            default_doc="Table IV's 2 rad/s scaled by the rotor corner 1/T2 (0.175 × it; "
+            "config/scaled.py afo_resistance_bandwidths)",
         ),
-    ] = 2.0
+    ] = None
+    R1_bandwidth_pu: Annotated[
+        Float | None,
+        setting(
+            "R1_bandwidth_rad_s in per-unit of the machine's rotor corner 1/T2 = R2/L2 (as "
+            "mras.R1_rate_pu)",
+            gt=0.0,
+            default_doc="unset: R1_bandwidth_rad_s",
+        ),
+    ] = None
+    R2_bandwidth_rad_s: Annotated[
+        Float | None,
+        setting(
+            'R̂2 adaptation rate (estimator.R2_adaptation = "afo"; needs [flux_injection]); '
+            "the absolute twin of R2_bandwidth_pu",
+            "rad/s",
+            gt=0.0,
+            default_doc="Table IV's 2 rad/s scaled by the rotor corner 1/T2 (0.175 × it; "
+            "config/scaled.py afo_resistance_bandwidths)",
+        ),
+    ] = None
+    R2_bandwidth_pu: Annotated[
+        Float | None,
+        setting(
+            "R2_bandwidth_rad_s in per-unit of the machine's rotor corner 1/T2 = R2/L2, so it "
+            "stays as far below the flux injection (flux_injection.frequency_pu) on every "
+            "machine",
+            gt=0.0,
+            default_doc="unset: R2_bandwidth_rad_s",
+        ),
+    ] = None
 
     def records(self, ctx: EstimatorContext) -> EstimatorRecords:
         """Adaptation gains (:func:`default_afo_gains`) and the observer gain.
@@ -211,10 +240,9 @@ class AfoSettings:
             ctx.L2_hat,
             self.g1_per_s,
             2 * math.pi * self.bandwidth_Hz,
-            self.R1_bandwidth_rad_s,
-            self.R2_bandwidth_rad_s,
+            *afo_resistance_bandwidths(self, sc.machine),
             sc.flux_injection.amplitude,
-            2 * math.pi * sc.flux_injection.frequency_Hz,
+            2 * math.pi * flux_injection_frequency_Hz(sc),
         )
         regen = self.gain == "regeneration"
         g2 = self.g2_ohm
@@ -240,64 +268,9 @@ class AfoSettings:
         return EstimatorRecords(params, derived=derived)
 
 
-@estimator_settings("ekf", "ekf", description="extended Kalman filter for speed and R2")
-class EkfSettings:
-    """Extended Kalman filter for speed and R2 (``[ekf]``); noise as standard deviations.
-
-    Per-period variances: currents ``(voltage_noise_V Ts / σL1)²``, fluxes
-    ``(flux_noise_Wb_per_s Ts)²``... see :func:`imdrive.design.estimators.default_ekf_noise`.
-    """
-
-    voltage_noise_V: Annotated[
-        Float, setting("voltage uncertainty behind the current's process noise", "V", gt=0.0)
-    ] = 5.0
-    flux_noise_Wb_per_s: Annotated[
-        Float, setting("rotor-flux process noise density", "Wb/s", gt=0.0)
-    ] = 0.1
-    acceleration_noise_rad_s2: Annotated[
-        Float, setting("speed process noise: electrical acceleration uncertainty", "rad/s²", gt=0.0)
-    ] = 2000.0
-    R2_drift_ohm_per_s: Annotated[
-        Float, setting("R2 process noise: drift-rate uncertainty", "ohm/s", gt=0.0)
-    ] = 0.5
-    current_noise_A: Annotated[
-        Float, setting("measurement noise per current component (rms)", "A", gt=0.0)
-    ] = 0.05
-
-    def records(self, ctx: EstimatorContext) -> EstimatorRecords:
-        """Process and measurement noise (:func:`default_ekf_noise`).
-
-        Parameters
-        ----------
-        ctx : EstimatorContext
-            The controller's model and the drive.
-
-        Returns
-        -------
-        EstimatorRecords
-        """
-        q, r, p0 = default_ekf_noise(
-            ctx.Ts,
-            ctx.sigma_L1_hat,
-            ctx.psi0,
-            ctx.R2_hat,
-            self.voltage_noise_V,
-            self.flux_noise_Wb_per_s,
-            self.acceleration_noise_rad_s2,
-            self.R2_drift_ohm_per_s,
-            self.current_noise_A,
-        )
-        on = ctx.scenario.estimator.R2_adaptation == "ekf"
-        params = dict(
-            q=q,
-            r=r,
-            p0=p0,
-            estimate_R2=on,
-            R2_min=0.5 * ctx.R2_hat,
-            R2_max=2.0 * ctx.R2_hat,
-            write_R2=on,
-        )
-        return EstimatorRecords(params)
+# the EKF's settings live in their own module (this one's size); imported here so it registers
+# in its place among the others, and the old import path works
+from imdrive.config.estimators_ekf import EkfSettings  # noqa: E402,F401
 
 
 @settings("flux_injection")
@@ -308,7 +281,25 @@ class FluxInjectionSettings:
     amplitude: Annotated[
         Float, setting("relative amplitude of the sinusoid on the flux command", ge=0.0, lt=1.0)
     ] = 0.0
-    frequency_Hz: Annotated[Float, setting("frequency of the sinusoid", "Hz", gt=0.0)] = 2.0
+    frequency_Hz: Annotated[
+        Float | None,
+        setting(
+            "frequency of the sinusoid; the absolute twin of frequency_pu",
+            "Hz",
+            gt=0.0,
+            default_doc="Table IV's 2 Hz scaled by the machine's rotor corner R2/(2π L2) "
+            "(1.098 × it; config/scaled.py flux_injection_frequency_Hz)",
+        ),
+    ] = None
+    frequency_pu: Annotated[
+        Float | None,
+        setting(
+            "frequency_Hz in per-unit of the controller's rotor corner R̂2(0)/(2π L̂2), as "
+            "injection.frequency_pu: the flux follows its command through the rotor's corner",
+            gt=0.0,
+            default_doc="unset: frequency_Hz",
+        ),
+    ] = None
 
 
 _WB = ("Wb", 1.0)

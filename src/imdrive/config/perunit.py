@@ -42,6 +42,9 @@ per-unit key                                SI value
 A per-unit key and its absolute twin are one setting: :data:`imdrive.config.pairs.PAIRS`
 declares every pair once, and an override of one member clears the other (see
 :mod:`imdrive.config.pairs`).
+The EKF's noise, the plant's thermal resistances, the flux-command injection's frequency
+and the adaptive flux observer's resistance rates are resolved in
+:mod:`imdrive.config.scaled` (this module's size).
 
 ``psi_rated`` is :attr:`~imdrive.config.machine.MachineParams.rated_flux_Wb` (the no-load
 rotor flux at rated voltage and frequency) and ``psi_rated / M`` the rated magnetising

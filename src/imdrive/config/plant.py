@@ -22,7 +22,9 @@ class ThermalSettings:
     """First-order thermal model of each winding (section ``[plant.thermal]``).
 
     ``tau dtheta/dt = Rth P_cu - (theta - theta_amb)`` and ``R = R_ref (1 + alpha (theta -
-    theta_ref))``, one per winding (1: stator, 2: rotor).
+    theta_ref))``, one per winding (1: stator, 2: rotor). The thermal resistances default in
+    per-unit of the machine's rated copper losses, the time constants are absolute
+    (:func:`imdrive.config.scaled.plant_thermal_resistances`).
     """
 
     enabled: Annotated[
@@ -63,12 +65,46 @@ class ThermalSettings:
         ),
     ] = 20.0
     Rth1_K_per_W: Annotated[
-        Float, setting("thermal resistance, stator winding to ambient", "K/W", gt=0.0)
-    ] = 0.4
+        Float | None,
+        setting(
+            "thermal resistance, stator winding to ambient; the absolute twin of Rth1_pu",
+            "K/W",
+            gt=0.0,
+            default_doc="Table IV's 0.4 K/W scaled by 1 / the rated stator copper losses "
+            "(config/scaled.py plant_thermal_resistances)",
+        ),
+    ] = None
+    Rth1_pu: Annotated[
+        Float | None,
+        setting(
+            "Rth1_K_per_W in per-unit of 80 K (the class B rise of IEC 60034-1) over the "
+            "machine's rated stator copper losses 1.5 R1 I_peak²: the winding's rise at them "
+            "over 80 K",
+            gt=0.0,
+            default_doc="unset: Rth1_K_per_W",
+        ),
+    ] = None
     tau1_s: Annotated[Float, setting("thermal time constant of the stator", "s", gt=0.0)] = 1200.0
     Rth2_K_per_W: Annotated[
-        Float, setting("thermal resistance, rotor winding to ambient", "K/W", gt=0.0)
-    ] = 0.4
+        Float | None,
+        setting(
+            "thermal resistance, rotor winding to ambient; the absolute twin of Rth2_pu",
+            "K/W",
+            gt=0.0,
+            default_doc="Table IV's 0.4 K/W scaled by 1 / the rated rotor copper losses "
+            "(config/scaled.py plant_thermal_resistances)",
+        ),
+    ] = None
+    Rth2_pu: Annotated[
+        Float | None,
+        setting(
+            "Rth2_K_per_W in per-unit of 80 K (the class B rise of IEC 60034-1) over the "
+            "machine's rated rotor copper losses s T_rated w_sync: the winding's rise at them "
+            "over 80 K",
+            gt=0.0,
+            default_doc="unset: Rth2_K_per_W",
+        ),
+    ] = None
     tau2_s: Annotated[Float, setting("thermal time constant of the rotor", "s", gt=0.0)] = 1200.0
 
     @model_validator(mode="after")

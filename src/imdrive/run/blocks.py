@@ -18,6 +18,7 @@ import numpy as np
 from imdrive.config.controller_model import inverter_error_half, magnetising_table
 from imdrive.config.perunit import Resolved, adc_range_A, sign_band_A
 from imdrive.config.profiles import Profile
+from imdrive.config.scaled import flux_injection_frequency_Hz, plant_thermal_resistances
 from imdrive.config.scenario import Scenario
 from imdrive.design.gains import default_current_gains, default_speed_gains
 from imdrive.errors import ConfigError
@@ -54,6 +55,8 @@ def plant_fields(sc: Scenario, D: Resolved) -> dict:
     """``PLANT_PARAMS``: the machine, its load, thermal model and saturation."""
     m = sc.machine
     th = sc.plant.thermal
+    # off, the kernels never read them (kernels/machine.py, bridge.py: if p.thermal)
+    Rth1, Rth2 = plant_thermal_resistances(sc) if th.enabled else (0.0, 0.0)
     return dict(
         R1=m.R1_ohm,
         R2=m.R2_ohm,
@@ -69,9 +72,9 @@ def plant_fields(sc: Scenario, D: Resolved) -> dict:
         alpha2=th.alpha2_per_K,
         theta_ref=th.theta_ref_C,
         theta_amb=th.theta_amb_C,
-        Rth1=th.Rth1_K_per_W,
+        Rth1=Rth1,
         tau1=th.tau1_s,
-        Rth2=th.Rth2_K_per_W,
+        Rth2=Rth2,
         tau2=th.tau2_s,
         thermal=th.enabled,
         speed_imposed=sc.plant.speed_mode == "imposed",
@@ -97,7 +100,7 @@ def sim_fields(sc: Scenario, D: Resolved) -> dict:
         sensorless=ctl.speed_feedback != "measured",
         delay=ctl.delay_periods,
         flux_inj_amp=sc.flux_injection.amplitude,
-        flux_inj_freq=sc.flux_injection.frequency_Hz,
+        flux_inj_freq=flux_injection_frequency_Hz(sc),
     )
 
 
