@@ -307,7 +307,21 @@ def switching_period(
 
 @njit(cache=True)
 def bridge_period(
-    pinv, sinv, pp, x, v_alpha, v_beta, Vdc_meas, R1b, R2b, TL0, Ts, nsub, ev, trace, carry,
+    pinv,
+    sinv,
+    pp,
+    x,
+    v_alpha,
+    v_beta,
+    Vdc_meas,
+    R1b,
+    R2b,
+    TL0,
+    Ts,
+    nsub,
+    ev,
+    trace,
+    carry,
     advance=0.0,
 ):
     """Integrate the plant over one carrier period of the switching bridge (updates ``x``).
