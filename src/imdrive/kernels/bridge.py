@@ -306,24 +306,8 @@ def switching_period(
 
 
 @njit(cache=True)
-def bridge_period(
-    pinv,
-    sinv,
-    pp,
-    x,
-    v_alpha,
-    v_beta,
-    Vdc_meas,
-    R1b,
-    R2b,
-    TL0,
-    Ts,
-    nsub,
-    ev,
-    trace,
-    carry,
-    advance=0.0,
-):
+def bridge_period(pinv, sinv, pp, x, v_alpha, v_beta, Vdc_meas, R1b, R2b, TL0, Ts, nsub, ev,
+                  trace, carry, advance=0.0):  # fmt: skip
     """Integrate the plant over one carrier period of the switching bridge (updates ``x``).
 
     The gate commands of the period (:func:`imdrive.kernels.inverter.gate_commands`) and the
