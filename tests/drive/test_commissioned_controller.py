@@ -302,11 +302,21 @@ def test_table_feedforward_acts_at_the_current_of_the_period_where_the_voltage_a
     got = inverter_feedforward(pc, s, i.real, i.imag, Ts)
     assert got == dead_time_feedforward(pc, turned.real, turned.imag)
     assert got != dead_time_feedforward(pc, i.real, i.imag)  # the sign of phase a changed
-    # the sign model of [control] is not turned (unchanged behaviour)
+    # the switching bridge's sign model of [control] is turned the same way
     sign = Scenario.read("sensorless-realistic-uncommissioned")
     pc0 = build_arrays(sign).params.control[0]
+    assert pc0["dtc_ripple"] > 0.0 and pc0["dtc_u"] > 0.0
     assert inverter_feedforward(pc0, s, i.real, i.imag, Ts) == dead_time_feedforward(
-        pc0, i.real, i.imag
+        pc0, turned.real, turned.imag
+    )
+    # the fixed band's is not (as the average model's: its loss acts at the sample's current)
+    fixed = Scenario.read(
+        "sensorless-realistic-uncommissioned", ['control.dead_time_compensation_band="fixed"']
+    )
+    pc1 = build_arrays(fixed).params.control[0]
+    assert pc1["dtc_ripple"] == 0.0
+    assert inverter_feedforward(pc1, s, i.real, i.imag, Ts) == dead_time_feedforward(
+        pc1, i.real, i.imag
     )
 
 

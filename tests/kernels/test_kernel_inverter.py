@@ -182,3 +182,20 @@ def test_pole_voltages_of_a_pole_state():
     assert (va, vb) == pytest.approx((2.0 / 3.0 * VDC, 0.0), abs=1e-9)
     s["pole"][:] = [1.0, 1.0, 1.0]  # a zero vector
     assert pole_voltages_ab(_params(), s, VDC, 0.0, 0.0) == pytest.approx((0.0, 0.0), abs=1e-9)
+
+
+def test_advance_moves_every_switching_legs_commands_earlier_and_keeps_the_pulse():
+    Ts = TS
+    s = np.zeros(1, dtype=INVERTER_STATE)[0]
+    ev = np.zeros((3, MAX_EVENTS))
+    d = np.array([0.5, 0.99, 1.0])  # a leg in the middle, one near the top, one high throughout
+    n = gate_commands(s, d, Ts, ev[0], ev[1], ev[2], 2e-6)
+    cmds = {(int(ev[1, j]), ev[2, j]): ev[0, j] for j in range(n)}
+    # leg a: both commands 2 us early, the pulse as long as commanded
+    assert cmds[(0, 1.0)] == pytest.approx(0.25 * Ts - 2e-6, abs=1e-15)
+    assert cmds[(0, 0.0)] == pytest.approx(0.75 * Ts - 2e-6, abs=1e-15)
+    # leg b turns on 0.5 us after the period's start: moved by that only, the pulse whole
+    assert cmds[(1, 1.0)] == pytest.approx(0.0, abs=1e-15)
+    assert cmds[(1, 0.0)] - cmds[(1, 1.0)] == pytest.approx(0.99 * Ts, abs=1e-15)
+    # leg c is high all period: one command at the start, none moved
+    assert cmds[(2, 1.0)] == 0.0 and (2, 0.0) not in cmds

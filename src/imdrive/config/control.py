@@ -214,9 +214,14 @@ class ControlSettings:
             "(computed from the voltage reference) straddles zero and whole beyond it "
             "(kernels/ifoc.py, commutation_ripple; the fixed band, wider than that ripple at "
             "low speed, stalled the current at its zero crossings and biased R2_hat 2-7 % low "
-            'at 0.1 of the rated speed); "fixed": the sign smooth over inverter.sign_band_A '
-            "throughout. The average model's loss changes sign over inverter.sign_band_A, so "
-            "there the band is that in either case"
+            "at 0.1 of the rated speed), taken at the current turned to the middle of the "
+            "period where it acts, and the modulator moves every gate command earlier by half "
+            "the assumed dead time (the dead time delays the pulses' centres by that, and the "
+            "current sample then biased the MRAS's estimate in proportion to the speed; "
+            'kernels/ifoc.py, dead_time_advance); "fixed": the sign smooth over '
+            "inverter.sign_band_A throughout, at the sample's current, no advance. The average "
+            "model's loss changes sign over inverter.sign_band_A, so there the band is that in "
+            "either case"
         ),
     ] = "ripple"
     dead_time_compensation_s: Annotated[

@@ -306,9 +306,8 @@ def switching_period(
 
 
 @njit(cache=True)
-def bridge_period(
-    pinv, sinv, pp, x, v_alpha, v_beta, Vdc_meas, R1b, R2b, TL0, Ts, nsub, ev, trace, carry
-):
+def bridge_period(pinv, sinv, pp, x, v_alpha, v_beta, Vdc_meas, R1b, R2b, TL0, Ts, nsub, ev,
+                  trace, carry, advance=0.0):  # fmt: skip
     """Integrate the plant over one carrier period of the switching bridge (updates ``x``).
 
     The gate commands of the period (:func:`imdrive.kernels.inverter.gate_commands`) and the
@@ -324,11 +323,12 @@ def bridge_period(
     stator current). ``ev`` is float64[3, MAX_EVENTS] scratch (times,
     legs, states). ``trace``, float64[n, 3], receives ``(t, i_alpha, i_beta)`` at the start
     of every interval while it has rows (pass a zero-row array for none): the current ripple's
-    extremes are at these instants.
+    extremes are at these instants. ``advance``: the modulator's advance of the gate commands,
+    s (:func:`imdrive.kernels.inverter.gate_commands`).
     """
     d = duty_cycles(v_alpha, v_beta, Vdc_meas)
     ev_t, ev_leg, ev_state = ev[0], ev[1], ev[2]
-    n = gate_commands(sinv, d, Ts, ev_t, ev_leg, ev_state)
+    n = gate_commands(sinv, d, Ts, ev_t, ev_leg, ev_state, advance)
 
     # --- held over the period: resistances, speed; the state at the start
     R1, R2 = winding_resistances(pp, x, R1b, R2b)

@@ -176,11 +176,16 @@ def duty_cycles(v_alpha, v_beta, Vdc_meas):
 
 
 @njit(cache=True)
-def gate_commands(s, d, Ts, ev_t, ev_leg, ev_state):
+def gate_commands(s, d, Ts, ev_t, ev_leg, ev_state, advance=0.0):
     """Gate changes of one carrier period, in time order (writes the ``ev_*`` arrays).
 
     ``s`` is the INVERTER_STATE (its ``gate`` is the command at the end of the last period and
-    becomes this period's final command), ``d`` the three duty cycles. Returns the count.
+    becomes this period's final command), ``d`` the three duty cycles. ``advance`` (s) moves
+    both commands of every switching leg earlier, the pulse kept whole (a leg's advance is at
+    most the time before its turn-on): the controller's dead-time compensation, which
+    widens the pulses the dead time narrows, moves them back to where the dead time's delay
+    of every commanded edge by ``t_d/2`` on the average would otherwise put their centres
+    (:func:`imdrive.kernels.ifoc.dead_time_advance`). Returns the count.
     """
     n = 0
     for x in range(3):
@@ -205,11 +210,13 @@ def gate_commands(s, d, Ts, ev_t, ev_leg, ev_state):
                 ev_leg[n] = x
                 ev_state[n] = 0.0
                 n += 1
-            ev_t[n] = (1.0 - d[x]) * 0.5 * Ts
+            t_on = (1.0 - d[x]) * 0.5 * Ts
+            a = min(advance, t_on)
+            ev_t[n] = t_on - a
             ev_leg[n] = x
             ev_state[n] = 1.0
             n += 1
-            ev_t[n] = (1.0 + d[x]) * 0.5 * Ts
+            ev_t[n] = (1.0 + d[x]) * 0.5 * Ts - a
             ev_leg[n] = x
             ev_state[n] = 0.0
             n += 1

@@ -52,6 +52,7 @@ from imdrive.kernels.estimators.registry import (
     estimator_step,
 )
 from imdrive.kernels.ifoc import (
+    dead_time_advance,
     field_weakening,
     foc_step,
     has_feedforward,
@@ -124,6 +125,7 @@ class Command(NamedTuple):
     v_log_ab: complex  # the reference computed at this sample (logged), V
     v_ref_ab: complex  # the reference that acts this period (after the delay), V
     dv_ab: complex  # the dead-time compensation contained in v_ref_ab, V
+    t_adv: float  # the switching bridge's advance of the gate commands, s
 
 
 class Modulation(NamedTuple):
@@ -132,6 +134,7 @@ class Modulation(NamedTuple):
     v_cmd_ab: complex  # what the controller commands and believes applied, V
     v_app_ab: complex  # the period-average voltage at the terminals, V (switching: the command)
     n_seg: int  # segments of the average model
+    t_adv: float  # the switching bridge's advance of the gate commands, s
 
 
 #: The loop's scratch memory, one record for the run. A record is handed to a stage as a
@@ -298,6 +301,7 @@ def control(sim, pc, x, mdl, ctl, smp, prof, smpl, estm, foc):
 
     dv_alpha = 0.0
     dv_beta = 0.0
+    t_adv = 0.0
     if has_feedforward(pc):  # inverter-error compensation, on the measured current
         dv_alpha, dv_beta = inverter_feedforward(
             pc, ctl, i_meas_alpha, i_meas_beta, Ts, v_ref_alpha, v_ref_beta
@@ -306,6 +310,7 @@ def control(sim, pc, x, mdl, ctl, smp, prof, smpl, estm, foc):
             standstill_compensation(ctl, dv_alpha, dv_beta, i_meas_alpha, i_meas_beta, w_ref)
         v_ref_alpha += dv_alpha
         v_ref_beta += dv_beta
+        t_adv = dead_time_advance(pc, ctl, Ts)
     v_log_ab = complex(v_ref_alpha, v_ref_beta)
     if sim.delay > 0:  # the reference of the last sample acts now, this one next period
         held = smp.v_hold_ab
@@ -316,7 +321,8 @@ def control(sim, pc, x, mdl, ctl, smp, prof, smpl, estm, foc):
         v_ref_beta = held.imag
         dv_alpha = held_dv.real
         dv_beta = held_dv.imag
-    return Command(w_ref, v_log_ab, complex(v_ref_alpha, v_ref_beta), complex(dv_alpha, dv_beta))
+    v_ref_ab = complex(v_ref_alpha, v_ref_beta)
+    return Command(w_ref, v_log_ab, v_ref_ab, complex(dv_alpha, dv_beta), t_adv)
 
 
 @njit(cache=True, inline="always")
@@ -375,7 +381,7 @@ def modulate(pinv, pc, smp, smpl, cmd, switching, Vdc_meas, scr, Ts):
         smp.v_prev_ab = complex(v_cmd_alpha, v_cmd_beta)
     smp.v_use = abs(complex(v_cmd_alpha, v_cmd_beta)) / (Vdc_meas / math.sqrt(3.0))
     smp.i_prev_ab = smpl.i_meas_ab
-    return Modulation(complex(v_cmd_alpha, v_cmd_beta), v_app_ab, n_seg)
+    return Modulation(complex(v_cmd_alpha, v_cmd_beta), v_app_ab, n_seg, cmd.t_adv)
 
 
 @njit(cache=True, inline="always")
@@ -410,6 +416,7 @@ def plant(pinv, sinv, pp, x, prof, mod, switching, Vdc_meas, nsub, scr, Ts):
         v_app_alpha, v_app_beta = bridge_period(
             pinv, sinv, pp, x, v_cmd.real, v_cmd.imag, Vdc_meas,
             prof.R1_base, prof.R2_base, prof.T_L0, Ts, nsub, scr.ev, scr.no_trace, scr,
+            mod.t_adv,
         )  # fmt: skip
         return complex(v_app_alpha, v_app_beta)
     seg_dt = scr.seg_dt
