@@ -117,15 +117,20 @@ def ekf_noise(ekf, machine) -> tuple[float, float, float, float, float]:
     -------
     tuple of float
     """
-    out = []
-    for absolute, per_unit, table_iv, base in EKF_NOISE:
-        if getattr(ekf, absolute) is not None:
-            out.append(getattr(ekf, absolute))
-        elif getattr(ekf, per_unit) is not None:
-            out.append(getattr(ekf, per_unit) * base(machine))
-        else:
-            out.append(table_iv_scaled(table_iv, base, machine))
-    return tuple(out)
+    return tuple(
+        _given_or_scaled(getattr(ekf, absolute), getattr(ekf, per_unit), table_iv, base, machine)
+        for absolute, per_unit, table_iv, base in EKF_NOISE
+    )
+
+
+def _given_or_scaled(absolute, per_unit, table_iv: float, base, machine) -> float:
+    """``absolute`` when set, else ``per_unit x base(machine)``, else Table IV's value scaled
+    by the base (:func:`table_iv_scaled`)."""
+    if absolute is not None:
+        return absolute
+    if per_unit is not None:
+        return per_unit * base(machine)
+    return table_iv_scaled(table_iv, base, machine)
 
 
 #: The temperature rise the plant's thermal resistances are stated in, K: the class B limit of
@@ -274,10 +279,5 @@ def afo_resistance_bandwidths(afo, machine) -> tuple[float, float]:
     given = (afo.R1_bandwidth_rad_s, afo.R2_bandwidth_rad_s)
     per_unit = (afo.R1_bandwidth_pu, afo.R2_bandwidth_pu)
     for g, pu, table_iv in zip(given, per_unit, AFO_BANDWIDTHS_TABLE_IV_RAD_S, strict=True):
-        if g is not None:
-            out.append(g)
-        elif pu is not None:
-            out.append(pu * _rotor_corner_rad_s(machine))
-        else:
-            out.append(table_iv_scaled(table_iv, _rotor_corner_rad_s, machine))
+        out.append(_given_or_scaled(g, pu, table_iv, _rotor_corner_rad_s, machine))
     return tuple(out)
