@@ -8,18 +8,7 @@ from __future__ import annotations
 
 import math
 
-from imdrive.errors import ConfigError
-
-
-def _rated_point_or_none(machine):
-    # the rated point, or None for a circuit without one (then neither rule applies)
-    from imdrive.config.machine import rated_point
-
-    try:
-        return rated_point(machine)
-    except ConfigError:
-        return None
-
+from imdrive.config.rated import rated_point_or_none as _rated_point_or_none
 
 #: The type-1 MRAS's lag at the machine's rated acceleration, in units of the rotor's corner
 #: frequency 1/T2, above which the MRAS runs its type-2 adaptation by default

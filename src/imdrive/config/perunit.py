@@ -284,14 +284,11 @@ def _resolve(sc) -> Resolved:
 
 
 def _rated_point_or_none(machine):
-    """The machine's rated point (:func:`~imdrive.config.rated.rated_point`), or None for a
-    circuit without one (each caller then falls back on the synchronous speed)."""
-    from imdrive.config.machine import rated_point
+    """The machine's rated point, or None for a circuit without one (each caller then falls
+    back on the synchronous speed): :func:`imdrive.config.rated.rated_point_or_none`."""
+    from imdrive.config.rated import rated_point_or_none
 
-    try:
-        return rated_point(machine)
-    except ConfigError:
-        return None
+    return rated_point_or_none(machine)
 
 
 def _synchronous_rpm(machine) -> float:

@@ -539,3 +539,22 @@ def rated_point_dict(m: MachineParams) -> dict | None:
         return rated_point(m).to_dict()
     except ConfigError:
         return None
+
+
+def rated_point_or_none(m: MachineParams) -> RatedPoint | None:
+    """:func:`rated_point`, or None for a circuit without one (its ``ConfigError``): callers
+    whose per-unit rule then does not apply, or falls back on the synchronous speed.
+
+    Parameters
+    ----------
+    m : MachineParams
+        The machine.
+
+    Returns
+    -------
+    RatedPoint or None
+    """
+    try:
+        return rated_point(m)
+    except ConfigError:
+        return None
