@@ -8,7 +8,7 @@ priority (kernels/ifoc.py ``foc_step``); what is left for ``v_q`` falls short of
 which drives ``i_q`` further into generation than its reference, the decoupling's
 ``-w_e sigma L1 iq*`` and the d loop's integral raise ``v_d`` and take still more of the limit:
 the q current runs away and control is lost. The voltage-feedback field weakening
-(``control.field_weakening``, the machine envelope's sensorless drive) holds the voltage at
+(``control.field_weakening``, on by default at this speed) holds the voltage at
 0.9 of the limit, at 0.93 and 0.90 of the rated flux there, and the speed settles where the
 MRAS detuning law at that flux puts it.
 
@@ -23,6 +23,7 @@ import warnings
 import numpy as np
 import pytest
 
+from imdrive.config.field_weakening import field_weakening_on
 from imdrive.config.perunit import resolve
 from imdrive.errors import ConfigWarning
 from imdrive.run.batch import simulate_batch
@@ -49,7 +50,7 @@ def _runs(machine, load_pu, ratio):
 def test_regenerating_at_rated_speed_is_held_by_the_field_weakening(machine, load_pu, ratio):
     sc, row, batch = _runs(machine, load_pu, ratio)
     held, bare = batch.metrics.iloc[0], batch.metrics.iloc[1]
-    assert sc.control.field_weakening
+    assert sc.control.field_weakening is None and field_weakening_on(sc)  # the default
 
     # without field weakening: the q current runs past its reference at the voltage limit,
     # half the rated current beyond it while the d current has fallen, then control is lost

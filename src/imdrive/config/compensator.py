@@ -349,7 +349,7 @@ class InjectionSettings:
             "the amplitude backs off as the voltage use (peak over each injection period) "
             "rises from headroom_from to headroom_to, and is off in field weakening; the "
             "compensator freezes below half amplitude (kernels/compensator.py)",
-            default_doc="on with control.field_weakening, else off",
+            default_doc="on with control.field_weakening (set or by default), else off",
         ),
     ] = None
     headroom_from: Annotated[

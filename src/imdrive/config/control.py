@@ -166,13 +166,16 @@ class ControlSettings:
         Bool, setting("cross-coupling and back-emf feed-forward in the current controllers")
     ] = True
     field_weakening: Annotated[
-        Bool,
+        Bool | None,
         setting(
             "field weakening above base speed: the flux reference is scaled down by a voltage "
             "feedback that holds the voltage use at field_weakening_voltage "
-            "(kernels/ifoc.py, field_weakening); turns injection.headroom on"
+            "(kernels/ifoc.py, field_weakening); turns injection.headroom on",
+            default_doc="on when the speed reference reaches the speed where the rated "
+            "torque at rated flux needs more than field_weakening_voltage of Vdc/√3 "
+            "(config/field_weakening.py), else off",
         ),
-    ] = False
+    ] = None
     field_weakening_voltage: Annotated[
         Float,
         setting("field weakening: voltage use it holds (fraction of Vdc/√3)", gt=0.0, le=1.0),

@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 from typing import Annotated, Literal
 
+from imdrive.config.field_weakening import field_weakening_on
 from imdrive.config.registry import (  # noqa: F401  (re-exported: the settings half's API)
     ESTIMATOR_SETTINGS,
     EstimatorContext,
@@ -379,7 +380,7 @@ class MrasSettings:
         setting(
             "scale the adaptation error by (design flux / estimated flux)², so the loop keeps "
             "its bandwidth in field weakening (kernels/estimators/mras.py)",
-            default_doc="on with control.field_weakening, else off",
+            default_doc="on with control.field_weakening (set or by default), else off",
         ),
     ] = None
     R1_standstill: Annotated[
@@ -460,7 +461,7 @@ class MrasSettings:
             K1, K2 = default_mras_gains(ctx.psi0, T2_hat, a)
         K1 = self.K1 if self.K1 is not None else K1
         K2 = self.K2 if self.K2 is not None else K2
-        normalise = self.normalise if self.normalise is not None else sc.control.field_weakening
+        normalise = self.normalise if self.normalise is not None else field_weakening_on(sc)
         if self.R1_rate_pu is not None and self.R1_rate_per_s != 0.0:
             raise ConfigError(
                 "mras.R1_rate_pu", "set mras.R1_rate_per_s or mras.R1_rate_pu, not both"

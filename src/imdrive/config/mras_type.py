@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 
+from imdrive.config.field_weakening import field_weakening_on
 from imdrive.config.rated import rated_point_or_none as _rated_point_or_none
 
 #: The type-1 MRAS's lag at the machine's rated acceleration, in units of the rotor's corner
@@ -88,7 +89,7 @@ def mras_type2_for_field_weakening(sc) -> bool:
     -------
     bool
     """
-    if not sc.control.field_weakening:
+    if not field_weakening_on(sc):
         return False
     rp = _rated_point_or_none(sc.machine)
     if rp is None:

@@ -16,6 +16,7 @@ import math
 import numpy as np
 
 from imdrive.config.controller_model import inverter_error_half, magnetising_table
+from imdrive.config.field_weakening import field_weakening_on
 from imdrive.config.perunit import Resolved, adc_range_A, sign_band_A
 from imdrive.config.profiles import Profile
 from imdrive.config.scaled import flux_injection_frequency_Hz, plant_thermal_resistances
@@ -251,7 +252,7 @@ def control_fields(sc: Scenario, D: Resolved, mh: dict, psi0: float) -> tuple[di
         ie_wmin=2 * math.pi * m.rated_frequency_Hz * ctl.inverter_error_adaptation_fmin_pu,
         # the MRAS's standstill R1 identification absorbed the residual the scale learns
         ie_r1=ie_rate > 0 and ctl.speed_feedback == "mras" and sc.mras.R1_standstill,
-        fw=ctl.field_weakening,
+        fw=field_weakening_on(sc),
         fw_v=ctl.field_weakening_voltage,
         fw_rate=ctl.field_weakening_rate,
         fw_min=ctl.field_weakening_min,
@@ -356,7 +357,7 @@ def _gating(sc, r) -> dict:
     on = comp.gating if comp.gating is not None else comp.input == "demodulated"
     out = {}
     inj = sc.injection
-    headroom = inj.headroom if inj.headroom is not None else sc.control.field_weakening
+    headroom = inj.headroom if inj.headroom is not None else field_weakening_on(sc)
     if headroom and r.inj_amp > 0.0:
         if not inj.headroom_from < inj.headroom_to:
             raise ConfigError("injection.headroom_from", "must be < injection.headroom_to")
@@ -364,7 +365,7 @@ def _gating(sc, r) -> dict:
         out["inj_v_hi"] = inj.headroom_to
     if inj.headroom_voltage is not None and r.inj_amp > 0.0:
         fw_v = sc.control.field_weakening_voltage
-        if not sc.control.field_weakening:
+        if not field_weakening_on(sc):
             raise ConfigError("injection.headroom_voltage", "needs control.field_weakening = true")
         if not inj.headroom_voltage <= inj.headroom_from:
             raise ConfigError("injection.headroom_voltage", "must be <= injection.headroom_from")

@@ -1,13 +1,13 @@
 """The drive over the machine library: every published machine, in per-unit of itself.
 
 For each machine of ``config/data/machines.toml`` and each of two drives -- ``sensorless``
-(Schauder's MRAS, no R2 tracking, with the voltage-feedback field weakening,
-:data:`DRIVE_OVERRIDES`) and ``injection-robust`` (the recommended R2-tracking preset) -- a
-grid in per-unit of the machine: speed reference as a fraction of its rated speed, load torque
-as a fraction of its rated torque (negative: regenerating), and the controller's starting
-``R2_hat(0)/R2``. Only ``[machine]`` and the operating point change: every other setting the
-presets leave derived or state in per-unit (config/perunit.py), which is what this study
-checks.
+(Schauder's MRAS, no R2 tracking; its voltage-feedback field weakening on by default from
+0.84-0.88 of the rated speed, :data:`DRIVE_OVERRIDES`) and ``injection-robust`` (the recommended
+R2-tracking preset) -- a grid in per-unit of the machine: speed reference as a fraction of its
+rated speed, load torque as a fraction of its rated torque (negative: regenerating), and the
+controller's starting ``R2_hat(0)/R2``. Only ``[machine]`` and the operating point change: every
+other setting the presets leave derived or state in per-unit (config/perunit.py), which is what
+this study checks.
 
 Times follow the machine too (:func:`timeline`): the speed reference ramps from 0 once the
 rotor is magnetised (:func:`ramp_start_s`: four rotor time constants, at least 0.5 s, the
@@ -45,6 +45,7 @@ import numpy as np
 import pandas as pd
 
 from imdrive.analysis import detuning_speed_error_rpm, field_weakened_flux_Wb
+from imdrive.config.field_weakening import field_weakening_on
 from imdrive.config.machine import machine_presets, rated_point
 from imdrive.config.perunit import SPEED_TOLERANCE_MIN_RPM, SPEED_TOLERANCE_PU
 from imdrive.config.scenario import Scenario
@@ -52,17 +53,18 @@ from imdrive.errors import ConfigWarning
 from imdrive.run.batch import simulate_batch
 
 DRIVES = ("sensorless", "injection-robust")
-#: What the grid adds to a drive's preset, the same on every machine. The DC link is
-#: sqrt 2 x V_rated, no margin: at rated speed the rated flux needs 0.98-0.99 of the inverter's
-#: voltage at no load on the large machines and 1.07-1.18 x the field weakening's 0.9 of it at
-#: the rated torque (more than the inverter has, motoring). ``sensorless`` gets the
-#: voltage-feedback field weakening ``injection-robust`` runs (kernels/ifoc.py
-#: ``field_weakening``; with it the MRAS's flux normalisation): without it the current loops
-#: sit at the voltage limit, where a step of regenerating torque ran the q current past its
-#: reference and control was lost (Krause 500 hp, the 3.3 kV machine), and a motoring run
-#: held its speed on a misoriented, weaker flux (the Aalto machine, 12.6 rpm off against the
-#: rated-flux law's 10.8).
-DRIVE_OVERRIDES = {"sensorless": ("control.field_weakening=true",)}
+#: What the grid adds to a drive's preset, the same on every machine: nothing now. The DC link
+#: is sqrt 2 x V_rated, no margin: at rated speed the rated flux needs 0.98-0.99 of the
+#: inverter's voltage at no load on the large machines and 1.01-1.06 of it at the rated torque
+#: (more than the inverter has, motoring). Without field weakening the current loops sit at
+#: the voltage limit, where a step of regenerating torque ran the q current past its reference
+#: and control was lost (Krause 500 hp, the 3.3 kV machine), and a motoring run held its speed
+#: on a misoriented, weaker flux (the Aalto machine, 12.6 rpm off against the rated-flux law's
+#: 10.8). ``sensorless`` had the voltage-feedback field weakening added here; it now comes by
+#: default wherever the speed reference reaches that voltage
+#: (:func:`imdrive.config.field_weakening.field_weakening_needed`), so the grid runs the
+#: preset as a user who replaces its ``[machine]`` gets it.
+DRIVE_OVERRIDES: dict[str, tuple[str, ...]] = {}
 SPEEDS_PU = (0.1, 0.5, 1.0)
 LOADS_PU = (-1.0, 0.0, 1.0)
 R2_RATIOS = (0.8, 1.2)
@@ -200,7 +202,7 @@ def law_flux_Wb(sc, speed_rpm: float, load_Nm: float, R2_ratio: float) -> float:
     stator voltage is ``field_weakening_voltage`` of ``Vdc/sqrt 3``
     (:func:`imdrive.analysis.field_weakened_flux_Wb`)."""
     psi = sc.machine.rated_flux_Wb
-    if not sc.control.field_weakening:
+    if not field_weakening_on(sc):
         return psi
     hold = sc.control.field_weakening_voltage * sc.inverter.v_max_V
     return field_weakened_flux_Wb(
