@@ -113,10 +113,14 @@ def test_adc_full_scale_follows_the_rated_current(name):
 
 def test_adc_full_scale_on_table_iv_is_exactly_50_A():
     assert adc_range_A(Scenario.read("sensorless")) == 50.0
-    # the absolute key of the last release still sets it; the realistic presets state it
+    # the absolute key of the last release still sets it
     assert adc_range_A(Scenario.read("sensorless", ["sensor.adc_range_A=20"])) == 20.0
-    assert (
-        adc_range_A(Scenario.read("sensorless-realistic", ["machine.preset=krause-2250hp"])) == 50.0
+    # the realistic presets leave it derived: 50 A on Table IV, following another machine
+    assert adc_range_A(Scenario.read("sensorless-realistic")) == 50.0
+    big = Scenario.read("sensorless-realistic", ["machine.preset=krause-2250hp"])
+    assert big.sensor.adc_range_A is None
+    assert adc_range_A(big) == pytest.approx(
+        50.0 * rated_peak_current_A(big.machine) / 11.4629, rel=1e-4
     )
 
 
@@ -137,5 +141,7 @@ def test_sign_band_follows_the_rated_current_as_the_ripple_does():
     sc = Scenario.read("sensorless", ["inverter.sign_band_pu=0.05"])
     assert sign_band_A(sc) == pytest.approx(0.05 * rated_peak_current_A(sc.machine))
     with pytest.warns(ConfigWarning, match="replaces inverter.sign_band_A = 0.2"):
-        sc = Scenario.read("sensorless-realistic").with_overrides(["inverter.sign_band_pu=0.05"])
+        sc = Scenario.read("sensorless", ["inverter.sign_band_A=0.2"]).with_overrides(
+            ["inverter.sign_band_pu=0.05"]
+        )
     assert sc.inverter.sign_band_A is None

@@ -199,6 +199,7 @@ def set_layer(data: dict, items, where: str = "the overrides") -> None:
     keys = [(dotted(parts), value) for parts, value in items]
     _check_layer(keys, where)
     here = {k for k, _ in keys}
+    machine_before = _machine_of(data)
     for (parts, value), (key, _) in zip(items, keys, strict=True):
         set_path(data, parts, value)
         pair = pair_of(key)
@@ -214,6 +215,59 @@ def set_layer(data: dict, items, where: str = "the overrides") -> None:
                     ConfigWarning(key, f"replaces {twin} = {old!r} of the scenario underneath"),
                     stacklevel=2,
                 )
+    _warn_machine_replaced(data, machine_before, here)
+
+
+def _machine_of(data: dict) -> tuple:
+    """What names the scenario's parameter set: ``machine.preset`` and ``machine.file``."""
+    node = data.get("machine") if isinstance(data, dict) else None
+    if not isinstance(node, dict):
+        return (None, None)
+    return (node.get("preset"), node.get("file"))
+
+
+def _warn_machine_replaced(data: dict, before: tuple, here: set[str]) -> None:
+    """One warning when this layer replaced the machine (``machine.preset`` / ``file``) under
+    absolute settings of the layer underneath (:data:`PAIRS`' absolute members): they were
+    tuned for the machine underneath and stay as given, their per-unit twins would follow."""
+    after = _machine_of(data)
+    if after == before or before == (None, None):
+        return
+    stale = []
+    for p in PAIRS:
+        for key, twin in zip(p.absolute, p.per_unit, strict=True):
+            node, name = _section(data, key)
+            if key in here or node is None or name not in node:
+                continue
+            if _is_set(key, node[name]):
+                stale.append((key, node[name], twin))
+    model = data.get("controller_model")
+    tables = sorted(
+        k for k, v in (model.items() if isinstance(model, dict) else ()) if v not in (None, [])
+    )
+    tables = [t for t in tables if f"controller_model.{t}" not in here]
+    if not stale and not tables:
+        return
+    was = before[0] if before[0] is not None else before[1]
+    now = after[0] if after[0] is not None else after[1]
+    parts = []
+    if stale:
+        listed = ", ".join(f"{k} = {v!r}" for k, v, _ in stale[:6])
+        more = f" and {len(stale) - 6} more" if len(stale) > 6 else ""
+        twins = ", ".join(t for _, _, t in stale[:6])
+        parts.append(
+            f"absolute settings {listed}{more} stay as given (state them per-unit to follow "
+            f"the machine: {twins})"
+        )
+    if tables:
+        parts.append(
+            f"the controller_model tables ({', '.join(tables)}) are {was!s}'s (run `imdrive "
+            "commission` on the new machine, or clear [controller_model])"
+        )
+    warnings.warn(
+        ConfigWarning("machine", f"{now!s} replaces {was!s}: " + "; ".join(parts)),
+        stacklevel=3,
+    )
 
 
 def apply_overrides(data: dict, overrides, where: str = "--set") -> None:

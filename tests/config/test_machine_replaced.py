@@ -1,0 +1,74 @@
+"""Replacing ``[machine]`` under settings stated for the machine underneath is never silent
+(config/pairs.py ``set_layer``): one warning names the absolute settings that stay as given
+(with the per-unit twins that would follow the machine) and the controller-model tables
+commissioned on the old machine.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import pytest
+
+from imdrive.config.scenario import Scenario
+from imdrive.errors import ConfigWarning
+
+
+def _machine_warnings(preset: str, overrides: list[str]) -> list[str]:
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        Scenario.read(preset, overrides)
+    return [
+        str(w.message)
+        for w in caught
+        if issubclass(w.category, ConfigWarning) and str(w.message).startswith("machine:")
+    ]
+
+
+def test_absolute_settings_of_a_paper_preset_are_named():
+    (msg,) = _machine_warnings("paper-fig5", ['machine.preset="krause-50hp"'])
+    assert "krause-50hp replaces paper-table-iv" in msg
+    for key in ("estimator.R2_ohm = 0.9792", "compensator.R2_min_ohm = 0.408"):
+        assert key in msg
+    assert "estimator.R2_ratio" in msg and "compensator.R2_min_ratio" in msg
+
+
+def test_many_settings_are_counted_not_dropped():
+    (msg,) = _machine_warnings("injection-fig5", ['machine.preset="aalto-2.2kw"'])
+    # 10 absolute settings differ from their defaults (gate_band_Hz = 1.5 is the default)
+    assert msg.count(" = ") == 6 and "and 4 more" in msg
+
+
+def test_a_key_set_in_the_same_layer_is_not_stale():
+    (msg,) = _machine_warnings(
+        "paper-fig5", ['machine.preset="krause-50hp"', "estimator.R2_ratio=1.2"]
+    )
+    assert "estimator.R2_ohm" not in msg
+    assert "compensator.R2_min_ohm = 0.408" in msg
+
+
+def test_commissioned_tables_are_named():
+    (msg,) = _machine_warnings("sensorless-realistic", ['machine.preset="krause-3hp"'])
+    assert "controller_model tables" in msg and "magnetising_Lm_H" in msg
+    assert "imdrive commission" in msg
+    # its sensor range and sign band are derived now: not among the stale settings
+    assert "adc_range_A" not in msg and "sign_band_A" not in msg
+
+
+@pytest.mark.parametrize(
+    ("preset", "overrides"),
+    [
+        ("injection-robust", ['machine.preset="krause-500hp"']),  # every such value per-unit
+        ("sensorless", ['machine.preset="geyer-3.3kv"']),
+        ("paper-fig5", ['machine.preset="paper-table-iv"']),  # the same machine again
+        ("paper-fig5", ["machine.R2_ohm=0.9"]),  # the plant's parameter, not another machine
+    ],
+)
+def test_silent_where_nothing_stays_tuned_for_another_machine(preset, overrides):
+    assert _machine_warnings(preset, overrides) == []
+
+
+def test_with_overrides_and_a_sweep_axis_warn_too():
+    sc = Scenario.read("injection-fig6")
+    with pytest.warns(ConfigWarning, match="krause-3hp replaces paper-table-iv"):
+        sc.with_overrides(['machine.preset="krause-3hp"'])
