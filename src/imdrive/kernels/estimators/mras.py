@@ -28,9 +28,10 @@ Krause's 2250 hp machine (T2 = 1.6 s, ``1/T2`` = 3 rpm) ramping to rated speed a
 rated torque, a 5.7 rpm lag raised the rotor flux to 2.5 times rated and lost control. The
 second integrator removes the steady lag (gains:
 :func:`imdrive.design.gains.mras_type2_gains`). It runs only above ``b2_wmin`` of stator
-frequency: near zero stator frequency the voltage model has little signal and the start-up
-mode of the estimate rings (docs/stability.md); there the integral is held, which leaves
-the type-1 loop with a constant added. Run through the whole start, the type-2 loop turned
+frequency, and once running is held again only below half of it (a hysteresis): near zero
+stator frequency the voltage model has little signal and the start-up mode of the estimate
+rings (docs/stability.md); there the integral is held, which leaves the type-1 loop with a
+constant added. Run through the whole start, the type-2 loop turned
 that ringing into excursions of the estimate of 955 rpm on the 2250 hp machine starting to
 10 % speed (R2_hat = 1.2 R2), and lost control; held below 5 % of the rated stator
 frequency (``mras.acceleration_tracking_from_pu``; just above the filter's cut-off
@@ -38,6 +39,9 @@ frequency (``mras.acceleration_tracking_from_pu``; just above the filter's cut-o
 the stator frequencies the drive holds: at 10 % it sat on the grid's 10 %-speed points, and
 the speed dip of a rated-load step there held the integrator while the loop needed it
 (lost control on Krause 500 hp and 2250 hp, R2_hat = 0.8 R2; held at 5 %, both keep it).
+Without the hysteresis the same happened at the grid's 5 %-speed points: switched on and off
+by every ripple of the stator frequency there, the loop lost control after a rated-torque
+step on Krause 500 hp whatever R2_hat (type 1 alone, or the threshold at 2 or 10 %, held).
 
 Discretisation at the control period Ts, with the voltage applied over the last period known
 exactly (it was held) and the current taken as the mean of its two end samples:
@@ -133,7 +137,7 @@ MRAS_STATE = record_dtype(
         ("lam_f_ab", c16),  # adjustable model passed through the same filter, Wb
         ("int_e", f8),  # integral of the error signal, Wb^2 s
         ("int_w", f8),  # integral of the PI's output (the type-2 adaptation), electrical rad
-        ("int_w_run", b1),  # the second integrator runs (stator frequency above b2_wmin)
+        ("int_w_run", b1),  # the second integrator runs (above b2_wmin, until below half of it)
         ("w_r_hat", f8),  # speed estimate, electrical rad/s
         ("e_dq0", c16),  # flux error (reference - adjustable) in the controller's frame, Wb
         ("dlam_i_ab", c16),  # adjustable model's change over the last period, Wb
@@ -460,7 +464,15 @@ def mras_estimate(p, m, s, inp):
     i0 = inp.i_prev_ab
     i1 = inp.i_ab
     Ts = inp.Ts
-    s.int_w_run = abs(inp.w_e) >= p.b2_wmin
+    # the second integrator starts above b2_wmin and is held again only below half of it: a
+    # drive that holds its stator frequency near one threshold switched the loop's type at
+    # every ripple of it, and the switching lost control where either type alone held
+    # (Krause 500 hp at 5 % of rated speed, a rated-torque step)
+    w_e_abs = abs(inp.w_e)
+    if w_e_abs >= p.b2_wmin:
+        s.int_w_run = True
+    elif w_e_abs < 0.5 * p.b2_wmin:
+        s.int_w_run = False
     mras_step(p, m, s, v.real, v.imag, i0.real, i0.imag, i1.real, i1.imag, inp.theta_e, Ts)
     w_hat = s.w_r_hat
     if p.R1_dc:  # the DC test at every start
