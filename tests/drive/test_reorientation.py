@@ -15,8 +15,10 @@ that had kept control lost it, and on the library's large machines the sensorles
 runs it had held (docs/envelope.md). The case is run with the type-1 MRAS and the field
 weakening's flux unbounded: the type-2 loop, the default now when the drive goes into field
 weakening (config/mras_type.py), keeps its estimate on the ramp, and the bound at the no-load
-voltage (``control.field_weakening_bound``) keeps the flux from overshooting; with either the
-frame no longer slips here.
+voltage (``control.field_weakening_bound``) keeps the flux from overshooting, and the
+internal-model current controller, the default at twice the rated speed
+(``control.current_controller``), holds the current there; with any of them the frame no
+longer slips here.
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ def _scenario(machine: str, on: bool) -> Scenario:
         "control.reorientation": on,
         "mras.acceleration_tracking": False,  # the type-1 loop, whose lag lets the frame slip
         "control.field_weakening_bound": False,  # with it the frame does not slip either
+        "control.current_controller": "pi",  # nor with the internal-model controller
         "estimator.R2_ratio": 0.7,
         "estimator.R1_ratio": 1.1,
         "load.torque_Nm": 0.0,

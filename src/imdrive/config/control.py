@@ -165,6 +165,19 @@ class ControlSettings:
     decoupling: Annotated[
         Bool, setting("cross-coupling and back-emf feed-forward in the current controllers")
     ] = True
+    current_controller: Annotated[
+        Literal["pi", "imc"] | None,
+        setting(
+            '"pi": synchronous-frame PIs by pole-zero cancellation, the cross-coupling '
+            'decoupled on the references; "imc": internal model control (Harnefors and Nee '
+            "1998): the cross-coupling decoupled on the measured current and an active "
+            "resistance, so an error of the back-emf's feed-forward is rejected at the current "
+            "loop's bandwidth (kernels/current_control.py)",
+            default_doc='"imc" with field_weakening on where the speed reference\'s electrical '
+            "speed exceeds half the current loop's bandwidth (1.74 x the rated speed of Table "
+            'IV at 200 Hz; config/current_control.py), "pi" otherwise',
+        ),
+    ] = None
     field_weakening: Annotated[
         Bool | None,
         setting(

@@ -38,6 +38,7 @@ import math
 
 from numba import njit
 
+from imdrive.kernels.current_control import decoupling_voltage
 from imdrive.kernels.inverter import (
     clarke,
     duty_cycles,
@@ -65,6 +66,8 @@ CONTROL_PARAMS = record_dtype(
         ("i_max", f8),  # stator current magnitude limit, A
         ("v_max", f8),  # voltage magnitude limit (the inverter's linear range), V
         ("decouple", b1),  # cross-coupling and back-emf feed-forward on
+        ("dec_meas", b1),  # cross-coupling decoupled on the measured current (else the reference)
+        ("R_a", f8),  # active resistance, V/A (0: none; kernels/current_control.py)
         ("angle_advance", f8),  # where in the next periods the voltage acts, periods (0.5, 1.5)
         ("dtc_u", f8),  # dead-time compensation: assumed t_d f_sw Vdc_meas per phase, V (0: off)
         ("dtc_band", f8),  # its current band (smooth sign), A
@@ -202,16 +205,13 @@ def foc_step(p, m, s, i_alpha, i_beta, w_fb_m, w_ref_m, psi_ref, i_inj, Ts):
     s.psi_hat = g * psi_hat + (1.0 - g) * M * id_ref
     w_e = n_p * w_fb_m + w_sl
 
-    # current PIs with decoupling; the d axis has priority in the voltage limit (keeps flux)
+    # current PIs with decoupling (control.current_controller, kernels/current_control.py);
+    # the d axis has priority in the voltage limit (keeps flux)
     kp = p.kp_i
     ki = p.ki_i
     e_d = id_ref - i_d
     e_q = iq_ref - i_q
-    ff_d = 0.0
-    ff_q = 0.0
-    if p.decouple:
-        ff_d = -w_e * sigma_L1 * iq_ref
-        ff_q = w_e * (sigma_L1 * id_ref + M / L2 * psi_hat)
+    ff_d, ff_q = decoupling_voltage(p, w_e, sigma_L1, M / L2 * psi_hat, id_ref, iq_ref, i_d, i_q)
     v_d_unsat = kp * e_d + s.int_dq.real + ff_d
     v_q_unsat = kp * e_q + s.int_dq.imag + ff_q
     v_max = p.v_max
@@ -224,7 +224,9 @@ def foc_step(p, m, s, i_alpha, i_beta, w_fb_m, w_ref_m, psi_ref, i_inj, Ts):
     )
     dth = 0.0
     if p.ie_rate > 0.0 and v_q_unsat == v_q and v_d_unsat == v_d:
-        adapt_inverter_error(p, s, m, v_d - ff_d, v_q - ff_q, i_d, i_q, th, w_e, Ts)
+        u_d = v_d - ff_d - p.R_a * i_d
+        u_q = v_q - ff_q - p.R_a * i_q
+        adapt_inverter_error(p, s, m, u_d, u_q, i_d, i_q, th, w_e, Ts)
     elif p.or_wmin > 0.0 and (v_q_unsat != v_q or v_d_unsat != v_d):
         dth = check_orientation(p, s, m, v_d, v_q, i_d, i_q, w_e, sigma_L1, Ts)
     elif s.or_time > 0.0:

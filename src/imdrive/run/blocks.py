@@ -16,6 +16,7 @@ import math
 import numpy as np
 
 from imdrive.config.controller_model import inverter_error_half, magnetising_table
+from imdrive.config.current_control import current_controller
 from imdrive.config.field_weakening import field_weakening_on
 from imdrive.config.perunit import Resolved, adc_range_A, sign_band_A
 from imdrive.config.profiles import Profile
@@ -216,6 +217,11 @@ def control_fields(sc: Scenario, D: Resolved, mh: dict, psi0: float) -> tuple[di
     kp_i, ki_i = default_current_gains(
         mh["sigma_L1_hat"], R_sigma, 2 * math.pi * ctl.current_bandwidth_Hz
     )
+    R_a = 0.0
+    imc = current_controller(sc) == "imc"
+    if imc:  # internal model control, kernels/current_control.py
+        R_a = max(kp_i - R_sigma, 0.0)
+        ki_i = 2 * math.pi * ctl.current_bandwidth_Hz * (R_sigma + R_a)
     kp_w, ki_w = default_speed_gains(m.J_kgm2, k_t, 2 * math.pi * D.speed_bandwidth_Hz)
     ie_rate = _inverter_error_adaptation(sc, D)
     gains = {
@@ -233,6 +239,8 @@ def control_fields(sc: Scenario, D: Resolved, mh: dict, psi0: float) -> tuple[di
         i_max=current_limit(sc, D),
         v_max=Vdc_meas / math.sqrt(3.0),
         decouple=ctl.decoupling,
+        dec_meas=imc,
+        R_a=R_a,
         angle_advance=0.5 + (ctl.delay_periods if ctl.delay_compensation else 0),
         dtc_u=(
             _assumed_dead_time(sc) * inv.switching_frequency_Hz * Vdc_meas
