@@ -333,6 +333,40 @@ class MrasSettings:
             ge=0.0,
         ),
     ] = 15.0
+    wc_per_stator_frequency: Annotated[
+        Float,
+        setting(
+            "below wc_rad_s the filter's cut-off follows the stator frequency, "
+            "max(wc_min_rad_s, this x |ω_e|), so the adaptation keeps 1/(1 + this²) of its "
+            "gain where a fixed cut-off would leave ω_e²/(ω_e² + ωc²) (0.07 at 20 rpm, no "
+            "load, on Table IV) and the speed loop outruns its estimate (0: a fixed cut-off; "
+            "kernels/estimators/mras.py)",
+            ge=0.0,
+        ),
+    ] = 0.0
+    wc_min_rad_s: Annotated[
+        Float,
+        setting(
+            "the floor of the cut-off that follows the stator frequency "
+            "(wc_per_stator_frequency): near zero stator frequency a smaller one lets offsets "
+            "and start-up transients of the voltage model decay more slowly (with an R̂1 "
+            "error dR1 its DC flux error is (L2/M) dR1 |i| / ωc)",
+            "rad/s",
+            gt=0.0,
+        ),
+    ] = 5.0
+    wc_follow_time_s: Annotated[
+        Float,
+        setting(
+            "time constant of the flux frequency the cut-off follows "
+            "(wc_per_stator_frequency): longer than the R2 compensator's injection period, "
+            "so the cut-off does not follow the injection's flux modulation (a cut-off "
+            "modulated in phase with the injection biased R̂2, +1.9 % at 0.1 x rated speed "
+            "regenerating on Table IV, against +0.9 % with 0.5 s)",
+            "s",
+            gt=0.0,
+        ),
+    ] = 0.5
     bandwidth_Hz: Annotated[
         Float,
         setting("bandwidth K1 and K2 are derived from (default: docs/stability.md)", "Hz", gt=0.0),
@@ -469,6 +503,9 @@ class MrasSettings:
         k_R1 = self.R1_rate_per_s if self.R1_rate_pu is None else self.R1_rate_pu / sc.machine.T2_s
         params = dict(
             wc=self.wc_rad_s,
+            wc_k=self.wc_per_stator_frequency,
+            wc_min=self.wc_min_rad_s,
+            wc_tau=self.wc_follow_time_s,
             K1=K1,
             K2=K2,
             b2=b2,

@@ -170,6 +170,8 @@ def model_coefficients(P: DriveParams, S: DriveState) -> dict:
     c["psi_ref"] = float(pv[PR_FLUX_REF, 0])
     c["sensorless"] = bool(P.sim[0]["sensorless"])
     c["wc"] = float(P.est[0]["wc"])  # an MRAS drive (stationary_drive refuses the others)
+    c["wc_k"] = float(P.est[0]["wc_k"])
+    c["wc_min"] = float(P.est[0]["wc_min"])
     c["K2"] = float(P.est[0]["K2"])
     c["decouple"] = bool(P.control[0]["decouple"])
     return c

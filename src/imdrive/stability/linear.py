@@ -226,6 +226,12 @@ def solve_operating_points(sc: Scenario, speeds_rpm, torques_Nm) -> OperatingPoi
     if len(idx):
         sub_P = rl.DriveParams(*(f[idx] if f.ndim >= 1 and f.shape[0] == n else f for f in d.P))
         sub_S = rl.DriveState(*(f[idx].copy() for f in d.S))
+        if "w_flux" in sub_S.est.dtype.names:
+            # the flux frequency the MRAS filter's cut-off follows (mras.wc_per_stator_frequency)
+            # at the operating point's, and held there (an infinite time constant): a low-pass
+            # over 0.5 s whose own slow mode is not in the reduced state
+            sub_S.est["w_flux"] = w_e[idx]
+            sub_P.est["wc_tau"] = np.inf
         Zs = np.ascontiguousarray(Z[idx])
         As = np.empty((len(idx), rl.N_Z, rl.N_Z))
         Bs = np.empty((len(idx), rl.N_Z, rl.N_U))

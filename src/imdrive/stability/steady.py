@@ -104,9 +104,12 @@ def _initial_state(c: dict, Ts: float, iq, w_m, w_ref) -> np.ndarray:
     w_r_hat = c["n_p"] * (w_ref if c["sensorless"] else w_m)
     T2h = c["L2_hat"] / c["R2_hat"]
     lam_i = c["M_hat"] * I / (1.0 + 1j * (w_e - w_r_hat) * T2h)
-    filt = 1j * w_e / (1j * w_e + c["wc"]) if c["wc"] > 0 else np.ones(n)
+    wc = np.full(n, c["wc"])
+    if c.get("wc_k", 0.0) > 0:  # the corner following the stator frequency (estimators/mras.py)
+        wc = np.minimum(c["wc"], np.maximum(c["wc_min"], c["wc_k"] * np.abs(w_e)))
+    filt = 1j * w_e / (1j * w_e + wc) if c["wc"] > 0 else np.ones(n)
     lam_f = lam_i * filt
-    den = 1j * w_e + c["wc"]
+    den = 1j * w_e + wc
     den = np.where(np.abs(den) < 1e-9, 1e-9, den)
     lam_v = (c["L2_hat"] / c["M_hat"]) * ((v - c["R1_hat"] * I) - 1j * w_e * c["sL1_hat"] * I) / den
     for k, val in ((0, psi_s), (2, psi_r), (5, v_prev), (7, i_prev), (10, int_dq)):

@@ -43,6 +43,38 @@ Without the hysteresis the same happened at the grid's 5 %-speed points: switche
 by every ripple of the stator frequency there, the loop lost control after a rated-torque
 step on Krause 500 hp whatever R2_hat (type 1 alone, or the threshold at 2 or 10 %, held).
 
+The filter's corner at low stator frequency (opt-in ``wc_k > 0``; ``mras.wc_per_stator_frequency``).
+Both models pass through ``H(s) = s/(s + wc)``, so in steady state at the stator frequency
+``w_e`` the error signal, and with it the adaptation loop's gain ``K1 |lam|^2``, is scaled by
+``|H(j w_e)|^2 = w_e^2 / (w_e^2 + wc^2)``: 0.07 at 20 rpm and no load on Table IV
+(``w_e`` = 4.2 rad/s, ``wc`` = 15 rad/s), which leaves the 20 Hz estimator a bandwidth of about
+1.4 Hz under a 5 Hz speed loop. A rated-load step there then drops the speed through zero
+(-13 rpm after 20 ms, the estimate still at 17.6 rpm; with the encoder the dip ends at
+-4.5 rpm) into the regenerating low-frequency region where the MRAS is unstable, and control is
+lost (envelope-full, 20 rpm, full and half motoring load, even from R2_hat = R2). Below
+``wc / wc_k`` the corner follows the stator frequency, ``wc(w_e) = max(wc_min, wc_k |w_e|)``
+(capped at ``wc``), so the loop keeps ``1/(1 + wc_k^2)`` of its gain down to
+``wc_min / wc_k``: the programmable low-pass filter of Bose & Patel (IEEE Trans. Ind.
+Electron. 44(1), 1997), here without their gain and phase correction, which the comparison of
+two identically filtered models does not need. In steady state the R1 error's share of the
+flux, ``-(L2/M) dR1 i / (j w_e lam)``, does not depend on ``wc``; what a small corner costs is
+the slower decay of offsets and start-up transients, and at standstill an R1_hat error leaves
+a DC flux error ``(L2/M) dR1 |i| / wc``, hence the floor ``wc_min`` (``mras.wc_min_rad_s``,
+5 rad/s: at 3 the standstill R1_hat's dead-time bias on the envelope's bridge, +50 %, put
+0.6 Wb into the voltage model as the ramp started and the bridge lost cells at 0.1 x rated
+speed; at 7 the 20 rpm load step was lost again). With 0.5 and 5 rad/s the loop keeps 0.41
+of its gain at 20 rpm, no load, on Table IV (0.07 with the fixed corner), and the rated-load
+step there is held. Above ``wc / wc_k``
+(4.8 Hz with 15 rad/s and 0.5) nothing changes: there ``wc`` was chosen for the R1-error
+margin at speed (docs/stability.md). ``w_e`` is the adjustable model's own flux frequency
+(:func:`flux_frequency`; the stator frequency in steady state) low-passed over ``wc_tau``
+(``mras.wc_follow_time_s``, 0.5 s: longer than the R2 compensator's injection period, whose
+flux modulation a corner following the raw frequency turned into an R2_hat bias, +1.9 % at
+0.1 x rated speed regenerating the rated torque on Table IV, +0.9 % with the low-pass, +0.2 %
+with the fixed corner); the corner in use is ``MRAS_STATE.wc_now``, which the R1 law reads
+too. The stability maps hold the low-passed frequency at the operating point's
+(stability/linear.py).
+
 Discretisation at the control period Ts, with the voltage applied over the last period known
 exactly (it was held) and the current taken as the mean of its two end samples:
 
@@ -126,6 +158,9 @@ MRAS_PARAMS = record_dtype(
         ("R1_dc_block", f8),  # block over which the measured build-up is compared, s
         ("R1_dc_nT2", f8),  # the window opens this many measured rotor time constants in
         ("bend", b1),  # the current model gets the current's mean over the period
+        ("wc_k", f8),  # the corner follows wc_k |w_e| below wc (0: fixed at wc)
+        ("wc_min", f8),  # and not below this, rad/s
+        ("wc_tau", f8),  # time constant of the flux frequency the corner follows, s
     ]
 )
 
@@ -140,6 +175,8 @@ MRAS_STATE = record_dtype(
         ("int_w_run", b1),  # the second integrator runs (above b2_wmin, until below half of it)
         ("w_r_hat", f8),  # speed estimate, electrical rad/s
         ("e_dq0", c16),  # flux error (reference - adjustable) in the controller's frame, Wb
+        ("wc_now", f8),  # the filter's corner this period (p.wc_k > 0), rad/s
+        ("w_flux", f8),  # the adjustable model's flux frequency, low-passed over p.wc_tau, rad/s
         ("dlam_i_ab", c16),  # adjustable model's change over the last period, Wb
         ("dc_t", f8),  # standstill identification: time in the present standstill run, s
         ("dc_vi", f8),  # its window's sums for the least squares: x1 y (x1 = |i|^2,
@@ -202,15 +239,6 @@ def mras_step(
     M, L1, L2, sigma_L1 = model_inductances(m)
     R1 = m.R1_hat
     R2 = m.R2_hat
-    wc = p.wc
-
-    # the common filter 1/(s + wc) applied to a derivative held over the period
-    if wc > 0.0:
-        g = math.exp(-wc * Ts)
-        k_in = (1.0 - g) / (wc * Ts)
-    else:
-        g = 1.0
-        k_in = 1.0
 
     # the current's mean over the period: its samples' mean plus the bend the turning
     # back-emf gives it (common.period_mean_offset; 1.9 rpm at twice the rated speed)
@@ -222,18 +250,33 @@ def mras_step(
     i_mean_alpha = 0.5 * (i_alpha + i_prev_alpha) + i_bend.real
     i_mean_beta = 0.5 * (i_beta + i_prev_beta) + i_bend.imag
 
+    # adjustable (current) model, eq. (2): exact over Ts for constant w_hat and a current
+    # varying linearly between its two samples (first-order hold) shifted by its bend
+    lam_old = s.lam_i_ab
+    lam_new = current_model_step(lam_old, s.w_r_hat, R2, L2, M, i0 + i_bend, i1 + i_bend, Ts)
+    dlam = lam_new - lam_old
+
+    # the common filter 1/(s + wc) applied to a derivative held over the period; its corner
+    # follows the adjustable model's flux frequency at low stator frequency (wc_k > 0)
+    wc = p.wc
+    if p.wc_k > 0.0:
+        a = Ts / max(p.wc_tau, Ts)
+        s.w_flux += a * (flux_frequency(lam_old, lam_new, Ts) - s.w_flux)
+        wc = filter_corner(p.wc, p.wc_k, p.wc_min, s.w_flux)
+        s.wc_now = wc
+    if wc > 0.0:
+        g = math.exp(-wc * Ts)
+        k_in = (1.0 - g) / (wc * Ts)
+    else:
+        g = 1.0
+        k_in = 1.0
+
     # reference (voltage) model, eq. (1)
     kv = L2 / M
     d_alpha = kv * (Ts * (v_prev_alpha - R1 * i_mean_alpha) - sigma_L1 * (i_alpha - i_prev_alpha))
     d_beta = kv * (Ts * (v_prev_beta - R1 * i_mean_beta) - sigma_L1 * (i_beta - i_prev_beta))
     lam_v_alpha = g * s.lam_v_ab.real + k_in * d_alpha
     lam_v_beta = g * s.lam_v_ab.imag + k_in * d_beta
-
-    # adjustable (current) model, eq. (2): exact over Ts for constant w_hat and a current
-    # varying linearly between its two samples (first-order hold) shifted by its bend
-    lam_old = s.lam_i_ab
-    lam_new = current_model_step(lam_old, s.w_r_hat, R2, L2, M, i0 + i_bend, i1 + i_bend, Ts)
-    dlam = lam_new - lam_old
     lam_f_alpha = g * s.lam_f_ab.real + k_in * dlam.real
     lam_f_beta = g * s.lam_f_ab.imag + k_in * dlam.imag
 
@@ -298,12 +341,30 @@ def mras_r1_step(p, m, s, i_alpha, i_beta, w_e, iq_ref, Ts):
     if i2 < 1e-2:
         return
     M, L1, L2, sigma_L1 = model_inductances(m)
-    wc = max(p.wc, 1.0)
+    wc = max(s.wc_now if p.wc_k > 0.0 else p.wc, 1.0)
     err = s.lam_v_ab - s.lam_f_ab
     dot = err.real * i_alpha + err.imag * i_beta
     sens = (L2 / M) * i2 * wc / (wc * wc + w_e * w_e)
     r1 = m.R1_hat + Ts * p.k_R1 * dot / sens
     m.R1_hat = min(max(r1, p.R1_min), p.R1_max)
+
+
+@njit(cache=True)
+def flux_frequency(lam_old, lam_new, Ts):
+    """The angular frequency of a flux vector that turned from ``lam_old`` to ``lam_new`` in
+    ``Ts`` seconds, rad/s (0 while it is below 1e-6 Wb)."""
+    if abs(lam_old) < 1e-6 or abs(lam_new) < 1e-6:
+        return 0.0
+    turn = lam_new * lam_old.conjugate()
+    return math.atan2(turn.imag, turn.real) / Ts
+
+
+@njit(cache=True)
+def filter_corner(wc, wc_k, wc_min, w_e):
+    """The filter's corner at the stator frequency ``w_e`` (rad/s): ``wc_k |w_e|``, not below
+    ``wc_min`` nor above ``wc`` (module docstring, "The filter's corner at low stator
+    frequency"), rad/s."""
+    return min(wc, max(wc_min, wc_k * abs(w_e)))
 
 
 #: Shortest window of the standstill identification, s (shorter runs leave R1_hat alone).
