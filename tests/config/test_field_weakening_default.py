@@ -67,7 +67,7 @@ def test_default_follows_the_speed_reference(machine):
     assert field_weakening_on(above)
     # where it switches: the rated torque's voltage crosses field_weakening_voltage
     for sc in (below, above):
-        top = float(abs(sc.control.speed_ref_rpm.arrays()[1]).max())
+        top = sc.control.speed_ref_rpm.peak
         use = rated_torque_voltage_V(sc, top) / sc.inverter.v_max_V
         assert (use > sc.control.field_weakening_voltage) == field_weakening_on(sc)
     # reversing: the magnitude decides

@@ -66,3 +66,14 @@ def test_cli_set_one_element(tmp_path, capsys):
     assert summary["final"]["speed_rpm"] == pytest.approx(300.0, abs=2.0)
     assert main(["run", "sensorless", "--set", "control.speed_ref_rpm.changes[5].to=1"]) == 2
     assert "changes[5]: no such element" in capsys.readouterr().err
+
+
+def test_peak_is_the_largest_magnitude_of_a_reversing_profile():
+    from imdrive.config.profiles import parse_profile
+
+    p = parse_profile(
+        "control.speed_ref_rpm",
+        {"initial": 0, "changes": [{"at": 0.5, "to": 1000, "over": 1}, {"at": 3, "to": -1500}]},
+    )
+    assert p.peak == 1500.0
+    assert parse_profile("load.torque_Nm", -12.0).peak == 12.0

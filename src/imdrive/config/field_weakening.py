@@ -62,7 +62,7 @@ def rated_torque_voltage_V(sc, speed_rpm: float) -> float:
         return math.nan
     psi = m.rated_flux_Wb
     if sc.control.flux_ref_Wb is not None:  # a profile: its largest value
-        psi = float(abs(sc.control.flux_ref_Wb.arrays()[1]).max())
+        psi = sc.control.flux_ref_Wb.peak
     L1, L2, M = m.M_H + m.Ll1_H, m.M_H + m.Ll2_H, m.M_H
     sigma_L1 = L1 - M * M / L2
     i_d = psi / M
@@ -101,8 +101,6 @@ def field_weakening_needed(sc) -> bool:
     """
     if sc.drive.mode != "vector":
         return False
-    _, v = sc.control.speed_ref_rpm.arrays()
-    top = float(max(abs(v.max()), abs(v.min())))
-    needed = rated_torque_voltage_V(sc, top)
+    needed = rated_torque_voltage_V(sc, sc.control.speed_ref_rpm.peak)
     v_max = sc.inverter.v_max_V
     return bool(needed > sc.control.field_weakening_voltage * v_max)

@@ -94,5 +94,4 @@ def mras_type2_for_field_weakening(sc) -> bool:
     rp = _rated_point_or_none(sc.machine)
     if rp is None:
         return False
-    _, v = sc.control.speed_ref_rpm.arrays()
-    return float(max(abs(v.max()), abs(v.min()))) > MRAS_TYPE2_ABOVE_PU * rp.speed_rpm
+    return sc.control.speed_ref_rpm.peak > MRAS_TYPE2_ABOVE_PU * rp.speed_rpm

@@ -167,6 +167,12 @@ class Profile:
         """The value after the last breakpoint, in the profile's unit."""
         return self.points[-1][1]
 
+    @property
+    def peak(self) -> float:
+        """The largest magnitude the profile reaches (piecewise linear between breakpoints:
+        at a breakpoint), in the profile's unit."""
+        return float(max(abs(p[1]) for p in self.points))
+
     # as a pydantic field type: validated by parse_profile, written back in file form
     @classmethod
     def __get_pydantic_core_schema__(cls, source, handler):
