@@ -95,3 +95,27 @@ def current_model_step(lam, w_r, R2, L2, M, i0, i1, Ts):
         phi2 = 0.5 + zT / 6.0 + zT * zT / 24.0
     b = M * R2 / L2 * Ts
     return ez * lam + b * (phi1 * i0 + phi2 * (i1 - i0))
+
+
+@njit(cache=True, inline="always")
+def lowpass_coefficients(wc, Ts):
+    """Pole ``g`` and input gain ``k_in`` of Schauder's low-pass ``1/(s + wc)`` over one
+    period of a held input: ``x[k+1] = g x[k] + k_in Ts u[k]``, ``g = exp(-wc Ts)``,
+    ``k_in = (1 - g)/(wc Ts)`` (1 at ``wc = 0``, the pure integrator).
+
+    Parameters
+    ----------
+    wc : float
+        Corner, rad/s (>= 0).
+    Ts : float
+        Period, s.
+
+    Returns
+    -------
+    (float, float)
+        ``g`` and ``k_in``, dimensionless.
+    """
+    if wc > 0.0:
+        g = math.exp(-wc * Ts)
+        return g, (1.0 - g) / (wc * Ts)
+    return 1.0, 1.0

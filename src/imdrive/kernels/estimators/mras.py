@@ -135,7 +135,11 @@ import math
 
 from numba import njit
 
-from imdrive.kernels.estimators.common import current_model_step, period_mean_offset
+from imdrive.kernels.estimators.common import (
+    current_model_step,
+    lowpass_coefficients,
+    period_mean_offset,
+)
 from imdrive.kernels.estimators.registry import register_kernel
 from imdrive.kernels.model import model_inductances
 from imdrive.kernels.records import b1, c16, f8, record_dtype
@@ -264,12 +268,7 @@ def mras_step(
         s.w_flux += a * (flux_frequency(lam_old, lam_new, Ts) - s.w_flux)
         wc = filter_corner(p.wc, p.wc_k, p.wc_min, s.w_flux)
         s.wc_now = wc
-    if wc > 0.0:
-        g = math.exp(-wc * Ts)
-        k_in = (1.0 - g) / (wc * Ts)
-    else:
-        g = 1.0
-        k_in = 1.0
+    g, k_in = lowpass_coefficients(wc, Ts)
 
     # reference (voltage) model, eq. (1)
     kv = L2 / M

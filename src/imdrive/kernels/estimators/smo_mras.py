@@ -74,7 +74,11 @@ import math
 
 from numba import njit
 
-from imdrive.kernels.estimators.common import current_model_step, period_mean_offset
+from imdrive.kernels.estimators.common import (
+    current_model_step,
+    lowpass_coefficients,
+    period_mean_offset,
+)
 from imdrive.kernels.estimators.registry import register_kernel
 from imdrive.kernels.model import model_inductances
 from imdrive.kernels.records import b1, c16, f8, record_dtype
@@ -181,12 +185,7 @@ def smo_mras_estimate(p, m, s, inp):
     M, L1, L2, sigma_L1 = model_inductances(m)
     Ts = inp.Ts
     wc = p.wc
-    if wc > 0.0:
-        g = math.exp(-wc * Ts)
-        k_in = (1.0 - g) / (wc * Ts)
-    else:
-        g = 1.0
-        k_in = 1.0
+    g, k_in = lowpass_coefficients(wc, Ts)
 
     # reference (voltage) model through 1/(s + wc)
     d = voltage_model_increment(m, inp.v_ab, inp.i_prev_ab, inp.i_ab, Ts)
