@@ -52,10 +52,18 @@ def _run(machine: str, signal: str | None = None):
 
 
 @pytest.mark.slow  # end to end: 16 s on the switching bridge, per machine
-@pytest.mark.parametrize("machine", ["paper-table-iv", "krause-3hp"])
-def test_scale_stable_at_one_and_a_half_rated_speed_sensorless(machine):
+@pytest.mark.parametrize(
+    ("machine", "identified", "R1_end"),
+    [("paper-table-iv", 1, 1.0), ("krause-3hp", 1, 1.0), ("krause-50hp", 2, 0.9)],
+)
+def test_scale_stable_at_one_and_a_half_rated_speed_sensorless(machine, identified, R1_end):
+    # with the current PIs' output: k 0.25 (its bound), R1_hat 3.28 R1, +1.18 / +1.17 rpm on
+    # Table IV and Krause's 3 hp machine (the same circuit, another inertia); 5.36 R1 and
+    # +0.90 rpm on the 50 hp machine, whose 0.5 s magnetisation is too short for the
+    # standstill identification: there R1_hat holds no share of the residual to give back,
+    # and taking it out anyway (as k learns) drove R1_hat to its floor, 0.06 R1
     k, R1_ratio, m = _run(machine)
-    # with the current PIs' output: k 0.25 (its bound), R1_hat 3.28 R1, +1.18 / +1.17 rpm
+    assert m["R1_id_status"] == identified
     assert k == pytest.approx(RATIO, abs=0.06)
-    assert R1_ratio == pytest.approx(1.0, abs=0.15)
+    assert R1_ratio == pytest.approx(R1_end, abs=0.15 if identified == 1 else 0.02)
     assert abs(m["speed_error_rpm"]) < 0.1

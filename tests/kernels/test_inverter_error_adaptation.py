@@ -51,7 +51,7 @@ def test_six_step_error_across_the_current_has_the_sixth_harmonic_the_law_assume
     assert abs(2 * np.mean(perp * np.sin(th))) < 1e-6
 
 
-def _run_law(ratio, w_e, t_end=6.0, rate=2.0, u_c=1.2, ie_r1=False, c0=0.0):
+def _run_law(ratio, w_e, t_end=6.0, rate=2.0, u_c=1.2, ie_r1=False, c0=0.0, R1_id=False):
     p = new_record(
         CONTROL_PARAMS,
         ie_rate=rate,
@@ -62,7 +62,9 @@ def _run_law(ratio, w_e, t_end=6.0, rate=2.0, u_c=1.2, ie_r1=False, c0=0.0):
     )[0]
     s = np.zeros(1, dtype=CONTROL_STATE)[0]
     s["ie_c0"] = c0
-    m = new_record(MODEL_STATE, R1_hat=0.6, R2_hat=0.8, Ll1_hat=0.008, Ll2_hat=0.008, M_hat=0.2)[0]
+    m = new_record(
+        MODEL_STATE, R1_hat=0.6, R2_hat=0.8, Ll1_hat=0.008, Ll2_hat=0.008, M_hat=0.2, R1_id=R1_id
+    )[0]
     i_d, i_q = 4.0, 3.0  # the current in the controller's frame (any angle to the d axis)
     gamma = math.atan2(i_q, i_d)
     w6 = 6 * abs(w_e)
@@ -103,8 +105,15 @@ def test_below_its_frequency_the_scale_holds():
 
 def test_the_learned_share_leaves_a_standstill_R1():
     c0 = 0.2  # ohm of apparent resistance per unit of the compensation at standstill
-    k, s, m = _run_law(1.25, 2 * math.pi * 10.0, ie_r1=True, c0=c0)
+    k, s, m = _run_law(1.25, 2 * math.pi * 10.0, ie_r1=True, c0=c0, R1_id=True)
     assert m["R1_hat"] == pytest.approx(0.6 - (k[-1] - 1.0) * c0, rel=1e-9)
+
+
+def test_no_share_leaves_an_R1_the_standstill_run_did_not_identify():
+    # the identification could not (R1_id false): R1_hat holds none of the residual
+    k, s, m = _run_law(1.25, 2 * math.pi * 10.0, ie_r1=True, c0=0.2, R1_id=False)
+    assert k[-1] == pytest.approx(1.25, rel=0.01)
+    assert m["R1_hat"] == 0.6
 
 
 def _six_step(theta, u):

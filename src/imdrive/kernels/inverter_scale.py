@@ -124,7 +124,11 @@ def adapt_inverter_error(p, s, m, u_d, u_q, i_d, i_q, th, w_e, Ts):
     apparent resistance ``(u - k u_c) (sgn . i)/|i|^2`` at the magnetising current; as ``k``
     learns the residual, its share ``dk c0`` (``c0 = Re(dv conj i)/(k |i|^2)`` at standstill,
     :func:`standstill_compensation`) leaves ``m.R1_hat``, so the reference model does not
-    keep a resistance error the residual no longer offsets.
+    keep a resistance error the residual no longer offsets. Only once it has identified
+    (``m.R1_id``): where it could not (a magnetisation too short for the machine's T2, Krause's
+    50 hp machine on the 0.5 s of ``injection-robust``), R1_hat holds no such share, and
+    taking it out drove R1_hat to its floor, 0.06 R1 (with the current-loop signal, whose
+    scale ran to its bound, up to 5.4 R1).
     """
     u_c = p.ie_u[p.ie_n - 1] if p.ie_n > 0 else p.dtc_u
     if u_c <= 0.0:  # nothing to scale (before the hypot: the average model runs this path)
@@ -159,7 +163,7 @@ def adapt_inverter_error(p, s, m, u_d, u_q, i_d, i_q, th, w_e, Ts):
         prod = (u_perp - s.ie_vm) * math.sin(6.0 * th_i - phi)
     dk = -p.ie_rate * prod / (SIXTH_HARMONIC_HALF * u_c * gain) * Ts
     dk_new = min(max(s.ie_dk + dk, -0.75), 1.0)
-    if p.ie_r1:
+    if p.ie_r1 and m.R1_id:  # only a share the identification took in can be given back
         m.R1_hat = max(m.R1_hat - (dk_new - s.ie_dk) * s.ie_c0, 0.05 * m.R1_hat)
     s.ie_dk = dk_new
 

@@ -446,6 +446,7 @@ def mras_r1_standstill(
         else:
             r1 = (s.dc_vi - s.dc_gi) / s.dc_ii
         m.R1_hat = min(max(r1, p.R1_min), p.R1_max)
+        m.R1_id = True
         s.dc_status = 1.0
     elif s.dc_t > 0.0:  # a standstill run ended without its window: say so
         s.dc_status = 2.0
