@@ -76,7 +76,17 @@ def test_a_band_wider_than_the_commutation_ripple_biases_R2_and_the_bound_remove
         assert row.verdict == "ok"
 
 
-def test_with_the_bridge_loss_shape_the_online_scale_learns_the_true_ratio():
+# the fixed band's scale and R1_hat with each of the scale's signals (control.
+# inverter_error_signal): the current PIs' output learned 1.17 and left R1_hat 1.17 R1, the
+# stator voltage equation's residual, which sees the over-compensation without the current
+# loop between, 1.20 and 1.11 R1; with the loss's shape both within 1.5 % and 4 %
+@pytest.mark.parametrize(
+    ("signal", "k_fixed_max", "R1_fixed_min"),
+    [("stator-voltage", 1.215, 1.08), ("current-loop", 1.2, 1.1)],
+)
+def test_with_the_bridge_loss_shape_the_online_scale_learns_the_true_ratio(
+    signal, k_fixed_max, R1_fixed_min
+):
     # Table IV at 0.3 of the rated speed, no load: the ripple at the commutations (about
     # 0.25 A) straddles the fixed band; the sign model's ramp over-compensates inside it,
     # which the sixth-harmonic law takes for a larger compensation and so learns a smaller
@@ -89,7 +99,11 @@ def test_with_the_bridge_loss_shape_the_online_scale_learns_the_true_ratio():
     sc = sw.scenario_for(tuple(want[a.name] for a in sw.axes))
     scs = [
         sc.with_overrides(
-            [f'control.dead_time_compensation_band="{band}"', "estimator.R1_ratio=1.0"]
+            [
+                f'control.dead_time_compensation_band="{band}"',
+                "estimator.R1_ratio=1.0",
+                f'control.inverter_error_signal="{signal}"',
+            ]
         )
         for band in ("fixed", "ripple")
     ]
@@ -101,7 +115,7 @@ def test_with_the_bridge_loss_shape_the_online_scale_learns_the_true_ratio():
         )
         for res, s in zip(b.results, scs, strict=True)
     )
-    assert k_fixed < 1.2
-    assert R1_fixed > 1.1
+    assert k_fixed < k_fixed_max
+    assert R1_fixed > R1_fixed_min
     assert k_ripple == pytest.approx(2.0 / 1.6, rel=0.015)
     assert R1_ripple == pytest.approx(1.0, abs=0.04)

@@ -264,6 +264,18 @@ class ControlSettings:
             "MRAS 1-2 rpm at 100-150 rpm)",
         ),
     ] = None
+    inverter_error_signal: Annotated[
+        Literal["stator-voltage", "current-loop"],
+        setting(
+            "where the online scaling reads the residual's sixth harmonic: "
+            '"stator-voltage", the stator voltage equation over each period (the applied '
+            "voltage less the compensation, sigma_L1 di/dt and R1_hat i; kernels/"
+            'inverter_scale.py stator_residual); "current-loop", the current controllers\' '
+            "output (on a sensorless drive at light load the speed estimate's sixth harmonic "
+            "reaches it through the speed loop and turned the law's sign at 1.5 x the rated "
+            "speed)"
+        ),
+    ] = "stator-voltage"
     inverter_error_adaptation_fmin_pu: Annotated[
         Float,
         setting(

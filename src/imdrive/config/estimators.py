@@ -423,7 +423,7 @@ class MrasSettings:
             "standstill R1 identification: while the speed reference is zero and the flux "
             "current flows, R̂1 = Σ v·i / Σ |i|² over the part after the measured flux build-up, "
             "applied when the reference leaves zero, log column R1_id_status 1 identified, 2 "
-            "could not (kernels/estimators/mras.py); exact on "
+            "could not (then the run's verdict_text says so; kernels/estimators/mras.py); exact on "
             "the average inverter, biased by an uncompensated dead-time voltage (1.9 R1 on "
             "sensorless-realistic): leave it off there"
         ),

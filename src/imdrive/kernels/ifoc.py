@@ -46,6 +46,13 @@ from imdrive.kernels.inverter import (
     phase_values,
     smooth_sign,
 )
+
+# the online scale of the inverter-error compensation (imported here for the old paths)
+from imdrive.kernels.inverter_scale import (  # noqa: F401
+    SIXTH_HARMONIC_HALF,
+    adapt_inverter_error,
+    standstill_compensation,
+)
 from imdrive.kernels.model import (
     MODEL_TABLE_POINTS,
     model_inductances,
@@ -84,6 +91,8 @@ CONTROL_PARAMS = record_dtype(
         ("ie_wc", f8),  # the current loop's bandwidth, rad/s (phase and gain at 6 w_e)
         ("ie_wmin", f8),  # lowest |w_e| it adapts at, rad/s
         ("ie_r1", b1),  # R1_hat was identified at standstill: move the scale's share out of it
+        # the scale reads the stator voltage equation's residual (0: the current PIs' output)
+        ("ie_veq", b1),
         ("fw", b1),  # field weakening by voltage feedback
         ("fw_v", f8),  # voltage use it holds, fraction of v_max
         ("fw_rate", f8),  # its integral gain, 1/s per unit of voltage use
@@ -110,6 +119,9 @@ CONTROL_STATE = record_dtype(
         ("ie_dk", f8),  # the inverter-error compensation's scale less 1 (online, ie_rate)
         ("ie_vm", f8),  # running mean of the current PI's output across the current, V
         ("ie_c0", f8),  # the compensation's apparent resistance at standstill, per unit scale, ohm
+        ("ie_rm", c16),  # running mean of the stator equation's residual in the frame, V
+        ("ie_rp", f8),  # the last period's residual across the current, high-passed, V
+        ("ie_thi", f8),  # and the angle of that period's current, rad
         ("w_sl", f8),  # the slip command of the last period, electrical rad/s
         ("w_ref_prev", f8),  # the speed reference at the last sample, mechanical rad/s
         ("ref_moved_at", f8),  # when the speed reference last moved, s (-inf: never)
@@ -307,84 +319,6 @@ def inverter_error(p, i_x):
     identified table, V: odd in ``i_x``, linear between the nodes, held past the last."""
     u, _ = table_interp(abs(i_x), p.ie_i, p.ie_u, p.ie_n)
     return u if i_x >= 0.0 else -u
-
-
-#: Half the sixth-harmonic coefficient ``c6/2`` of a six-step error across the current
-#: (:func:`adapt_inverter_error`): ``(4/pi)(1/10 + 1/14)``.
-SIXTH_HARMONIC_HALF = 4.0 / math.pi * (1.0 / 10.0 + 1.0 / 14.0)
-
-
-@njit(cache=True)
-def adapt_inverter_error(p, s, m, u_d, u_q, i_d, i_q, th, w_e, Ts):
-    """Scale the inverter-error compensation so the sixth harmonic it leaves vanishes.
-
-    The part of the inverter's voltage error that the feed-forward does not cancel,
-    ``(u - k u_c) sgn(i_x)`` per phase, is a six-step vector of magnitude ``4/3 (u - k u_c)``
-    pointing at the 60-degree sector of the current (Jeong & Park, "The analysis and
-    compensation of dead-time effects in PWM inverters", IEEE Trans. Ind. Electron. 38(2),
-    1991: it adds sixth-harmonic ripple in the synchronous frame). Across the current vector
-    (angle ``theta_i``) it is ``-4/3 (u - k u_c) sin(saw(theta_i))`` (``saw``: the angle from
-    the nearest sector centre), whose first harmonic is ``-c6 (u - k u_c) sin(6 theta_i)``
-    with ``c6 = (8/pi)(1/10 + 1/14) = 0.4365``. The current PIs (closed loop ``a_c/(s + a_c)``)
-    put that disturbance into their output ``u_dq`` (the voltage reference less the
-    feed-forward terms), with gain ``|H|`` and lag ``phi`` at ``6 w_e``. So the mean of
-
-        p = (u_perp - mean(u_perp)) sin(6 theta_i - phi)  =  -c6/2 |H| (u - k u_c),
-
-    and ``dk/dt = -rate 2/c6 p / (u_c |H|) = rate (u/u_c - k)`` drives the scale ``k`` to the
-    ratio of the true error to the assumed one, whatever the rest of the drive does: no other
-    part of an ideal sinusoidal machine's voltage has a sixth harmonic locked to the current
-    (this project's adaptation law; the same signal is what a repetitive dead-time
-    compensator cancels). ``mean(u_perp)`` is a first-order low-pass at ``6 |w_e| / 5``
-    (its high-pass leads by ``atan(1/5)``, included in ``phi``). Only above ``p.ie_wmin``
-    (the sixth harmonic then lies well above the R2 injection's frequencies) and outside
-    the voltage limit (checked by the caller). ``s.ie_dk`` holds ``k - 1`` (bounded to
-    -0.75 ... +1).
-
-    A standstill R1 identification (``p.ie_r1``) measured ``R1`` plus the residual's
-    apparent resistance ``(u - k u_c) (sgn . i)/|i|^2`` at the magnetising current; as ``k``
-    learns the residual, its share ``dk c0`` (``c0 = Re(dv conj i)/(k |i|^2)`` at standstill,
-    :func:`standstill_compensation`) leaves ``m.R1_hat``, so the reference model does not
-    keep a resistance error the residual no longer offsets.
-    """
-    u_c = p.ie_u[p.ie_n - 1] if p.ie_n > 0 else p.dtc_u
-    if u_c <= 0.0:  # nothing to scale (before the hypot: the average model runs this path)
-        return
-    i_mag = math.hypot(i_d, i_q)
-    if i_mag < 1e-6:
-        return
-    u_perp = (i_d * u_q - i_q * u_d) / i_mag
-    # the mean runs at any speed (from its first sample), so it has settled when the
-    # scale starts to adapt and no step of the PI's DC output reaches the product
-    w6 = 6.0 * max(abs(w_e), p.ie_wmin)
-    if s.ie_vm == 0.0:
-        s.ie_vm = u_perp
-    s.ie_vm += (u_perp - s.ie_vm) * min(0.2 * w6 * Ts, 1.0)
-    if abs(w_e) < p.ie_wmin:
-        return
-    th_i = th + math.atan2(i_q, i_d)
-    x = w6 / p.ie_wc
-    gain = 1.0 / math.sqrt(1.0 + x * x) * 0.98058  # |H| and the high-pass's cos(atan(0.2))
-    phi = math.atan(x) - math.atan(0.2)
-    if w_e < 0.0:  # turning backwards, the lag in time is a lead in angle
-        phi = -phi
-    prod = (u_perp - s.ie_vm) * math.sin(6.0 * th_i - phi)
-    dk = -p.ie_rate * prod / (SIXTH_HARMONIC_HALF * u_c * gain) * Ts
-    dk_new = min(max(s.ie_dk + dk, -0.75), 1.0)
-    if p.ie_r1:
-        m.R1_hat = max(m.R1_hat - (dk_new - s.ie_dk) * s.ie_c0, 0.05 * m.R1_hat)
-    s.ie_dk = dk_new
-
-
-@njit(cache=True)
-def standstill_compensation(s, dv_alpha, dv_beta, i_alpha, i_beta, w_ref):
-    """Track the compensation's apparent resistance at standstill (``s.ie_c0``, ohm per unit
-    of the scale): ``Re(dv conj i)/((1 + s.ie_dk) |i|^2)`` while the speed reference is zero,
-    the current above 1 A and the field nearly still (the standstill R1 identification's
-    own conditions, :func:`imdrive.kernels.estimators.mras.mras_r1_standstill`)."""
-    i2 = i_alpha * i_alpha + i_beta * i_beta
-    if w_ref == 0.0 and i2 > 1.0 and abs(s.w_e) < math.pi:
-        s.ie_c0 = (dv_alpha * i_alpha + dv_beta * i_beta) / ((1.0 + s.ie_dk) * i2)
 
 
 @njit(cache=True)

@@ -9,7 +9,7 @@ value, so a change acts from the next sample on.
 
 from numba import njit
 
-from imdrive.kernels.records import f8, i8, record_dtype
+from imdrive.kernels.records import b1, f8, i8, record_dtype
 
 #: Most nodes of the controller's magnetising-curve table (``MODEL_STATE.sat_*``).
 MODEL_TABLE_POINTS = 32
@@ -30,6 +30,8 @@ MODEL_STATE = record_dtype(
         ("sat_Lm0", f8),  # Lm at the first node, H (the curve below it: a line through 0)
         ("psi_m_hat", f8),  # the controller's magnetising-flux magnitude, Wb
         ("L_inc_hat", f8),  # the incremental inductance d psi_m / d i_m there, H
+        # R1_hat holds a standstill identification (and with it the inverter's residual there)
+        ("R1_id", b1),
     ]
 )
 

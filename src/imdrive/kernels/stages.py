@@ -63,6 +63,7 @@ from imdrive.kernels.ifoc import (
     standstill_compensation,
 )
 from imdrive.kernels.inverter import MAX_EVENTS, MAX_SEGMENTS, inverter_segments, limit_magnitude
+from imdrive.kernels.inverter_scale import stator_residual
 from imdrive.kernels.machine import integrate_segment, log_plant, stator_current
 from imdrive.kernels.model import incremental_L2, model_inductances
 from imdrive.kernels.profiles import (
@@ -293,6 +294,8 @@ def control(sim, pc, x, mdl, ctl, smp, prof, smpl, estm, foc):
         if sim.flux_inj_amp != 0.0:  # excitation for R2 adaptation (Kubota & Matsuse 1994)
             psi_ref *= 1.0 + sim.flux_inj_amp * math.sin(2.0 * math.pi * sim.flux_inj_freq * t)
         w_fb = estm.w_r_hat / pc.n_p if sim.sensorless else x.w_m
+        if pc.ie_veq and pc.ie_rate > 0.0:  # the inverter error left, for the online scale
+            stator_residual(pc, ctl, mdl, smp.v_prev_ab, smp.i_prev_ab, smpl.i_meas_ab, Ts)
         v_ref_alpha, v_ref_beta = foc_step(
             pc, mdl, ctl, i_meas_alpha, i_meas_beta, w_fb, w_ref, psi_ref, estm.i_inj, Ts
         )

@@ -252,6 +252,7 @@ def _run_block(block, offset, logs, log_every, window_s, parallel, errors):
     ts_blk = np.empty(B)
     res_blk: list = [None] * B
     e_blk = np.full(B, "", dtype=object)
+    r1_blk = np.full(B, np.nan)  # the standstill R1 identification's last outcome
     kernel_wall = 0.0
     groups: dict[tuple, list] = {}
     for i, sc in enumerate(block):
@@ -286,6 +287,8 @@ def _run_block(block, offset, logs, log_every, window_s, parallel, errors):
             s_blk[i] = out.status[g]
             k_blk[i] = out.k_end[g]
             ts_blk[i] = a.Ts
+            if "dc_status" in state.est.dtype.names:
+                r1_blk[i] = state.est[g]["dc_status"]
             if logs:
                 lg = logged_rows(log[g], out.status[g], out.k_end[g], le)
                 final = DriveState(*(f[g : g + 1].copy() for f in state))
@@ -301,12 +304,13 @@ def _run_block(block, offset, logs, log_every, window_s, parallel, errors):
                     a.derived,
                 )
     # the block's status as columns at once: a dict per drive kept to the end would cost ~0.6 kB
-    v_blk = _status_columns(_verdicts(block, m_blk, s_blk, k_blk, ts_blk, e_blk))
+    v_blk = _status_columns(_verdicts(block, m_blk, s_blk, k_blk, ts_blk, e_blk, r1_blk))
     return m_blk, s_blk, k_blk, ts_blk, e_blk, v_blk, res_blk, kernel_wall
 
 
-def _verdicts(block, m_blk, s_blk, k_blk, ts_blk, e_blk) -> list[dict]:
-    """The status columns (:func:`imdrive.run.status.verdict`) of each drive of a block."""
+def _verdicts(block, m_blk, s_blk, k_blk, ts_blk, e_blk, r1_blk) -> list[dict]:
+    """The status columns (:func:`imdrive.run.status.verdict`) of each drive of a block
+    (``r1_blk``: the standstill R1 identification's outcome, ``R1_id_status``, NaN without)."""
     from imdrive.run.status import verdict
 
     out = []
@@ -318,6 +322,7 @@ def _verdicts(block, m_blk, s_blk, k_blk, ts_blk, e_blk) -> list[dict]:
             simulated_s=simulated,
             diverged_at_s=simulated,
             error=e_blk[i],
+            R1_id_status=float(r1_blk[i]),
         )
         if s_blk[i] == S_FAILED:
             out.append(

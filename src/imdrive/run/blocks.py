@@ -260,6 +260,7 @@ def control_fields(sc: Scenario, D: Resolved, mh: dict, psi0: float) -> tuple[di
         ie_wmin=2 * math.pi * m.rated_frequency_Hz * ctl.inverter_error_adaptation_fmin_pu,
         # the MRAS's standstill R1 identification absorbed the residual the scale learns
         ie_r1=ie_rate > 0 and ctl.speed_feedback == "mras" and sc.mras.R1_standstill,
+        ie_veq=ctl.inverter_error_signal == "stator-voltage",
         fw=field_weakening_on(sc),
         fw_v=ctl.field_weakening_voltage,
         fw_rate=ctl.field_weakening_rate,

@@ -40,6 +40,10 @@ seconds, both ends included; the whole run if ``window_s >= t_end``).
                          a free speed (not ``plant.speed_mode = "imposed"``) and a bound > 0.
                          Also on the samples of a diverged run before the divergence.
 ``lost_control``         ``lost_control_at_s`` is not NaN (a boolean column)
+``R1_id_status``         the standstill R1 identification's last outcome (``mras.R1_standstill``,
+                         the log column ``R1_id_status_code`` at the last sample): 0 no
+                         standstill run, 1 identified, 2 could not (NaN without the MRAS);
+                         the batch takes it from the final state
 ``R2_held_pct``          share of the samples from the compensator's enable time
                          (``t >= compensator.t_on_s``) at which R2_hat was held, i.e. the
                          gating mask ``comp_frozen`` of the last decision was not 0, % (NaN
@@ -191,6 +195,8 @@ def drive_metrics(res, window_s: float = DEFAULT_WINDOW_S) -> dict:
             "final_speed_est_rpm": speed_est[-1],
         }
     )
+    # the standstill R1 identification's last outcome (0 none, 1 identified, 2 could not)
+    out["R1_id_status"] = float(s["R1_id_status_code"][-1]) if "R1_id_status_code" in s else nan
     bound, duration = lost_control_check(sc)
     t_lc = lost_control_time(s["time_s"], speed, speed_ref, bound * 30.0 / math.pi, duration)
     out["lost_control"] = not math.isnan(t_lc)

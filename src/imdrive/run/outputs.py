@@ -73,8 +73,9 @@ COLUMN_DOCS = {
     "rotor_rise_K": "the compensator's rotor thermal model: rotor temperature above ambient "
     "(compensator.thermal_model; recalibrated by the estimate, it carries R2_hat while held)",
     "R1_id_status_code": "standstill R1 identification (mras.R1_standstill): 0 no standstill "
-    "run yet, 1 R1_hat identified, 2 a standstill run ended before the flux build-up was over "
-    "(R1_hat left as it was)",
+    "run yet, 1 R1_hat identified, 2 a standstill run ended before the measured flux build-up "
+    "was over, or the drive was not still (R1_hat left as it was; the run's verdict_text says "
+    "so)",
     "inj_freq_Hz": "injection frequency in use (the compensator moves it away from the stator "
     "frequency)",
 }

@@ -25,6 +25,11 @@ metrics (:func:`imdrive.run.metrics.drive_metrics`) and its scenario:
 ``not-run``
     the scenario could not be built (the batch's ``status`` -1).
 
+A run whose standstill R1 identification (``mras.R1_standstill``) could not identify
+(``R1_id_status`` 2: the speed reference left zero before the measured flux build-up was
+over, or the drive was not still) says so in ``verdict_text`` whatever its verdict
+(:data:`R1_NOT_IDENTIFIED`): the MRAS then ran on R̂1 as it was given.
+
 The failures are listed in time order (a loss of control before the divergence it led to, a
 hold before the R̂2 error it left at the end) and the verdict is the first; ``verdict_text``
 names every one. Why R̂2 was held comes from the compensator's gating mask (the log column
@@ -69,6 +74,13 @@ STATUS_COLUMNS = (
     "verdict_ok",
     "verdict_text",
     "verdict_at_s",
+)
+
+#: The note a run's ``verdict_text`` carries when its standstill R1 identification could not
+#: identify (``R1_id_status`` 2).
+R1_NOT_IDENTIFIED = (
+    "standstill R1 not identified (its last standstill run ended before the measured flux "
+    "build-up was over, or the drive was not still): R1_hat as it was"
 )
 
 VERDICTS = ("ok", "lost-control", "diverged", "frozen", "held", "R2-off", "speed-error", "not-run")
@@ -138,7 +150,7 @@ def verdict(sc, row: dict) -> dict:
     row : dict
         Its metrics: ``status``, ``diverged_at_s``, ``lost_control_at_s``, ``R2_error_pct``,
         ``speed_error_rpm``, ``R2_hat_final_ohm``, ``R2_held_since_s``,
-        ``R2_held_end_causes``, ``simulated_s``.
+        ``R2_held_end_causes``, ``simulated_s``, ``R1_id_status`` (optional).
 
     Returns
     -------
@@ -206,16 +218,18 @@ def verdict(sc, row: dict) -> dict:
             )
         )
     events.sort(key=lambda e: e[0])
+    r1_note = f"; {R1_NOT_IDENTIFIED}" if row.get("R1_id_status") == 2 else ""
     if events:
         out["verdict"] = events[0][1]
         out["verdict_ok"] = False
-        out["verdict_text"] = "; ".join(e[2] for e in events)
+        out["verdict_text"] = "; ".join(e[2] for e in events) + r1_note
         out["verdict_at_s"] = events[0][0]
         return out
     out["verdict"] = "ok"
     out["verdict_ok"] = True
     out["verdict_at_s"] = math.nan
-    out["verdict_text"] = "ok" + (f"; {held_note[2]}, still within tolerance" if held_note else "")
+    held = f"; {held_note[2]}, still within tolerance" if held_note else ""
+    out["verdict_text"] = "ok" + held + r1_note
     return out
 
 
