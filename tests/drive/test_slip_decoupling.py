@@ -31,12 +31,21 @@ from imdrive import simulate_batch
 pytestmark = pytest.mark.slow  # end to end: 6 closed-loop runs of 24 s
 
 
-def _runs(machine: str, speed_pu: float, R2_ratio: float, type1: bool = True, pi: bool = False):
+def _runs(
+    machine: str,
+    speed_pu: float,
+    R2_ratio: float,
+    type1: bool = True,
+    pi: bool = False,
+    fixed_gains: bool = False,
+):
     """The run without and with the correction; ``type1`` pins the type-1 MRAS, ``pi`` the PI
-    current controller."""
+    current controller, ``fixed_gains`` the speed PI's designed gains in field weakening."""
     pinned = {"mras.acceleration_tracking": False} if type1 else {}  # the whole coupling
     if pi:
         pinned["control.current_controller"] = "pi"
+    if fixed_gains:
+        pinned["control.speed_gain_flux_scaling"] = False
     scs = [
         ramp_scenario(
             machine,
@@ -58,7 +67,10 @@ def _runs(machine: str, speed_pu: float, R2_ratio: float, type1: bool = True, pi
 
 @pytest.mark.parametrize("machine, speed_pu, R2_ratio", [("krause-3hp", 2.0, 1.0)])
 def test_decoupling_still_needed_with_the_default_type2_loop(machine, speed_pu, R2_ratio):
-    r = _runs(machine, speed_pu, R2_ratio, type1=False, pi=True)
+    # with the speed gains scaled by the flux factor (the default in field weakening) the run
+    # without the correction ends within goal too (R2_hat +0.06 %, 0.19 rpm): pinned off, the
+    # loop it was measured on
+    r = _runs(machine, speed_pu, R2_ratio, type1=False, pi=True, fixed_gains=True)
     off, on = r[False], r[True]
     assert off.verdict != "ok" and abs(off.R2_error_pct) > 0.5  # measured -0.99 %, speed-error
     assert on.verdict == "ok" and abs(on.R2_error_pct) < 0.1

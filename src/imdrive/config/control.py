@@ -204,6 +204,16 @@ class ControlSettings:
         Bool,
         setting("field weakening: flux factor at most the no-load one at field_weakening_voltage"),
     ] = True
+    speed_gain_flux_scaling: Annotated[
+        Bool | None,
+        setting(
+            "in field weakening the speed PI's gains times the flux factor k (kp) and k^2 (ki): "
+            "an estimator's speed error from a wrong R2_hat is proportional to the torque "
+            "current and grows as 1/k, a positive feedback through the speed PI that made the "
+            "loop limit-cycle at twice the rated speed (kernels/speed_control.py)",
+            default_doc="on with field_weakening on and a sensorless speed_feedback, else off",
+        ),
+    ] = None
     reorientation: Annotated[
         Bool,
         setting(

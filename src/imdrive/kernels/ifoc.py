@@ -27,10 +27,10 @@ Gain formulas (the defaults; each can be overridden in the scenario):
 * speed PI, with ``k_t = 1.5 n_p (M/L2) psi*`` the torque constant (N m/A)::
 
       kp_w = J a_s / k_t,    ki_w = kp_w a_s / 4           (crossover ~ a_s, PI zero at a_s/4)
+      (in field weakening times k and k^2 with w_fw_sched: kernels/speed_control.py)
 
 Both PIs use back-calculation anti-windup: after saturation the integral state is corrected by
-the part of the output that could not be applied, so the next output starts from the limit.
-"""
+the part of the output that could not be applied, so the next output starts from the limit."""
 
 from __future__ import annotations
 
@@ -61,6 +61,7 @@ from imdrive.kernels.model import (
     update_magnetising,
 )
 from imdrive.kernels.records import b1, c16, f8, i8, record_dtype
+from imdrive.kernels.speed_control import speed_pi_gains
 
 #: Parameters of the speed and current controllers (gains from :mod:`imdrive.design.gains`).
 CONTROL_PARAMS = record_dtype(
@@ -98,6 +99,7 @@ CONTROL_PARAMS = record_dtype(
         ("fw_rate", f8),  # its integral gain, 1/s per unit of voltage use
         ("fw_min", f8),  # lowest flux factor
         ("fw_bound", b1),  # the flux factor is bounded by the no-load voltage at fw_v
+        ("w_fw_sched", b1),  # speed PI gains times k, k^2 in field weakening (speed_control.py)
         ("r1_settle", f8),  # online R1 law held this long after the speed reference moved, s
         ("or_wmin", f8),  # orientation check from this |w_e|, rad/s (0: off)
         ("or_trip", f8),  # misoriented and voltage-limited this long: realign, s
@@ -141,11 +143,9 @@ def wrap_angle(th):
 
 @njit(cache=True)
 def open_loop_voltage(s, v_amp, f_Hz, Ts):
-    """Balanced sinusoidal voltage for the next period (updates the angle in ``c``).
-
-    The sinusoid is sampled at the middle of the period, so the held voltage has the
-    continuous sinusoid's phase (its amplitude is reduced by sinc(w Ts/2), 6e-5 at 60 Hz, 10 kHz).
-    """
+    """Balanced sinusoidal voltage for the next period (updates the angle in ``c``), sampled at
+    the middle of the period: the held voltage has the continuous sinusoid's phase (its
+    amplitude is reduced by sinc(w Ts/2), 6e-5 at 60 Hz, 10 kHz)."""
     w = 2.0 * math.pi * f_Hz
     th = s.theta_ol + 0.5 * w * Ts
     s.theta_ol = wrap_angle(s.theta_ol + w * Ts)
@@ -196,15 +196,15 @@ def foc_step(p, m, s, i_alpha, i_beta, w_fb_m, w_ref_m, psi_ref, i_inj, Ts):
     psi_hat = s.psi_hat
     # floor: keeps slip and torque current finite while the machine is still unmagnetised
     psi_div = max(psi_hat, 0.05 * M * abs(id_ref), 1e-6)
-
     # speed PI -> torque command, expressed as the q current at the reference flux; divided by
     # the modelled flux so the torque does not follow flux changes (injection, magnetising)
     iq_max = math.sqrt(max(i_max * i_max - id_ref * id_ref, 0.0))
     err_w = w_ref_m - w_fb_m
-    u_unsat = p.kp_w * err_w + s.int_w
+    kp_w, ki_w = speed_pi_gains(p, s)  # in field weakening scaled by the flux factor
+    u_unsat = kp_w * err_w + s.int_w
     flux_gain = psi_ref / psi_div
     iq_ref = min(max(u_unsat * flux_gain, -iq_max), iq_max)
-    s.int_w += p.ki_w * Ts * err_w + (iq_ref / flux_gain - u_unsat)
+    s.int_w += ki_w * Ts * err_w + (iq_ref / flux_gain - u_unsat)
 
     # synchronous frame: slip from the estimated rotor time constant
     th = s.theta_e

@@ -22,6 +22,7 @@ from imdrive.config.perunit import Resolved, adc_range_A, sign_band_A
 from imdrive.config.profiles import Profile
 from imdrive.config.scaled import flux_injection_frequency_Hz, plant_thermal_resistances
 from imdrive.config.scenario import Scenario
+from imdrive.config.speed_gain import speed_gain_flux_scaling
 from imdrive.design.gains import default_current_gains, default_speed_gains
 from imdrive.errors import ConfigError
 from imdrive.fuzzy import fuzzy_table
@@ -266,6 +267,7 @@ def control_fields(sc: Scenario, D: Resolved, mh: dict, psi0: float) -> tuple[di
         fw_rate=ctl.field_weakening_rate,
         fw_min=ctl.field_weakening_min,
         fw_bound=ctl.field_weakening_bound,
+        w_fw_sched=speed_gain_flux_scaling(sc),
         r1_settle=_r1_settle_s(D),
         or_wmin=(
             2 * math.pi * m.rated_frequency_Hz * ORIENTATION_FROM_PU if ctl.reorientation else 0.0
