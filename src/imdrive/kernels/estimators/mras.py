@@ -549,14 +549,10 @@ def mras_estimate(p, m, s, inp):
     i0 = inp.i_prev_ab
     i1 = inp.i_ab
     Ts = inp.Ts
-    # the second integrator starts above b2_wmin and is held again only below half of it: a
-    # drive that holds its stator frequency near one threshold switched the loop's type at
-    # every ripple of it, and the switching lost control where either type alone held
-    # (Krause 500 hp at 5 % of rated speed, a rated-torque step)
-    w_e_abs = abs(inp.w_e)
-    if w_e_abs >= p.b2_wmin:
+    # second integrator: on above b2_wmin, held only below half of it (hysteresis: module doc)
+    if abs(inp.w_e) >= p.b2_wmin:
         s.int_w_run = True
-    elif w_e_abs < 0.5 * p.b2_wmin:
+    elif abs(inp.w_e) < 0.5 * p.b2_wmin:
         s.int_w_run = False
     mras_step(p, m, s, v.real, v.imag, i0.real, i0.imag, i1.real, i1.imag, inp.theta_e, Ts)
     w_hat = s.w_r_hat
