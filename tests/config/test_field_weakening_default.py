@@ -101,3 +101,18 @@ def test_paper_presets_keep_it_off():
             assert not field_weakening_on(sc), name
         else:
             assert field_weakening_on(sc) == sc.control.field_weakening, name
+
+
+def test_show_all_says_what_the_default_is_here():
+    # `imdrive show --all` (Scenario.to_toml): the unset setting's comment names its value in
+    # this scenario, and the text still reads back to the same scenario (comments only)
+    for speed_pu, here in ((0.95, "true"), (0.5, "false")):
+        sc = _at("krause-500hp", speed_pu)
+        text = sc.to_toml()
+        assert f"# field_weakening is unset (its documented default applies: {here} here)" in text
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ConfigWarning)
+            again = Scenario.from_toml(text)
+        assert again.to_dict() == sc.to_dict()
+    open_loop = Scenario.read("free-acceleration").to_toml()
+    assert "# field_weakening is unset (its documented default applies)\n" in open_loop

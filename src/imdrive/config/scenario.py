@@ -555,16 +555,18 @@ class Scenario:
 
     # -- export ----------------------------------------------------------------------------
     def to_toml(self) -> str:
-        """The scenario as TOML text, every default filled in (``imdrive show PRESET --all``).
+        """The scenario as TOML text, every default filled in (``imdrive show PRESET --all``);
+        an unset setting whose default depends on the scenario says what it is here.
 
         Returns
         -------
         str
             TOML text that :meth:`from_toml` reads back to an equal scenario.
         """
+        from imdrive.config.resolved import resolved_defaults
         from imdrive.config.toml_writer import dumps
 
-        return dumps(self.to_dict())
+        return dumps(self.to_dict(), resolved_defaults(self))
 
     def to_dict(self) -> dict:
         """The scenario as run, every default filled in, in TOML-shaped form.

@@ -47,12 +47,16 @@ def value(v) -> str:
     raise TypeError(f"cannot write {type(v).__name__} as TOML")
 
 
-def _table(lines: list[str], path: list[str], d: dict) -> None:
+def _table(lines: list[str], path: list[str], d: dict, resolved: dict) -> None:
     subs = []
     body = []
     for k, v in d.items():
         if v is None:
-            body.append(f"# {_key(k)} is unset (its documented default applies)")
+            here = resolved.get(".".join([*path, k]))
+            rule = "its documented default applies"
+            if here is not None:
+                rule += f": {value(here)} here"
+            body.append(f"# {_key(k)} is unset ({rule})")
             continue
         if isinstance(v, dict) and any(isinstance(x, dict) for x in v.values()):
             subs.append((k, v))
@@ -63,16 +67,19 @@ def _table(lines: list[str], path: list[str], d: dict) -> None:
         lines.append("[" + ".".join(_key(p) for p in path) + "]")
     lines.extend(body)
     for k, v in subs:
-        _table(lines, [*path, k], v)
+        _table(lines, [*path, k], v, resolved)
 
 
-def dumps(data: dict) -> str:
+def dumps(data: dict, resolved: dict | None = None) -> str:
     """``data`` (a dictionary of values and tables) as TOML text.
 
     Parameters
     ----------
     data : dict
         Top-level values first, then tables; nested tables of values become inline tables.
+    resolved : dict, optional
+        Dotted key -> the value an unset (``None``) setting takes in this scenario, written in
+        its comment (:func:`imdrive.config.resolved.resolved_defaults`).
 
     Returns
     -------
@@ -82,7 +89,7 @@ def dumps(data: dict) -> str:
     lines: list[str] = []
     top = {k: v for k, v in data.items() if not isinstance(v, dict)}
     tables = {k: v for k, v in data.items() if isinstance(v, dict)}
-    _table(lines, [], top)
+    _table(lines, [], top, resolved or {})
     for k, v in tables.items():
-        _table(lines, [k], v)
+        _table(lines, [k], v, resolved or {})
     return "\n".join(lines).lstrip("\n") + "\n"
