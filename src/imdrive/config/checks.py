@@ -57,7 +57,8 @@ def per_unit_warnings(sc, r) -> None:
     machine (typically a value tuned for another machine) is warned about, one line each."""
     comp, inj, m = sc.compensator, sc.injection, sc.machine
     notes = []
-    if comp.enabled and comp.G_CR_pu is None and not 1e-4 <= r.G_CR / r.R2_hat <= 0.2:
+    absolute_step = comp.G_CR_ohm is not None and comp.G_CR_pu is None
+    if comp.enabled and absolute_step and not 1e-4 <= r.G_CR / r.R2_hat <= 0.2:
         notes.append(
             (
                 "compensator.G_CR_ohm",

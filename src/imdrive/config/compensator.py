@@ -18,7 +18,9 @@ class CompensatorSettings:
 
     ``gain_E_per_Wb`` and ``gain_DE_per_Wb`` scale e_d0 and its change per period before the
     quantiser (thresholds 0.25 ... 5): 1e6 reproduces the paper's micro-weber thresholds.
-    ``G_CR_ohm`` is the change of R2_hat per output level and period. The clamps default to
+    ``G_CR_ohm`` is the change of R2_hat per output level and period. Unset, these and the
+    gate's thresholds are the paper's numbers on Table IV scaled to the machine
+    (:mod:`imdrive.config.compensator_gains`). The clamps default to
     0.5 and 2 times the initial estimate. ``period_s`` defaults to 10 ms, or to one injection
     period with ``input = "demodulated"``.
     """
@@ -35,20 +37,33 @@ class CompensatorSettings:
         ),
     ] = None
     gain_E_per_Wb: Annotated[
-        Float,
+        Float | None,
         setting(
             "scaling of e_d0 before the 13-level quantiser (1e6: the paper's µWb thresholds)",
             "1/Wb",
             gt=0.0,
+            default_doc="the paper's 1e6 on Table IV scaled by 1/ψ_rated "
+            "(config/compensator_gains.py)",
         ),
-    ] = 1e6
+    ] = None
     gain_DE_per_Wb: Annotated[
-        Float,
-        setting("scaling of the change of e_d0 per period before the quantiser", "1/Wb", gt=0.0),
-    ] = 1e6
+        Float | None,
+        setting(
+            "scaling of the change of e_d0 per period before the quantiser",
+            "1/Wb",
+            gt=0.0,
+            default_doc="the paper's 1e6 on Table IV scaled by 1/ψ_rated",
+        ),
+    ] = None
     G_CR_ohm: Annotated[
-        Float, setting("change of R̂2 per output level and period", "ohm", ge=0.0)
-    ] = 0.001
+        Float | None,
+        setting(
+            "change of R̂2 per output level and period",
+            "ohm",
+            ge=0.0,
+            default_doc="the paper's 0.001 on Table IV scaled by the machine's R2",
+        ),
+    ] = None
     G_CR_pu: Annotated[
         Float | None,
         setting(
@@ -123,23 +138,25 @@ class CompensatorSettings:
         ),
     ] = None
     gate_speed_rpm: Annotated[
-        Float,
+        Float | None,
         setting(
             "gating: speed-reference change within a period, or mean speed error over it, "
             "above which the period is a transient",
             "rpm",
             gt=0.0,
+            default_doc="1 rpm on Table IV scaled by the rated slip speed (0.0126 × it)",
         ),
-    ] = 1.0
+    ] = None
     gate_iq_A: Annotated[
-        Float,
+        Float | None,
         setting(
             "gating: change of the period-mean iq* from one period to the next above which the "
             "period is a load transient",
             "A",
             gt=0.0,
+            default_doc="0.3 A on Table IV scaled by machine.rated_current_A",
         ),
-    ] = 0.3
+    ] = None
     gate_speed_pu: Annotated[
         Float | None,
         setting(
@@ -175,14 +192,15 @@ class CompensatorSettings:
         ),
     ] = None
     gate_band_Hz: Annotated[
-        Float,
+        Float | None,
         setting(
             "gating: the injection frequency is switched when |stator frequency| is within this "
             "of it (0: never)",
             "Hz",
             ge=0.0,
+            default_doc="half the first injection frequency (1 Hz of Table IV's 2 Hz)",
         ),
-    ] = 1.0
+    ] = None
     gate_hold_periods: Annotated[
         Int, setting("gating: decisions still skipped after a gated one", ge=0)
     ] = 1
@@ -225,7 +243,7 @@ class CompensatorSettings:
             'step_law = "adaptive": bound of the drift rate, per decision period',
             "ohm",
             ge=0.0,
-            default_doc="3 × G_CR_ohm",
+            default_doc="3 × the resolved G_CR_ohm",
         ),
     ] = None
 
@@ -466,7 +484,12 @@ def injection_frequencies_in_use(
     f1 = inj.frequency_Hz if r is None else r.inj_f1
     f2 = inj.frequency2_Hz if inj.frequency2_Hz is not None else 2.0 * inj.frequency_Hz
     f3 = inj.frequency3_Hz
-    band = comp.gate_band_Hz
+    if comp.gate_band_Hz is not None:
+        band = comp.gate_band_Hz
+    else:  # as config/compensator_gains.py resolves it
+        from imdrive.config.compensator_gains import GATE_BAND_PU
+
+        band = (comp.gate_band_pu if comp.gate_band_pu is not None else GATE_BAND_PU) * f1
     if r is not None:
         f2, f3, band = r.inj_f2, r.inj_f3, r.gate_band
     out = []

@@ -44,7 +44,9 @@ declares every pair once, and an override of one member clears the other (see
 :mod:`imdrive.config.pairs`).
 The EKF's noise, the plant's thermal resistances, the flux-command injection's frequency
 and the adaptive flux observer's resistance rates are resolved in
-:mod:`imdrive.config.scaled` (this module's size).
+:mod:`imdrive.config.scaled` (this module's size); the compensator's step, gains and gate
+thresholds, unset, are the paper's Table IV numbers scaled to the machine
+(:mod:`imdrive.config.compensator_gains`).
 
 ``psi_rated`` is :attr:`~imdrive.config.machine.MachineParams.rated_flux_Wb` (the no-load
 rotor flux at rated voltage and frequency) and ``psi_rated / M`` the rated magnetising
@@ -58,6 +60,7 @@ import dataclasses
 import math
 from dataclasses import dataclass
 
+from imdrive.config.table_iv import table_iv_scaled
 from imdrive.errors import ConfigError
 
 
@@ -233,15 +236,10 @@ def _resolve(sc) -> Resolved:
         f1 = inj.frequency_Hz
         f2 = inj.frequency2_Hz if inj.frequency2_Hz is not None else 2.0 * f1
         f3 = inj.frequency3_Hz
-    band = comp.gate_band_Hz if comp.gate_band_pu is None else comp.gate_band_pu * f1
-    gate_speed = comp.gate_speed_rpm
-    if comp.gate_speed_pu is not None:
-        from imdrive.config.machine import rated_point
+    from imdrive.config.compensator_gains import compensator_gains
 
-        rp = rated_point(m)
-        gate_speed = comp.gate_speed_pu * (rp.synchronous_speed_rpm - rp.speed_rpm)
+    g = compensator_gains(comp, m, R2, f1)
     I_rated = m.rated_current_A
-    gate_iq = comp.gate_iq_A if comp.gate_iq_pu is None else comp.gate_iq_pu * I_rated
     from imdrive.config.compensator import decision_period_steps
 
     r = Resolved(
@@ -252,16 +250,16 @@ def _resolve(sc) -> Resolved:
         Ll2_hat=est.Ll2_H if est.Ll2_H is not None else m.Ll2_H,
         R2_min=0.5 * R2 if lo is None else lo,
         R2_max=2.0 * R2 if hi is None else hi,
-        G_CR=comp.G_CR_ohm if comp.G_CR_pu is None else comp.G_CR_pu * R2,
-        gain_E=comp.gain_E_per_Wb if comp.gain_E_pu is None else comp.gain_E_pu / psi,
-        gain_DE=comp.gain_DE_per_Wb if comp.gain_DE_pu is None else comp.gain_DE_pu / psi,
+        G_CR=g.G_CR,
+        gain_E=g.gain_E,
+        gain_DE=g.gain_DE,
         inj_amp=inj.amplitude_A if inj.amplitude_pu is None else inj.amplitude_pu * psi / m.M_H,
         inj_f1=f1,
         inj_f2=f2,
         inj_f3=f3,
-        gate_band=band,
-        gate_speed_rpm=gate_speed,
-        gate_iq_A=gate_iq,
+        gate_band=g.gate_band_Hz,
+        gate_speed_rpm=g.gate_speed_rpm,
+        gate_iq_A=g.gate_iq_A,
         psi_rated=psi,
         I_rated=I_rated,
         speed_bandwidth_Hz=speed_bandwidth_Hz(sc),
@@ -399,24 +397,6 @@ def current_limit_A(sc) -> float:
     """
     given = sc.control.current_limit_A
     return given if given is not None else CURRENT_LIMIT_PU * rated_peak_current_A(sc.machine)
-
-
-def table_iv_scaled(value: float, base, machine) -> float:
-    """A default first set in SI on the Table IV machine, scaled to ``machine``:
-    ``value x base(machine) / base(Table IV)``, exactly ``value`` on Table IV.
-
-    Parameters
-    ----------
-    value : float
-        The default on Table IV, SI.
-    base : callable
-        The machine's quantity the setting scales with (``rated_peak_current_A``).
-    machine : MachineParams
-        The scenario's machine.
-    """
-    from imdrive.config.machine import machine_preset
-
-    return value * (base(machine) / base(machine_preset("paper-table-iv")))
 
 
 #: the current sensors' ADC full scale on Table IV, A (:func:`adc_range_A`)

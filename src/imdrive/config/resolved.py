@@ -21,13 +21,34 @@ def resolved_defaults(sc) -> dict[str, object]:
     -------
     dict
         ``control.field_weakening`` (:func:`~imdrive.config.field_weakening.field_weakening_on`),
-        ``control.current_controller``, ``control.speed_gain_flux_scaling``; empty for an
-        open-loop drive.
+        ``control.current_controller``, ``control.speed_gain_flux_scaling``,
+        ``mras.acceleration_tracking`` (with the MRAS in the loop), and with the compensator
+        on, its unset machine-dependent settings (:mod:`imdrive.config.compensator_gains`);
+        empty for an open-loop drive.
     """
     if sc.drive.mode != "vector":
         return {}
-    return {
+    out = {
         "control.field_weakening": field_weakening_on(sc),
         "control.current_controller": current_controller(sc),
         "control.speed_gain_flux_scaling": speed_gain_flux_scaling(sc),
     }
+    from imdrive.config.perunit import resolve
+
+    r = resolve(sc)
+    if sc.control.speed_feedback == "mras":
+        from imdrive.config.estimators import mras_type2
+
+        T2_hat = (r.Ll2_hat + r.M_hat) / r.R2_hat
+        out["mras.acceleration_tracking"] = mras_type2(sc, sc.mras, T2_hat)
+    if sc.compensator.enabled:
+        for key, value in (
+            ("G_CR_ohm", r.G_CR),
+            ("gain_E_per_Wb", r.gain_E),
+            ("gain_DE_per_Wb", r.gain_DE),
+            ("gate_speed_rpm", r.gate_speed_rpm),
+            ("gate_iq_A", r.gate_iq_A),
+            ("gate_band_Hz", r.gate_band),
+        ):
+            out[f"compensator.{key}"] = float(value)
+    return out

@@ -83,6 +83,9 @@ COLUMN_DOCS = {
 SUMMARY_DOCS = {
     "scenario": "the scenario as run, every default filled in (a valid scenario file's content)",
     "derived": "quantities derived from it: gains, limits, rated values, compensator period",
+    "resolved": "the value each unset scenario-dependent setting took (field weakening, "
+    "current controller, speed-gain scaling, MRAS type, the compensator's machine-scaled "
+    "gains): what `imdrive show --all` writes in their comments",
     "versions": "imdrive, Python, numpy, scipy, numba versions",
     "status": "ok, or why the run stopped",
     "diverged": "whether a state left its bounds (NaN, current, speed)",

@@ -476,6 +476,7 @@ class SimulationResult:
         return {
             "scenario": self.scenario.to_dict(),
             "derived": {k: float(v) for k, v in self.derived.items()},
+            "resolved": self._resolved_defaults(),
             "versions": package_versions(),
             "status": STATUS_TEXT[self.status],
             "diverged": self.diverged,
@@ -494,6 +495,19 @@ class SimulationResult:
             "machine_rated": rated_point_dict(self.scenario.machine),
             "verdict": self.verdict,
         }
+
+    def _resolved_defaults(self) -> dict:
+        """The value each unset scenario-dependent setting took in this run (dotted key ->
+        value; :func:`imdrive.config.resolved.resolved_defaults`), only those left unset."""
+        from imdrive.config.resolved import resolved_defaults
+
+        sc = self.scenario
+        out = {}
+        for key, value in resolved_defaults(sc).items():
+            section, name = key.split(".")
+            if getattr(getattr(sc, section), name) is None:
+                out[key] = value
+        return out
 
     def to_csv(self, path) -> None:
         """Write the signals as CSV (header = column names with units).

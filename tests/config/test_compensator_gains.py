@@ -1,0 +1,73 @@
+"""The compensator's machine-dependent settings left unset follow the machine
+(config/compensator_gains.py): the paper's numbers on Table IV, bit for bit, scaled by the
+machine's R2, rated flux, rated slip speed, rated current and the injection frequency
+elsewhere; a per-unit twin or an absolute value wins, in that order.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from imdrive.config.perunit import resolve
+from imdrive.config.rated import rated_point
+from imdrive.config.resolved import resolved_defaults
+from imdrive.config.scenario import Scenario
+
+ON = ["compensator.enabled=true"]
+
+
+def _slip_rpm(m) -> float:
+    rp = rated_point(m)
+    return rp.synchronous_speed_rpm - rp.speed_rpm
+
+
+def test_table_iv_keeps_the_paper_numbers_exactly():
+    r = resolve(Scenario.read("sensorless", ON))
+    assert (r.G_CR, r.gain_E, r.gain_DE) == (0.001, 1e6, 1e6)
+    assert (r.gate_speed_rpm, r.gate_iq_A, r.gate_band) == (1.0, 0.3, 1.0)
+
+
+@pytest.mark.parametrize("machine", ["krause-50hp", "aalto-2.2kw", "krause-2250hp"])
+def test_unset_settings_keep_their_share_of_the_machine(machine):
+    t4 = Scenario.read("sensorless", ON)
+    sc = Scenario.read("sensorless", [*ON, f'machine.preset="{machine}"'])
+    r0, r = resolve(t4), resolve(sc)
+    m0, m = t4.machine, sc.machine
+    assert m.R2_ohm != pytest.approx(m0.R2_ohm, rel=0.1)  # a machine unlike Table IV
+    assert r.G_CR / m.R2_ohm == pytest.approx(r0.G_CR / m0.R2_ohm, rel=1e-12)
+    for g, g0 in ((r.gain_E, r0.gain_E), (r.gain_DE, r0.gain_DE)):
+        assert g * m.rated_flux_Wb == pytest.approx(g0 * m0.rated_flux_Wb, rel=1e-12)
+    assert r.gate_speed_rpm / _slip_rpm(m) == pytest.approx(
+        r0.gate_speed_rpm / _slip_rpm(m0), rel=1e-12
+    )
+    assert r.gate_iq_A / m.rated_current_A == pytest.approx(
+        r0.gate_iq_A / m0.rated_current_A, rel=1e-12
+    )
+    assert r.gate_band == pytest.approx(0.5 * r.inj_f1, rel=1e-12)
+
+
+def test_a_twin_or_an_absolute_value_wins():
+    base = [*ON, 'machine.preset="krause-50hp"']
+    r = resolve(Scenario.read("sensorless", [*base, "compensator.G_CR_pu=0.01"]))
+    assert r.G_CR == pytest.approx(0.01 * r.R2_hat, rel=1e-12)
+    r = resolve(Scenario.read("sensorless", [*base, "compensator.G_CR_ohm=0.004"]))
+    assert r.G_CR == 0.004
+    r = resolve(Scenario.read("sensorless", [*base, "compensator.gate_band_Hz=0.7"]))
+    assert r.gate_band == 0.7
+    r = resolve(Scenario.read("sensorless", [*base, "compensator.gate_band_pu=0.25"]))
+    assert r.gate_band == pytest.approx(0.25 * r.inj_f1, rel=1e-12)
+
+
+def test_the_paper_presets_state_theirs_and_show_all_names_the_derived_ones():
+    sc = Scenario.read("paper-fig5")
+    assert (sc.compensator.G_CR_ohm, sc.compensator.gain_E_per_Wb) == (0.001, 1e6)
+    d = resolved_defaults(Scenario.read("sensorless", [*ON, 'machine.preset="krause-50hp"']))
+    assert d["compensator.G_CR_ohm"] == pytest.approx(
+        0.001
+        * Scenario.read("sensorless", ['machine.preset="krause-50hp"']).machine.R2_ohm
+        / Scenario.read("sensorless").machine.R2_ohm,
+        rel=1e-12,
+    )
+    text = Scenario.read("sensorless", ON).to_toml()
+    assert "# G_CR_ohm is unset (its documented default applies: 0.001 here)" in text
+    assert "# gain_E_per_Wb is unset (its documented default applies: 1000000.0 here)" in text
