@@ -14,10 +14,10 @@ from imdrive.config.validation import Float, setting
 RegenerationAngle = Annotated[
     Float,
     setting(
-        "rotation of the MRAS's adaptation error in low-speed regeneration, "
-        "e = Im{λv λ̂* e^(-jφ)}, φ of the sign opposite to the torque's: the loop of the "
-        "MRAS, the field orientation and the speed controller is unstable near zero stator "
-        "frequency there (kernels/estimators/mras_stabilise.py; 0: Schauder's error everywhere)",
+        "rotation of the MRAS's adaptation error where the stator frequency is against the "
+        "speed (regeneration below the slip speed), e = Im{(λv - λ̂) λ̂* e^(-jφ)}, φ of the "
+        "speed's sign: the loop of the MRAS, the field orientation and the speed controller "
+        "is unstable there (kernels/estimators/mras_stabilise.py; 0: Schauder's error)",
         "deg",
         ge=0.0,
         lt=90.0,

@@ -19,20 +19,38 @@ where the models agree, is added to it; rotating ``lam_v`` itself would add ``|l
 move the equilibrium). A speed error ``d`` misplaces
 the rotor's slip by ``d``; in steady state (rotor flux ``lam_hat``, slip ``w_sl`` of the
 controller, ``x = w_sl T2``) it moves the cross product by ``-lam_hat^2 T2 d / (1 + x^2)`` and
-the dot product by ``-lam_hat^2 T2 x d / (1 + x^2)``, so the rotated error's gain to the speed
-error is ``cos(phi) - x sin(phi)`` times the unrotated one: an angle of the sign opposite to the
-slip's (to the torque's) adds to the loop's gain while its phase moves, and the angle is what
-shifts the loop's low-frequency zero out of the right half-plane.
+the dot product by ``-lam_hat^2 T2 x d / (1 + x^2)`` (both times the filter's ``|H(j w_e)|^2``),
+so the rotated error's steady gain to the speed error is ``cos(phi) - x sin(phi)`` times the
+unrotated one: an angle of the sign opposite to the slip's (to the torque's) adds to it. What
+the angle does to the loop's dynamics was measured on the linearised drive (below).
 
-The angle is scheduled (:func:`regeneration_angle`) so that it acts only where it is needed:
+The angle is scheduled (:func:`regeneration_angle`) on the adjustable model's flux frequency
+``w_e`` (the stator frequency in steady state) and the speed estimate::
 
-    phi = -phi_max sat(i_q* / i_band) r(w_r_hat i_q*) max(0, 1 - |w_e| / w_band)
+    phi = phi_max s r,    s = sat(w_r_hat / w_speed),    r = clip(1/2 - w_e s / w_band, 0, 1)
 
-``r`` is 1 in regeneration (``w_r_hat i_q* <= -w_speed i_band``), 0 in motoring, linear
-in between (continuous through zero speed and zero torque); ``w_e`` is the controller's stator
-frequency. In motoring and above ``w_band`` the error is Schauder's, bit for bit. The
-angle does not make the rotor resistance observable at zero stator frequency: the R2
-compensator's own gates keep saying so; what it keeps is the speed loop's stability.
+full where the stator frequency is against the speed (the *plugging* quadrant: regeneration
+below the slip speed, where the slip is larger than the speed and of the other sign), none where
+it is ``w_band / 2`` or more with the speed, and continuous through zero speed. Its sign is the
+speed's, opposite to the torque's there, which adds to the loop's steady gain. Measured on the
+linearised drive (:mod:`imdrive.stability.linear`; ``sensorless``, Table IV, R2_hat = R2, 20 rpm
+regenerating half the rated torque, stator frequency -0.7 Hz): least stable pole +3.8 +- 6.7j /s
+without, -3.5 /s with 80 deg; at 5 % of the rated speed regenerating the rated torque from
+R2_hat = 1.3 R2, +12.0 /s (real) without, -1.0 /s with. The angle was scanned (with a wider
+ramp): 30 / 60 / 85 deg gave -0.1 / -2.1 / -3.3 /s at the first point, and 80 deg is Hinkkanen
+and Luomi's ``0.44 pi``. Applied with the stator frequency *with* the speed (regeneration above
+the slip speed, where the plain MRAS is stable) it destabilised the loop (+16 /s at 5 % speed,
+rated regenerating torque, R2_hat = R2, stator frequency +0.22 Hz), hence the narrow ramp
+(``mras.regeneration_band_pu``, 0.005: 0.3 Hz on Table IV). Left: within about +-0.1 Hz of zero
+stator frequency at high regenerating torque a weakly unstable mode remains (+0.1 ... +1.7 /s on
+Table IV at the rated torque), where the voltage model has no signal at all.
+
+While the angle acts the online R1 law is held (``mras_r1_step``): its premise, that the speed
+adaptation drives the cross product to zero and leaves the dot product to R1, no longer holds
+(measured: both running, the speed drifted 43 rpm off in 30 s at 20 rpm regenerating the
+rated torque; R1 held, 0.2 rpm). The angle does not make the rotor resistance observable at
+zero stator frequency: the R2 compensator's own gates keep saying so; what it keeps is the
+speed loop's stability.
 """
 
 from __future__ import annotations
