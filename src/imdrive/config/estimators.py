@@ -17,6 +17,12 @@ import math
 from typing import Annotated, Literal
 
 from imdrive.config.field_weakening import field_weakening_on
+from imdrive.config.mras_regeneration import (
+    RegenerationAngle,
+    RegenerationBand,
+    RegenerationSpeed,
+    regeneration_params,
+)
 from imdrive.config.registry import (  # noqa: F401  (re-exported: the settings half's API)
     ESTIMATOR_SETTINGS,
     EstimatorContext,
@@ -448,6 +454,9 @@ class MrasSettings:
         ),
     ] = 0.5
     period_mean_current: PeriodMeanCurrent = True
+    regeneration_angle_deg: RegenerationAngle = 80.0
+    regeneration_band_pu: RegenerationBand = 0.005
+    regeneration_speed_pu: RegenerationSpeed = 0.005
     acceleration_tracking: Annotated[
         Bool | None,
         setting(
@@ -522,6 +531,7 @@ class MrasSettings:
             R1_dc_block=0.25 * ctx.L2_hat / ctx.R2_hat,
             R1_dc_nT2=3.5,
             bend=self.period_mean_current,
+            **regeneration_params(self, sc.machine),
         )
         src = {
             "mras_K1": "mras.K1" if self.K1 is not None else "mras.bandwidth_Hz",

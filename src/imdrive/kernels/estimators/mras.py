@@ -14,34 +14,33 @@ adjustable model's derivative through the same filter, so the two outputs stay c
 
     e = lam_q lam_hat_d - lam_d lam_hat_q,    w_r_hat = K1 e + K2 \\int e dt
 
-(d, q here are the stationary axes alpha, beta).
+(d, q here are the stationary axes alpha, beta). In low-speed regeneration, with the stator
+frequency against the speed, ``e`` is read along a rotated direction (:mod:`.mras_stabilise`).
 
-Type-2 adaptation (opt-in ``b2 > 0``; ``mras.acceleration_tracking``): a second integrator
-after the PI, ``w_r_hat = u + b2 \\int u dt`` with ``u = K1 e + K2 \\int e dt``. The PI
-alone, its zero cancelling the adjustable model's pole, leaves the loop ``a / s``
-(``a = K1 |lam|^2``): the estimate lags a constant acceleration ``alpha`` by ``alpha / a``.
-The error signal is linear in the speed error only within about the rotor's corner
-frequency ``1/T2`` (``e ~ x / (1 + x^2)``, ``x = T2 (w_r - w_r_hat)`` at small slip), so on
-a machine with a large ``T2`` this lag leaves the linear range; and the indirect field
-orientation, which runs on the estimate, then misplaces its slip by the lag: measured on
-Krause's 2250 hp machine (T2 = 1.6 s, ``1/T2`` = 3 rpm) ramping to rated speed at half the
-rated torque, a 5.7 rpm lag raised the rotor flux to 2.5 times rated and lost control. The
-second integrator removes the steady lag (gains:
-:func:`imdrive.design.gains.mras_type2_gains`). It runs only above ``b2_wmin`` of stator
-frequency, and once running is held again only below half of it (a hysteresis): near zero
-stator frequency the voltage model has little signal and the start-up mode of the estimate
-rings (docs/stability.md); there the integral is held, which leaves the type-1 loop with a
-constant added. Run through the whole start, the type-2 loop turned
-that ringing into excursions of the estimate of 955 rpm on the 2250 hp machine starting to
-10 % speed (R2_hat = 1.2 R2), and lost control; held below 5 % of the rated stator
-frequency (``mras.acceleration_tracking_from_pu``; just above the filter's cut-off
-``wc = 15 rad/s``, 0.04 of 60 Hz), 37 rpm and control kept. The threshold must stay below
-the stator frequencies the drive holds: at 10 % it sat on the grid's 10 %-speed points, and
-the speed dip of a rated-load step there held the integrator while the loop needed it
-(lost control on Krause 500 hp and 2250 hp, R2_hat = 0.8 R2; held at 5 %, both keep it).
-Without the hysteresis the same happened at the grid's 5 %-speed points: switched on and off
-by every ripple of the stator frequency there, the loop lost control after a rated-torque
-step on Krause 500 hp whatever R2_hat (type 1 alone, or the threshold at 2 or 10 %, held).
+Type-2 adaptation (opt-in ``b2 > 0``; ``mras.acceleration_tracking``): a second integrator after
+the PI, ``w_r_hat = u + b2 \\int u dt`` with ``u = K1 e + K2 \\int e dt``. The PI alone, its zero
+cancelling the adjustable model's pole, leaves the loop ``a / s`` (``a = K1 |lam|^2``): the
+estimate lags a constant acceleration ``alpha`` by ``alpha / a``. The error signal is linear in the
+speed error only within about the rotor's corner frequency ``1/T2`` (``e ~ x / (1 + x^2)``, ``x =
+T2 (w_r - w_r_hat)`` at small slip), so on a machine with a large ``T2`` this lag leaves the linear
+range; and the indirect field orientation, which runs on the estimate, then misplaces its slip by
+the lag: measured on Krause's 2250 hp machine (T2 = 1.6 s, ``1/T2`` = 3 rpm) ramping to rated speed
+at half the rated torque, a 5.7 rpm lag raised the rotor flux to 2.5 times rated and lost control.
+The second integrator removes the steady lag (gains:
+:func:`imdrive.design.gains.mras_type2_gains`). It runs only above ``b2_wmin`` of stator frequency,
+and once running is held again only below half of it (a hysteresis): near zero stator frequency the
+voltage model has little signal and the start-up mode of the estimate rings (docs/stability.md);
+there the integral is held, which leaves the type-1 loop with a constant added. Run through the
+whole start, the type-2 loop turned that ringing into excursions of the estimate of 955 rpm on the
+2250 hp machine starting to 10 % speed (R2_hat = 1.2 R2), and lost control; held below 5 % of the
+rated stator frequency (``mras.acceleration_tracking_from_pu``; just above the filter's cut-off
+``wc = 15 rad/s``, 0.04 of 60 Hz), 37 rpm and control kept. The threshold must stay below the
+stator frequencies the drive holds: at 10 % it sat on the grid's 10 %-speed points, and the speed
+dip of a rated-load step there held the integrator while the loop needed it (lost control on Krause
+500 hp and 2250 hp, R2_hat = 0.8 R2; held at 5 %, both keep it). Without the hysteresis the same
+happened at the grid's 5 %-speed points: switched on and off by every ripple of the stator
+frequency there, the loop lost control after a rated-torque step on Krause 500 hp whatever R2_hat
+(type 1 alone, or the threshold at 2 or 10 %, held).
 
 The filter's corner at low stator frequency (opt-in ``wc_k > 0``; ``mras.wc_per_stator_frequency``).
 Both models pass through ``H(s) = s/(s + wc)``, so in steady state at the stator frequency
@@ -135,6 +134,7 @@ import math
 
 from numba import njit
 
+from imdrive.kernels.estimators import mras_stabilise as stab
 from imdrive.kernels.estimators.common import (
     current_model_step,
     lowpass_coefficients,
@@ -166,6 +166,7 @@ MRAS_PARAMS = record_dtype(
         ("wc_min", f8),  # and not below this, rad/s
         ("wc_tau", f8),  # time constant of the flux frequency the corner follows, s
     ]
+    + stab.STABILISE_PARAMS  # the error's rotation in regeneration
 )
 
 #: State of the MRAS.
@@ -201,6 +202,7 @@ MRAS_STATE = record_dtype(
         ("dc_open", b1),  # the window is open: the measured flux build-up is over
         ("dc_status", f8),  # 0 no standstill run yet, 1 R1 identified, 2 could not identify
     ]
+    + stab.STABILISE_STATE
 )
 
 #: Log fields of this block (the engine logs every estimator's ``speed_est``, ``e_d0`` and
@@ -281,19 +283,18 @@ def mras_step(
     lam_f_beta = g * s.lam_f_ab.imag + k_in * dlam.imag
 
     # adaptation, eqs. (4), (8), (9)
-    e = lam_v_beta * lam_f_alpha - lam_v_alpha * lam_f_beta
+    s.phi = stab.regeneration_angle(p, s.w_r_hat, lam_old, lam_new, Ts)
+    e = stab.adaptation_error(lam_v_alpha, lam_v_beta, lam_f_alpha, lam_f_beta, s.phi)
     if p.psi2_norm > 0.0:
-        # the loop's bandwidth is K1 |lam|^2 (imdrive.design.gains.default_mras_gains): hold
-        # it at its design value when the flux is weakened (the current model's own
-        # magnitude, unfiltered, so the low-speed filter attenuation is left as designed)
+        # the loop's bandwidth K1 |lam|^2 (design.gains) held in field weakening by the current
+        # model's own magnitude, unfiltered (the low-speed filter's attenuation stays designed)
         lam2 = lam_new.real * lam_new.real + lam_new.imag * lam_new.imag
         e *= p.psi2_norm / max(lam2, 0.0625 * p.psi2_norm)
     s.int_e += Ts * e
     w_pi = p.K1 * e + p.K2 * s.int_e
     if p.b2 > 0.0:
-        # type-2 adaptation (imdrive.design.gains.mras_type2_gains): the PI's output and b2
-        # times its integral, no lag behind a constant acceleration; at low stator frequency
-        # the integral is held, which leaves the type-1 loop (plus a constant)
+        # type-2 (design.gains.mras_type2_gains): the PI's output plus b2 times its integral, no
+        # lag behind an acceleration; held at low stator frequency (type 1 plus a constant)
         if s.int_w_run:
             s.int_w += Ts * w_pi
         s.w_r_hat = w_pi + p.b2 * s.int_w
@@ -333,9 +334,10 @@ def mras_r1_step(p, m, s, i_alpha, i_beta, w_e, iq_ref, Ts):
     ``i_alpha``, ``i_beta``: measured current at this sample less the injected sinusoid, A;
     ``w_e``: the controller's stator frequency, electrical rad/s; ``Ts``: control period, s.
     ``iq_ref``: the controller's torque current, A (R1_hat is held in regeneration,
-    ``w_e iq_ref < 0``). Call after :func:`mras_step`.
+    ``w_e iq_ref < 0``, and while ``s.phi`` mixes the flux error's dot product into the speed
+    adaptation: mras_stabilise). Call after :func:`mras_step`.
     """
-    if abs(w_e) > 2.0 * math.pi * p.R1_fmax or w_e * iq_ref < 0.0:
+    if abs(w_e) > 2.0 * math.pi * p.R1_fmax or w_e * iq_ref < 0.0 or s.phi != 0.0:
         return
     i2 = i_alpha * i_alpha + i_beta * i_beta
     if i2 < 1e-2:

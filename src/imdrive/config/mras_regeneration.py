@@ -1,0 +1,67 @@
+"""Settings of the MRAS's rotated adaptation error in low-speed regeneration.
+
+The compiled half and the reasoning are in :mod:`imdrive.kernels.estimators.mras_stabilise`;
+here the four settings of ``[mras]`` (per-unit of the machine) and the record fields they give.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated
+
+from imdrive.config.validation import Float, setting
+
+RegenerationAngle = Annotated[
+    Float,
+    setting(
+        "rotation of the MRAS's adaptation error where the stator frequency is against the "
+        "speed (regeneration below the slip speed), e = Im{(λv - λ̂) λ̂* e^(-jφ)}, φ of the "
+        "speed's sign: the loop of the MRAS, the field orientation and the speed controller "
+        "is unstable there (kernels/estimators/mras_stabilise.py; 0: Schauder's error)",
+        "deg",
+        ge=0.0,
+        lt=90.0,
+    ),
+]
+RegenerationBand = Annotated[
+    Float,
+    setting(
+        "the rotation ramps in over this much stator frequency, centred on 0: full where the "
+        "stator frequency is half of it or more against the speed, none where it is half of it "
+        "with the speed; per-unit of the machine's rated frequency",
+        gt=0.0,
+    ),
+]
+RegenerationSpeed = Annotated[
+    Float,
+    setting(
+        "the rotation ramps in over this much speed estimate, per-unit of the machine's rated "
+        "speed (so it is continuous through zero speed)",
+        gt=0.0,
+    ),
+]
+
+
+def regeneration_params(mras, machine) -> dict:
+    """The ``MRAS_PARAMS`` fields of the rotation from ``[mras]`` and ``[machine]``.
+
+    Parameters
+    ----------
+    mras : MrasSettings
+    machine : Machine
+
+    Returns
+    -------
+    dict
+        ``phi_max`` (rad), ``phi_w_band`` (electrical rad/s), ``phi_i_band`` (A),
+        ``phi_w_speed`` (electrical rad/s).
+    """
+    from imdrive.config.machine import rated_point
+
+    rp = rated_point(machine)
+    w_m_rated = rp.speed_rpm * math.pi / 30.0
+    return dict(
+        phi_max=math.radians(mras.regeneration_angle_deg),
+        phi_w_band=mras.regeneration_band_pu * rp.w_e_rad_s,
+        phi_w_speed=mras.regeneration_speed_pu * w_m_rated * machine.pole_pairs,
+    )
