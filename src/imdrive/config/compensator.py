@@ -226,6 +226,14 @@ class CompensatorSettings:
             ge=0.0,
         ),
     ] = 0.3
+    overshoot_damping: Annotated[
+        Bool,
+        setting(
+            'step_law = "adaptive": a table-level step of the sign opposite to the last one '
+            "halves the table's steps that follow (to a quarter at most), one of the same sign "
+            "doubles them back (kernels/step_damping.py)"
+        ),
+    ] = True
     drift_min_freq_Hz: Annotated[
         Float | None,
         setting(

@@ -143,6 +143,7 @@ from imdrive.kernels.sensitivity import (  # noqa: F401  (in_phase_sensitivity: 
     injection_sensitivity_ratio,
     saturation_sensitivity_ratio,
 )
+from imdrive.kernels.step_damping import table_step_factor
 
 #: The quantiser's first threshold on the scaled E (level 1 starts here; Table III's axes).
 THRESHOLD_1 = 1.0
@@ -192,6 +193,7 @@ COMPENSATOR_PARAMS = record_dtype(
         ("slip_decouple", b1),  # detection: remove the slip's coupling of e_q0 into e_d0
         ("cpl_wc", f8),  # the MRAS filter cut-off that decoupling undoes, rad/s (0: none)
         ("cpl_wmin", f8),  # decoupling from this |w_e| (full at twice it), rad/s (0: always)
+        ("damp", b1),  # adaptive law: overshoot damping of the table's steps (step_damping.py)
     ]
 )
 
@@ -235,6 +237,8 @@ COMPENSATOR_STATE = record_dtype(
         ("inj_new", b1),  # it started since the last decision (adaptive law: a settling period)
         ("cpl_d", f8),  # the part of e_d0 the slip couples in from e_q0, Wb
         ("cpl_ws", f8),  # the slip command it uses, low-passed over T2_hat, rad/s
+        ("damp_n", f8),  # overshoot damping: halvings of the table's steps in force
+        ("big_sign", f8),  # and the sign of the last table-level step (0: none yet)
     ]
 )
 
@@ -348,7 +352,9 @@ def compensator_update(p, s, m, table, E):
             if not (p.gate and s.fe_mean < p.drift_fmin):
                 d = s.drift + p.drift_gain * dr
                 s.drift = min(max(d, -p.drift_max), p.drift_max)
-        elif x * s.drift < 0.0:
+        elif p.damp:
+            dr *= table_step_factor(s, cr)
+        if abs(x) >= THRESHOLD_1 and x * s.drift < 0.0:
             # a large error against the drift: the drift is wrong (it was not integrated out
             # here and kept walking R2_hat away while the table's level was 0 — measured at
             # 600 rpm, 12 N m, R2_hat(0) = 1.2 R2: -9.5 % after 10 s)

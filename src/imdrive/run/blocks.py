@@ -397,6 +397,7 @@ def _gating(sc, r) -> dict:
             "drift_gain": comp.drift_gain,
             "drift_max": dmax,
             "drift_fmin": _drift_fmin(sc, r),
+            "damp": comp.overshoot_damping,
         }
     if not (on and comp.enabled):
         return out
