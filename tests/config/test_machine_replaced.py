@@ -72,3 +72,18 @@ def test_with_overrides_and_a_sweep_axis_warn_too():
     sc = Scenario.read("injection-fig6")
     with pytest.warns(ConfigWarning, match="krause-3hp replaces paper-table-iv"):
         sc.with_overrides(['machine.preset="krause-3hp"'])
+
+
+@pytest.mark.parametrize("preset", ["sensorless", "injection-robust"])
+def test_a_scenario_written_out_in_full_is_not_stale(preset):
+    # with_overrides on a read scenario layers on its full dictionary: its defaults (the
+    # controller model's mode keys, empty tables, per-unit settings) were stated for no machine
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        Scenario.read(preset).with_overrides(['machine.preset="krause-3hp"'])
+    assert not [w for w in caught if str(w.message).startswith("machine:")]
+    # a commissioned table written out in full still is
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        Scenario.read("sensorless-realistic").with_overrides(['machine.preset="krause-3hp"'])
+    assert [w for w in caught if "controller_model tables" in str(w.message)]

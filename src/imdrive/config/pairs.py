@@ -242,8 +242,12 @@ def _warn_machine_replaced(data: dict, before: tuple, here: set[str]) -> None:
             if _is_set(key, node[name]):
                 stale.append((key, node[name], twin))
     model = data.get("controller_model")
+    # the measured tables themselves (a scenario written out in full states the mode keys and
+    # empty tables too: those were not commissioned on anything)
     tables = sorted(
-        k for k, v in (model.items() if isinstance(model, dict) else ()) if v not in (None, [])
+        k
+        for k, v in (model.items() if isinstance(model, dict) else ())
+        if isinstance(v, list | tuple) and len(v) > 0
     )
     tables = [t for t in tables if f"controller_model.{t}" not in here]
     if not stale and not tables:
