@@ -18,6 +18,10 @@ LOW_SPEED = [
     "control.speed_ref_rpm={initial=0, changes=[{at=0.5, to=30, over=1.0}]}",
     "load.torque_Nm={initial=0, changes=[{at=2.0, to=12}]}",
     "simulation.t_end_s=4",
+    # Schauder's adaptation error, as in the paper: the rated-load step at 30 rpm pulls the
+    # rotor through zero into regeneration, where it is unstable (the rotated error, the
+    # default, rides through: test below)
+    "mras.regeneration_angle_deg=0",
 ]
 
 
@@ -29,6 +33,11 @@ def test_load_step_dip_matches_the_closed_form_for_the_default_gains():
     assert got == pytest.approx(2 * dT / (math.e * J * a) * 30 / math.pi, rel=1e-3)
     # a stiffer loop moves less
     assert load_step_dip_rpm(J, k_t, 4 * kp, 4 * kp * 4 * a / 4, dT) < got / 3
+
+
+def test_the_rotated_mras_error_rides_through_the_same_load_step(tmp_path):
+    assert main(["run", "sensorless", *[a for s in LOW_SPEED[:-1] for a in ("--set", s)],
+                 "--out", str(tmp_path / "r")]) == 0  # fmt: skip
 
 
 def test_low_speed_loss_names_the_estimator_and_where_to_look(tmp_path, capsys):

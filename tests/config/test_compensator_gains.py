@@ -6,6 +6,8 @@ elsewhere; a per-unit twin or an absolute value wins, in that order.
 
 from __future__ import annotations
 
+import math
+
 import pytest
 
 from imdrive.config.perunit import resolve
@@ -71,3 +73,29 @@ def test_the_paper_presets_state_theirs_and_show_all_names_the_derived_ones():
     text = Scenario.read("sensorless", ON).to_toml()
     assert "# G_CR_ohm is unset (its documented default applies: 0.001 here)" in text
     assert "# gain_E_per_Wb is unset (its documented default applies: 1000000.0 here)" in text
+
+
+INJ = [*ON, 'compensator.input="demodulated"', "injection.amplitude_pu=0.075"]
+
+
+@pytest.mark.parametrize("machine", ["krause-50hp", "aalto-2.2kw", "krause-2250hp"])
+def test_the_unset_injection_frequency_follows_the_rotor_corner(machine):
+    t4 = resolve(Scenario.read("sensorless", INJ))
+    assert (t4.inj_f1, t4.inj_f2, t4.n_comp) == (2.0, 4.0, 5000)  # Table IV, bit for bit
+    sc = Scenario.read("sensorless", [*INJ, f'machine.preset="{machine}"'])
+    r = resolve(sc)
+    corner = 1.0 / (2.0 * math.pi * sc.machine.T2_s)
+    corner_t4 = 1.0 / (2.0 * math.pi * Scenario.read("sensorless").machine.T2_s)
+    # the same multiple of the corner, to within the rounding to whole control periods
+    Ts = sc.simulation.Ts_s
+    assert r.inj_f1 / corner == pytest.approx(2.0 / corner_t4, abs=r.inj_f1 * Ts * 2.0 / corner)
+    assert (1.0 / (r.inj_f1 * Ts)) == pytest.approx(round(1.0 / (r.inj_f1 * Ts)), abs=1e-6)
+    assert r.inj_f2 == 2.0 * r.inj_f1 and r.gate_band == 0.5 * r.inj_f1
+    assert resolved_defaults(sc)["injection.frequency_Hz"] == r.inj_f1
+    # given, it is used as it is
+    given = resolve(
+        Scenario.read(
+            "sensorless", [*INJ, f'machine.preset="{machine}"', "injection.frequency_Hz=2.0"]
+        )
+    )
+    assert given.inj_f1 == 2.0

@@ -221,7 +221,8 @@ def compensator_rules(sc) -> None:
     if comp.period_s is not None and comp.period_s / Ts > 2e9:
         raise ConfigError("compensator.period_s", "is more than 2e9 control periods")
     inj = sc.injection
-    if inj.frequency_Hz * Ts < 0.5e-9:  # no division: a tiny product must not divide
+    # no division: a tiny product must not divide
+    if inj.frequency_Hz is not None and inj.frequency_Hz * Ts < 0.5e-9:
         raise ConfigError("injection.frequency_Hz", "has a period of more than 2e9 periods")
     check_whole_injection_periods(comp, inj, Ts, r)
     i_rated = sc.machine.rated_current_A

@@ -320,7 +320,16 @@ class InjectionSettings:
             default_doc="unset: amplitude_A",
         ),
     ] = None
-    frequency_Hz: Annotated[Float, setting("frequency of the sinusoid", "Hz", gt=0.0)] = 2.0
+    frequency_Hz: Annotated[
+        Float | None,
+        setting(
+            "frequency of the sinusoid",
+            "Hz",
+            gt=0.0,
+            default_doc="Table IV's 2 Hz scaled by the machine's rotor corner R2/(2π L2), to "
+            "whole control periods (config/compensator_gains.py injection_frequency_Hz)",
+        ),
+    ] = None
     frequency_pu: Annotated[
         Float | None,
         setting(
@@ -454,6 +463,14 @@ class InjectionSettings:
     ] = 0.0
 
 
+def _first_frequency(inj) -> float:
+    """The injection frequency without the scenario's machine (no resolved values at hand):
+    as given, else Table IV's default."""
+    from imdrive.config.compensator_gains import INJECTION_TABLE_IV_HZ
+
+    return inj.frequency_Hz if inj.frequency_Hz is not None else INJECTION_TABLE_IV_HZ
+
+
 def decision_period_steps(
     comp: CompensatorSettings, inj: InjectionSettings, Ts: float, r=None
 ) -> int:
@@ -467,7 +484,7 @@ def decision_period_steps(
     if comp.period_s is not None:
         period = comp.period_s
     elif comp.input == "demodulated":
-        period = 1.0 / (inj.frequency_Hz if r is None else r.inj_f1)
+        period = 1.0 / (_first_frequency(inj) if r is None else r.inj_f1)
     else:
         period = 0.01
     return max(int(round(period / Ts)), 1)
@@ -489,8 +506,8 @@ def injection_frequencies_in_use(
     if not (comp.enabled and amp > 0.0):
         return []
     pu = r is not None and inj.frequency_pu is not None
-    f1 = inj.frequency_Hz if r is None else r.inj_f1
-    f2 = inj.frequency2_Hz if inj.frequency2_Hz is not None else 2.0 * inj.frequency_Hz
+    f1 = _first_frequency(inj) if r is None else r.inj_f1
+    f2 = inj.frequency2_Hz if inj.frequency2_Hz is not None else 2.0 * f1
     f3 = inj.frequency3_Hz
     if comp.gate_band_Hz is not None:
         band = comp.gate_band_Hz

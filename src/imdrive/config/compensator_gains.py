@@ -14,6 +14,8 @@ setting                 Table IV     scaled by
 ``gate_speed_rpm``      1 rpm        the rated slip speed (79 rpm on Table IV)
 ``gate_iq_A``           0.3 A        the rated current ``machine.rated_current_A``
 ``gate_band_Hz``        1 Hz         the first injection frequency in use (half of it)
+``injection.            2 Hz         the machine's rotor corner ``R2/(2 pi L2)``,
+frequency_Hz``                       to whole control periods
 ======================  ===========  ==============================================
 
 The paper's presets state their numbers (paper §4, Table III's gains 1e6 /Wb and 0.001 ohm);
@@ -23,6 +25,7 @@ stay as given.
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 from imdrive.config.table_iv import table_iv_scaled
@@ -35,6 +38,8 @@ TABLE_IV = {
     "gate_speed_rpm": 1.0,
     "gate_iq_A": 0.3,
 }
+#: the injection's frequency on Table IV, Hz (1.1 times its rotor corner R2/(2 pi L2), 1.82 Hz)
+INJECTION_TABLE_IV_HZ = 2.0
 #: the gate's band around the injection frequency, per-unit of it, when neither
 #: ``gate_band_Hz`` nor ``gate_band_pu`` is set (1 Hz of the 2 Hz injection on Table IV)
 GATE_BAND_PU = 0.5
@@ -157,3 +162,42 @@ def compensator_gains(comp, machine, R2_hat: float, f_injection_Hz: float) -> Co
         ),
         gate_band_Hz=band,
     )
+
+
+def _rotor_corner_Hz(machine) -> float:
+    return 1.0 / (2.0 * math.pi * machine.T2_s)
+
+
+def injection_frequency_Hz(inj, machine, Ts: float, even: bool) -> float:
+    """The injection's first frequency without a per-unit one, Hz: ``injection.frequency_Hz``
+    as given, or by default Table IV's 2 Hz scaled by the machine's rotor corner
+    ``R2 / (2 pi L2)`` (Kubota & Matsuse, IEEE Trans. Ind. Appl. 30(5), 1994: the R2
+    information in the flux's answer is the same at a fixed multiple of the corner, not at a
+    fixed frequency), moved to a whole number of control periods ``Ts`` (an even number for
+    the adaptive law's half-period decisions, ``even``) unless it is one already: exactly
+    2 Hz on Table IV.
+
+    Parameters
+    ----------
+    inj : InjectionSettings
+        ``[injection]``.
+    machine : MachineParams
+        The scenario's machine.
+    Ts : float
+        The control period, s.
+    even : bool
+        The period must be an even number of control periods.
+
+    Returns
+    -------
+    float
+    """
+    if inj.frequency_Hz is not None:
+        return inj.frequency_Hz
+    f = table_iv_scaled(INJECTION_TABLE_IV_HZ, _rotor_corner_Hz, machine)
+    multiple = 2 if even else 1
+    periods = 1.0 / (f * Ts)
+    n = max(multiple * round(periods / multiple), multiple)
+    if abs(periods - n) <= 1e-9 * n:
+        return f
+    return 1.0 / (n * Ts)

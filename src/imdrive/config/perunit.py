@@ -233,7 +233,9 @@ def _resolve(sc) -> Resolved:
         f2 = f1 * (inj.frequency2_pu / inj.frequency_pu if inj.frequency2_pu else 2.0)
         f3 = None if inj.frequency3_pu is None else f1 * inj.frequency3_pu / inj.frequency_pu
     else:
-        f1 = inj.frequency_Hz
+        from imdrive.config.compensator_gains import injection_frequency_Hz
+
+        f1 = injection_frequency_Hz(inj, m, sc.simulation.Ts_s, comp.step_law == "adaptive")
         f2 = inj.frequency2_Hz if inj.frequency2_Hz is not None else 2.0 * f1
         f3 = inj.frequency3_Hz
     from imdrive.config.compensator_gains import compensator_gains

@@ -23,7 +23,8 @@ def resolved_defaults(sc) -> dict[str, object]:
         ``control.field_weakening`` (:func:`~imdrive.config.field_weakening.field_weakening_on`),
         ``control.current_controller``, ``control.speed_gain_flux_scaling``,
         ``mras.acceleration_tracking`` (with the MRAS in the loop), and with the compensator
-        on, its unset machine-dependent settings (:mod:`imdrive.config.compensator_gains`);
+        on, its unset machine-dependent settings (:mod:`imdrive.config.compensator_gains`), and
+        with the injection on, its frequency;
         empty for an open-loop drive.
     """
     if sc.drive.mode != "vector":
@@ -51,4 +52,6 @@ def resolved_defaults(sc) -> dict[str, object]:
             ("gate_band_Hz", r.gate_band),
         ):
             out[f"compensator.{key}"] = float(value)
+    if r.inj_amp > 0.0 and sc.injection.frequency_pu is None:
+        out["injection.frequency_Hz"] = float(r.inj_f1)
     return out
