@@ -126,7 +126,8 @@ class CompensatorSettings:
         Float,
         setting(
             "gating: speed-reference change within a period, or mean speed error over it, "
-            "above which the period is a transient",
+            "above which the period is a transient (in field weakening the error weighted by "
+            "the speed loop's gain, k^2 with the flux-scaled speed gains)",
             "rpm",
             gt=0.0,
         ),
