@@ -237,9 +237,6 @@ COMPENSATOR_STATE = record_dtype(
         ("inj_new", b1),  # it started since the last decision (adaptive law: a settling period)
         ("cpl_d", f8),  # the part of e_d0 the slip couples in from e_q0, Wb
         ("cpl_ws", f8),  # the slip command it uses, low-passed over T2_hat, rad/s
-        ("g_err_raw", f8),  # sum of the speed error over the period, unweighted, rad/s
-        ("g_err_raw_half", f8),  # adaptive step law: its sum over the last half period
-        ("speed_unheld", b1),  # the last decision's unweighted mean speed error > gate_dw
     ]
 )
 
@@ -388,7 +385,6 @@ def compensator_gate_sample(p, s, w_ref, w_fb, iq_ref, v_use, w_e, g_w=1.0):
     if v_use >= p.gate_v:
         s.g_flags = float(int(s.g_flags) | 4)
     s.g_err += (w_ref - w_fb) * g_w
-    s.g_err_raw += w_ref - w_fb
     s.g_iq += iq_ref
     s.g_we += w_e
     s.g_cnt += 1.0
@@ -428,7 +424,7 @@ def _gate_decide(p, s, w_e):
     schedule (see the module docstring). Resets the period's sums; returns the mask."""
     flags = int(s.g_flags)
     if s.g_cnt > 0.0:
-        err, cnt, raw = s.g_err, s.g_cnt, s.g_err_raw
+        err, cnt = s.g_err, s.g_cnt
         if p.fine:
             # half periods: the speed error's mean over the whole period that ends (both
             # halves), so the injection's own speed ripple averages out as the docstring says
@@ -436,15 +432,10 @@ def _gate_decide(p, s, w_e):
             # of ripple held the compensator frozen)
             err += s.g_err_half
             cnt += s.g_cnt_half
-            raw += s.g_err_raw_half
             s.g_err_half = s.g_err
             s.g_cnt_half = s.g_cnt
-            s.g_err_raw_half = s.g_err_raw
         if abs(err / cnt) > p.gate_dw:
             flags |= 1
-        # the speed not held in rpm, whatever the loop's gain: the estimation headroom's
-        # flux loop reads this (kernels/compensator_range.py headroom_weakening_input)
-        s.speed_unheld = (flags & 1) != 0 or abs(raw / cnt) > p.gate_dw
         iq = s.g_iq / s.g_cnt
         if p.fine:  # half periods: compare with the same half of the previous period
             if s.g_iq_known2 and abs(iq - s.g_iq_prev2) > p.gate_diq:
@@ -491,7 +482,6 @@ def _gate_decide(p, s, w_e):
         flags = 16
     s.g_flags = 0.0
     s.g_err = 0.0
-    s.g_err_raw = 0.0
     s.g_iq = 0.0
     s.g_we = 0.0
     s.g_cnt = 0.0

@@ -80,11 +80,7 @@ def headroom_weakening_input(p, s, v_use, torque_limited):
 
     ``torque_limited`` (the speed loop's torque current at its limit) hands the flux to the
     field weakening's own rule (returns ``v_use``); otherwise, while the speed gate holds the
-    compensator (``s.frozen & 1``) or the period-mean speed error exceeds the gate's threshold
-    unweighted by the speed loop's gain (``s.speed_unheld``: the speed not held in rpm; the
-    compensator's gate weighs it by the loop's gain in field weakening, and with only that
-    flag the flux loop kept lowering the flux on the Aalto 2.2 kW machine at 2 x rated speed
-    while the speed wandered +-3 rpm), the slow term only raises the flux. The gain
+    compensator (``s.frozen & 1``), the slow term only raises the flux. The gain
     ``inj_fw_rate`` is at most ``injection.headroom_gain_per_period`` (0.6) per injection
     period (:func:`imdrive.run.blocks.headroom_rate_per_s`).
     """
@@ -96,7 +92,7 @@ def headroom_weakening_input(p, s, v_use, torque_limited):
         # run the drive away; on Krause 500 hp at rated speed, regenerating, the flux kept
         # falling with the torque current at its limit while the gate was still open)
         return v_use
-    if int(s.frozen) & 1 or s.speed_unheld:
+    if int(s.frozen) & 1:
         # the speed is not held (a transient): the flux is only not lowered further and
         # rises back at the slow rate where the voltage leaves room: the fast rule at every
         # trip of the speed gate raised the flux at 20 /s, and at base speed with rated load
