@@ -15,7 +15,9 @@ discretisation residual of the 100 us control period (1.5 rpm less at 50 us).
 The runs pin the type-1 MRAS, with which the mechanism was measured: the type-2 loop, the
 default now when the drive goes into field weakening (config/mras_type.py), leaves a far
 smaller q-axis error to couple (without the correction, measured 0.00 % on Table IV and
--0.99 % on Krause 3 hp, the latter still flagged `speed-error`; with it both within 0.01 %).
+-0.99 % on Krause 3 hp, the latter flagged `speed-error`, before the compensator's speed gate
+weighed the speed error by the loop's gain; since, +0.47 %, 1.9 rpm, still `speed-error`;
+with it both within 0.01 %).
 That last run also pins the PI current controller: with the internal-model controller, the
 default at twice the rated speed (kernels/current_control.py), the current follows its
 reference closely enough that without the correction R2_hat ends -0.03 % off (within goal).
@@ -70,10 +72,13 @@ def test_decoupling_still_needed_with_the_default_type2_loop(machine, speed_pu, 
     # with the speed gains scaled by the flux factor (the default in field weakening) the run
     # without the correction ends within goal too (R2_hat +0.06 %, 0.19 rpm): pinned off, the
     # loop it was measured on
+    # (with the speed gate weighing the speed error by the loop's gain, k with these fixed
+    # gains, R2_hat is held half as often, 17 % of the time, and the bias without the
+    # correction is +0.47 % instead of -0.99 %: still out of goal; the correction removes it)
     r = _runs(machine, speed_pu, R2_ratio, type1=False, pi=True, fixed_gains=True)
     off, on = r[False], r[True]
-    assert off.verdict != "ok" and abs(off.R2_error_pct) > 0.5  # measured -0.99 %, speed-error
-    assert on.verdict == "ok" and abs(on.R2_error_pct) < 0.1
+    assert off.verdict != "ok" and abs(off.R2_error_pct) > 0.3  # measured +0.47 %, speed-error
+    assert on.verdict == "ok" and abs(on.R2_error_pct) < 0.02  # measured 0.001 %
 
 
 @pytest.mark.parametrize(

@@ -141,7 +141,8 @@ class CompensatorSettings:
         Float | None,
         setting(
             "gating: speed-reference change within a period, or mean speed error over it, "
-            "above which the period is a transient",
+            "above which the period is a transient (in field weakening the error weighted by "
+            "the speed loop's gain, k^2 with the flux-scaled speed gains)",
             "rpm",
             gt=0.0,
             default_doc="1 rpm on Table IV scaled by the rated slip speed (0.0126 × it)",

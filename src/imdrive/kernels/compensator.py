@@ -83,7 +83,9 @@ the period that ends
 
 * ``1`` the speed reference moved by more than ``p.gate_dw`` (rad/s, mechanical), or the mean
   speed error ``w_ref - w_fb`` over the period exceeded it (a speed step or ramp; a load step
-  shows here too). The mean over whole injection periods removes the injection's own ripple;
+  shows here too), the error weighted by the speed loop's gain (``k^2`` in field weakening with
+  the flux-scaled speed gains: kernels/speed_control.py). The mean over whole injection
+  periods removes the injection's own ripple;
 * ``2`` the mean iq* changed from the previous period by more than ``p.gate_diq`` (A): a load
   step or removal;
 * ``4`` the voltage reached ``p.gate_v`` times the inverter's limit ``Vdc/sqrt 3``;
@@ -370,14 +372,17 @@ def compensator_update(p, s, m, table, E):
 
 
 @njit(cache=True)
-def compensator_gate_sample(p, s, w_ref, w_fb, iq_ref, v_use, w_e):
+def compensator_gate_sample(p, s, w_ref, w_fb, iq_ref, v_use, w_e, g_w=1.0):
     """Accumulate the gating signals of one control period (only with ``p.gate``).
 
     ``w_ref``, ``w_fb``: speed reference and feedback, mechanical rad/s; ``iq_ref``: the
     controller's iq* of the last period times the field weakening's flux factor (a torque in
     units of rated-flux current), A; ``v_use``: magnitude of the last commanded voltage
     over the inverter's limit ``Vdc/sqrt 3``; ``w_e``: the controller's stator frequency,
-    electrical rad/s (its period mean drives the frequency schedule).
+    electrical rad/s (its period mean drives the frequency schedule); ``g_w``: the speed
+    loop's gain over its rated-flux value (:func:`imdrive.kernels.speed_control.speed_loop_gain`),
+    which weights the speed error: the mean error of a transient grows as the loop slows in
+    field weakening, the reference's moves do not.
     """
     if s.g_cnt == 0.0:
         s.g_wref0 = w_ref
@@ -385,7 +390,7 @@ def compensator_gate_sample(p, s, w_ref, w_fb, iq_ref, v_use, w_e):
         s.g_flags = float(int(s.g_flags) | 1)
     if v_use >= p.gate_v:
         s.g_flags = float(int(s.g_flags) | 4)
-    s.g_err += w_ref - w_fb
+    s.g_err += (w_ref - w_fb) * g_w
     s.g_iq += iq_ref
     s.g_we += w_e
     s.g_cnt += 1.0

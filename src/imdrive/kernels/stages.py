@@ -79,6 +79,7 @@ from imdrive.kernels.profiles import (
 )
 from imdrive.kernels.records import f8, record_dtype
 from imdrive.kernels.sensors import NOISE_FIELDS, measure_current_drawn
+from imdrive.kernels.speed_control import speed_loop_gain
 
 S_OK = 0
 S_NAN = 1
@@ -262,7 +263,8 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc
             # swings by 1/k more for the same torque, and the gate held R2_hat 80 % of the time
             # at 2 x rated speed)
             iq_torque = ctl.i_ref_dq.imag * (1.0 - ctl.fw_cut)
-            compensator_gate_sample(pk, cmp, w_ref, w_fb_g, iq_torque, v_use, ctl.w_e)
+            g_w = speed_loop_gain(pc, ctl)  # the speed error weighted by the loop's gain
+            compensator_gate_sample(pk, cmp, w_ref, w_fb_g, iq_torque, v_use, ctl.w_e, g_w)
         compensator_step(pk, cmp, mdl, table, e_dq0.real, t, smpl.k, ctl.w_e)
         if pk.th_on:  # the rotor thermal model carries R2_hat while it is held
             thermal_step(pk, cmp, mdl, ctl.i_s_dq.imag, t, Ts)
