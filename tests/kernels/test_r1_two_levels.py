@@ -37,7 +37,7 @@ def _identify(t2_hat_ratio=1.0, levels=2, magnetise_s=0.5, hold_T2=16.0):
     T2_hat = t2_hat_ratio * T2
     p = new_record(
         MRAS_PARAMS, R1_min=0.1, R1_max=5.0, R1_dc=True, R1_dc_settle=T2_hat,
-        R1_dc_block=0.25 * T2_hat, R1_dc_nT2=3.5, R1_dc_levels=levels, R1_dc_boost=0.5,
+        R1_dc_block=0.25 * T2_hat, R1_dc_nT2=3.5, R1_dc_levels=levels, R1_dc_boost=-0.4,
         R1_dc_hold=hold_T2 * T2_hat,
     )[0]  # fmt: skip
     m = new_record(
@@ -97,7 +97,7 @@ def test_without_its_hold_the_second_level_says_it_could_not():
     m, s, left_at = _identify(magnetise_s=1.3, hold_T2=0.0)
     assert left_at == pytest.approx(1.3, abs=2 * TS)
     assert s["dc_status"] == 3.0
-    assert m["R1_hat"] == pytest.approx(R1 + U0 / (1.5 * I0), rel=0.01)
+    assert m["R1_hat"] == pytest.approx(R1 + U0 / (0.6 * I0), rel=0.01)
     assert m["R1_id"] and not m["ie_new"]
     m, s, _ = _identify(magnetise_s=0.5, hold_T2=0.0)  # nor level A
     assert s["dc_status"] == 2.0

@@ -433,16 +433,17 @@ class MrasSettings:
         setting(
             "R1_standstill at 1 current level (R̂1 holds the dead-time compensation's residual "
             "voltage / |i|) or 2 (R̂1 = Δu/Δi, Holtz & Quan 2002; the residual starts the "
-            "compensation's scale): the flux current at 1 + R1_standstill_boost of its "
+            "compensation's scale): the flux current at R1_standstill_first_level of its "
             "reference, then at it; the speed reference waits for the test at most "
             "R1_standstill_hold_T2 (kernels/estimators/mras_standstill.py)",
             ge=1,
             le=2,
         ),
     ] = 2
-    R1_standstill_boost: Annotated[
-        Float, setting("the two-level test's first flux level less 1, per unit", gt=0.0, le=1.0)
-    ] = 0.5
+    R1_standstill_first_level: Annotated[
+        Float,
+        setting("the two-level test's first flux level, per unit of the reference", gt=0.2, le=2.0),
+    ] = 0.6
     R1_standstill_hold_T2: Annotated[
         Float, setting("longest wait for the two-level test, per unit of T̂2(0)", ge=0.0)
     ] = 16.0
@@ -540,7 +541,7 @@ class MrasSettings:
             R1_dc_block=0.25 * ctx.L2_hat / ctx.R2_hat,
             R1_dc_nT2=3.5,
             R1_dc_levels=self.R1_standstill_levels,
-            R1_dc_boost=self.R1_standstill_boost,
+            R1_dc_boost=self.R1_standstill_first_level - 1.0,
             R1_dc_hold=self.R1_standstill_hold_T2 * ctx.L2_hat / ctx.R2_hat,
             bend=self.period_mean_current,
         )

@@ -264,7 +264,8 @@ def _two_levels_end(p, m, s, Ts):
     residual along the current ``u0 = (r_B - R1) I_B`` into ``m.u0_id`` at ``m.i_id = I_B``
     for the online inverter-error scale to start from (``m.ie_new``); ``m.R1_id`` stays false
     (R1_hat holds no residual). With level A only, R1_hat = r_A as one level would (status 3,
-    ``m.R1_id``); with neither, R1_hat is left (status 2)."""
+    ``m.R1_id``); with neither, R1_hat is left (status 2) and the next standstill run tries
+    again (the test is made once it has identified a level)."""
     m.dc_busy = False
     m.dc_boost = 0.0
     if s.dc_run_t == 0.0:
@@ -285,6 +286,6 @@ def _two_levels_end(p, m, s, Ts):
         m.R1_hat = min(max(s.dc_rA, p.R1_min), p.R1_max)
         m.R1_id = True
         s.dc_status = 3.0
-    else:
+        s.dc_phase = 3.0
+    else:  # nothing identified: the next standstill run tries again
         s.dc_status = 2.0
-    s.dc_phase = 3.0
