@@ -423,9 +423,10 @@ class MrasSettings:
             "standstill R1 identification: while the speed reference is zero and the flux "
             "current flows, R̂1 = Σ v·i / Σ |i|² over the part after the measured flux build-up, "
             "applied when the reference leaves zero, log column R1_id_status 1 identified, 2 "
-            "could not (then the run's verdict_text says so; kernels/estimators/mras.py); exact on "
-            "the average inverter, biased by an uncompensated dead-time voltage (1.9 R1 on "
-            "sensorless-realistic): leave it off there"
+            "could not, 3 one level of two (then the run's verdict_text says so; "
+            "kernels/estimators/mras_standstill.py); at one level biased by the dead-time "
+            "compensation's residual (1.13 R1 on the envelope's bridge), at two levels not "
+            "(R1_standstill_levels)"
         ),
     ] = False
     R1_standstill_levels: Annotated[
