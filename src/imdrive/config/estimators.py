@@ -17,6 +17,7 @@ import math
 from typing import Annotated, Literal
 
 from imdrive.config.field_weakening import field_weakening_on
+from imdrive.config.r1_standstill import r1_standstill_levels
 from imdrive.config.registry import (  # noqa: F401  (re-exported: the settings half's API)
     ESTIMATOR_SETTINGS,
     EstimatorContext,
@@ -430,7 +431,7 @@ class MrasSettings:
         ),
     ] = False
     R1_standstill_levels: Annotated[
-        Int,
+        Int | None,
         setting(
             "R1_standstill at 1 current level (R̂1 holds the dead-time compensation's residual "
             "voltage / |i|) or 2 (R̂1 = Δu/Δi, Holtz & Quan 2002; the residual starts the "
@@ -439,11 +440,12 @@ class MrasSettings:
             "R1_standstill_hold_T2 (kernels/estimators/mras_standstill.py)",
             ge=1,
             le=2,
+            default_doc="2 where the controller compensates its inverter's error, else 1",
         ),
-    ] = 2
+    ] = None
     R1_standstill_first_level: Annotated[
         Float,
-        setting("the two-level test's first flux level, per unit of the reference", gt=0.2, le=2.0),
+        setting("the two-level test's first flux level, per unit of the reference", gt=0.2, le=0.8),
     ] = 0.6
     R1_standstill_hold_T2: Annotated[
         Float, setting("longest wait for the two-level test, per unit of T̂2(0)", ge=0.0)
@@ -541,7 +543,7 @@ class MrasSettings:
             R1_dc_settle=ctx.L2_hat / ctx.R2_hat,
             R1_dc_block=0.25 * ctx.L2_hat / ctx.R2_hat,
             R1_dc_nT2=3.5,
-            R1_dc_levels=self.R1_standstill_levels,
+            R1_dc_levels=r1_standstill_levels(sc),
             R1_dc_boost=self.R1_standstill_first_level - 1.0,
             R1_dc_hold=self.R1_standstill_hold_T2 * ctx.L2_hat / ctx.R2_hat,
             bend=self.period_mean_current,
