@@ -39,6 +39,9 @@ def _runs(machine: str):
                 "control.inverter_error_adaptation_per_s": rate,
                 "estimator.R2_ratio": 1.0,
                 "estimator.R1_ratio": 1.0,
+                # one standstill level: two would start the scale from the residual they
+                # identify (test_r1_two_levels.py), and the unscaled case would show no bias
+                "mras.R1_standstill_levels": 1,
                 "control.speed_ref_rpm": {
                     "initial": 0,
                     "changes": [{"at": 0.5, "to": 0.17 * rp.speed_rpm, "over": 1.0}],

@@ -57,6 +57,9 @@ def _runs(machine: str, R1_ratio: float):
                 # the stator frequency (on in injection-robust since) also lowers what the MRAS
                 # reads of the stall's lag (Aalto, no load: -2.6 % instead of -3.4)
                 "mras.wc_per_stator_frequency=0",
+                # the one-level standstill R1 this was measured with (two levels: R1_hat = R1
+                # and the scale started at the residual; the fixed band then ends -2.5 %)
+                "mras.R1_standstill_levels=1",
                 "simulation.log_every=200",
             ]
             keys.append((band, load))
@@ -107,6 +110,9 @@ def test_with_the_bridge_loss_shape_the_online_scale_learns_the_true_ratio(
                 f'control.dead_time_compensation_band="{band}"',
                 "estimator.R1_ratio=1.0",
                 f'control.inverter_error_signal="{signal}"',
+                # one standstill level: its R1_hat keeps the share the scale did not take
+                # (two levels identify R1 itself, 1.000 R1 here)
+                "mras.R1_standstill_levels=1",
             ]
         )
         for band in ("fixed", "ripple")

@@ -1,6 +1,7 @@
 """Standstill R1 identification from any R2_hat(0) within +-40 %: its window follows the
-flux build-up measured (kernels/estimators/mras.py, mras_r1_standstill), and it says when it
-could not identify (log column ``R1_id_status_code``: 1 identified, 2 could not)."""
+flux build-up measured (kernels/estimators/mras_standstill.py, mras_r1_standstill), and it says
+when it could not identify (log column ``R1_id_status_code``: 1 identified, 2 could not). The
+one-level test (``mras.R1_standstill_levels = 1``); two levels: test_r1_two_levels.py."""
 
 from __future__ import annotations
 
@@ -16,6 +17,7 @@ def _standstill(machine, r2_ratio, magnetise_s, r1_ratio=0.9):
         [
             f'machine.preset="{machine}"',
             "mras.R1_standstill=true",
+            "mras.R1_standstill_levels=1",
             f"estimator.R1_ratio={r1_ratio}",
             f"estimator.R2_ratio={r2_ratio}",
             f"control.speed_ref_rpm={{initial=0,changes=[{{at={magnetise_s},to=300,over=1}}]}}",
@@ -62,6 +64,7 @@ def _realistic_standstill(machine, r2_ratio, magnetise_s):
         [
             *DRIVES["realistic (all)"],
             f'machine.preset="{machine}"',
+            "mras.R1_standstill_levels=1",
             f"estimator.R2_ratio={r2_ratio}",
             f"control.speed_ref_rpm={{initial=0,changes=[{{at={magnetise_s},to=300,over=1}}]}}",
             f"simulation.t_end_s={magnetise_s + 0.02}",
@@ -99,6 +102,7 @@ def test_a_run_that_could_not_identify_says_so_in_its_status():
         "sensorless",
         [
             "mras.R1_standstill=true",
+            "mras.R1_standstill_levels=1",
             "control.speed_ref_rpm={initial=0,changes=[{at=0.2,to=300,over=1}]}",
             "simulation.t_end_s=2.0",
         ],

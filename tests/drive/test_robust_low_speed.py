@@ -26,6 +26,7 @@ def _standstill(r1_ratio, r2_ratio, magnetise_s=0.5, extra=()):
         "sensorless",
         [
             "mras.R1_standstill=true",
+            "mras.R1_standstill_levels=1",  # two levels: test_r1_two_levels.py
             f"estimator.R1_ohm={r1_ratio * R1}",
             f"estimator.R2_ohm={r2_ratio * R2}",
             f"control.speed_ref_rpm={{initial=0,changes=[{{at={magnetise_s},to=300,over=1}}]}}",
@@ -229,11 +230,12 @@ def test_mras_normalisation_changes_nothing_at_rated_flux():
 
 
 def test_standstill_R1_identification_sees_the_dead_time_error():
-    """The documented limit: on the uncommissioned realistic drive (2 us dead time
-    compensated for 1.6 us) the residual dead-time voltage dominates R1 |i| at standstill."""
+    """The documented limit of one current level: on the uncommissioned realistic drive (2 us
+    dead time compensated for 1.6 us) the residual dead-time voltage dominates R1 |i| at
+    standstill (two levels: test_r1_two_levels.py)."""
     sc = Scenario.read(
         "sensorless-realistic-uncommissioned",
-        ["mras.R1_standstill=true", "simulation.t_end_s=0.75"],
+        ["mras.R1_standstill=true", "mras.R1_standstill_levels=1", "simulation.t_end_s=0.75"],
     )
     res = simulate(sc)
     assert res["R1_hat_ohm"][-1] / res["R1_ohm"][-1] > 1.5
@@ -241,6 +243,7 @@ def test_standstill_R1_identification_sees_the_dead_time_error():
         "sensorless-realistic-uncommissioned",
         [
             "mras.R1_standstill=true",
+            "mras.R1_standstill_levels=1",
             "simulation.t_end_s=0.75",
             "inverter.dead_time_s=0",
             'control.dead_time_compensation="none"',

@@ -154,3 +154,17 @@ def test_R2_hat_on_its_clamp_is_named(sc):
     assert f"(at its upper clamp, {r.R2_max / r.R2_hat:.3g} R2_hat(0)" in v["verdict_text"]
     v = verdict(sc, _row(sc, R2_error_pct=-6.7, R2_hat_final_ohm=1.001 * r.R2_max))
     assert "clamp" not in v["verdict_text"]
+
+
+@pytest.mark.parametrize("R2_error", [0.0, 3.0])  # an ok run and one that is not
+def test_the_standstill_R1_outcome_is_noted(sc, R2_error):
+    from imdrive.run.status import R1_NOT_IDENTIFIED, R1_ONE_LEVEL
+
+    texts = {
+        s: verdict(sc, _row(sc, R2_error_pct=R2_error, R1_id_status=s))["verdict_text"]
+        for s in (0.0, 1.0, 2.0, 3.0)
+    }
+    assert texts[2.0].endswith(R1_NOT_IDENTIFIED)
+    assert texts[3.0].endswith(R1_ONE_LEVEL)  # two levels, the first one only
+    for s in (0.0, 1.0):
+        assert R1_NOT_IDENTIFIED not in texts[s] and R1_ONE_LEVEL not in texts[s]

@@ -23,6 +23,7 @@ from imdrive.config.mras_regeneration import (
     RegenerationSpeed,
     regeneration_params,
 )
+from imdrive.config.r1_standstill import r1_standstill_levels
 from imdrive.config.registry import (  # noqa: F401  (re-exported: the settings half's API)
     ESTIMATOR_SETTINGS,
     EstimatorContext,
@@ -33,7 +34,7 @@ from imdrive.config.registry import (  # noqa: F401  (re-exported: the settings 
     package_sections,
 )
 from imdrive.config.scaled import afo_resistance_bandwidths, flux_injection_frequency_Hz
-from imdrive.config.validation import Bool, Float, setting, settings
+from imdrive.config.validation import Bool, Float, Int, setting, settings
 from imdrive.design.estimators import (
     afo_regeneration_gain,
     default_afo_gains,
@@ -429,11 +430,32 @@ class MrasSettings:
             "standstill R1 identification: while the speed reference is zero and the flux "
             "current flows, R̂1 = Σ v·i / Σ |i|² over the part after the measured flux build-up, "
             "applied when the reference leaves zero, log column R1_id_status 1 identified, 2 "
-            "could not (then the run's verdict_text says so; kernels/estimators/mras.py); exact on "
-            "the average inverter, biased by an uncompensated dead-time voltage (1.9 R1 on "
-            "sensorless-realistic): leave it off there"
+            "could not, 3 one level of two (then the run's verdict_text says so; "
+            "kernels/estimators/mras_standstill.py); at one level biased by the dead-time "
+            "compensation's residual (1.13 R1 on the envelope's bridge), at two levels not "
+            "(R1_standstill_levels)"
         ),
     ] = False
+    R1_standstill_levels: Annotated[
+        Int | None,
+        setting(
+            "R1_standstill at 1 current level (R̂1 holds the dead-time compensation's residual "
+            "voltage / |i|) or 2 (R̂1 = Δu/Δi, Holtz & Quan 2002; the residual starts the "
+            "compensation's scale): the flux current at R1_standstill_first_level of its "
+            "reference, then at it; the speed reference waits for the test at most "
+            "R1_standstill_hold_T2 (kernels/estimators/mras_standstill.py)",
+            ge=1,
+            le=2,
+            default_doc="2 where the controller compensates its inverter's error, else 1",
+        ),
+    ] = None
+    R1_standstill_first_level: Annotated[
+        Float,
+        setting("the two-level test's first flux level, per unit of the reference", gt=0.2, le=0.8),
+    ] = 0.6
+    R1_standstill_hold_T2: Annotated[
+        Float, setting("longest wait for the two-level test, per unit of T̂2(0)", ge=0.0)
+    ] = 16.0
     R1_max_freq_Hz: Annotated[
         Float | None,
         setting(
@@ -530,6 +552,9 @@ class MrasSettings:
             R1_dc_settle=ctx.L2_hat / ctx.R2_hat,
             R1_dc_block=0.25 * ctx.L2_hat / ctx.R2_hat,
             R1_dc_nT2=3.5,
+            R1_dc_levels=r1_standstill_levels(sc),
+            R1_dc_boost=self.R1_standstill_first_level - 1.0,
+            R1_dc_hold=self.R1_standstill_hold_T2 * ctx.L2_hat / ctx.R2_hat,
             bend=self.period_mean_current,
             **regeneration_params(self, sc.machine),
         )

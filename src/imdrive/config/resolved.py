@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from imdrive.config.current_control import current_controller
 from imdrive.config.field_weakening import field_weakening_on
+from imdrive.config.r1_standstill import r1_standstill_levels
 from imdrive.config.speed_gain import speed_gain_flux_scaling
 
 
@@ -22,9 +23,9 @@ def resolved_defaults(sc) -> dict[str, object]:
     dict
         ``control.field_weakening`` (:func:`~imdrive.config.field_weakening.field_weakening_on`),
         ``control.current_controller``, ``control.speed_gain_flux_scaling``,
-        ``mras.acceleration_tracking`` (with the MRAS in the loop), and with the compensator
-        on, its unset machine-dependent settings (:mod:`imdrive.config.compensator_gains`), and
-        with the injection on, its frequency;
+        ``mras.R1_standstill_levels``, ``mras.acceleration_tracking`` (with the MRAS in the
+        loop), and with the compensator on, its unset machine-dependent settings
+        (:mod:`imdrive.config.compensator_gains`), and with the injection on, its frequency;
         empty for an open-loop drive.
     """
     if sc.drive.mode != "vector":
@@ -33,6 +34,7 @@ def resolved_defaults(sc) -> dict[str, object]:
         "control.field_weakening": field_weakening_on(sc),
         "control.current_controller": current_controller(sc),
         "control.speed_gain_flux_scaling": speed_gain_flux_scaling(sc),
+        "mras.R1_standstill_levels": r1_standstill_levels(sc),
     }
     from imdrive.config.perunit import resolve
 

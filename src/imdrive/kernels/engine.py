@@ -235,7 +235,7 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
 
     for k in range(n_steps + 1 if final else n_steps):
         t = (k0 + k) * Ts
-        prof = profiles(pp, pt, pv, pn, t, foc)
+        prof = profiles(pp, pt, pv, pn, t, foc, mdl, Ts)
         smpl = measure(pp, psen, x, ctl, prof, t, k0 + k, i_next_ab, have_next, scratch[0])
         estm = NO_ESTIMATE
         if foc:

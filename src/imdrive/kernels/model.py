@@ -32,6 +32,14 @@ MODEL_STATE = record_dtype(
         ("L_inc_hat", f8),  # the incremental inductance d psi_m / d i_m there, H
         # R1_hat holds a standstill identification (and with it the inverter's residual there)
         ("R1_id", b1),
+        # the standstill test at two current levels (kernels/estimators/mras_standstill.py)
+        ("dc_boost", f8),  # it asks for the flux reference times 1 + this
+        ("dc_busy", b1),  # it holds the speed reference at zero
+        ("t_hold", f8),  # the time the speed profile was held, s
+        ("dc_hold_max", f8),  # and the longest it may be, s
+        ("u0_id", f8),  # the inverter's residual it identified along its current, V
+        ("i_id", f8),  # at this current, A
+        ("ie_new", b1),  # for the online inverter-error scale to start from (once)
     ]
 )
 

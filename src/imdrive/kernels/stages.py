@@ -63,7 +63,7 @@ from imdrive.kernels.ifoc import (
     standstill_compensation,
 )
 from imdrive.kernels.inverter import MAX_EVENTS, MAX_SEGMENTS, inverter_segments, limit_magnitude
-from imdrive.kernels.inverter_scale import stator_residual
+from imdrive.kernels.inverter_scale import start_from_identified, stator_residual
 from imdrive.kernels.machine import integrate_segment, log_plant, stator_current
 from imdrive.kernels.model import incremental_L2, model_inductances
 from imdrive.kernels.profiles import (
@@ -159,9 +159,11 @@ NO_ESTIMATE = Estimate(0.0, 0j, 0.0, 0.0, 0.0)
 
 
 @njit(cache=True, inline="always")
-def profiles(pp, pt, pv, pn, t, foc):
+def profiles(pp, pt, pv, pn, t, foc, mdl, Ts):
     """The profiles the drive reads at ``t`` (the stages after it read no profile array): the
-    references of field-oriented control, or the open-loop voltage."""
+    references of field-oriented control, or the open-loop voltage. The speed reference's
+    profile runs ``mdl.t_hold`` late: the time a standstill test held it at zero
+    (``mdl.dc_busy``, :func:`imdrive.kernels.estimators.mras_standstill.r1_two_levels`)."""
     w_imposed = 0.0
     if pp.speed_imposed:
         w_imposed = profile_at(pt, pv, pn, PR_SPEED_IMPOSED, t)
@@ -173,7 +175,10 @@ def profiles(pp, pt, pv, pn, t, foc):
     v_amp = 0.0
     f_Hz = 0.0
     if foc:
-        w_ref = profile_at(pt, pv, pn, PR_SPEED_REF, t)
+        w_ref = profile_at(pt, pv, pn, PR_SPEED_REF, t - mdl.t_hold)
+        if mdl.dc_busy and w_ref != 0.0 and mdl.t_hold < mdl.dc_hold_max:  # the start waits
+            mdl.t_hold += Ts
+            w_ref = 0.0
         psi_ref = profile_at(pt, pv, pn, PR_FLUX_REF, t)
     else:
         v_amp = profile_at(pt, pv, pn, PR_V_AMP, t)
@@ -287,6 +292,8 @@ def control(sim, pc, x, mdl, ctl, smp, prof, smpl, estm, foc):
     if foc:
         w_ref = prof.w_ref
         psi_ref = prof.psi_ref
+        if mdl.dc_boost != 0.0:  # the standstill test's first current level
+            psi_ref *= 1.0 + mdl.dc_boost
         if pc.fw:  # field weakening above base speed (voltage feedback)
             k_max = 1.0
             if pc.fw_bound and ctl.w_e != 0.0 and psi_ref > 0.0:
@@ -311,8 +318,9 @@ def control(sim, pc, x, mdl, ctl, smp, prof, smpl, estm, foc):
         dv_alpha, dv_beta = inverter_feedforward(
             pc, ctl, i_meas_alpha, i_meas_beta, Ts, v_ref_alpha, v_ref_beta
         )
-        if pc.ie_r1:
-            standstill_compensation(ctl, dv_alpha, dv_beta, i_meas_alpha, i_meas_beta, w_ref)
+        standstill_compensation(ctl, dv_alpha, dv_beta, i_meas_alpha, i_meas_beta, w_ref)
+        if mdl.ie_new:  # the standstill test identified the residual: the scale starts there
+            start_from_identified(ctl, mdl)
         v_ref_alpha += dv_alpha
         v_ref_beta += dv_beta
         t_adv = dead_time_advance(pc, ctl, Ts)

@@ -42,7 +42,8 @@ seconds, both ends included; the whole run if ``window_s >= t_end``).
 ``lost_control``         ``lost_control_at_s`` is not NaN (a boolean column)
 ``R1_id_status``         the standstill R1 identification's last outcome (``mras.R1_standstill``,
                          the log column ``R1_id_status_code`` at the last sample): 0 no
-                         standstill run, 1 identified, 2 could not (NaN without the MRAS);
+                         standstill run, 1 identified, 2 could not, 3 one level of two
+                         (NaN without the MRAS);
                          the batch takes it from the final state
 ``R2_held_pct``          share of the samples from the compensator's enable time
                          (``t >= compensator.t_on_s``) at which R2_hat was held, i.e. the

@@ -75,7 +75,8 @@ COLUMN_DOCS = {
     "R1_id_status_code": "standstill R1 identification (mras.R1_standstill): 0 no standstill "
     "run yet, 1 R1_hat identified, 2 a standstill run ended before the measured flux build-up "
     "was over, or the drive was not still (R1_hat left as it was; the run's verdict_text says "
-    "so)",
+    "so), 3 the two-level test identified its first level only (R1_hat holds the inverter's "
+    "residual, as with one level)",
     "inj_freq_Hz": "injection frequency in use (the compensator moves it away from the stator "
     "frequency)",
 }

@@ -28,7 +28,10 @@ metrics (:func:`imdrive.run.metrics.drive_metrics`) and its scenario:
 A run whose standstill R1 identification (``mras.R1_standstill``) could not identify
 (``R1_id_status`` 2: the speed reference left zero before the measured flux build-up was
 over, or the drive was not still) says so in ``verdict_text`` whatever its verdict
-(:data:`R1_NOT_IDENTIFIED`): the MRAS then ran on R̂1 as it was given.
+(:data:`R1_NOT_IDENTIFIED`): the MRAS then ran on R̂1 as it was given. A two-level test
+(``mras.R1_standstill_levels = 2``) that identified its first level only (``R1_id_status`` 3:
+the second level's window was too short) says so too (:data:`R1_ONE_LEVEL`): R̂1 then holds
+the inverter's residual voltage over the current, as the one-level test's does.
 
 The failures are listed in time order (a loss of control before the divergence it led to, a
 hold before the R̂2 error it left at the end) and the verdict is the first; ``verdict_text``
@@ -81,6 +84,12 @@ STATUS_COLUMNS = (
 R1_NOT_IDENTIFIED = (
     "standstill R1 not identified (its last standstill run ended before the measured flux "
     "build-up was over, or the drive was not still): R1_hat as it was"
+)
+
+#: The note when a two-level standstill test identified its first level only (status 3).
+R1_ONE_LEVEL = (
+    "standstill R1 identified at one current level only (the second level's window was too "
+    "short): R1_hat holds the inverter's residual voltage over the current"
 )
 
 VERDICTS = ("ok", "lost-control", "diverged", "frozen", "held", "R2-off", "speed-error", "not-run")
@@ -218,7 +227,7 @@ def verdict(sc, row: dict) -> dict:
             )
         )
     events.sort(key=lambda e: e[0])
-    r1_note = f"; {R1_NOT_IDENTIFIED}" if row.get("R1_id_status") == 2 else ""
+    r1_note = {2: f"; {R1_NOT_IDENTIFIED}", 3: f"; {R1_ONE_LEVEL}"}.get(row.get("R1_id_status"), "")
     if events:
         out["verdict"] = events[0][1]
         out["verdict_ok"] = False

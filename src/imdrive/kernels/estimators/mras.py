@@ -140,6 +140,10 @@ from imdrive.kernels.estimators.common import (
     lowpass_coefficients,
     period_mean_offset,
 )
+from imdrive.kernels.estimators.mras_standstill import (  # noqa: F401 (also imported from here)
+    R1_DC_MIN_WINDOW,
+    mras_r1_standstill,
+)
 from imdrive.kernels.estimators.registry import register_kernel
 from imdrive.kernels.model import model_inductances
 from imdrive.kernels.records import b1, c16, f8, record_dtype
@@ -161,6 +165,9 @@ MRAS_PARAMS = record_dtype(
         ("R1_dc_settle", f8),  # shortest time from the start of a standstill run to its window, s
         ("R1_dc_block", f8),  # block over which the measured build-up is compared, s
         ("R1_dc_nT2", f8),  # the window opens this many measured rotor time constants in
+        ("R1_dc_levels", f8),  # 1 or 2 current levels (mras_standstill.py)
+        ("R1_dc_boost", f8),  # level A's flux reference is 1 + this times the reference's
+        ("R1_dc_hold", f8),  # the speed reference waits for the two-level test at most this, s
         ("bend", b1),  # the current model gets the current's mean over the period
         ("wc_k", f8),  # the corner follows wc_k |w_e| below wc (0: fixed at wc)
         ("wc_min", f8),  # and not below this, rad/s
@@ -200,7 +207,12 @@ MRAS_STATE = record_dtype(
         ("dc_T2_sum", f8),  # sum of its block-wise measurements, s
         ("dc_T2_n", f8),  # and their number
         ("dc_open", b1),  # the window is open: the measured flux build-up is over
-        ("dc_status", f8),  # 0 no standstill run yet, 1 R1 identified, 2 could not identify
+        ("dc_status", f8),  # 0 no standstill run yet, 1 R1 identified, 2 could not, 3 one level
+        ("dc_run_t", f8),  # the standstill run's time, s
+        ("dc_phase", f8),  # the two-level test: 0 level A, 1 level B, 2 B's window, 3 done
+        ("dc_rA", f8),  # level A's apparent resistance, ohm
+        ("dc_iA", f8),  # and current, A
+        ("dc_T2A", f8),  # and the T2 measured on its build-up, s
     ]
     + stab.STABILISE_STATE
 )
@@ -367,172 +379,6 @@ def filter_corner(wc, wc_k, wc_min, w_e):
     ``wc_min`` nor above ``wc`` (module docstring, "The filter's corner at low stator
     frequency"), rad/s."""
     return min(wc, max(wc_min, wc_k * abs(w_e)))
-
-
-#: Shortest window of the standstill identification, s (shorter runs leave R1_hat alone).
-R1_DC_MIN_WINDOW = 0.05
-
-
-@njit(cache=True)
-def _r1_window_opens(p, s, y, i2, Ts):
-    """One sample of the measured flux build-up (:func:`mras_r1_standstill`): block sums of
-    ``y = Re(u conj i)`` and ``|i|^2``; at each block's end the apparent resistance ``r_b``,
-    the plant's T2 from the decay ratio of its differences, and ``s.dc_open`` once the
-    build-up measured has decayed by ``p.R1_dc_nT2`` time constants: the geometric tail left
-    after the block, ``|r_b - r_prev| q/(1 - q)`` (``q = exp(-block/T2)``), is at most
-    ``exp(-p.R1_dc_nT2)`` of the build-up since the first block, ``r_first - r_b + tail``; or
-    two blocks in a row have moved by less than 1 % (the build-up below the current ripple's
-    noise, or over before the run began)."""
-    s.dc_by += y
-    s.dc_bx += i2
-    s.dc_bt += Ts
-    if s.dc_bt < p.R1_dc_block:
-        return
-    r_b = s.dc_by / s.dc_bx
-    if s.dc_r_first == 0.0:
-        s.dc_r_first = r_b
-    if s.dc_r_prev2 > 0.0:
-        # the decay ratio of the build-up over one block: exp(-block / T2)
-        d0 = s.dc_r_prev - s.dc_r_prev2
-        d1 = r_b - s.dc_r_prev
-        q = d1 / d0 if d0 != 0.0 else 0.0
-        # measured while the build-up is well above the current ripple's noise (a block
-        # moving by more than 1 %): later the differences are noise. The mean of the
-        # block-wise values: a saturating machine's build-up is not one exponential, and a
-        # single late value was a fifth of the rest
-        flat = abs(d1) <= 0.01 * abs(r_b)
-        if 0.0 < q < 1.0 and not flat:
-            s.dc_T2_sum += -s.dc_bt / math.log(q)
-            s.dc_T2_n += 1.0
-            s.dc_T2 = s.dc_T2_sum / s.dc_T2_n
-        # the tail at the measured T2 (before one is measured, at the block's T2_hat, four)
-        T2 = s.dc_T2 if s.dc_T2 > 0.0 else 4.0 * p.R1_dc_block
-        q_T2 = math.exp(-s.dc_bt / T2)
-        tail = abs(d1) * q_T2 / (1.0 - q_T2)
-        decayed = tail <= math.exp(-p.R1_dc_nT2) * abs(s.dc_r_first - r_b + tail)
-        still = flat and abs(d0) <= 0.01 * abs(r_b)
-        if s.dc_t >= p.R1_dc_settle and (decayed or still):
-            s.dc_open = True
-    s.dc_r_prev2 = s.dc_r_prev
-    s.dc_r_prev = r_b
-    s.dc_by = 0.0
-    s.dc_bx = 0.0
-    s.dc_bt = 0.0
-
-
-@njit(cache=True)
-def mras_r1_standstill(
-    p, m, s, v_alpha, v_beta, i_prev_alpha, i_prev_beta, i_alpha, i_beta, w_ref, w_e, Ts
-):
-    """Standstill R1 identification while the flux builds up (``p.R1_dc``; updates ``m.R1_hat``).
-
-    With the speed reference at zero and a DC flux current, the stator equation in steady
-    state is ``v = R1 i``: the flux is constant and no current changes, so neither the
-    ``sigma L1 p i`` nor the ``p psi`` term is left (the DC test of IEEE Std 112, made by the
-    drive on every start). What is left of the flux build-up in the window is a regressor
-    from the controller's current model, ``g``, with a free scale ``k`` (the plant's build-up
-    has the true T2, the model's T2_hat): after four rotor time constants it is still about
-    5 % of ``R1 i``. Measured on ``sensorless`` (0.5 s magnetisation): R1_hat exact with R2_hat
-    = R2; with R2_hat = 0.8 or 1.2 R2, -0.2 / +0.4 % (ignoring the build-up: 1.5 %;
-    subtracting the model's build-up with k = 1: +-1.1 %).
-
-    A standstill run is a stretch of periods with ``w_ref = 0``, ``|i| > 1 A`` and
-    ``|w_e| < 2 pi 0.5 Hz``. Its window opens when the flux build-up *measured* is nearly
-    over: the run is cut into blocks of ``p.R1_dc_block`` seconds (a quarter of the
-    controller's T2_hat) and each block's apparent resistance ``r_b = sum Re(u conj i) /
-    sum |i|^2`` is ``R1`` plus the build-up's ``(M/L2) p psi . i / |i|^2``, which decays as
-    ``exp(-t/T2)`` with the *plant's* T2. The ratio of two successive block differences is
-    ``q = exp(-block/T2)``, so ``T2 = -block / ln q`` is measured (the mean over the
-    blocks). The window opens when the build-up *left* is ``exp(-p.R1_dc_nT2)`` (3.5: 3 %)
-    of the build-up seen since the first block, the tail after the last block taken as a
-    geometric series of its difference, ``|r_b - r_prev| q/(1 - q)``, or when two blocks in
-    a row move by less than 1 % (and not before ``p.R1_dc_settle``, one T2_hat): the decay
-    the drive measures, whatever shape it has. A window fixed at four T2_hat fell after the
-    0.5 s magnetisation whenever R2_hat(0) <= 0.76 R2; one at 3.5 times the mean measured
-    T2 fell after it on a saturating machine, whose build-up is slow at first (unsaturated)
-    and fast at the end: on the realistic drive (Table IV, 2 us dead time compensated as
-    1.6 us, 1 V device drops, sensor errors, saturation) the mean was 0.117 s against the
-    0.087 s of the machine's data, the window opened at 0.44 s and lasted less than
-    :data:`R1_DC_MIN_WINDOW` from R2_hat(0) = 1.2 and 1.4 R2 (on the Aalto 2.2 kW machine at
-    every R2_hat(0) from 0.6 to 1.4 R2); with the decay measured it opens near 0.3 s (the
-    build-up left is fitted by the ``k g`` term below). T2 is measured only while a block
-    moves by more than 1 % (above the
-    current ripple's noise on a switching bridge). When the run ends (the speed reference
-    leaves zero) and its window lasted at least
-    :data:`R1_DC_MIN_WINDOW`, R1_hat is the least-squares solution over the window of::
-
-        Re(u conj i) = R1 |i|^2 + k Re(g conj i),   u = v - sigma L1 p i,  g = (M/L2) p lam_hat
-
-    clamped to ``[p.R1_min, p.R1_max]``. ``v``: the voltage applied over the last period as
-    the controller knows it (commanded, less any dead-time compensation), V; ``i``: the mean
-    of the period's two current samples, A. With the ideal (average) inverter the
-    identification is exact. On a real inverter the dead time's voltage error left after
-    compensation adds ``dv/|i|`` to the result, and at standstill ``R1 |i|`` is only a few
-    volts: measured on ``sensorless-realistic`` (2 us dead time, compensated for 1.6 us) R1_hat
-    came out 1.9 R1. There it needs an exact dead-time compensation, or a test at two current
-    levels (not implemented), and should stay off.
-
-    ``s.dc_status`` says what the last run did: 1 R1_hat identified, 2 the run ended before
-    a window of :data:`R1_DC_MIN_WINDOW` (the build-up was not over: a magnetisation too
-    short for the machine's T2), R1_hat left as it was (logged as ``R1_id_status``).
-    """
-    still = w_ref == 0.0 and abs(w_e) < math.pi
-    i_m_alpha = 0.5 * (i_alpha + i_prev_alpha)
-    i_m_beta = 0.5 * (i_beta + i_prev_beta)
-    i2 = i_m_alpha * i_m_alpha + i_m_beta * i_m_beta
-    if still and i2 > 1.0:
-        s.dc_t += Ts
-        M, L1, L2, sigma_L1 = model_inductances(m)
-        u_alpha = v_alpha - sigma_L1 * (i_alpha - i_prev_alpha) / Ts
-        u_beta = v_beta - sigma_L1 * (i_beta - i_prev_beta) / Ts
-        y = u_alpha * i_m_alpha + u_beta * i_m_beta
-        if not s.dc_open:  # the measured build-up: compare block by block
-            _r1_window_opens(p, s, y, i2, Ts)
-        else:
-            g_alpha = (M / L2) * s.dlam_i_ab.real / Ts
-            g_beta = (M / L2) * s.dlam_i_ab.imag / Ts
-            x1 = i2  # |i|^2, the regressor of R1
-            x2 = (
-                g_alpha * i_m_alpha + g_beta * i_m_beta
-            )  # the flux build-up's power (regressor of k)
-            s.dc_vi += x1 * y
-            s.dc_ii += x1 * x1
-            s.dc_gi += x1 * x2
-            s.dc_gg += x2 * x2
-            s.dc_gy += x2 * y
-            s.dc_n += 1.0
-        return
-    if s.dc_n * Ts >= R1_DC_MIN_WINDOW and s.dc_ii > 0.0:
-        # least squares y = R1 x1 + k x2: k scales the model's build-up to the plant's (the
-        # controller's T2_hat sets its shape); a window where the build-up is over leaves
-        # x2 ~ 0, so fall back to y = R1 x1 + x2 (k = 1)
-        det = s.dc_ii * s.dc_gg - s.dc_gi * s.dc_gi
-        if det > 1e-6 * s.dc_ii * s.dc_gg and s.dc_gg > 0.0:
-            r1 = (s.dc_vi * s.dc_gg - s.dc_gi * s.dc_gy) / det
-        else:
-            r1 = (s.dc_vi - s.dc_gi) / s.dc_ii
-        m.R1_hat = min(max(r1, p.R1_min), p.R1_max)
-        m.R1_id = True
-        s.dc_status = 1.0
-    elif s.dc_t > 0.0:  # a standstill run ended without its window: say so
-        s.dc_status = 2.0
-    s.dc_t = 0.0
-    s.dc_by = 0.0
-    s.dc_bx = 0.0
-    s.dc_bt = 0.0
-    s.dc_r_prev = 0.0
-    s.dc_r_prev2 = 0.0
-    s.dc_r_first = 0.0
-    s.dc_T2 = 0.0
-    s.dc_T2_sum = 0.0
-    s.dc_T2_n = 0.0
-    s.dc_open = False
-    s.dc_vi = 0.0
-    s.dc_ii = 0.0
-    s.dc_gi = 0.0
-    s.dc_gg = 0.0
-    s.dc_gy = 0.0
-    s.dc_n = 0.0
 
 
 OWN_LOG_FIELDS = LOG_FIELDS[3:]
