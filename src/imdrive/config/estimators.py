@@ -368,9 +368,15 @@ class MrasSettings:
         ),
     ] = 0.5
     bandwidth_Hz: Annotated[
-        Float,
-        setting("bandwidth K1 and K2 are derived from (default: docs/stability.md)", "Hz", gt=0.0),
-    ] = 20.0
+        Float | None,
+        setting(
+            "bandwidth K1 and K2 are derived from (docs/stability.md)",
+            "Hz",
+            gt=0.0,
+            default_doc="20 Hz, at least 3 times the speed loop's bandwidth "
+            "(imdrive.config.mras_type.mras_bandwidth_Hz)",
+        ),
+    ] = None
     K1: Annotated[
         Float | None,
         setting(
@@ -484,9 +490,11 @@ class MrasSettings:
         -------
         EstimatorRecords
         """
+        from imdrive.config.mras_type import mras_bandwidth_Hz
+
         sc = ctx.scenario
         T2_hat = ctx.L2_hat / ctx.R2_hat
-        a = 2 * math.pi * self.bandwidth_Hz
+        a = 2 * math.pi * mras_bandwidth_Hz(sc, self)
         b2 = 0.0
         f_rated = sc.machine.rated_frequency_Hz
         if mras_type2(sc, self, T2_hat):
@@ -553,6 +561,7 @@ def mras_type2(sc, mras: MrasSettings, T2_hat: float) -> bool:
     :data:`imdrive.config.mras_type.MRAS_RAMP_LAG_MAX_PU`."""
     from imdrive.config.mras_type import (
         MRAS_RAMP_LAG_MAX_PU,
+        mras_bandwidth_Hz,
         mras_ramp_lag_pu,
         mras_type2_for_field_weakening,
     )
@@ -561,7 +570,7 @@ def mras_type2(sc, mras: MrasSettings, T2_hat: float) -> bool:
         return mras.acceleration_tracking
     if mras_type2_for_field_weakening(sc):
         return True
-    return mras_ramp_lag_pu(sc, mras.bandwidth_Hz, T2_hat) > MRAS_RAMP_LAG_MAX_PU
+    return mras_ramp_lag_pu(sc, mras_bandwidth_Hz(sc, mras), T2_hat) > MRAS_RAMP_LAG_MAX_PU
 
 
 # the sliding-mode MRAS's settings live in their own module (this one's size); imported here
