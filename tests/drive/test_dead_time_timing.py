@@ -22,10 +22,10 @@ Aalto machine), after 0.02 and 0.002 rpm. With 4 us a residual of 0.1 rpm (0.14 
 formula's) is left at the rated speed, of either sign; not explained yet.
 
 The speed loop and the MRAS are pinned at the bandwidths this was measured with (5 / 20 Hz on
-Table IV, 12.3 / 20 Hz on the Aalto machine): the Aalto machine's defaults are now 20 / 60 Hz
-(:func:`imdrive.config.mras_type.mras_bandwidth_Hz`), which pass more of the bridge's ripple
-into the estimate (1.7 rpm peak to peak of speed here, 0.38 with the former) and move its
-mean by 0.04 rpm, which is not this mechanism.
+Table IV, 12.3 / 20 Hz on the Aalto machine): the Aalto machine's MRAS now runs at 49 Hz by
+default (:func:`imdrive.config.mras_type.mras_bandwidth_Hz`), which passes more of the
+bridge's ripple into the estimate (1.0 rpm peak to peak of speed here, 0.38 at 20 Hz) and
+moves its mean by 0.03 rpm, which is not this mechanism.
 """
 
 from __future__ import annotations

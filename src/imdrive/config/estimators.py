@@ -373,7 +373,7 @@ class MrasSettings:
             "bandwidth K1 and K2 are derived from (docs/stability.md)",
             "Hz",
             gt=0.0,
-            default_doc="20 Hz, at least 3 times the speed loop's bandwidth "
+            default_doc="20 Hz, at least 4 times the speed loop's bandwidth "
             "(imdrive.config.mras_type.mras_bandwidth_Hz)",
         ),
     ] = None

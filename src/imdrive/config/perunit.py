@@ -462,26 +462,21 @@ def divergence_current_A(sc) -> float:
 
 #: the speed bandwidth every machine gets at least, Hz (the paper's drive)
 SPEED_BANDWIDTH_MIN_HZ = 5.0
-#: the largest speed dip a rated-load step may cause, per-unit of the rated speed: half the
-#: lowest speed the drive holds such a step at, 5 % (:func:`speed_bandwidth_Hz`)
-SPEED_DIP_PU = 0.025
+#: the largest speed dip a rated-load step may cause, per-unit of the rated speed
+SPEED_DIP_PU = 0.05
 
 
 def speed_bandwidth_Hz(sc) -> float:
     """The speed loop's bandwidth of scenario ``sc``, Hz: ``control.speed_bandwidth_Hz``, or
-    by default 5 Hz raised so that a rated-load step dips the speed by at most 2.5 % of the
-    rated speed, so a drive at 5 % speed does not pass through zero (capped at a tenth of the
-    current loop's bandwidth). The sensorless estimate lags the rotor by more than the dip
-    (the speed loop acts on it), hence half: at 5 % dips the 2.2 kW Aalto machine at 5 %
-    speed fell 72 -> -81 rpm within 30 ms of the step (the estimate still at 5 rpm, 85 rpm
-    off, beyond the MRAS's linear range ``1/T2`` = 45 rpm) and control was lost whatever R2_hat.
+    by default 5 Hz raised so that a rated-load step dips the speed by at most 5 % of the
+    rated speed, so a drive at 10 % speed does not pass through zero (capped at a tenth of the
+    current loop's bandwidth).
 
     With both poles of the speed PI at ``w_bw`` (:func:`imdrive.design.gains.default_speed_gains`)
     a torque step ``T`` dips the speed by about ``0.6 T / (J w_bw)`` (the peak of
     ``t exp(-w_bw t)`` scaled; measured 0.5-0.7 on the library), so the rule is
-    ``w_bw >= 0.6 T_rated / (J 0.025 w_rated)``. Table IV keeps 5 Hz (3.8 Hz needed), as does
-    every library machine but the 2.2 kW Aalto machine (J = 0.015 kg m²): 24.7 Hz needed, the
-    cap's 20 Hz given (12.3 Hz at a 5 % dip held 10 % speed; 5 Hz lost control there).
+    ``w_bw >= 0.6 T_rated / (J 0.05 w_rated)``. Table IV keeps 5 Hz (1.9 Hz needed); the 2.2 kW
+    Aalto machine (J = 0.015 kg m²) gets 12.3 Hz, where 5 Hz lost control at 10 % speed.
 
     Parameters
     ----------
