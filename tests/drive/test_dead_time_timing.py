@@ -23,7 +23,7 @@ formula's) is left at the rated speed, of either sign; not explained yet.
 
 The speed loop and the MRAS are pinned at the bandwidths this was measured with (5 / 20 Hz on
 Table IV, 12.3 / 20 Hz on the Aalto machine): the Aalto machine's MRAS now runs at 49 Hz by
-default (:func:`imdrive.config.mras_type.mras_bandwidth_Hz`), which passes more of the
+default (:func:`imdrive.config.mras_bandwidth.mras_bandwidth_Hz`), which passes more of the
 bridge's ripple into the estimate (1.0 rpm peak to peak of speed here, 0.38 at 20 Hz) and
 moves its mean by 0.03 rpm, which is not this mechanism.
 """

@@ -53,7 +53,7 @@ def test_filter_corner_follows_the_stator_frequency_between_its_floor_and_cut_of
 )
 def test_low_speed_motoring_load_step_keeps_control(machine, speed_pu, load_pu):
     # the MRAS's bandwidth this was measured with (20 Hz): the Aalto machine's default is now
-    # 49 Hz (four times its speed loop, config/mras_type.py), which holds these steps with the
+    # 49 Hz (four times its speed loop, config/mras_bandwidth.py), which holds these steps with the
     # fixed cut-off too
     overrides = {
         "estimator.R2_ratio": 1.0,

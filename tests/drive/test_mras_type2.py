@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from imdrive.config.machine import machine_presets
-from imdrive.config.mras_type import mras_bandwidth_Hz
+from imdrive.config.mras_bandwidth import mras_bandwidth_Hz
 from imdrive.config.perunit import MRAS_RAMP_LAG_MAX_PU, mras_ramp_lag_pu
 from imdrive.config.scenario import Scenario
 from imdrive.design.gains import default_mras_gains, mras_type2_gains

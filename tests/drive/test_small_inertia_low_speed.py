@@ -5,7 +5,7 @@ The 2.2 kW Aalto machine's rated torque decelerates its inertia (J = 0.015 kg m�
 5 % speed lost control at a rated motoring step whatever R2_hat: the rotor fell to -81 rpm
 within 30 ms while the estimate, 85 rpm behind (beyond the MRAS's linear range 1/T2), stayed
 near 5 rpm. The MRAS is now kept four times faster than the speed loop
-(:func:`imdrive.config.mras_type.mras_bandwidth_Hz`, Table IV's ratio: 49 Hz here). Not a
+(:func:`imdrive.config.mras_bandwidth.mras_bandwidth_Hz`, Table IV's ratio: 49 Hz here). Not a
 law: Table IV's machine given the Aalto machine's inertia (J = 0.015 kg m², speed loop 8.8 Hz,
 MRAS 35 Hz) still loses control from 0.8 R2 (it holds from 1.2 R2; 49 Hz holds both at
 J = 0.0128 kg m²), so only the Aalto machine is tested here.
@@ -17,7 +17,7 @@ import warnings
 
 import pytest
 
-from imdrive.config.mras_type import mras_bandwidth_Hz
+from imdrive.config.mras_bandwidth import mras_bandwidth_Hz
 from imdrive.config.perunit import speed_bandwidth_Hz
 from imdrive.errors import ConfigWarning
 from imdrive.run.batch import simulate_batch

@@ -374,7 +374,7 @@ class MrasSettings:
             "Hz",
             gt=0.0,
             default_doc="20 Hz, at least 4 times the speed loop's bandwidth "
-            "(imdrive.config.mras_type.mras_bandwidth_Hz)",
+            "(imdrive.config.mras_bandwidth.mras_bandwidth_Hz)",
         ),
     ] = None
     K1: Annotated[
@@ -490,7 +490,7 @@ class MrasSettings:
         -------
         EstimatorRecords
         """
-        from imdrive.config.mras_type import mras_bandwidth_Hz
+        from imdrive.config.mras_bandwidth import mras_bandwidth_Hz
 
         sc = ctx.scenario
         T2_hat = ctx.L2_hat / ctx.R2_hat
@@ -559,9 +559,9 @@ def mras_type2(sc, mras: MrasSettings, T2_hat: float) -> bool:
     (:func:`imdrive.config.mras_type.mras_type2_for_field_weakening`) or when
     :func:`imdrive.config.mras_type.mras_ramp_lag_pu` exceeds
     :data:`imdrive.config.mras_type.MRAS_RAMP_LAG_MAX_PU`."""
+    from imdrive.config.mras_bandwidth import mras_bandwidth_Hz
     from imdrive.config.mras_type import (
         MRAS_RAMP_LAG_MAX_PU,
-        mras_bandwidth_Hz,
         mras_ramp_lag_pu,
         mras_type2_for_field_weakening,
     )

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from imdrive.config.current_control import current_controller
 from imdrive.config.field_weakening import field_weakening_on
-from imdrive.config.mras_type import mras_bandwidth_Hz
+from imdrive.config.mras_bandwidth import mras_bandwidth_Hz
 from imdrive.config.speed_gain import speed_gain_flux_scaling
 
 
@@ -23,7 +23,7 @@ def resolved_defaults(sc) -> dict[str, object]:
     dict
         ``control.field_weakening`` (:func:`~imdrive.config.field_weakening.field_weakening_on`),
         ``control.current_controller``, ``control.speed_gain_flux_scaling``,
-        ``mras.bandwidth_Hz`` (:func:`~imdrive.config.mras_type.mras_bandwidth_Hz`); empty for
+        ``mras.bandwidth_Hz`` (:func:`~imdrive.config.mras_bandwidth.mras_bandwidth_Hz`); empty for
         an open-loop drive.
     """
     if sc.drive.mode != "vector":
