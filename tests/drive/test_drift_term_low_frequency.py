@@ -10,6 +10,11 @@ filter's corner (4.2 Hz with wc = 15 rad/s), they end within 2 %.
 The test pins the fixed corner it was measured with (``mras.wc_per_stator_frequency = 0``):
 with the recommended preset's corner that follows the stator frequency (10 rad/s there) the
 swing is gone with the drift term on as well (Krause 3 hp: -0.77 %).
+
+Since the drift is not integrated towards the error while the error shrinks (the adaptive
+law's overshoot, kernels/compensator.py), the approach from 0.8 R2 no longer winds it up:
+with the drift term forced on here the runs are the same to the last digit as without it
+(-0.11 and -1.5 %), where they swung before.
 """
 
 from __future__ import annotations
@@ -29,8 +34,8 @@ def test_low_frequency_regeneration_converges_without_the_drift_term(machine):
     sc = scs[0].with_overrides({"mras.wc_per_stator_frequency": 0.0})  # the fixed corner
     old = sc.with_overrides({"compensator.drift_min_freq_Hz": 0.0})  # drift term always on
     new, was = simulate_batch([sc, old]).metrics.itertuples()
-    # with the drift term on the swing is still running at the end (measured -2.5 / -2.9 %
-    # with the higher injection frequency as the bound; larger with none)
-    assert abs(was.R2_error_pct) > 2.0, was.R2_error_pct
-    assert abs(new.R2_error_pct) < 2.0, new.R2_error_pct  # measured -0.15 / -1.5 %
+    # with the drift term on the swing ran to the end (measured -2.5 / -2.9 % with the higher
+    # injection frequency as the bound; larger with none); now it is never wound up here
+    assert was.R2_error_pct == new.R2_error_pct
+    assert abs(new.R2_error_pct) < 2.0, new.R2_error_pct  # measured -0.11 / -1.5 %
     assert new.verdict == "ok", new.verdict_text

@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 from imdrive.config.machine import machine_presets
+from imdrive.config.mras_bandwidth import mras_bandwidth_Hz
 from imdrive.config.perunit import MRAS_RAMP_LAG_MAX_PU, mras_ramp_lag_pu
 from imdrive.config.scenario import Scenario
 from imdrive.design.gains import default_mras_gains, mras_type2_gains
@@ -68,7 +69,7 @@ def test_the_default_follows_the_per_unit_lag_and_keeps_table_iv_type_1():
         T2 = (m.Ll2_H + m.M_H) / m.R2_ohm
         d = simulate(sc).derived
         on[name] = "mras_b2" in d
-        assert on[name] == (mras_ramp_lag_pu(sc, sc.mras.bandwidth_Hz, T2) > MRAS_RAMP_LAG_MAX_PU)
+        assert on[name] == (mras_ramp_lag_pu(sc, mras_bandwidth_Hz(sc), T2) > MRAS_RAMP_LAG_MAX_PU)
         # the PI's gains are the type-1 loop's, with or without the second integrator
         assert d["mras_K2"] == d["mras_K1"] / T2
     assert on == {

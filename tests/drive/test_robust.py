@@ -94,10 +94,11 @@ def test_runaway_is_flagged_in_result_summary_batch_and_cli(tmp_path):
 @pytest.mark.slow  # end to end: closed-loop runs of seconds
 def test_default_tuning_is_stable_over_the_R1_range():
     """The maps: stable for R1_hat/R1 in [0.85, 1.15] at 150-1500 rpm, rated motoring load."""
+    from imdrive.config.mras_bandwidth import mras_bandwidth_Hz
     from imdrive.stability import stability_map
 
     sc = Scenario.read("sensorless")
-    assert (sc.mras.wc_rad_s, sc.mras.bandwidth_Hz) == (15.0, 20.0)
+    assert (sc.mras.wc_rad_s, mras_bandwidth_Hz(sc)) == (15.0, 20.0)
     speeds = np.arange(150.0, 1501.0, 90.0)
     for r in (0.85, 1.15):
         df = stability_map(sc, speeds, [12.0], R1_ratio=r)

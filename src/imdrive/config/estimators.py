@@ -375,9 +375,15 @@ class MrasSettings:
         ),
     ] = 0.5
     bandwidth_Hz: Annotated[
-        Float,
-        setting("bandwidth K1 and K2 are derived from (default: docs/stability.md)", "Hz", gt=0.0),
-    ] = 20.0
+        Float | None,
+        setting(
+            "bandwidth K1 and K2 are derived from (docs/stability.md)",
+            "Hz",
+            gt=0.0,
+            default_doc="20 Hz, at least 4 times the speed loop's bandwidth "
+            "(imdrive.config.mras_bandwidth.mras_bandwidth_Hz)",
+        ),
+    ] = None
     K1: Annotated[
         Float | None,
         setting(
@@ -515,9 +521,11 @@ class MrasSettings:
         -------
         EstimatorRecords
         """
+        from imdrive.config.mras_bandwidth import mras_bandwidth_Hz
+
         sc = ctx.scenario
         T2_hat = ctx.L2_hat / ctx.R2_hat
-        a = 2 * math.pi * self.bandwidth_Hz
+        a = 2 * math.pi * mras_bandwidth_Hz(sc, self)
         b2 = 0.0
         f_rated = sc.machine.rated_frequency_Hz
         if mras_type2(sc, self, T2_hat):
@@ -580,25 +588,8 @@ def r1_max_freq_Hz(mras: MrasSettings, f_rated: float) -> float:
     return mras.R1_max_freq_pu * f_rated
 
 
-def mras_type2(sc, mras: MrasSettings, T2_hat: float) -> bool:
-    """Whether the MRAS of scenario ``sc`` runs the type-2 adaptation: ``acceleration_tracking``
-    as set, or by default when the speed reference takes the drive into field weakening
-    (:func:`imdrive.config.mras_type.mras_type2_for_field_weakening`) or when
-    :func:`imdrive.config.mras_type.mras_ramp_lag_pu` exceeds
-    :data:`imdrive.config.mras_type.MRAS_RAMP_LAG_MAX_PU`."""
-    from imdrive.config.mras_type import (
-        MRAS_RAMP_LAG_MAX_PU,
-        mras_ramp_lag_pu,
-        mras_type2_for_field_weakening,
-    )
-
-    if mras.acceleration_tracking is not None:
-        return mras.acceleration_tracking
-    if mras_type2_for_field_weakening(sc):
-        return True
-    return mras_ramp_lag_pu(sc, mras.bandwidth_Hz, T2_hat) > MRAS_RAMP_LAG_MAX_PU
-
-
+# the type-2 rule lives with its criteria (this module's size); the old import path works
 # the sliding-mode MRAS's settings live in their own module (this one's size); imported here
 # so it registers after the others, as before, and the old import path works
 from imdrive.config.estimators_smo import SmoMrasSettings  # noqa: E402,F401
+from imdrive.config.mras_bandwidth import mras_type2  # noqa: E402,F401

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from imdrive.config.current_control import current_controller
 from imdrive.config.field_weakening import field_weakening_on
+from imdrive.config.mras_bandwidth import mras_bandwidth_Hz
 from imdrive.config.r1_standstill import r1_standstill_levels
 from imdrive.config.speed_gain import speed_gain_flux_scaling
 
@@ -23,10 +24,11 @@ def resolved_defaults(sc) -> dict[str, object]:
     dict
         ``control.field_weakening`` (:func:`~imdrive.config.field_weakening.field_weakening_on`),
         ``control.current_controller``, ``control.speed_gain_flux_scaling``,
-        ``mras.R1_standstill_levels``, ``mras.acceleration_tracking`` (with the MRAS in the
-        loop), and with the compensator on, its unset machine-dependent settings
-        (:mod:`imdrive.config.compensator_gains`), and with the injection on, its frequency;
-        empty for an open-loop drive.
+        ``mras.R1_standstill_levels``, ``mras.bandwidth_Hz``
+        (:func:`~imdrive.config.mras_bandwidth.mras_bandwidth_Hz`), ``mras.acceleration_tracking``
+        (with the MRAS in the loop), and with the compensator on, its unset machine-dependent
+        settings (:mod:`imdrive.config.compensator_gains`), and with the injection on, its
+        frequency; empty for an open-loop drive.
     """
     if sc.drive.mode != "vector":
         return {}
@@ -35,6 +37,7 @@ def resolved_defaults(sc) -> dict[str, object]:
         "control.current_controller": current_controller(sc),
         "control.speed_gain_flux_scaling": speed_gain_flux_scaling(sc),
         "mras.R1_standstill_levels": r1_standstill_levels(sc),
+        "mras.bandwidth_Hz": mras_bandwidth_Hz(sc),
     }
     from imdrive.config.perunit import resolve
 
