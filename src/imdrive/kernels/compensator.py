@@ -246,6 +246,7 @@ COMPENSATOR_STATE = record_dtype(
         ("live", b1),  # the last decision updated R2_hat from the detected error
         ("th_rise", f8),  # thermal model: rotor temperature above ambient, K
         ("th_R2_cold", f8),  # thermal model: R2 at ambient, calibrated (0: not yet), ohm
+        ("th_n", f8),  # thermal model: fine decisions averaged into th_R2_cold so far
         ("inj_running", b1),  # the injection has started
         ("inj_new", b1),  # it started since the last decision (adaptive law: a settling period)
         ("cpl_d", f8),  # the part of e_d0 the slip couples in from e_q0, Wb
