@@ -18,9 +18,9 @@ setting                 Table IV     scaled by
 frequency_Hz``                       to whole control periods
 ======================  ===========  ==============================================
 
-The paper's presets state their numbers (paper §4, Table III's gains 1e6 /Wb and 0.001 ohm);
-with their ``[machine]`` replaced, :func:`imdrive.config.pairs.set_layer` warns that those
-stay as given.
+The paper's presets state their numbers (paper §4: its micro-weber thresholds, 1e6 /Wb,
+and 0.001 ohm); with their ``[machine]`` replaced, :func:`imdrive.config.pairs.set_layer`
+warns that those stay as given.
 """
 
 from __future__ import annotations
