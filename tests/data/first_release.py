@@ -25,11 +25,13 @@ FIRST_RELEASE = {
     "injection.headroom_to": 0.95,
     "compensator.step_law": "table",
     "compensator.fine_gain": 2.5,
-    "compensator.gate_band_Hz": 1.0,
+    # unset: half the 2 Hz injection, the 1 Hz the first release had as its default
+    "compensator.gate_band_Hz": None,
     "compensator.gate_voltage": 0.97,
     "compensator.thermal_model": False,
     "injection.decouple_slip": False,
     "mras.period_mean_current": False,
+    "mras.regeneration_angle_deg": 0.0,  # Schauder's adaptation error
 }
 
 

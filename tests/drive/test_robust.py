@@ -35,14 +35,16 @@ def test_lost_control_time_definition():
 
 
 def _runaway():
-    # rated regenerating load at 40 rpm: inside the low-speed regenerating region where the
-    # MRAS has no stable equilibrium (docs/stability.md); the drive runs away
+    # rated regenerating load at 40 rpm: inside the low-speed regenerating region where
+    # Schauder's MRAS has no stable equilibrium (docs/stability.md); the drive runs away (the
+    # rotated error, mras.regeneration_angle_deg, the default, holds it: pinned off here)
     return Scenario.read(
         "sensorless",
         [
             "control.speed_ref_rpm={initial=0,changes=[{at=0.5,to=40,over=0.2}]}",
             "load.torque_Nm={initial=0,changes=[{at=1.0,to=-12,over=0.2}]}",
             "simulation.t_end_s=4.0",
+            "mras.regeneration_angle_deg=0",
         ],
     )
 
@@ -79,6 +81,8 @@ def test_runaway_is_flagged_in_result_summary_batch_and_cli(tmp_path):
             "output.figures=false",
             "--set",
             "output.csv=false",
+            "--set",
+            "mras.regeneration_angle_deg=0",
         ]
     )
     assert code == EXIT_LOST_CONTROL == 3

@@ -247,7 +247,12 @@ def test_standstill_R1_identification_sees_the_dead_time_error():
             "simulation.t_end_s=0.75",
             "inverter.dead_time_s=0",
             'control.dead_time_compensation="none"',
+            # the switches' 1 V drops are a residual too: 0.46 R1 more at the magnetising
+            # current (before, the window did not open here and the test read R1_hat(0))
+            "inverter.device_drop_V=0",
         ],
     )
     res = simulate(exact)
-    assert res["R1_hat_ohm"][-1] / res["R1_ohm"][-1] == pytest.approx(1.0, abs=2e-3)
+    assert res["R1_id_status_code"][-1] == 1  # identified
+    # 0.994 R1: the uncommissioned controller's linear magnetising model on a saturating plant
+    assert res["R1_hat_ohm"][-1] / res["R1_ohm"][-1] == pytest.approx(1.0, abs=0.01)
