@@ -64,6 +64,18 @@ def test_R2_beyond_the_tolerance_is_never_ok(sc, err):
     assert f"R2_hat off by {err:+.3g} %" in v["verdict_text"]
 
 
+@pytest.mark.parametrize("peak", [2.5, -2.1])
+def test_R2_hat_outside_the_tolerance_within_the_window_is_not_settled(sc, peak):
+    v = verdict(sc, _row(sc, R2_error_pct=0.5, R2_error_window_pct=peak))
+    assert v["verdict"] == "R2-unsettled" and not v["verdict_ok"]
+    assert v["verdict_text"] == (
+        f"R2_hat not settled: {peak:+.3g} % off within the final window (ends +0.5 %)"
+    )
+    assert verdict(sc, _row(sc, R2_error_pct=0.5, R2_error_window_pct=1.9))["verdict"] == "ok"
+    # ending off, the end is the verdict: R2-off, not a swing
+    assert verdict(sc, _row(sc, R2_error_pct=2.5, R2_error_window_pct=3.0))["verdict"] == "R2-off"
+
+
 def test_speed_error_beyond_the_tolerance_is_never_ok(sc):
     tol = speed_tolerance_rpm(sc)
     v = verdict(sc, _row(sc, speed_error_rpm=-1.01 * tol))

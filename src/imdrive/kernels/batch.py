@@ -43,6 +43,7 @@ BATCH_METRICS = record_dtype(
         ("R2_held_causes", f8),
         ("R2_held_since_s", f8),
         ("R2_held_end_causes", f8),
+        ("R2_error_window_pct", f8),
     ]
 )
 METRICS = BATCH_METRICS.names
@@ -66,6 +67,7 @@ ACCUMULATOR = record_dtype(
         ("held_causes", i8),  # OR of the gating masks over the active samples
         ("held_start", i8),  # first sample of the present held stretch (-1: updating)
         ("held_run_causes", i8),  # OR of the masks over the present held stretch
+        ("r2_peak", f8),  # signed relative R2 error of largest magnitude in the window
     ]
 )
 
@@ -148,6 +150,9 @@ def accumulate(log, n_rows, k_first, k_win0, acc_arr, lc_bound=0.0, lc_n=0, t_on
             acc.torque += row.torque
             acc.speed_min = min(acc.speed_min, sp)
             acc.speed_max = max(acc.speed_max, sp)
+            e2 = (row.R2_hat - r2) / r2
+            if abs(e2) > abs(acc.r2_peak):
+                acc.r2_peak = e2
             acc.count += 1
 
 
@@ -165,6 +170,7 @@ def summarize(acc, last, n_valid, ok, Ts, out):
         out.speed_est_error_rpm = acc.speed_est_err / cnt
         out.speed_ripple_rpm = acc.speed_max - acc.speed_min
         out.torque_mean_Nm = acc.torque / cnt
+        out.R2_error_window_pct = 100.0 * acc.r2_peak
         if acc.last_bad == -1:
             out.convergence_time_s = 0.0
         elif acc.last_bad == n_valid - 1:
@@ -176,6 +182,7 @@ def summarize(acc, last, n_valid, ok, Ts, out):
         out.speed_est_error_rpm = nan
         out.speed_ripple_rpm = nan
         out.torque_mean_Nm = nan
+        out.R2_error_window_pct = nan
         out.convergence_time_s = nan
     out.R2_hat_final_ohm = last.R2_hat
     out.R2_final_ohm = last.R2

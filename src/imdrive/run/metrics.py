@@ -53,6 +53,9 @@ seconds, both ends included; the whole run if ``window_s >= t_end``).
 ``R2_held_since_s``      when R2_hat is held at the last sample: the first sample time of that
                          uninterrupted held stretch; NaN if it was being estimated at the end
 ``R2_held_end_causes``   OR of the masks over that stretch (0 if none)
+``R2_error_window_pct``  the ``100 (R2_hat - R2) / R2`` of largest magnitude over the window,
+                         with its sign: whether R2_hat had settled (an R2_hat that swings may
+                         end inside the tolerance by phase)
 
 plus the status columns of :mod:`imdrive.run.status` (``speed_error_pu_slip``,
 ``speed_tolerance_rpm``, ``verdict``, ``verdict_text``, ``verdict_at_s``), ``status`` (0 ok,
@@ -186,6 +189,9 @@ def drive_metrics(res, window_s: float = DEFAULT_WINDOW_S) -> dict:
             "speed_est_error_rpm": np.mean(speed_est[win] - speed[win]) if steady else nan,
             "speed_ripple_rpm": np.ptp(speed[win]) if steady else nan,
             "torque_mean_Nm": np.mean(s["torque_Nm"][win]) if steady else nan,
+            "R2_error_window_pct": _window_peak_pct(R2_hat[win], s["R2_ohm"][win])
+            if steady
+            else nan,
             "R2_hat_final_ohm": R2_hat[-1],
             "R2_final_ohm": s["R2_ohm"][-1],
             "R2_error_pct": 100 * (R2_hat[-1] - s["R2_ohm"][-1]) / s["R2_ohm"][-1],
@@ -207,6 +213,12 @@ def drive_metrics(res, window_s: float = DEFAULT_WINDOW_S) -> dict:
 
     out.update(verdict(sc, out))
     return out
+
+
+def _window_peak_pct(R2_hat, R2) -> float:
+    """The relative R2 error of largest magnitude over the window, with its sign, %."""
+    e = (R2_hat - R2) / R2
+    return float(100.0 * e[np.argmax(np.abs(e))])
 
 
 def held_metrics(res) -> dict:

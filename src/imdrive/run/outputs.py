@@ -106,7 +106,8 @@ SUMMARY_DOCS = {
     "circuit (voltage, frequency, speed, slip, torque, current, power factor, efficiency, "
     "magnetising current, rotor flux, breakdown torque): imdrive.config.machine.rated_point",
     "verdict": "the run's status (imdrive.run.status): `verdict` ok, or the first cause of a "
-    "failure (lost-control, diverged, frozen, held, R2-off, speed-error), `verdict_text` every "
+    "failure (lost-control, diverged, frozen, held, R2-off, R2-unsettled, speed-error), "
+    "`verdict_text` every "
     "cause in time order, `verdict_at_s`; the speed error in rated slips and its tolerance; "
     "the share of the compensator's time R2_hat was held, since when and why (voltage limit, "
     "stator frequency band, gated transient); `R2_observable`: estimated at the end, or not "

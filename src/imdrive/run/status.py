@@ -20,6 +20,9 @@ metrics (:func:`imdrive.run.metrics.drive_metrics`) and its scenario:
     R̂2 ends more than :data:`R2_TOLERANCE` from R2 while it was being estimated (or with no
     compensator); the text says when R̂2 ended on one of its clamps (``compensator.R2_min_*``,
     ``R2_max_*``), which then kept it from R2.
+``R2-unsettled``
+    R̂2 ends within the tolerance but was outside it within the final window
+    (``R2_error_window_pct``): it swings, and its end value is a phase of the swing.
 ``speed-error``
     the mean speed error over the final window exceeds the tolerance.
 ``not-run``
@@ -92,7 +95,17 @@ R1_ONE_LEVEL = (
     "short): R1_hat holds the inverter's residual voltage over the current"
 )
 
-VERDICTS = ("ok", "lost-control", "diverged", "frozen", "held", "R2-off", "speed-error", "not-run")
+VERDICTS = (
+    "ok",
+    "lost-control",
+    "diverged",
+    "frozen",
+    "held",
+    "R2-off",
+    "R2-unsettled",
+    "speed-error",
+    "not-run",
+)
 
 
 def held_reasons(mask) -> list[str]:
@@ -159,7 +172,8 @@ def verdict(sc, row: dict) -> dict:
     row : dict
         Its metrics: ``status``, ``diverged_at_s``, ``lost_control_at_s``, ``R2_error_pct``,
         ``speed_error_rpm``, ``R2_hat_final_ohm``, ``R2_held_since_s``,
-        ``R2_held_end_causes``, ``simulated_s``, ``R1_id_status`` (optional).
+        ``R2_held_end_causes``, ``simulated_s``, ``R1_id_status`` and ``R2_error_window_pct``
+        (optional).
 
     Returns
     -------
@@ -217,6 +231,18 @@ def verdict(sc, row: dict) -> dict:
         if comp.enabled:
             what = _at_clamp(sc, row.get("R2_hat_final_ohm"))
         events.append((t_end, "R2-off", f"R2_hat off by {float(r2_err):+.3g} %{what}"))
+    r2_win = row.get("R2_error_window_pct", math.nan)
+    if vector and not r2_bad and _finite(r2_win) and abs(float(r2_win)) > 100.0 * R2_TOLERANCE:
+        if held_note is not None:
+            events.append(held_note)
+        events.append(
+            (
+                t_end,
+                "R2-unsettled",
+                f"R2_hat not settled: {float(r2_win):+.3g} % off within the final window "
+                f"(ends {float(r2_err):+.3g} %)",
+            )
+        )
     if vector and status == 0 and _finite(err) and abs(float(err)) > tol_rpm:
         events.append(
             (
