@@ -73,6 +73,9 @@ def test_the_paper_presets_state_theirs_and_show_all_names_the_derived_ones():
     text = Scenario.read("sensorless", ON).to_toml()
     assert "# G_CR_ohm is unset (its documented default applies: 0.001 here)" in text
     assert "# gain_E_per_Wb is unset (its documented default applies: 1000000.0 here)" in text
+    # a per-unit twin set in the same table is named as the value's source
+    twin = Scenario.read("sensorless", [*ON, "compensator.G_CR_pu=0.03"])
+    assert "# G_CR_ohm is unset (taken from its twin G_CR_pu: " in twin.to_toml()
 
 
 INJ = [*ON, 'compensator.input="demodulated"', "injection.amplitude_pu=0.075"]

@@ -47,13 +47,27 @@ def value(v) -> str:
     raise TypeError(f"cannot write {type(v).__name__} as TOML")
 
 
+def _twin_rule(path: list[str], k: str, d: dict) -> str:
+    """Why an unset key takes its value: its per-unit (or absolute) twin in the same table
+    when that one is set (:mod:`imdrive.config.pairs`), else its documented default."""
+    from imdrive.config.pairs import pair_of
+
+    pair = pair_of(".".join([*path, k]))
+    if pair is not None:
+        for twin in pair.twins(".".join([*path, k])):
+            *head, name = twin.split(".")
+            if head == path and d.get(name) is not None:
+                return f"taken from its twin {name}"
+    return "its documented default applies"
+
+
 def _table(lines: list[str], path: list[str], d: dict, resolved: dict) -> None:
     subs = []
     body = []
     for k, v in d.items():
         if v is None:
             here = resolved.get(".".join([*path, k]))
-            rule = "its documented default applies"
+            rule = _twin_rule(path, k, d)
             if here is not None:
                 rule += f": {value(here)} here"
             body.append(f"# {_key(k)} is unset ({rule})")
