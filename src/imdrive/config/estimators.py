@@ -564,7 +564,7 @@ class MrasSettings:
             R1_dc_boost=self.R1_standstill_first_level - 1.0,
             R1_dc_hold=self.R1_standstill_hold_T2 * ctx.L2_hat / ctx.R2_hat,
             bend=self.period_mean_current,
-            **regeneration_params(self, sc.machine),
+            **regeneration_params(self, sc.machine, ctx.psi0),
         )
         src = {
             "mras_K1": "mras.K1" if self.K1 is not None else "mras.bandwidth_Hz",

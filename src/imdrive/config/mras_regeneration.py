@@ -42,19 +42,27 @@ RegenerationSpeed = Annotated[
 ]
 
 
-def regeneration_params(mras, machine) -> dict:
+#: the rotation ramps in as the adjustable model's rotor flux builds up from this share of the
+#: controller's flux reference at t = 0 to the next (``phi_lam_on``, ``phi_lam_full``)
+FLUX_BUILT = (0.6, 0.9)
+
+
+def regeneration_params(mras, machine, psi0: float = 0.0) -> dict:
     """The ``MRAS_PARAMS`` fields of the rotation from ``[mras]`` and ``[machine]``.
 
     Parameters
     ----------
     mras : MrasSettings
     machine : Machine
+    psi0 : float
+        The controller's flux reference at t = 0, Wb: the rotation ramps in as the adjustable
+        model's flux builds up to it (:data:`FLUX_BUILT`; 0: from the start).
 
     Returns
     -------
     dict
-        ``phi_max`` (rad), ``phi_w_band`` (electrical rad/s), ``phi_i_band`` (A),
-        ``phi_w_speed`` (electrical rad/s).
+        ``phi_max`` (rad), ``phi_w_band`` (electrical rad/s), ``phi_w_speed`` (electrical
+        rad/s), ``phi_lam_on`` and ``phi_lam_full`` (Wb).
     """
     from imdrive.config.machine import rated_point
 
@@ -64,4 +72,6 @@ def regeneration_params(mras, machine) -> dict:
         phi_max=math.radians(mras.regeneration_angle_deg),
         phi_w_band=mras.regeneration_band_pu * rp.w_e_rad_s,
         phi_w_speed=mras.regeneration_speed_pu * w_m_rated * machine.pole_pairs,
+        phi_lam_on=FLUX_BUILT[0] * psi0,
+        phi_lam_full=FLUX_BUILT[1] * psi0,
     )

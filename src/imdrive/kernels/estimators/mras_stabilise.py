@@ -45,6 +45,13 @@ rated regenerating torque, R2_hat = R2, stator frequency +0.22 Hz), hence the na
 stator frequency at high regenerating torque a weakly unstable mode remains (+0.1 ... +1.7 /s on
 Table IV at the rated torque), where the voltage model has no signal at all.
 
+The angle also ramps in with the adjustable model's flux magnitude, from ``phi_lam_on`` to
+``phi_lam_full`` (0.6 and 0.9 of the flux reference,
+:data:`imdrive.config.mras_regeneration.FLUX_BUILT`): while the flux builds up the models'
+magnitudes differ by the build-up, and the dot product fed that back into the speed estimate,
+whose sign sets the angle's (at standstill with current-sensor offsets and noise the estimate
+ran to 16 rpm on Table IV and 222 rpm on the Aalto 2.2 kW machine, the rotor to 5 and 76 rpm).
+
 While the angle acts the online R1 law is held (``mras_r1_step``): its premise, that the speed
 adaptation drives the cross product to zero and leaves the dot product to R1, no longer holds
 (measured: both running, the speed drifted 43 rpm off in 30 s at 20 rpm regenerating the
@@ -66,6 +73,8 @@ STABILISE_PARAMS = [
     ("phi_max", f8),  # the adaptation error's rotation in the plugging quadrant, rad (0: off)
     ("phi_w_band", f8),  # it ramps in over this much stator frequency, centred on 0, rad/s
     ("phi_w_speed", f8),  # and over this much speed estimate (through zero speed), rad/s
+    ("phi_lam_on", f8),  # none while the adjustable model's flux is below this, Wb
+    ("phi_lam_full", f8),  # full from this flux up (linear between), Wb
 ]
 
 #: Fields of ``MRAS_STATE`` this module owns.
@@ -98,15 +107,20 @@ def regeneration_angle(p, w_r_hat, lam_old, lam_new, Ts):
         ``phi``, rad, of the speed estimate's sign: 0 where the stator frequency is
         ``phi_w_band / 2`` or more of the speed's sign, and while ``phi_max`` is 0.
     """
-    if p.phi_max == 0.0 or abs(lam_old) < 1e-6:
+    lam = abs(lam_new)
+    if p.phi_max == 0.0 or abs(lam_old) < 1e-6 or lam <= p.phi_lam_on:
         return 0.0
+    # while the flux builds up the two models' magnitudes disagree by the build-up itself,
+    # not by a speed error: the dot product would feed it back into the speed estimate
+    span = p.phi_lam_full - p.phi_lam_on
+    k_lam = min(1.0, (lam - p.phi_lam_on) / span) if span > 0.0 else 1.0
     turn = lam_new * lam_old.conjugate()
     w_e = math.atan2(turn.imag, turn.real) / Ts
     s_w = min(1.0, max(-1.0, w_r_hat / p.phi_w_speed))
     r = 0.5 - w_e * s_w / p.phi_w_band
     if r <= 0.0:
         return 0.0
-    return p.phi_max * s_w * min(r, 1.0)
+    return p.phi_max * s_w * min(r, 1.0) * k_lam
 
 
 @njit(cache=True)
