@@ -42,6 +42,20 @@ RegenerationSpeed = Annotated[
 ]
 
 
+RegenerationGain = Annotated[
+    Float,
+    setting(
+        "where the MRAS's error is rotated, scale it towards the unloaded MRAS's steady loop "
+        "gain, 1 + g (φ/φmax) ((1 + x²)/(cos φ - x sin φ) - 1) at the slip x = ω_sl T̂2 "
+        "(kernels/estimators/mras_stabilise.py regeneration_gain): 1 all of it, 0 none. It "
+        "moves the linearised loop's regenerating pole into the left half-plane at 5 % speed "
+        "but the rated regenerating step there still loses control (off by default)",
+        ge=0.0,
+        le=1.0,
+    ),
+]
+
+
 def regeneration_params(mras, machine) -> dict:
     """The ``MRAS_PARAMS`` fields of the rotation from ``[mras]`` and ``[machine]``.
 
@@ -64,4 +78,5 @@ def regeneration_params(mras, machine) -> dict:
         phi_max=math.radians(mras.regeneration_angle_deg),
         phi_w_band=mras.regeneration_band_pu * rp.w_e_rad_s,
         phi_w_speed=mras.regeneration_speed_pu * w_m_rated * machine.pole_pairs,
+        phi_gain=float(mras.regeneration_gain),
     )

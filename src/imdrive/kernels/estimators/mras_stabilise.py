@@ -66,6 +66,7 @@ STABILISE_PARAMS = [
     ("phi_max", f8),  # the adaptation error's rotation in the plugging quadrant, rad (0: off)
     ("phi_w_band", f8),  # it ramps in over this much stator frequency, centred on 0, rad/s
     ("phi_w_speed", f8),  # and over this much speed estimate (through zero speed), rad/s
+    ("phi_gain", f8),  # how much of the loop gain lost to the slip the rotated error restores
 ]
 
 #: Fields of ``MRAS_STATE`` this module owns.
@@ -122,3 +123,44 @@ def adaptation_error(lam_v_alpha, lam_v_beta, lam_f_alpha, lam_f_beta, phi):
     d_beta = lam_v_beta - lam_f_beta
     dot = d_alpha * lam_f_alpha + d_beta * lam_f_beta
     return math.cos(phi) * cross - math.sin(phi) * dot
+
+
+@njit(cache=True)
+def regeneration_gain(p, phi, w_r_hat, lam_old, lam_new, T2_hat, Ts):
+    """The factor that gives the rotated error the steady loop gain of the unloaded MRAS
+    (``p.phi_gain = 1``; 0: none, the default).
+
+    At the slip ``x = w_sl T2_hat`` (``w_sl = w_e - w_r_hat``, the adjustable model's slip)
+    the rotated error's steady gain to a speed error is ``(cos phi - x sin phi)/(1 + x^2)``
+    times the unloaded cross product's (module docstring). The factor is its inverse, blended
+    in with the angle, ``1 + p.phi_gain (phi/phi_max) ((1 + x^2)/(cos phi - x sin phi) - 1)``:
+    1 wherever the angle is 0 (Schauder's error and its gains as designed).
+
+    Parameters
+    ----------
+    p : MRAS_PARAMS record
+        ``phi_max`` (rad), ``phi_gain`` (0 to 1).
+    phi : float
+        This period's rotation (:func:`regeneration_angle`), rad.
+    w_r_hat : float
+        Speed estimate, electrical rad/s.
+    lam_old, lam_new : complex
+        The adjustable model's rotor flux at the last sample and now, stationary frame, Wb.
+    T2_hat : float
+        The model's rotor time constant ``L2_hat/R2_hat``, s.
+    Ts : float
+        Control period, s.
+
+    Returns
+    -------
+    float
+        The factor, dimensionless, >= 1.
+    """
+    if phi == 0.0 or p.phi_gain == 0.0:
+        return 1.0
+    turn = lam_new * lam_old.conjugate()
+    w_e = math.atan2(turn.imag, turn.real) / Ts
+    x = (w_e - w_r_hat) * T2_hat
+    g = math.cos(phi) - x * math.sin(phi)
+    k_full = (1.0 + x * x) / max(g, math.cos(phi))
+    return 1.0 + p.phi_gain * abs(phi / p.phi_max) * (k_full - 1.0)
