@@ -45,6 +45,22 @@ rated regenerating torque, R2_hat = R2, stator frequency +0.22 Hz), hence the na
 stator frequency at high regenerating torque a weakly unstable mode remains (+0.1 ... +1.7 /s on
 Table IV at the rated torque), where the voltage model has no signal at all.
 
+The rotated error's steady gain falls with the slip as ``(cos phi - x sin phi)/(1 + x^2)`` of
+the unloaded cross product's, ``x = w_sl T2``; at the rated regenerating torque ``x`` is 1.45 on
+Table IV and 3.1 on Krause's 50 hp machine, where the gain is 0.52 and 0.30 of it and the MRAS's
+loop (20 Hz designed) is barely faster than the 5 Hz speed loop. Measured on the linearised
+``sensorless`` drive at 5 % of the rated speed regenerating the rated torque, stator frequency
+-0.36 Hz (full angle): from R2_hat = 1.2 R2 the least stable pole is +1.33 +- 5.7j /s on Krause
+50 hp (+0.55 from 1.3 R2) and +0.63 +- 4.4j /s on Table IV; no angle from 30 to 85 deg makes
+it stable on Krause 50 hp (+0.98 at 85 deg). ``mras.regeneration_gain`` (``p.phi_gain``,
+:func:`regeneration_gain`) scales the error back to the unloaded gain at the adjustable model's
+slip, blended in with the angle: the pole moves to -0.32 /s (-0.89 from 1.3 R2) and -0.46 /s
+on Table IV. It is off by default: in simulation the rated regenerating step at 5 % speed
+still ends in a flux collapse and a runaway on Krause 50 hp from 1.2 R2 (a second after the
+limit cycle has died down, so a large-signal basin, not the linear loop), and Krause 3 hp
+(``sensorless``, 1.2 R2) and the Aalto machine (``injection-robust``, 1.2 R2) each lost a
+cell of the machine envelope there that they hold without it; from 1.3 R2 Krause 50 hp held.
+
 While the angle acts the online R1 law is held (``mras_r1_step``): its premise, that the speed
 adaptation drives the cross product to zero and leaves the dot product to R1, no longer holds
 (measured: both running, the speed drifted 43 rpm off in 30 s at 20 rpm regenerating the
