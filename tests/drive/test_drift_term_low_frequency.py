@@ -22,7 +22,7 @@ from __future__ import annotations
 import pytest
 
 from imdrive import simulate_batch
-from imdrive.studies.machines import scenarios
+from imdrive.studies.machines import scenarios, timeline
 
 pytestmark = pytest.mark.slow
 
@@ -32,10 +32,18 @@ def test_low_frequency_regeneration_converges_without_the_drift_term(machine):
     scs, _ = scenarios([machine], drives=["injection-robust"], speeds=[0.1], loads=[-1.0],
                        ratios=[0.8])  # fmt: skip
     sc = scs[0].with_overrides({"mras.wc_per_stator_frequency": 0.0})  # the fixed corner
+    # the load steps at the grid's time as measured, without the standstill test's wait
+    # (studies/machines.py standstill_wait_s): 0.08 s later on Krause 3 hp, the drift term
+    # moves the end by 0.04 % of R2 (-0.11 -> -0.15 %)
+    T = sc.load.torque_Nm.points[-1][1]
+    load_at = timeline(sc.machine)[1]
+    sc = sc.with_overrides([f"load.torque_Nm={{initial=0, changes=[{{at={load_at}, to={T}}}]}}"])
     old = sc.with_overrides({"compensator.drift_min_freq_Hz": 0.0})  # drift term always on
     new, was = simulate_batch([sc, old]).metrics.itertuples()
     # with the drift term on the swing ran to the end (measured -2.5 / -2.9 % with the higher
     # injection frequency as the bound; larger with none); now it is never wound up here
     assert was.R2_error_pct == new.R2_error_pct
-    assert abs(new.R2_error_pct) < 2.0, new.R2_error_pct  # measured -0.11 / -1.5 %
+    # measured -0.11 / -0.09 % (Krause 50 hp: -1.5 % while its standstill window came after
+    # the ramp and R1_hat stayed 10 % off)
+    assert abs(new.R2_error_pct) < 2.0, new.R2_error_pct
     assert new.verdict == "ok", new.verdict_text

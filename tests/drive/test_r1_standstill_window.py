@@ -12,12 +12,16 @@ from imdrive.run.simulate import simulate
 
 
 def _standstill(machine, r2_ratio, magnetise_s, r1_ratio=0.9):
+    """R1_hat/R1 and the status when the speed reference leaves zero at ``magnetise_s``, the
+    start not waiting for the window (``mras.R1_standstill_hold_T2 = 0``;
+    test_r1_standstill_wait.py has the wait)."""
     sc = Scenario.read(
         "sensorless",
         [
             f'machine.preset="{machine}"',
             "mras.R1_standstill=true",
             "mras.R1_standstill_levels=1",
+            "mras.R1_standstill_hold_T2=0",
             f"estimator.R1_ratio={r1_ratio}",
             f"estimator.R2_ratio={r2_ratio}",
             f"control.speed_ref_rpm={{initial=0,changes=[{{at={magnetise_s},to=300,over=1}}]}}",
@@ -106,6 +110,7 @@ def test_a_run_that_could_not_identify_says_so_in_its_status():
         [
             "mras.R1_standstill=true",
             "mras.R1_standstill_levels=1",
+            "mras.R1_standstill_hold_T2=0",  # the start does not wait for the window
             "control.speed_ref_rpm={initial=0,changes=[{at=0.2,to=300,over=1}]}",
             "simulation.t_end_s=2.0",
         ],

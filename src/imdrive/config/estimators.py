@@ -20,10 +20,11 @@ from imdrive.config.field_weakening import field_weakening_on
 from imdrive.config.mras_regeneration import (
     RegenerationAngle,
     RegenerationBand,
+    RegenerationGain,
     RegenerationSpeed,
     regeneration_params,
 )
-from imdrive.config.r1_standstill import r1_standstill_levels
+from imdrive.config.r1_standstill import StandstillHold, r1_standstill_levels
 from imdrive.config.registry import (  # noqa: F401  (re-exported: the settings half's API)
     ESTIMATOR_SETTINGS,
     EstimatorContext,
@@ -459,9 +460,7 @@ class MrasSettings:
         Float,
         setting("the two-level test's first flux level, per unit of the reference", gt=0.2, le=0.8),
     ] = 0.6
-    R1_standstill_hold_T2: Annotated[
-        Float, setting("longest wait for the two-level test, per unit of T̂2(0)", ge=0.0)
-    ] = 16.0
+    R1_standstill_hold_T2: StandstillHold = 16.0
     R1_max_freq_Hz: Annotated[
         Float | None,
         setting(
@@ -485,6 +484,7 @@ class MrasSettings:
     regeneration_angle_deg: RegenerationAngle = 80.0
     regeneration_band_pu: RegenerationBand = 0.005
     regeneration_speed_pu: RegenerationSpeed = 0.005
+    regeneration_gain: RegenerationGain = 0.0
     acceleration_tracking: Annotated[
         Bool | None,
         setting(

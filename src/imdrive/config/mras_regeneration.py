@@ -47,6 +47,20 @@ RegenerationSpeed = Annotated[
 FLUX_BUILT = (0.6, 0.9)
 
 
+RegenerationGain = Annotated[
+    Float,
+    setting(
+        "where the MRAS's error is rotated, scale it towards the unloaded MRAS's steady loop "
+        "gain, 1 + g (φ/φmax) ((1 + x²)/(cos φ - x sin φ) - 1) at the slip x = ω_sl T̂2 "
+        "(kernels/estimators/mras_stabilise.py regeneration_gain): 1 all of it, 0 none. It "
+        "moves the linearised loop's regenerating pole into the left half-plane at 5 % speed "
+        "but the rated regenerating step there still loses control (off by default)",
+        ge=0.0,
+        le=1.0,
+    ),
+]
+
+
 def regeneration_params(mras, machine, psi0: float = 0.0) -> dict:
     """The ``MRAS_PARAMS`` fields of the rotation from ``[mras]`` and ``[machine]``.
 
@@ -62,7 +76,7 @@ def regeneration_params(mras, machine, psi0: float = 0.0) -> dict:
     -------
     dict
         ``phi_max`` (rad), ``phi_w_band`` (electrical rad/s), ``phi_w_speed`` (electrical
-        rad/s), ``phi_lam_on`` and ``phi_lam_full`` (Wb).
+        rad/s), ``phi_lam_on`` and ``phi_lam_full`` (Wb), ``phi_gain`` (0 to 1).
     """
     from imdrive.config.machine import rated_point
 
@@ -74,4 +88,5 @@ def regeneration_params(mras, machine, psi0: float = 0.0) -> dict:
         phi_w_speed=mras.regeneration_speed_pu * w_m_rated * machine.pole_pairs,
         phi_lam_on=FLUX_BUILT[0] * psi0,
         phi_lam_full=FLUX_BUILT[1] * psi0,
+        phi_gain=float(mras.regeneration_gain),
     )

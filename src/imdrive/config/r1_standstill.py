@@ -11,6 +11,21 @@ timeline.
 
 from __future__ import annotations
 
+from typing import Annotated
+
+from imdrive.config.validation import Float, setting
+
+#: ``mras.R1_standstill_hold_T2``
+StandstillHold = Annotated[
+    Float,
+    setting(
+        "longest wait of the first start for the standstill test (two levels: the test; "
+        "one level: its window of half a T̂2 after the measured flux build-up), per unit "
+        "of T̂2(0); 0: the speed reference does not wait",
+        ge=0.0,
+    ),
+]
+
 
 def r1_standstill_levels(sc) -> int:
     """``mras.R1_standstill_levels`` as set, else 2 where the controller compensates its

@@ -167,7 +167,7 @@ MRAS_PARAMS = record_dtype(
         ("R1_dc_nT2", f8),  # the window opens this many measured rotor time constants in
         ("R1_dc_levels", f8),  # 1 or 2 current levels (mras_standstill.py)
         ("R1_dc_boost", f8),  # level A's flux reference is 1 + this times the reference's
-        ("R1_dc_hold", f8),  # the speed reference waits for the two-level test at most this, s
+        ("R1_dc_hold", f8),  # the speed reference waits for the standstill test at most this, s
         ("bend", b1),  # the current model gets the current's mean over the period
         ("wc_k", f8),  # the corner follows wc_k |w_e| below wc (0: fixed at wc)
         ("wc_min", f8),  # and not below this, rad/s
@@ -297,6 +297,7 @@ def mras_step(
     # adaptation, eqs. (4), (8), (9)
     s.phi = stab.regeneration_angle(p, s.w_r_hat, lam_old, lam_new, Ts)
     e = stab.adaptation_error(lam_v_alpha, lam_v_beta, lam_f_alpha, lam_f_beta, s.phi)
+    e *= stab.regeneration_gain(p, s.phi, s.w_r_hat, lam_old, lam_new, L2 / R2, Ts)
     if p.psi2_norm > 0.0:
         # the loop's bandwidth K1 |lam|^2 (design.gains) held in field weakening by the current
         # model's own magnitude, unfiltered (the low-speed filter's attenuation stays designed)

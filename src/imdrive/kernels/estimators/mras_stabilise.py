@@ -52,6 +52,22 @@ magnitudes differ by the build-up, and the dot product fed that back into the sp
 whose sign sets the angle's (at standstill with current-sensor offsets and noise the estimate
 ran to 16 rpm on Table IV and 222 rpm on the Aalto 2.2 kW machine, the rotor to 5 and 76 rpm).
 
+The rotated error's steady gain falls with the slip as ``(cos phi - x sin phi)/(1 + x^2)`` of
+the unloaded cross product's, ``x = w_sl T2``; at the rated regenerating torque ``x`` is 1.45 on
+Table IV and 3.1 on Krause's 50 hp machine, where the gain is 0.52 and 0.30 of it and the MRAS's
+loop (20 Hz designed) is barely faster than the 5 Hz speed loop. Measured on the linearised
+``sensorless`` drive at 5 % of the rated speed regenerating the rated torque, stator frequency
+-0.36 Hz (full angle): from R2_hat = 1.2 R2 the least stable pole is +1.33 +- 5.7j /s on Krause
+50 hp (+0.55 from 1.3 R2) and +0.63 +- 4.4j /s on Table IV; no angle from 30 to 85 deg makes
+it stable on Krause 50 hp (+0.98 at 85 deg). ``mras.regeneration_gain`` (``p.phi_gain``,
+:func:`regeneration_gain`) scales the error back to the unloaded gain at the adjustable model's
+slip, blended in with the angle: the pole moves to -0.32 /s (-0.89 from 1.3 R2) and -0.46 /s
+on Table IV. It is off by default: in simulation the rated regenerating step at 5 % speed
+still ends in a flux collapse and a runaway on Krause 50 hp from 1.2 R2 (a second after the
+limit cycle has died down, so a large-signal basin, not the linear loop), and Krause 3 hp
+(``sensorless``, 1.2 R2) and the Aalto machine (``injection-robust``, 1.2 R2) each lost a
+cell of the machine envelope there that they hold without it; from 1.3 R2 Krause 50 hp held.
+
 While the angle acts the online R1 law is held (``mras_r1_step``): its premise, that the speed
 adaptation drives the cross product to zero and leaves the dot product to R1, no longer holds
 (measured: both running, the speed drifted 43 rpm off in 30 s at 20 rpm regenerating the
@@ -75,6 +91,7 @@ STABILISE_PARAMS = [
     ("phi_w_speed", f8),  # and over this much speed estimate (through zero speed), rad/s
     ("phi_lam_on", f8),  # none while the adjustable model's flux is below this, Wb
     ("phi_lam_full", f8),  # full from this flux up (linear between), Wb
+    ("phi_gain", f8),  # how much of the loop gain lost to the slip the rotated error restores
 ]
 
 #: Fields of ``MRAS_STATE`` this module owns.
@@ -136,3 +153,44 @@ def adaptation_error(lam_v_alpha, lam_v_beta, lam_f_alpha, lam_f_beta, phi):
     d_beta = lam_v_beta - lam_f_beta
     dot = d_alpha * lam_f_alpha + d_beta * lam_f_beta
     return math.cos(phi) * cross - math.sin(phi) * dot
+
+
+@njit(cache=True)
+def regeneration_gain(p, phi, w_r_hat, lam_old, lam_new, T2_hat, Ts):
+    """The factor that gives the rotated error the steady loop gain of the unloaded MRAS
+    (``p.phi_gain = 1``; 0: none, the default).
+
+    At the slip ``x = w_sl T2_hat`` (``w_sl = w_e - w_r_hat``, the adjustable model's slip)
+    the rotated error's steady gain to a speed error is ``(cos phi - x sin phi)/(1 + x^2)``
+    times the unloaded cross product's (module docstring). The factor is its inverse, blended
+    in with the angle, ``1 + p.phi_gain (phi/phi_max) ((1 + x^2)/(cos phi - x sin phi) - 1)``:
+    1 wherever the angle is 0 (Schauder's error and its gains as designed).
+
+    Parameters
+    ----------
+    p : MRAS_PARAMS record
+        ``phi_max`` (rad), ``phi_gain`` (0 to 1).
+    phi : float
+        This period's rotation (:func:`regeneration_angle`), rad.
+    w_r_hat : float
+        Speed estimate, electrical rad/s.
+    lam_old, lam_new : complex
+        The adjustable model's rotor flux at the last sample and now, stationary frame, Wb.
+    T2_hat : float
+        The model's rotor time constant ``L2_hat/R2_hat``, s.
+    Ts : float
+        Control period, s.
+
+    Returns
+    -------
+    float
+        The factor, dimensionless, >= 1.
+    """
+    if phi == 0.0 or p.phi_gain == 0.0:
+        return 1.0
+    turn = lam_new * lam_old.conjugate()
+    w_e = math.atan2(turn.imag, turn.real) / Ts
+    x = (w_e - w_r_hat) * T2_hat
+    g = math.cos(phi) - x * math.sin(phi)
+    k_full = (1.0 + x * x) / max(g, math.cos(phi))
+    return 1.0 + p.phi_gain * abs(phi / p.phi_max) * (k_full - 1.0)
