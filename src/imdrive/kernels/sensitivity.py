@@ -77,15 +77,27 @@ def fine_loop_gain_ratio(p, m):
     share of ``R2_hat(0)``, ``p.R2_tuned``), and the detected error per % of R2 is
     :func:`in_phase_sensitivity` at the injection frequency and the rotor's time constant. As
     R2_hat moves away from where the gains were resolved both change: from ``R2_hat(0) = 0.7
-    R2`` heated to ``1.2 R2`` the step is ``0.7 / 1.2`` of R2_hat's share and the 1.17 Hz
-    injection sits at 0.54 of the rotor's corner instead of 0.92 (``S`` 0.35 instead of 0.50),
-    so the loop gain per decision fell to 0.4 of its tuned value (and a ramp's end overshot by
-    1 % of R2 for seconds, the drift unwound that slowly). This ratio puts it back:
+    R2`` heated to ``1.2 R2`` (Table IV) the step is ``0.7 / 1.2`` of R2_hat's share and the
+    1.17 Hz injection sits at 0.54 of the rotor's corner instead of 0.92 (``S`` 0.35 instead of
+    0.50), so the loop gain per decision fell to 0.4 of its tuned value (and at a ramp's end
+    R2_hat ran on by 0.9 % of R2, the drift unwound that slowly). This ratio puts it back:
 
-        (R2_hat / R2_tuned) S(w_i, T2_tuned) / S(w_i, T2_hat)
+        (R2_hat / R2_tuned) S(w_1, T2_tuned) / S(w_1, T2_hat)
 
-    at the frequency in use ``w_i`` (with :func:`injection_sensitivity_ratio`, the loop gain of
-    the first frequency at R2_tuned), bounded to ``[1/4, 4]``; 1 without ``p.R2_tuned``.
+    at the first injection frequency ``w_1`` (:func:`injection_sensitivity_ratio` scales the
+    frequency in use to it), bounded to ``[1/4, 4]``.
+
+    Parameters
+    ----------
+    p : COMPENSATOR_PARAMS record
+        ``R2_tuned`` (ohm; 0: no ratio) and ``inj_freq`` (Hz).
+    m : MODEL_STATE record
+        The controller's model: ``R2_hat`` (ohm) and the rotor inductance.
+
+    Returns
+    -------
+    float
+        The ratio (dimensionless), 1 without ``p.R2_tuned``.
     """
     if p.R2_tuned <= 0.0:
         return 1.0
