@@ -13,8 +13,9 @@ swing is gone with the drift term on as well (Krause 3 hp: -0.77 %).
 
 Since the drift is not integrated towards the error while the error shrinks (the adaptive
 law's overshoot, kernels/compensator.py), the approach from 0.8 R2 no longer winds it up:
-with the drift term forced on here the runs are the same to the last digit as without it
-(-0.11 and -1.5 %), where they swung before.
+with the drift term forced on here the runs are the same as without it to 0.01 % (-0.08 and
+-1.5 %; the same to the last digit until a shrink of less than 5 % of the error per decision
+counted as a ramp's lag, kernels/drift_rate.py), where they swung before.
 """
 
 from __future__ import annotations
@@ -42,7 +43,8 @@ def test_low_frequency_regeneration_converges_without_the_drift_term(machine):
     new, was = simulate_batch([sc, old]).metrics.itertuples()
     # with the drift term on the swing ran to the end (measured -2.5 / -2.9 % with the higher
     # injection frequency as the bound; larger with none); now it is never wound up here
-    assert was.R2_error_pct == new.R2_error_pct
+    # forcing the drift term off changes the end by a hair (the fine gain follows R2_hat)
+    assert was.R2_error_pct == pytest.approx(new.R2_error_pct, abs=0.01)
     # measured -0.11 / -0.09 % (Krause 50 hp: -1.5 % while its standstill window came after
     # the ramp and R1_hat stayed 10 % off)
     assert abs(new.R2_error_pct) < 2.0, new.R2_error_pct

@@ -255,6 +255,31 @@ class CompensatorSettings:
             default_doc="3 × the resolved G_CR_ohm",
         ),
     ] = None
+    drift_unwind_factor: Annotated[
+        Float,
+        setting(
+            'step_law = "adaptive": the drift gain\'s multiple while the detected error grows '
+            "against the drift (a ramp of R2 that stopped; kernels/drift_rate.py)",
+            ge=1.0,
+        ),
+    ] = 4.0
+    drift_shrink_margin: Annotated[
+        Float,
+        setting(
+            'step_law = "adaptive": the share of itself the detected error must shrink by in a '
+            "decision for the drift not to be integrated towards it (the proportional step "
+            "closing an error, not a ramp's lag; kernels/drift_rate.py)",
+            ge=0.0,
+        ),
+    ] = 0.05
+    fine_gain_follows_R2: Annotated[
+        Bool,
+        setting(
+            'step_law = "adaptive": the fine step keeps its loop gain as R̂2 moves from R̂2(0): '
+            "times R̂2/R̂2(0) and the injection's in-phase sensitivity at R̂2(0) over that at "
+            "R̂2 (kernels/sensitivity.py, fine_loop_gain_ratio)"
+        ),
+    ] = True
 
     thermal_model: Annotated[
         Bool,

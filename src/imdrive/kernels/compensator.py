@@ -66,7 +66,13 @@ period, lagged by 8 %). With ``p.fine`` the update is a second-order tracking lo
   reached 1.1 % of R2 per decision at the crossing and R2_hat went on to +2.6 % (before the
   run's end, +2.1 %); without integrating while the error shrinks it approaches from below
   and ends -0.2 %. A ramp still winds the drift up (the error grows until the drift follows
-  it), and the drift is always unwound where it pushes against the error.
+  it), and the drift is always unwound where it pushes against the error; a shrink of less
+  than ``p.drift_margin`` of the error per decision is a ramp's lag, not a closing, and a
+  drift against a growing error (a ramp that stopped) unwinds ``p.drift_unwind`` times
+  faster (:mod:`imdrive.kernels.drift_rate`);
+* the fine step keeps its loop gain as R2_hat moves away from ``R2_hat(0)`` (``p.R2_tuned``),
+  where ``G_CR`` and the injection frequency were resolved
+  (:func:`~imdrive.kernels.sensitivity.fine_loop_gain_ratio`).
 * below the stator frequency ``p.drift_fmin`` (period mean, with the gating on; default the
   higher injection frequency, and at least 1.75 times the MRAS filter's corner
   ``wc/2 pi``, above which that filter lags by less than 30 degrees) the drift term is reset
@@ -149,9 +155,11 @@ from imdrive.kernels.detection import (  # noqa: F401  (MAX_HP_CORRECTION: old p
     compensated_product,
     slip_coupling,
 )
+from imdrive.kernels.drift_rate import drift_update
 from imdrive.kernels.fuzzy import lookup
 from imdrive.kernels.records import b1, f8, record_dtype
 from imdrive.kernels.sensitivity import (  # noqa: F401  (in_phase_sensitivity: old path)
+    fine_loop_gain_ratio,
     in_phase_sensitivity,
     injection_sensitivity_ratio,
     saturation_sensitivity_ratio,
@@ -207,6 +215,9 @@ COMPENSATOR_PARAMS = record_dtype(
         ("cpl_wc", f8),  # the MRAS filter cut-off that decoupling undoes, rad/s (0: none)
         ("cpl_wmin", f8),  # decoupling from this |w_e| (full at twice it), rad/s (0: always)
         ("damp", b1),  # adaptive law: overshoot damping of the table's steps (step_damping.py)
+        ("drift_unwind", f8),  # adaptive law: drift gain's multiple against a growing error
+        ("drift_margin", f8),  # and the shrink of the error that counts as closing it
+        ("R2_tuned", f8),  # adaptive law: R2_hat its fine gain is tuned at, ohm (0: fixed gain)
     ]
 )
 
@@ -361,13 +372,10 @@ def compensator_update(p, s, m, table, E):
             # low stator frequency: no drift term (a type-1 loop); see the module docstring
             s.drift = 0.0
         if abs(x) < THRESHOLD_1:  # inside the table's first threshold: a continuous level
-            cr = p.fine_gain * x
+            cr = p.fine_gain * x * fine_loop_gain_ratio(p, m)
             dr = p.G_CR * cr
-            unwinding = x * s.drift < 0.0
-            if not (p.gate and s.fe_mean < p.drift_fmin) and (unwinding or x * DE >= 0.0):
-                # not while the proportional step is closing the error (module docstring)
-                d = s.drift + p.drift_gain * dr
-                s.drift = min(max(d, -p.drift_max), p.drift_max)
+            if not (p.gate and s.fe_mean < p.drift_fmin):
+                drift_update(p, s, x, p.G_E * DE, dr)
         elif p.damp:
             dr *= table_step_factor(s, cr)
         if abs(x) >= THRESHOLD_1 and x * s.drift < 0.0:

@@ -398,6 +398,9 @@ def _gating(sc, r) -> dict:
             "drift_max": dmax,
             "drift_fmin": _drift_fmin(sc, r),
             "damp": comp.overshoot_damping,
+            "drift_unwind": comp.drift_unwind_factor,
+            "drift_margin": comp.drift_shrink_margin,
+            "R2_tuned": r.R2_hat if comp.fine_gain_follows_R2 else 0.0,
         }
     if not (on and comp.enabled):
         return out
