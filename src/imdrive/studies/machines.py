@@ -24,7 +24,8 @@ injection frequency, hence its decisions, scale with ``1/T2``). Its verdict (:fu
 * ``converged``: ``sensorless``: the steady speed error equals the detuning law's
   ``slip (R2_hat/R2 - 1)`` (:func:`imdrive.analysis.detuning_speed_error_rpm`) at the flux
   the field weakening settles at (:func:`detuning_law_rpm`) within the tolerance;
-  ``injection-robust``: R2_hat within 2 % of R2 and the speed error within the tolerance.
+  ``injection-robust``: R2_hat within 2 % of R2 at the end and over the final window
+  (``R2_error_window_pct``) and the speed error within the tolerance.
   The tolerance is 1 rpm or 0.1 % of the rated speed, whichever is larger;
 * ``not converged``: stable, but outside those bounds at the end.
 
@@ -211,7 +212,11 @@ def verdict(row) -> str:
         return "lost"
     tol = tolerance_rpm(row["rated_speed_rpm"])
     if row["drive"] == "injection-robust":
-        ok = abs(row["R2_error_pct"]) <= R2_BAND_PCT and abs(row["speed_error_rpm"]) <= tol
+        r2 = abs(row["R2_error_pct"])
+        r2_win = row.get("R2_error_window_pct", math.nan)  # older CSVs: the end alone
+        if r2_win == r2_win:
+            r2 = max(r2, abs(r2_win))
+        ok = r2 <= R2_BAND_PCT and abs(row["speed_error_rpm"]) <= tol
     else:
         ok = abs(row["speed_error_rpm"] - row["detuning_law_rpm"]) <= tol
     return "converged" if ok else "not converged"
