@@ -50,7 +50,7 @@ def injection_headroom(p, s, v_use, k_flux, wrapped):
 
 
 @njit(cache=True)
-def headroom_weakening_input(p, s, v_use, torque_limited):
+def headroom_weakening_input(p, s, v_use, torque_limited, k_flux):
     """The voltage use the field weakening sees with the estimation headroom (``p.inj_fw``).
 
     The field weakening integrates ``dk/dt = fw_rate (fw_v - v_in)`` on its flux factor ``k``
@@ -62,7 +62,7 @@ def headroom_weakening_input(p, s, v_use, torque_limited):
     speed +-10 rpm. While the injection runs (``s.v_peak_last > 0``) this returns the ``v_in``
     for which the loop integrates instead
 
-        dk/dt = inj_fw_rate (inj_v_peak - v_peak_last) + fw_rate min(fw_v - v_use, 0)
+        dk/dt = inj_fw_rate k (inj_v_peak - v_peak_last) + fw_rate min(fw_v - v_use, 0)
 
     * a slow term on the peak voltage use of the last whole injection period
       ``v_peak_last`` (held over the period, so it carries no ripple): it lowers the flux
@@ -72,10 +72,17 @@ def headroom_weakening_input(p, s, v_use, torque_limited):
     * the field weakening's own fast term only where the voltage use exceeds ``fw_v``: the
       protection against saturation in a fast transient (a speed ramp), idle in steady state.
 
-    The sampled slow loop's gain per injection period is about ``inj_fw_rate T_inj v``
-    (the voltage use is nearly proportional to the flux above base speed): 0.4 at 1 /s and
-    2 Hz, no overshoot; hence the cap on ``inj_fw_rate`` per injection period where the
-    injection is slow (large machines). The cost of the lowered flux in torque per ampere is
+    Above base speed the voltage use is nearly proportional to the flux, ``v ~ k w_e psi*``,
+    so ``dv/dk = v / k``: the slow term integrates ``ln k`` (the factor ``k = k_flux``, the
+    field weakening's flux factor in use), and the sampled loop's gain per injection period
+    is ``inj_fw_rate T_inj v`` at every speed: 0.4 at 1 /s and 2 Hz, no overshoot; hence
+    the cap on ``inj_fw_rate`` per injection period where the injection is slow (large
+    machines). Integrating ``k`` itself, the gain grew as ``1 / k``: at twice the rated
+    speed (``k`` 0.46) it was 1.15 per period, and the flux, the torque current and the
+    speed cycled at 0.3-0.4 Hz, none of the injection frequencies (Table IV, -2 x rated
+    speed, full available load, R2_hat exact: 5.4 rpm peak to peak, 6.2 on the dead-time
+    bridge; 0.11 and 0.40 integrating ``ln k``). The cost of the lowered flux in torque per
+    ampere is
     :func:`imdrive.analysis.headroom.torque_per_ampere_at_flux`.
 
     ``torque_limited`` (the speed loop's torque current at its limit) hands the flux to the
@@ -84,7 +91,7 @@ def headroom_weakening_input(p, s, v_use, torque_limited):
     ``inj_fw_rate`` is at most ``injection.headroom_gain_per_period`` (0.6) per injection
     period (:func:`imdrive.run.blocks.headroom_rate_per_s`).
     """
-    slow = p.inj_fw_rate * (p.inj_v_peak - s.v_peak_last)
+    slow = p.inj_fw_rate * k_flux * (p.inj_v_peak - s.v_peak_last)
     if torque_limited:
         # a torque beyond what the lowered flux gives: the field weakening's own rule, so the
         # estimation never costs control, whether or not the speed gate has tripped yet

@@ -237,7 +237,8 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc
         if pk.inj_fw and cmp.v_peak_last > 0.0:  # the field weakening leaves it headroom
             i_ref = ctl.i_ref_dq  # the speed loop's torque current at its limit
             iq_max = math.sqrt(max(pc.i_max * pc.i_max - i_ref.real * i_ref.real, 0.0))
-            v_fw = headroom_weakening_input(pk, cmp, v_use, abs(i_ref.imag) >= 0.99 * iq_max)
+            lim = abs(i_ref.imag) >= 0.99 * iq_max
+            v_fw = headroom_weakening_input(pk, cmp, v_use, lim, 1.0 - ctl.fw_cut)
     w_ref = prof.w_ref
 
     # R1 adaptation held from the compensator's start until it first updates and whenever

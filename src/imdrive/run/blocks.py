@@ -335,9 +335,11 @@ def headroom_rate_per_s(rate_per_s: float, gain_per_period: float, f_inj_Hz: flo
     """The estimation headroom's integral gain in use, 1/s.
 
     Its slow term acts on the peak voltage use of the last whole injection period, held over
-    the next one, so the flux factor moves ``rate T_inj (v_target - v_peak)`` per period on a
-    sample up to a period old: a sampled integral loop whose gain per period must stay below
-    one. Table IV's 1 /s at 2 Hz is 0.5. The injection is set in per-unit of the rotor's
+    the next one, so the flux factor ``k`` moves by the fraction ``rate T_inj (v_target -
+    v_peak)`` of itself per period (the voltage use is nearly proportional to ``k`` above base
+    speed, :func:`imdrive.kernels.compensator_range.headroom_weakening_input`) on a sample up
+    to a period old: a sampled integral loop whose gain per period must stay below one.
+    Table IV's 1 /s at 2 Hz is 0.5. The injection is set in per-unit of the rotor's
     corner frequency, 0.07-0.22 Hz on the large machines of the library, where 1 /s was
     4.5-14 per period: the flux cycled between rated and the field weakening's floor over tens of
     seconds (R2_hat 17 % off at no load on Krause 2250 hp), and from one stale peak (the
