@@ -436,8 +436,10 @@ class InjectionSettings:
     headroom_rate_per_s: Annotated[
         Float,
         setting(
-            "estimation headroom: integral gain of the flux factor on the peak voltage use "
-            "(sampled once per injection period: keep it below about 1/(injection period))",
+            "estimation headroom: integral gain of the flux factor's logarithm (the flux moves "
+            "by this fraction of itself per second and unit of voltage-use error) on the peak "
+            "voltage use (sampled once per injection period: keep it below about "
+            "1/(injection period))",
             "1/s",
             gt=0.0,
         ),
