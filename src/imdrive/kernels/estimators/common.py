@@ -119,3 +119,13 @@ def lowpass_coefficients(wc, Ts):
         g = math.exp(-wc * Ts)
         return g, (1.0 - g) / (wc * Ts)
     return 1.0, 1.0
+
+
+@njit(cache=True)
+def flux_frequency(lam_old, lam_new, Ts):
+    """The angular frequency of a flux vector that turned from ``lam_old`` to ``lam_new`` in
+    ``Ts`` seconds, rad/s (0 while it is below 1e-6 Wb)."""
+    if abs(lam_old) < 1e-6 or abs(lam_new) < 1e-6:
+        return 0.0
+    turn = lam_new * lam_old.conjugate()
+    return math.atan2(turn.imag, turn.real) / Ts

@@ -135,8 +135,9 @@ import math
 from numba import njit
 
 from imdrive.kernels.estimators import mras_stabilise as stab
-from imdrive.kernels.estimators.common import (
+from imdrive.kernels.estimators.common import (  # noqa: F401 (flux_frequency: also from here)
     current_model_step,
+    flux_frequency,
     lowpass_coefficients,
     period_mean_offset,
 )
@@ -362,16 +363,6 @@ def mras_r1_step(p, m, s, i_alpha, i_beta, w_e, iq_ref, Ts):
     sens = (L2 / M) * i2 * wc / (wc * wc + w_e * w_e)
     r1 = m.R1_hat + Ts * p.k_R1 * dot / sens
     m.R1_hat = min(max(r1, p.R1_min), p.R1_max)
-
-
-@njit(cache=True)
-def flux_frequency(lam_old, lam_new, Ts):
-    """The angular frequency of a flux vector that turned from ``lam_old`` to ``lam_new`` in
-    ``Ts`` seconds, rad/s (0 while it is below 1e-6 Wb)."""
-    if abs(lam_old) < 1e-6 or abs(lam_new) < 1e-6:
-        return 0.0
-    turn = lam_new * lam_old.conjugate()
-    return math.atan2(turn.imag, turn.real) / Ts
 
 
 @njit(cache=True)

@@ -82,6 +82,7 @@ import math
 
 from numba import njit
 
+from imdrive.kernels.estimators.common import flux_frequency
 from imdrive.kernels.records import f8
 
 #: Fields of ``MRAS_PARAMS`` this module owns (appended to the MRAS's own).
@@ -131,8 +132,7 @@ def regeneration_angle(p, w_r_hat, lam_old, lam_new, Ts):
     # not by a speed error: the dot product would feed it back into the speed estimate
     span = p.phi_lam_full - p.phi_lam_on
     k_lam = min(1.0, (lam - p.phi_lam_on) / span) if span > 0.0 else 1.0
-    turn = lam_new * lam_old.conjugate()
-    w_e = math.atan2(turn.imag, turn.real) / Ts
+    w_e = flux_frequency(lam_old, lam_new, Ts)
     s_w = min(1.0, max(-1.0, w_r_hat / p.phi_w_speed))
     r = 0.5 - w_e * s_w / p.phi_w_band
     if r <= 0.0:
@@ -188,9 +188,7 @@ def regeneration_gain(p, phi, w_r_hat, lam_old, lam_new, T2_hat, Ts):
     """
     if phi == 0.0 or p.phi_gain == 0.0:
         return 1.0
-    turn = lam_new * lam_old.conjugate()
-    w_e = math.atan2(turn.imag, turn.real) / Ts
-    x = (w_e - w_r_hat) * T2_hat
+    x = (flux_frequency(lam_old, lam_new, Ts) - w_r_hat) * T2_hat
     g = math.cos(phi) - x * math.sin(phi)
     k_full = (1.0 + x * x) / max(g, math.cos(phi))
     return 1.0 + p.phi_gain * abs(phi / p.phi_max) * (k_full - 1.0)
