@@ -214,7 +214,7 @@ def verdict(row) -> str:
     if row["drive"] == "injection-robust":
         r2 = abs(row["R2_error_pct"])
         r2_win = row.get("R2_error_window_pct", math.nan)  # older CSVs: the end alone
-        if r2_win == r2_win:
+        if not math.isnan(r2_win):
             r2 = max(r2, abs(r2_win))
         ok = r2 <= R2_BAND_PCT and abs(row["speed_error_rpm"]) <= tol
     else:
