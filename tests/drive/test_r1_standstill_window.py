@@ -36,11 +36,28 @@ def _standstill(machine, r2_ratio, magnetise_s, r1_ratio=0.9):
 @pytest.mark.parametrize("r2_ratio", [0.6, 0.7, 1.4])
 def test_R1_is_identified_from_any_R2_hat_within_40_percent(machine, r2_ratio):
     # with the window at four of the controller's T2_hat, R2_hat(0) <= 0.76 R2 pushed it past
-    # the 0.5 s magnetisation on Table IV and R1_hat stayed 10 % off without a word;
-    # measured now: -0.9 % at 0.6, +0.4 % at 1.4 (the build-up left in the window)
+    # the 0.5 s magnetisation on Table IV and R1_hat stayed 10 % off without a word.
+    # The build-up left in the window is fitted as the decay at the T2 measured: with the
+    # controller's current-model build-up (T2_hat's shape) R1_hat was -0.9 % off from 0.6 R2
+    # and +0.4 % from 1.4 R2 on Table IV; measured now within 0.05 %
     ratio, status = _standstill(machine, r2_ratio, 0.5)
     assert status == 1
-    assert ratio == pytest.approx(1.0, abs=0.012)
+    assert ratio == pytest.approx(1.0, abs=0.002)
+
+
+@pytest.mark.parametrize("machine", ["paper-table-iv", "krause-50hp", "geyer-3.3kv"])
+def test_R1_hat_does_not_carry_the_error_of_R2_hat(machine):
+    # a linear rotor circuit under a constant flux current builds its flux up as one
+    # exponential at the plant's T2, whatever the controller's R2_hat: the identified R1 is
+    # the same from R2_hat(0) = 0.6 and 1.4 R2. With the build-up's regressor at T2_hat's
+    # shape the two differed by 3.1 % of R1 on Krause 50 hp (-1.7 / +1.4 %) and 1.4 % on
+    # Table IV; measured now 0.01 %. The magnetisation is the machine's four T2 and a window
+    T2 = Scenario.read("sensorless", [f'machine.preset="{machine}"']).machine.T2_s
+    low, s_low = _standstill(machine, 0.6, 5.0 * T2)
+    high, s_high = _standstill(machine, 1.4, 5.0 * T2)
+    assert s_low == s_high == 1
+    assert high - low == pytest.approx(0.0, abs=0.001)
+    assert low == pytest.approx(1.0, abs=0.001)
 
 
 @pytest.mark.parametrize("machine", ["paper-table-iv", "aalto-2.2kw"])
