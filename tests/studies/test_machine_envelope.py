@@ -155,3 +155,48 @@ def test_large_machine_is_lost_by_the_type_1_estimate_lag_not_by_the_machine():
     assert not measured["lost"] and measured["max_flux_pu"] < 1.05
     assert not type2["lost"] and abs(type2["lag_pu_corner"]) < 0.1
     assert type2["max_flux_pu"] < 1.15  # 1.11: it rises below 5 % of the rated frequency
+
+
+@pytest.mark.parametrize("machine", ["paper-table-iv", "krause-50hp", "geyer-3.3kv"])
+def test_stator_frequency_is_the_field_oriented_steady_state(machine):
+    """With R2_hat = R2 at the rated flux the rotor flux is oriented and the slip is the
+    indirect FOC's ``w_sl = R2 T_e / (1.5 n_p psi_r^2)`` (T_e the load and the friction), so
+    ``f_s = (n_p w_m + w_sl) / 2 pi``; at 5 % of the rated speed regenerating the rated
+    torque it is near zero on the machines whose rated slip is about 5 %."""
+    import math
+    import warnings
+
+    from imdrive.config.machine import rated_point
+    from imdrive.errors import ConfigWarning
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConfigWarning)
+        sc = study.Scenario.read("sensorless", [f'machine.preset="{machine}"'])
+    m = sc.machine
+    rp = rated_point(m)
+    for speed_pu, load_pu in ((0.05, -1.0), (0.5, 1.0)):
+        n, T = speed_pu * rp.speed_rpm, load_pu * rp.torque_Nm
+        w_m = n * math.pi / 30
+        T_e = T + m.B_Nms * w_m
+        w_sl = m.R2_ohm * T_e / (1.5 * m.pole_pairs * m.rated_flux_Wb**2)
+        want = (m.pole_pairs * w_m + w_sl) / (2 * math.pi)
+        assert study.stator_frequency_Hz(sc, n, T, 1.0) == pytest.approx(want, rel=1e-6, abs=1e-6)
+    # R2_hat above R2 pushes the regenerating point further down (a larger slip's magnitude)
+    n, T = 0.05 * rp.speed_rpm, -rp.torque_Nm
+    assert study.stator_frequency_Hz(sc, n, T, 1.3) < study.stator_frequency_Hz(sc, n, T, 1.0)
+
+
+def test_stator_frequency_summary_names_the_highest_frequency_outside_converged():
+    t = pd.DataFrame(
+        {
+            "verdict": ["converged", "lost", "not converged", "converged", "converged"],
+            "f_s_Hz": [-0.5, -0.2, 0.9, 0.1, 5.0],
+            "f_s_R2_Hz": [0.2, 0.3, 0.3, 0.2, 4.0],
+        }
+    )
+    text = study.stator_frequency_summary(t)
+    # the lower of the two: -0.2 and +0.3 outside; runs at or below +0.30 Hz: four, two converged
+    assert "2 runs outside the converged column" in text
+    assert "at most +0.30 Hz" in text and "lowest -0.20 Hz" in text
+    assert "2 of the 4 runs at or below" in text and "every run above it did (1)" in text
+    assert study.stator_frequency_summary(t.drop(columns="f_s_R2_Hz")) == ""

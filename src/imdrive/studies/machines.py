@@ -47,6 +47,7 @@ import numpy as np
 import pandas as pd
 
 from imdrive.analysis import detuning_speed_error_rpm, field_weakened_flux_Wb
+from imdrive.analysis.foc import foc_operating_point
 from imdrive.config.field_weakening import field_weakening_on
 from imdrive.config.machine import machine_presets, rated_point
 from imdrive.config.perunit import SPEED_TOLERANCE_MIN_RPM, SPEED_TOLERANCE_PU
@@ -256,6 +257,21 @@ def detuning_law_rpm(sc, speed_rpm: float, load_Nm: float, R2_ratio: float) -> f
     return float(detuning_speed_error_rpm(sc.machine, speed_rpm, load_Nm, R2_ratio, psi))
 
 
+def stator_frequency_Hz(sc, speed_rpm: float, load_Nm: float, R2_ratio: float) -> float:
+    """The stator frequency of the drive's steady state with ``R2_hat = R2_ratio R2``, Hz.
+
+    :func:`imdrive.analysis.foc_operating_point` (sensorless: the speed estimate at the
+    reference) at the flux the drive runs (:func:`law_flux_Wb`). Regenerating at low speed it
+    is ``n_p w_m - w_sl``: the slip's magnitude grows with ``R2_hat`` and with the machine's
+    rated slip, and at 5 % of the rated speed regenerating the rated torque it reaches zero on
+    a machine whose rated slip is about 5 % -- the line on which no drive that estimates its
+    speed from the fundamental-frequency voltages and currents is observable (Holtz, "Sensorless
+    control of induction motor drives", Proc. IEEE 90(8), 2002).
+    """
+    psi = law_flux_Wb(sc, speed_rpm, load_Nm, R2_ratio)
+    return float(foc_operating_point(sc.machine, speed_rpm, load_Nm, R2_ratio, psi).f_Hz)
+
+
 def run(machines=None, **grid) -> pd.DataFrame:
     """Run the grid and return one row per drive with its metrics and verdict.
 
@@ -271,7 +287,9 @@ def run(machines=None, **grid) -> pd.DataFrame:
     pandas.DataFrame
         The grid's columns, the batch metrics, ``detuning_law_rpm`` (:func:`detuning_law_rpm`),
         ``law_flux_pu`` (the flux it is computed at, per-unit of the rated flux,
-        :func:`law_flux_Wb`) and ``verdict``.
+        :func:`law_flux_Wb`), ``f_s_Hz`` and ``f_s_R2_Hz`` (the steady state's stator
+        frequency with ``R2_hat(0)`` and with ``R2_hat = R2``, :func:`stator_frequency_Hz`)
+        and ``verdict``.
     """
     scs, table = scenarios(machines, **grid)
     with warnings.catch_warnings():
@@ -291,8 +309,36 @@ def run(machines=None, **grid) -> pd.DataFrame:
         else math.nan
         for sc, row in zip(scs, table.itertuples(), strict=True)
     ]
+    for col, ratio in (("f_s_Hz", None), ("f_s_R2_Hz", 1.0)):
+        table[col] = [
+            stator_frequency_Hz(sc, row.speed_rpm, row.load_Nm, ratio or row.R2_ratio)
+            for sc, row in zip(scs, table.itertuples(), strict=True)
+        ]
     table["verdict"] = [verdict(r) for _, r in table.iterrows()]
     return table
+
+
+def stator_frequency_summary(table: pd.DataFrame) -> str:
+    """One sentence on where the runs outside the converged column are: the highest stator
+    frequency among them (the lower of ``f_s_Hz`` and ``f_s_R2_Hz``: the drive starts at the
+    one and, tracking R2, moves to the other), and how many runs at or below it converged.
+    Empty for a CSV without the columns (before 2026-11-24) or with every run converged."""
+    if "f_s_Hz" not in table or "f_s_R2_Hz" not in table:
+        return ""
+    f_low = np.minimum(table["f_s_Hz"], table["f_s_R2_Hz"])
+    bad = table["verdict"] != "converged"
+    if not bad.any():
+        return ""
+    top = float(f_low[bad].max())
+    near = f_low <= top
+    ok = int((near & ~bad).sum())
+    return (
+        f"\nThe {int(bad.sum())} runs outside the converged column all run at a stator "
+        f"frequency of at most {top:+.2f} Hz (steady state, the lower of R̂2(0)'s and R2's, "
+        f"`f_s_Hz` and `f_s_R2_Hz` in the CSV; lowest {float(f_low[bad].min()):+.2f} Hz); "
+        f"{ok} of the {int(near.sum())} runs at or below that frequency converged, and "
+        f"every run above it did ({int((~near).sum())}).\n"
+    )
 
 
 def markdown(table: pd.DataFrame) -> str:
@@ -331,7 +377,7 @@ def markdown(table: pd.DataFrame) -> str:
         below = [d for d in DRIVES if len(ref) and share(g, d) < share(ref, d)]
         cells.append("**no**: " + ", ".join(below) if below else ("yes" if len(ref) else "–"))
         lines.append(f"| {m} | " + " | ".join(cells) + " |")
-    return "\n".join(lines) + "\n"
+    return "\n".join(lines) + "\n" + stator_frequency_summary(table)
 
 
 #: The runs of :func:`ramp_diagnosis`: (machine, speed feedback, ramp stretch, ramp start in s

@@ -170,13 +170,13 @@ def mras_r1_standstill(
         Re(u conj i) = R1 |i|^2 + k x2,   u = v - sigma L1 p i,
         x2 = |i|^2 exp(-t/T2)  (T2 measured),  else  x2 = Re(g conj i),  g = (M/L2) p lam_hat
 
-    (``t`` from the window's start) clamped to ``[p.R1_min, p.R1_max]``. ``v``: the voltage applied over the last period as
-    the controller knows it (commanded, less any dead-time compensation), V; ``i``: the mean
-    of the period's two current samples, A. With the ideal (average) inverter the
-    identification is exact. On a real inverter the dead time's voltage error left after
-    compensation adds ``dv/|i|`` to the result, and at standstill ``R1 |i|`` is only a few
-    volts: measured on ``sensorless-realistic`` (2 us dead time, compensated for 1.6 us) R1_hat
-    came out 1.9 R1. The test at two current levels (``p.R1_dc_levels = 2``,
+    (``t`` from the window's start) clamped to ``[p.R1_min, p.R1_max]``. ``v``: the voltage
+    applied over the last period as the controller knows it (commanded, less any dead-time
+    compensation), V; ``i``: the mean of the period's two current samples, A. With the ideal
+    (average) inverter the identification is exact. On a real inverter the dead time's voltage
+    error left after compensation adds ``dv/|i|`` to the result, and at standstill ``R1 |i|`` is
+    only a few volts: measured on ``sensorless-realistic`` (2 us dead time, compensated for 1.6
+    us) R1_hat came out 1.9 R1. The test at two current levels (``p.R1_dc_levels = 2``,
     :func:`r1_two_levels`) removes that bias.
 
     The first start waits for the window (as the two-level test's does): until R1_hat has
