@@ -155,4 +155,7 @@ def test_ringing_table_is_what_the_code_computes():
     doctables.pages()  # registers the tables
     stored = pd.read_csv(DOCS / doctables.TABLES["ramp-ringing"].data)
     fresh = measure_ringing()
-    pd.testing.assert_frame_equal(fresh, stored, check_exact=False, rtol=1e-6)
+    # a staleness check, not a bound on the physics: the eigenvalues of the same code moved by
+    # up to 2e-6 relative between two installs (a fresh venv of 2026-11-24 against the one
+    # that stored them), so 1e-5; a change of the drive moves them by far more
+    pd.testing.assert_frame_equal(fresh, stored, check_exact=False, rtol=1e-5)

@@ -291,7 +291,12 @@ def run(machines=None, **grid) -> pd.DataFrame:
         frequency with ``R2_hat(0)`` and with ``R2_hat = R2``, :func:`stator_frequency_Hz`)
         and ``verdict``.
     """
-    scs, table = scenarios(machines, **grid)
+    return measure(*scenarios(machines, **grid))
+
+
+def measure(scs, table: pd.DataFrame) -> pd.DataFrame:
+    """Simulate the scenarios ``scs`` of :func:`scenarios` and add to its ``table`` the
+    metrics, the detuning law, the stator frequencies and the verdicts (:func:`run`)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConfigWarning)
         res = simulate_batch(scs, errors="record")

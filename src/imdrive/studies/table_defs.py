@@ -264,6 +264,33 @@ register(
 )
 
 
+# ---------------------------------------------------------------------------------------------
+# docs/machine-envelope.md: regenerating at low speed, by stator frequency
+
+
+def _zero_frequency(df) -> list[str]:
+    from imdrive.studies.zero_frequency import markdown_lines
+
+    return markdown_lines(df)
+
+
+def _measure_zero_frequency():
+    from imdrive.studies.zero_frequency import run
+
+    return run()
+
+
+register(
+    DocTable(
+        "zero-frequency",
+        "machine-envelope.md",
+        "data/zero_frequency.csv",
+        _zero_frequency,
+        _measure_zero_frequency,
+    )
+)
+
+
 from imdrive.studies import (  # noqa: E402, F401  (register theirs)
     compensator_tables,
     robust_tables,

@@ -1,0 +1,113 @@
+"""Regenerating at low speed, by stator frequency: where the sensorless drive and the R2
+tracking hold, on machines of different rated slip.
+
+The machine envelope (:mod:`imdrive.studies.machines`) puts its lowest speed at 5 % of each
+machine's rated speed. Regenerating the rated torque there, the stator frequency ``f_s =
+(n_p w_m + w_sl)/2 pi`` (``w_sl < 0``) is near zero on a machine whose rated slip is about 5 %
+(Table IV +0.36 Hz, Krause 50 hp +0.18 Hz with R2_hat = R2) and a few hertz on the large,
+low-slip ones (Krause 500 hp +2.1 Hz). At ``f_s = 0`` neither the speed nor R2 can be told
+from the fundamental-frequency voltages and currents (Holtz, "Sensorless control of induction
+motor drives", Proc. IEEE 90(8), 2002): the grid in per-unit of speed compares the small
+machines on that line with the large ones away from it.
+
+This study puts every machine at the same stator frequencies instead: regenerating the rated
+torque, the speed reference is the one whose steady state with ``R2_hat = R2`` runs at
+``f_s`` (:func:`speed_for_stator_frequency`, from :func:`imdrive.analysis.foc_operating_point`),
+for ``f_s`` in :data:`F_S_HZ`, from ``R2_hat(0)/R2`` in :data:`R2_RATIOS`. The runs, the
+timeline and the verdicts are the machine envelope's (:func:`imdrive.studies.machines.measure`,
+:func:`~imdrive.studies.machines.verdict`).
+
+``python -m imdrive.studies.doctables --run zero-frequency`` measures it again and rewrites
+its table in docs/machine-envelope.md.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import pandas as pd
+from scipy.optimize import brentq
+
+from imdrive.config.machine import rated_point
+from imdrive.config.scenario import Scenario
+from imdrive.errors import ConfigWarning
+from imdrive.studies import machines as envelope
+
+#: Machines: the paper's (4.4 % rated slip), two of other sizes near 5 % and 2.9 %
+#: (Krause 50 hp, Aalto 2.2 kW) and a large low-slip one (Krause 500 hp, 1.5 %).
+MACHINES = ("paper-table-iv", "krause-50hp", "aalto-2.2kw", "krause-500hp")
+#: Stator frequencies of the steady state with R2_hat = R2, Hz.
+F_S_HZ = (-0.5, -0.25, 0.0, 0.25, 0.5, 1.0, 2.0)
+#: Starting R2_hat(0)/R2.
+R2_RATIOS = (0.8, 1.0, 1.2)
+#: Load in per-unit of the rated torque (negative: regenerating).
+LOAD_PU = -1.0
+
+
+def speed_for_stator_frequency(sc, f_s_Hz: float, load_Nm: float) -> float:
+    """The speed reference, rpm, whose field-oriented steady state with ``R2_hat = R2`` runs
+    at the stator frequency ``f_s_Hz`` with the load ``load_Nm``
+    (:func:`imdrive.studies.machines.stator_frequency_Hz`, which rises with the speed).
+
+    Raises
+    ------
+    ValueError
+        If no speed between minus and plus the rated speed gives ``f_s_Hz``.
+    """
+    n_rated = rated_point(sc.machine).speed_rpm
+
+    def gap(n):
+        return envelope.stator_frequency_Hz(sc, n, load_Nm, 1.0) - f_s_Hz
+
+    lo, hi = -n_rated, n_rated
+    if gap(lo) * gap(hi) > 0.0:
+        raise ValueError(f"f_s_Hz: no speed within +-{n_rated:.0f} rpm runs at {f_s_Hz} Hz")
+    return float(brentq(gap, lo, hi, xtol=1e-9))
+
+
+def scenarios(machines=MACHINES, frequencies=F_S_HZ, ratios=R2_RATIOS):
+    """The study's scenarios and rows (those of :func:`imdrive.studies.machines.scenarios`,
+    with ``f_s_target_Hz``), one machine's speeds at a time."""
+    all_scs, tables = [], []
+    for m in machines:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ConfigWarning)
+            base = Scenario.read("sensorless", [f'machine.preset="{m}"'])
+        rp = rated_point(base.machine)
+        T = LOAD_PU * rp.torque_Nm
+        speeds = [speed_for_stator_frequency(base, f, T) / rp.speed_rpm for f in frequencies]
+        scs, table = envelope.scenarios([m], speeds=speeds, loads=(LOAD_PU,), ratios=ratios)
+        per_speed = len(table) // len(speeds) // len(envelope.DRIVES)
+        f = list(frequencies)
+        table["f_s_target_Hz"] = [f[(k // per_speed) % len(f)] for k in range(len(table))]
+        all_scs += scs
+        tables.append(table)
+    return all_scs, pd.concat(tables, ignore_index=True)
+
+
+def run(machines=MACHINES, frequencies=F_S_HZ, ratios=R2_RATIOS) -> pd.DataFrame:
+    """Run the study: one row per drive, the machine envelope's columns and ``f_s_target_Hz``."""
+    return envelope.measure(*scenarios(machines, frequencies, ratios))
+
+
+def markdown_lines(df: pd.DataFrame) -> list[str]:
+    """The table: per machine and stator frequency, the speed reference and, per drive, the
+    runs converged / not converged / lost over the starting R2_hat; for ``injection-robust``
+    the R2_hat error at the end, lowest to highest."""
+    drives = list(dict.fromkeys(df["drive"]))
+    head = "| machine | f_s, Hz | speed, rpm (% rated) | " + " | ".join(
+        f"{d}: converged / not / lost" for d in drives
+    )
+    lines = [head + " | injection-robust: R̂2 error at the end, % |"]
+    lines.append("|---|---|---|" + "---|" * (len(drives) + 1))
+    for (m, f), g in df.groupby(["machine", "f_s_target_Hz"], sort=False):
+        n, rated = float(g["speed_rpm"].iloc[0]), float(g["rated_speed_rpm"].iloc[0])
+        cells = [m, f"{f:+.2f}", f"{n:.1f} ({100 * n / rated:.1f} %)"]
+        for d in drives:
+            v = g[g["drive"] == d]["verdict"]
+            c, nc, lost = ((v == k).sum() for k in ("converged", "not converged", "lost"))
+            cells.append(f"{c} / {nc} / {lost}")
+        r2 = g[g["drive"] == "injection-robust"]["R2_error_pct"]
+        cells.append(f"{r2.min():+.1f} … {r2.max():+.1f}" if len(r2) else "–")
+        lines.append("| " + " | ".join(cells) + " |")
+    return lines

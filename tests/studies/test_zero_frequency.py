@@ -1,0 +1,75 @@
+"""Regenerating at low speed by stator frequency (imdrive.studies.zero_frequency): the speed
+references put each machine at the asked stator frequency, and a reduced run reproduces the
+stored runs of docs/machine-envelope.md's table."""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import pandas as pd
+import pytest
+
+from imdrive.config.machine import rated_point
+from imdrive.config.scenario import Scenario
+from imdrive.errors import ConfigWarning
+from imdrive.studies import machines as envelope
+from imdrive.studies import zero_frequency as study
+from imdrive.studies.doctable import DOCS
+
+
+def _sensorless(machine):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConfigWarning)
+        return Scenario.read("sensorless", [f'machine.preset="{machine}"'])
+
+
+@pytest.mark.parametrize("machine", study.MACHINES)
+def test_speed_reference_runs_at_the_stator_frequency(machine):
+    sc = _sensorless(machine)
+    rp = rated_point(sc.machine)
+    T = -rp.torque_Nm
+    speeds = [study.speed_for_stator_frequency(sc, f, T) for f in study.F_S_HZ]
+    for f, n in zip(study.F_S_HZ, speeds, strict=True):
+        assert envelope.stator_frequency_Hz(sc, n, T, 1.0) == pytest.approx(f, abs=1e-6)
+    # the slip fixed by the torque, the speed moves by 60/n_p rpm per hertz (friction aside)
+    step = (speeds[-1] - speeds[0]) / (study.F_S_HZ[-1] - study.F_S_HZ[0])
+    assert step == pytest.approx(60.0 / sc.machine.pole_pairs, rel=0.01)
+    # regenerating, f_s = 0 is below the synchronous speed of the slip: a positive speed
+    # equal to the rated-torque slip at the rated flux (w_sl = R2 T / (1.5 n_p psi^2))
+    m = sc.machine
+    w_sl = m.R2_ohm * rp.torque_Nm / (1.5 * m.pole_pairs * m.rated_flux_Wb**2)
+    n0 = study.speed_for_stator_frequency(sc, 0.0, T)
+    assert n0 == pytest.approx(w_sl / m.pole_pairs * 30 / math.pi, rel=0.02)
+
+
+def test_a_frequency_no_speed_reaches_is_refused():
+    sc = _sensorless("paper-table-iv")
+    with pytest.raises(ValueError, match="f_s_Hz"):
+        study.speed_for_stator_frequency(sc, 500.0, -rated_point(sc.machine).torque_Nm)
+
+
+def test_the_stored_runs_cover_the_study():
+    t = pd.read_csv(DOCS / "data" / "zero_frequency.csv")
+    n = len(study.F_S_HZ) * len(study.R2_RATIOS) * len(envelope.DRIVES)
+    assert (t.groupby("machine").size() == n).all()
+    assert set(t["machine"]) == set(study.MACHINES)
+    assert set(t["f_s_target_Hz"]) == set(study.F_S_HZ)
+    # each run is at the frequency it is filed under
+    assert (t["f_s_R2_Hz"] - t["f_s_target_Hz"]).abs().max() < 1e-6
+
+
+@pytest.mark.slow
+def test_reduced_run_reproduces_the_stored_runs():
+    t = study.run(["krause-500hp"], frequencies=(0.5,), ratios=(1.2,))
+    stored = pd.read_csv(DOCS / "data" / "zero_frequency.csv")
+    keys = ["machine", "drive", "f_s_target_Hz", "R2_ratio"]
+    both = t.merge(stored, on=keys, suffixes=("", "_stored"), validate="one_to_one")
+    assert len(both) == len(envelope.DRIVES)
+    for _, row in both.iterrows():
+        assert row["verdict"] == row["verdict_stored"]
+        for col in ("speed_error_rpm", "R2_error_pct"):
+            assert float(row[col]) == pytest.approx(float(row[col + "_stored"]), rel=1e-6), (
+                f"{row[keys].to_dict()} {col}: run "
+                "'python -m imdrive.studies.doctables --run zero-frequency'"
+            )
