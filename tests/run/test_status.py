@@ -180,3 +180,57 @@ def test_the_standstill_R1_outcome_is_noted(sc, R2_error):
     assert texts[3.0].endswith(R1_ONE_LEVEL)  # two levels, the first one only
     for s in (0.0, 1.0):
         assert R1_NOT_IDENTIFIED not in texts[s] and R1_ONE_LEVEL not in texts[s]
+
+
+def _regenerating(machine, speed_pu, compensator=True, feedback=None):
+    """``injection-robust`` on ``machine`` at ``speed_pu`` of its rated speed regenerating the
+    rated torque (the final values of the profiles are what the note reads)."""
+    base = Scenario.read("injection-robust", [f'machine.preset="{machine}"'])
+    rp = rated_point(base.machine)
+    ov = [
+        f"control.speed_ref_rpm={{initial=0,changes=[{{at=1,to={speed_pu * rp.speed_rpm}}}]}}",
+        f"load.torque_Nm={{initial=0,changes=[{{at=2,to={-rp.torque_Nm}}}]}}",
+        "estimator.R2_ratio=1.2",
+    ]
+    if not compensator:
+        ov.append("compensator.enabled=false")
+    if feedback:
+        ov.append(f'control.speed_feedback="{feedback}"')
+    return base.with_overrides(ov)
+
+
+@pytest.mark.parametrize("machine", ["paper-table-iv", "krause-50hp", "aalto-2.2kw"])
+def test_a_failed_run_near_zero_stator_frequency_says_so(machine):
+    from imdrive.analysis.foc import foc_operating_point
+    from imdrive.run.status import LOW_FREQUENCY_PU, low_frequency_note
+
+    sc = _regenerating(machine, 0.05)
+    r2 = sc.machine.R2_ohm
+    row = _row(sc, R2_hat_final_ohm=1.2 * r2, R2_final_ohm=r2, R2_error_pct=20.0)
+    note = low_frequency_note(sc, row, lost=False)
+    # the field-oriented steady state at 5 % of the rated speed regenerating the rated torque
+    # from R2_hat = 1.2 R2: on the three machines within 2 % of the rated frequency of zero
+    f_s = foc_operating_point(
+        sc.machine, sc.control.speed_ref_rpm.final, -rated_point(sc.machine).torque_Nm, 1.2
+    ).f_Hz
+    assert abs(f_s) < LOW_FREQUENCY_PU * sc.machine.rated_frequency_Hz
+    assert f"near zero stator frequency (steady state {f_s:+.2f} Hz" in note
+    # in the verdict, after the failures it explains
+    text = verdict(sc, row)["verdict_text"]
+    assert text.startswith("R2_hat off by +20 %") and text.endswith(note)
+    # at half the rated speed the same point is tens of hertz away: no note
+    far = _regenerating(machine, 0.5)
+    assert low_frequency_note(far, _row(far, R2_hat_final_ohm=1.2 * r2), lost=True) == ""
+
+
+def test_no_low_frequency_note_where_it_explains_nothing():
+    from imdrive.run.status import low_frequency_note
+
+    # a detuned drive without a compensator: its error is the detuning's, unless it was lost
+    off = _regenerating("paper-table-iv", 0.05, compensator=False)
+    row = _row(off, R2_hat_final_ohm=1.2 * off.machine.R2_ohm)
+    assert low_frequency_note(off, row, lost=False) == ""
+    assert "near zero stator frequency" in low_frequency_note(off, row, lost=True)
+    # a measured speed is observable at any stator frequency
+    enc = _regenerating("paper-table-iv", 0.05, feedback="measured")
+    assert low_frequency_note(enc, _row(enc), lost=True) == ""

@@ -36,6 +36,11 @@ over, or the drive was not still) says so in ``verdict_text`` whatever its verdi
 the second level's window was too short) says so too (:data:`R1_ONE_LEVEL`): R̂1 then holds
 the inverter's residual voltage over the current, as the one-level test's does.
 
+A sensorless run that failed (lost control or diverged, or its compensator did not track R2)
+and whose steady state at the end runs within :data:`LOW_FREQUENCY_PU` of the rated frequency
+of zero stator frequency says so last in ``verdict_text`` (:func:`low_frequency_note`): there
+the speed and R2 are not observable from the fundamental-frequency signals.
+
 The failures are listed in time order (a loss of control before the divergence it led to, a
 hold before the R̂2 error it left at the end) and the verdict is the first; ``verdict_text``
 names every one. Why R̂2 was held comes from the compensator's gating mask (the log column
@@ -94,6 +99,54 @@ R1_ONE_LEVEL = (
     "standstill R1 identified at one current level only (the second level's window was too "
     "short): R1_hat holds the inverter's residual voltage over the current"
 )
+
+#: A failed sensorless run whose final steady state runs below this fraction of the machine's
+#: rated frequency says so (:func:`low_frequency_note`): 1.2 Hz at 60 Hz, 1 Hz at 50 Hz.
+#: Measured (docs/machine-envelope.md, regenerating the rated torque on four machines): from
+#: +2 Hz every run converged, the failures were at +1 Hz and below.
+LOW_FREQUENCY_PU = 0.02
+
+
+def low_frequency_note(sc, row: dict, lost: bool) -> str:
+    """``"; near zero stator frequency ..."`` for a sensorless run whose steady state at the
+    end runs within :data:`LOW_FREQUENCY_PU` of the rated frequency of zero, else ``""``;
+    ``lost``: the run lost control or diverged.
+
+    The steady state is the field-oriented one (:func:`imdrive.analysis.foc_operating_point`)
+    at the final speed reference, the final load (its profile, viscous and fan terms at that
+    speed) and the final ``R2_hat/R2``; only for a run that lost control or diverged, or
+    whose compensator failed (an R2 left detuned explains its own error). Near ``f_s = 0``
+    neither the speed nor R2 can be told
+    from the fundamental-frequency voltages and currents (Holtz, "Sensorless control of
+    induction motor drives", Proc. IEEE 90(8), 2002): the note says why such a run failed,
+    it does not change its verdict.
+    """
+    if sc.control.speed_feedback == "measured" or sc.drive.mode != "vector":
+        return ""
+    if not (lost or sc.compensator.enabled):  # a detuned drive's error is the detuning's
+        return ""
+    from imdrive.analysis.foc import foc_operating_point
+
+    try:
+        n = sc.control.speed_ref_rpm.final
+        w = n * math.pi / 30.0
+        load = sc.load.torque_Nm.final + sc.load.viscous_Nms * w + sc.load.fan_Nms2 * w * abs(w)
+        r2_hat = row.get("R2_hat_final_ohm", math.nan)
+        r2 = row.get("R2_final_ohm", math.nan)
+        r2_hat = float(r2_hat) if _finite(r2_hat) else resolve(sc).R2_hat
+        r2 = float(r2) if _finite(r2) and float(r2) > 0.0 else sc.machine.R2_ohm
+        f_s = foc_operating_point(sc.machine, n, load, r2_hat / r2).f_Hz
+    except (ArithmeticError, ValueError, RuntimeError):  # no steady state to speak of
+        return ""
+    if not math.isfinite(f_s) or abs(f_s) > LOW_FREQUENCY_PU * sc.machine.rated_frequency_Hz:
+        return ""
+    return (
+        f"; near zero stator frequency (steady state {f_s:+.2f} Hz, within "
+        f"{100 * LOW_FREQUENCY_PU:.0f} % of the rated {sc.machine.rated_frequency_Hz:g} Hz): "
+        "at 0 Hz the speed and R2 cannot be told from the fundamental-frequency signals, and "
+        "near it the estimators lose their margin (docs/machine-envelope.md)"
+    )
+
 
 VERDICTS = (
     "ok",
@@ -258,6 +311,8 @@ def verdict(sc, row: dict) -> dict:
         out["verdict"] = events[0][1]
         out["verdict_ok"] = False
         out["verdict_text"] = "; ".join(e[2] for e in events) + r1_note
+        lost = any(e[1] in ("lost-control", "diverged") for e in events)
+        out["verdict_text"] += low_frequency_note(sc, row, lost)
         out["verdict_at_s"] = events[0][0]
         return out
     out["verdict"] = "ok"
