@@ -161,6 +161,15 @@ VERDICTS = (
 )
 
 
+def r2_worst_pct(end_pct, window_pct=math.nan):
+    """``|R̂2 - R2| / R2``, %: the larger of the error at the end and the final window's worst
+    (``R2_error_pct``, ``R2_error_window_pct``; a missing or NaN window reads the end alone:
+    CSVs from before the window column). Scalars or arrays (``numpy.fmax``)."""
+    import numpy as np
+
+    return np.fmax(np.abs(end_pct), np.abs(window_pct))
+
+
 def held_reasons(mask) -> list[str]:
     """The groups of a gating mask, in the order of :data:`HELD_CAUSES` (unknown bits named).
 

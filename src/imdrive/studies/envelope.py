@@ -43,7 +43,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from imdrive.run.status import held_reasons
+from imdrive.run.status import held_reasons, r2_worst_pct
 
 ROOT = Path(__file__).resolve().parents[3]
 DOC_PATH = ROOT / "docs" / "envelope.md"
@@ -99,11 +99,9 @@ def classify(df: pd.DataFrame) -> pd.DataFrame:
 
 
 def _r2_worst_pct(df: pd.DataFrame) -> pd.Series:
-    """|R̂2 - R2| / R2, %: the larger of the end's and the final window's worst."""
-    end = df["R2_error_pct"].abs()
-    if "R2_error_window_pct" not in df:
-        return end
-    return np.fmax(end, df["R2_error_window_pct"].abs())
+    """|R̂2 - R2| / R2, %: the larger of the end's and the final window's worst
+    (:func:`imdrive.run.status.r2_worst_pct`)."""
+    return r2_worst_pct(df["R2_error_pct"], df.get("R2_error_window_pct", math.nan))
 
 
 def _pct(n: int, d: int) -> str:

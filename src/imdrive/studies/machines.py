@@ -54,6 +54,7 @@ from imdrive.config.perunit import SPEED_TOLERANCE_MIN_RPM, SPEED_TOLERANCE_PU
 from imdrive.config.scenario import Scenario
 from imdrive.errors import ConfigWarning
 from imdrive.run.batch import simulate_batch
+from imdrive.run.status import r2_worst_pct
 
 DRIVES = ("sensorless", "injection-robust")
 #: What the grid adds to a drive's preset, the same on every machine: nothing now. The DC link
@@ -213,10 +214,8 @@ def verdict(row) -> str:
         return "lost"
     tol = tolerance_rpm(row["rated_speed_rpm"])
     if row["drive"] == "injection-robust":
-        r2 = abs(row["R2_error_pct"])
-        r2_win = row.get("R2_error_window_pct", math.nan)  # older CSVs: the end alone
-        if not math.isnan(r2_win):
-            r2 = max(r2, abs(r2_win))
+        # older CSVs have no window column: the end alone
+        r2 = r2_worst_pct(row["R2_error_pct"], row.get("R2_error_window_pct", math.nan))
         ok = r2 <= R2_BAND_PCT and abs(row["speed_error_rpm"]) <= tol
     else:
         ok = abs(row["speed_error_rpm"] - row["detuning_law_rpm"]) <= tol
