@@ -189,6 +189,7 @@ def test_stator_frequency_is_the_field_oriented_steady_state(machine):
 def test_stator_frequency_summary_names_the_highest_frequency_outside_converged():
     t = pd.DataFrame(
         {
+            "drive": ["a"] * 5,
             "verdict": ["converged", "lost", "not converged", "converged", "converged"],
             "f_s_Hz": [-0.5, -0.2, 0.9, 0.1, 5.0],
             "f_s_R2_Hz": [0.2, 0.3, 0.3, 0.2, 4.0],
@@ -196,7 +197,7 @@ def test_stator_frequency_summary_names_the_highest_frequency_outside_converged(
     )
     text = study.stator_frequency_summary(t)
     # the lower of the two: -0.2 and +0.3 outside; runs at or below +0.30 Hz: four, two converged
-    assert "2 runs outside the converged column" in text
+    assert "2 runs of `a` outside the converged column" in text
     assert "at most +0.30 Hz" in text and "lowest -0.20 Hz" in text
     assert "2 of the 4 runs at or below" in text and "every run above it did (1)" in text
     assert study.stator_frequency_summary(t.drop(columns="f_s_R2_Hz")) == ""
