@@ -234,3 +234,23 @@ def test_no_low_frequency_note_where_it_explains_nothing():
     # a measured speed is observable at any stator frequency
     enc = _regenerating("paper-table-iv", 0.05, feedback="measured")
     assert low_frequency_note(enc, _row(enc), lost=True) == ""
+
+
+def test_the_low_frequency_note_names_what_held_there_unless_it_is_in_use():
+    from imdrive.run.status import low_frequency_note
+
+    mras = _regenerating("krause-50hp", 0.05)
+    row = _row(mras, R2_hat_final_ohm=1.2 * mras.machine.R2_ohm)
+    assert '"afo" held these points' in low_frequency_note(mras, row, lost=True)
+    # the sensorless preset with the observer's speed, at the same point
+    afo = Scenario.read(
+        "sensorless",
+        [
+            'machine.preset="krause-50hp"',
+            'control.speed_feedback="afo"',
+            f"control.speed_ref_rpm={mras.control.speed_ref_rpm.final}",
+            f"load.torque_Nm={mras.load.torque_Nm.final}",
+        ],
+    )
+    note = low_frequency_note(afo, _row(afo, R2_hat_final_ohm=1.2 * afo.machine.R2_ohm), True)
+    assert "near zero stator frequency" in note and "afo" not in note

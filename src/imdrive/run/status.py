@@ -118,8 +118,10 @@ def low_frequency_note(sc, row: dict, lost: bool) -> str:
     whose compensator failed (an R2 left detuned explains its own error). Near ``f_s = 0``
     neither the speed nor R2 can be told
     from the fundamental-frequency voltages and currents (Holtz, "Sensorless control of
-    induction motor drives", Proc. IEEE 90(8), 2002): the note says why such a run failed,
-    it does not change its verdict.
+    induction motor drives", Proc. IEEE 90(8), 2002), and beside it the MRAS loses its
+    stability where the adaptive full-order observer with its regeneration gain holds
+    (docs/machine-envelope.md, the zero-frequency study): the note says why such a run
+    failed and what held there, it does not change its verdict.
     """
     if sc.control.speed_feedback == "measured" or sc.drive.mode != "vector":
         return ""
@@ -140,11 +142,16 @@ def low_frequency_note(sc, row: dict, lost: bool) -> str:
         return ""
     if not math.isfinite(f_s) or abs(f_s) > LOW_FREQUENCY_PU * sc.machine.rated_frequency_Hz:
         return ""
+    other = (
+        ""
+        if sc.control.speed_feedback == "afo"
+        else ' (control.speed_feedback = "afo" held these points in docs/machine-envelope.md)'
+    )
     return (
         f"; near zero stator frequency (steady state {f_s:+.2f} Hz, within "
         f"{100 * LOW_FREQUENCY_PU:.0f} % of the rated {sc.machine.rated_frequency_Hz:g} Hz): "
         "at 0 Hz the speed and R2 cannot be told from the fundamental-frequency signals, and "
-        "near it the estimators lose their margin (docs/machine-envelope.md)"
+        f"near it only an estimator whose gain is designed for regeneration holds{other}"
     )
 
 
