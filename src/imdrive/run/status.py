@@ -38,8 +38,9 @@ the inverter's residual voltage over the current, as the one-level test's does.
 
 A sensorless run that failed (lost control or diverged, or its compensator did not track R2)
 and whose steady state at the end runs within :data:`LOW_FREQUENCY_PU` of the rated frequency
-of zero stator frequency says so last in ``verdict_text`` (:func:`low_frequency_note`): there
-the speed and R2 are not observable from the fundamental-frequency signals.
+of zero stator frequency says so last in ``verdict_text`` (:func:`low_frequency_note`): at
+0 Hz the speed and R2 are not observable from the fundamental-frequency signals, and beside
+it the MRAS loses its stability margin.
 
 The failures are listed in time order (a loss of control before the divergence it led to, a
 hold before the R̂2 error it left at the end) and the verdict is the first; ``verdict_text``
@@ -115,13 +116,12 @@ def low_frequency_note(sc, row: dict, lost: bool) -> str:
     The steady state is the field-oriented one (:func:`imdrive.analysis.foc_operating_point`)
     at the final speed reference, the final load (its profile, viscous and fan terms at that
     speed) and the final ``R2_hat/R2``; only for a run that lost control or diverged, or
-    whose compensator failed (an R2 left detuned explains its own error). Near ``f_s = 0``
-    neither the speed nor R2 can be told
-    from the fundamental-frequency voltages and currents (Holtz, "Sensorless control of
-    induction motor drives", Proc. IEEE 90(8), 2002), and beside it the MRAS loses its
-    stability where the adaptive full-order observer with its regeneration gain holds
-    (docs/machine-envelope.md, the zero-frequency study): the note says why such a run
-    failed and what held there, it does not change its verdict.
+    whose compensator failed (an R2 left detuned explains its own error). At ``f_s = 0``
+    neither the speed nor R2 can be told from the fundamental-frequency voltages and currents
+    (Holtz, "Sensorless control of induction motor drives", Proc. IEEE 90(8), 2002), and
+    beside it the MRAS loses its stability where the adaptive full-order observer with its
+    regeneration gain holds (docs/machine-envelope.md, the zero-frequency study): the note
+    says why such a run failed and what held there; it does not change its verdict.
     """
     if sc.control.speed_feedback == "measured" or sc.drive.mode != "vector":
         return ""

@@ -3,7 +3,9 @@
 For each machine of ``config/data/machines.toml`` and each of two drives -- ``sensorless``
 (Schauder's MRAS, no R2 tracking; its voltage-feedback field weakening on by default from
 0.84-0.88 of the rated speed, :data:`DRIVE_OVERRIDES`) and ``injection-robust`` (the recommended
-R2-tracking preset) -- a grid in per-unit of the machine: speed reference as a fraction of its
+R2-tracking preset) -- and, for comparison, ``sensorless-afo`` (``sensorless`` with the adaptive
+full-order observer's speed, :data:`DRIVE_ALIASES`; not part of the goal), a grid in per-unit
+of the machine: speed reference as a fraction of its
 rated speed, load torque as a fraction of its rated torque (negative: regenerating), and the
 controller's starting ``R2_hat(0)/R2``. Only ``[machine]`` and the operating point change: every
 other setting the presets leave derived or state in per-unit (config/perunit.py), which is what
@@ -29,7 +31,7 @@ injection frequency, hence its decisions, scale with ``1/T2``). Its verdict (:fu
   The tolerance is 1 rpm or 0.1 % of the rated speed, whichever is larger;
 * ``not converged``: stable, but outside those bounds at the end.
 
-``python -m imdrive.studies.machines OUT_CSV`` runs the grid (252 drives) and writes
+``python -m imdrive.studies.machines OUT_CSV`` runs the grid (1008 drives) and writes
 the runs; ``python -m imdrive.studies.machines --markdown CSV`` prints the table of
 docs/machine-envelope.md, which a test re-renders from the stored CSV. :func:`ramp_diagnosis`
 measures why the large machines lose control at rated speed (a table of the same page,
@@ -273,9 +275,9 @@ def stator_frequency_Hz(sc, speed_rpm: float, load_Nm: float, R2_ratio: float) -
     reference) at the flux the drive runs (:func:`law_flux_Wb`). Regenerating at low speed it
     is ``n_p w_m - w_sl``: the slip's magnitude grows with ``R2_hat`` and with the machine's
     rated slip, and at 5 % of the rated speed regenerating the rated torque it reaches zero on
-    a machine whose rated slip is about 5 % -- the line on which no drive that estimates its
-    speed from the fundamental-frequency voltages and currents is observable (Holtz, "Sensorless
-    control of induction motor drives", Proc. IEEE 90(8), 2002).
+    a machine whose rated slip is about 5 % -- the line on which the speed is not observable
+    from the fundamental-frequency voltages and currents (Holtz, "Sensorless control of
+    induction motor drives", Proc. IEEE 90(8), 2002).
     """
     psi = law_flux_Wb(sc, speed_rpm, load_Nm, R2_ratio)
     return float(foc_operating_point(sc.machine, speed_rpm, load_Nm, R2_ratio, psi).f_Hz)

@@ -14,6 +14,17 @@ The residual then starts the online scale of the dead-time compensation
 (:func:`imdrive.kernels.inverter_scale.start_from_identified`), which cannot adapt below its
 sixth harmonic's lowest frequency (at 20 rpm, never).
 
+The build-up left in a window is fitted as the decay at the T2 the drive measured on it
+(both tests). Until 2026-11-24 the one-level test fitted the controller's current-model
+build-up ``g = (M/L2) p lam_hat``, whose shape is T2_hat's: R1_hat then carried R2_hat(0)'s
+error, -0.9 / +0.5 % on Table IV and -1.7 / +1.4 % on Krause 50 hp from R2_hat(0) = 0.6 /
+1.4 R2 (machine envelope, ideal drive), and at 10 % of the rated speed regenerating the
+rated torque the injection compensator's R2_hat ended +2.2 % off from 0.7 R2 on Krause
+50 hp for R1_hat's -1.5 %. With the measured decay (same runs, six library machines,
+R2_hat(0) = 0.6-1.4 R2) R1_hat is within 0.03 %; on a saturating machine, whose build-up is
+not one exponential, -0.2 to -1.5 % (with ``g``: -0.1 to -2.0 %). ``g`` stays the regressor
+when no T2 was measured (a build-up below the 1 % block threshold).
+
 The cost is magnetisation time: each level waits for its flux build-up (3.5 measured T2) and
 takes a window of half a T2_hat, so the test lasts 7-9.5 T2 from the start of magnetisation
 (measured on the envelope's bridge from R2_hat(0) = 0.6-1.4 R2: Table IV 7.9-9.4, Aalto
@@ -129,18 +140,9 @@ def mras_r1_standstill(
     ``sigma L1 p i`` nor the ``p psi`` term is left (the DC test of IEEE Std 112, made by the
     drive on every start). What is left of the flux build-up in the window (after four rotor
     time constants still about 5 % of ``R1 i``) is a regressor with a free scale ``k``: the
-    decay ``exp(-t/T2)`` at the T2 the drive *measured* on the build-up (below), as in the
-    two-level test. With a rotor circuit of constant inductance the build-up under a constant
-    flux current is that one exponential whatever R2_hat is. Until 2026-11-24 the one-level
-    test took the controller's current-model build-up ``g = (M/L2) p lam_hat`` instead, whose
-    shape is set by T2_hat: R1_hat then carried R2_hat(0)'s error, -0.9 / +0.5 % on Table IV
-    and -1.7 / +1.4 % on Krause 50 hp from R2_hat(0) = 0.6 / 1.4 R2 (machine envelope, ideal
-    drive), and at 10 % of the rated speed regenerating the rated torque the injection
-    compensator's R2_hat ended +2.2 % off from 0.7 R2 on Krause 50 hp for R1_hat's -1.5 %.
-    Measured with the decay (the machine envelope's magnetisation, six library machines,
-    R2_hat(0) = 0.6-1.4 R2): R1_hat within 0.03 %; on a saturating machine, whose build-up is
-    not one exponential, -0.2 to -1.5 % (with ``g``: -0.1 to -2.0 %). ``g`` stays the
-    regressor when no T2 was measured (a build-up below the 1 % block threshold).
+    decay ``exp(-t/T2)`` at the T2 the drive *measured* on the build-up (below), one
+    exponential whatever R2_hat is; the controller's current-model build-up (T2_hat's shape)
+    only where no T2 was measured (module docstring: why, and what each gave).
 
     A standstill run is a stretch of periods with ``w_ref = 0``, ``|i| > 1 A`` and
     ``|w_e| < 2 pi 0.5 Hz``. Its window opens when the flux build-up *measured* is nearly
