@@ -15,8 +15,11 @@ fixed cut-off ends 4 % off.
 
 The cut-off follows the adjustable model's flux frequency low-passed over 0.5 s
 (``mras.wc_follow_time_s``): following it raw, the cut-off moved with the injection's flux
-modulation, in phase with it, and biased R2_hat (Table IV, 0.1 x rated speed, regenerating
-the rated torque, from 0.7 R2: +1.9 %, against +0.9 % low-passed).
+modulation, in phase with it, and doubled the R2_hat bias an R1_hat error leaves (Table IV,
+0.1 x rated speed, regenerating the rated torque, from 0.7 R2: +1.9 %, against +0.9 %
+low-passed, with the -0.65 % the one-level standstill test left in R1_hat until it stopped
+carrying R2_hat(0)'s error; with R1_hat 1 % low and the test off, +2.4 against +1.1 %; with
+the R1_hat the test identifies now, +0.1 % either way).
 """
 
 from __future__ import annotations
@@ -78,11 +81,18 @@ def test_low_speed_motoring_load_step_keeps_control(machine, speed_pu, load_pu):
 
 @pytest.mark.slow
 def test_cut_off_does_not_follow_the_injection():
-    overrides = {"estimator.R2_ratio": 0.7, "estimator.R1_ratio": 0.9, "simulation.t_end_s": 24.0}
+    # R1_hat 1 % low, held (the standstill test off): the bias the cut-off's following acts on
+    overrides = {
+        "estimator.R2_ratio": 0.7,
+        "estimator.R1_ratio": 0.99,
+        "mras.R1_standstill": False,
+        "simulation.t_end_s": 24.0,
+    }
     low_passed = ramp_scenario("paper-table-iv", 0.1, overrides, load_pu_available=-1.0)
     assert low_passed.mras.wc_follow_time_s == 0.5
     raw = low_passed.with_overrides({"mras.wc_follow_time_s": 1e-4})  # one control period
     lp, rw = simulate_batch([low_passed, raw]).metrics.itertuples()
     assert lp.verdict == "ok", lp.verdict_text
-    assert abs(lp.R2_error_pct) < 1.2  # measured +0.94 %
-    assert rw.R2_error_pct > 1.5  # measured +1.93 %
+    assert abs(lp.R2_error_pct) < 1.5  # measured +1.14 %
+    assert rw.R2_error_pct > 2.0  # measured +2.40 %
+    assert rw.R2_error_pct > 1.8 * lp.R2_error_pct

@@ -6,7 +6,8 @@ run ends at 38 s) from R2_hat(0) = 0.7 R2 on the ideal drive. With the plain law
 
 * at 2 x rated speed, regenerating the available torque, the drift kept walking R2_hat at
   0.78 of the ramp's rate 1.7 s after the ramp stopped: R2_hat ended +0.93 %, the speed
-  2.9 rpm off (tolerance 1.72); on Krause's 3 hp machine +0.93 % and 2.3 rpm;
+  2.9 rpm off (tolerance 1.72); on Krause's 3 hp machine +0.93 % and 2.3 rpm (+0.86 % on
+  both since the standstill R1 test no longer carries R2_hat(0)'s error);
 * at 1.5 x rated speed, motoring, the drift was never integrated (the detected error shrank
   by 0.05 % per decision as the injection's sensitivity fell with T2) and R2_hat lagged the
   ramp by 1.5 % as a type-1 loop, ending -0.74 %, 1.75 rpm off.
@@ -36,9 +37,9 @@ PLAIN_LAW = [
 ]
 #: (machine, speed_pu, load_pu_available): the cells, and the plain law's final R2_hat error, %
 CELLS = {
-    ("paper-table-iv", 2.0, -1.0): 0.93,
+    ("paper-table-iv", 2.0, -1.0): 0.86,
     ("paper-table-iv", 1.5, 1.0): -0.74,
-    ("krause-3hp", 2.0, -1.0): 0.93,
+    ("krause-3hp", 2.0, -1.0): 0.86,
 }
 
 

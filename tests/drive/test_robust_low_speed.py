@@ -39,8 +39,11 @@ def _standstill(r1_ratio, r2_ratio, magnetise_s=0.5, extra=()):
 
 
 @pytest.mark.parametrize("r1_ratio", [0.8, 1.15])
-def test_standstill_R1_identification_is_exact_with_the_right_R2(r1_ratio):
-    assert _standstill(r1_ratio, 1.0) == pytest.approx(1.0, abs=1e-6)
+def test_standstill_R1_identification_with_the_right_R2(r1_ratio):
+    # the build-up left is fitted as the decay at the T2 the drive measured, which leaves
+    # -0.025 / -0.020 % (the controller's own build-up, exact only with R2_hat = R2, left
+    # 1e-6 here and up to 1.7 % from R2_hat(0) = 0.6-1.4 R2: test_r1_standstill_window.py)
+    assert _standstill(r1_ratio, 1.0) == pytest.approx(1.0, abs=3e-4)
 
 
 @pytest.mark.parametrize("r2_ratio", [0.75, 1.25])

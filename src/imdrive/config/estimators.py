@@ -369,8 +369,9 @@ class MrasSettings:
             "time constant of the flux frequency the cut-off follows "
             "(wc_per_stator_frequency): longer than the R2 compensator's injection period, "
             "so the cut-off does not follow the injection's flux modulation (a cut-off "
-            "modulated in phase with the injection biased R̂2, +1.9 % at 0.1 x rated speed "
-            "regenerating on Table IV, against +0.9 % with 0.5 s)",
+            "modulated in phase with the injection doubled the R̂2 bias an R̂1 error leaves: "
+            "+2.4 % at 0.1 x rated speed regenerating on Table IV with R̂1 1 % low, against "
+            "+1.1 % with 0.5 s)",
             "s",
             gt=0.0,
         ),

@@ -68,11 +68,11 @@ step there is held. Above ``wc / wc_k``
 margin at speed (docs/stability.md). ``w_e`` is the adjustable model's own flux frequency
 (:func:`flux_frequency`; the stator frequency in steady state) low-passed over ``wc_tau``
 (``mras.wc_follow_time_s``, 0.5 s: longer than the R2 compensator's injection period, whose
-flux modulation a corner following the raw frequency turned into an R2_hat bias, +1.9 % at
-0.1 x rated speed regenerating the rated torque on Table IV, +0.9 % with the low-pass, +0.2 %
-with the fixed corner); the corner in use is ``MRAS_STATE.wc_now``, which the R1 law reads
-too. The stability maps hold the low-passed frequency at the operating point's
-(stability/linear.py).
+flux modulation a corner following the raw frequency turned into an R2_hat bias: it doubles
+the bias an R1_hat error leaves, at 0.1 x rated speed regenerating the rated torque on Table
+IV from 0.7 R2 with R1_hat 1 % low +2.4 % raw, +1.1 % with the low-pass); the corner in use
+is ``MRAS_STATE.wc_now``, which the R1 law reads too. The stability maps hold the low-passed
+frequency at the operating point's (stability/linear.py).
 
 Discretisation at the control period Ts, with the voltage applied over the last period known
 exactly (it was held) and the current taken as the mean of its two end samples:
