@@ -77,9 +77,7 @@ def scenarios(machines=MACHINES, frequencies=F_S_HZ, ratios=R2_RATIOS):
         T = LOAD_PU * rp.torque_Nm
         speeds = [speed_for_stator_frequency(base, f, T) / rp.speed_rpm for f in frequencies]
         scs, table = envelope.scenarios([m], speeds=speeds, loads=(LOAD_PU,), ratios=ratios)
-        per_speed = len(table) // len(speeds) // len(envelope.DRIVES)
-        f = list(frequencies)
-        table["f_s_target_Hz"] = [f[(k // per_speed) % len(f)] for k in range(len(table))]
+        table["f_s_target_Hz"] = table["speed_pu"].map(dict(zip(speeds, frequencies, strict=True)))
         all_scs += scs
         tables.append(table)
     return all_scs, pd.concat(tables, ignore_index=True)
