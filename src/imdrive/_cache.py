@@ -1,40 +1,162 @@
-"""Where the compiled kernels are cached on disk.
+"""Where the compiled kernels are cached on disk, and when they are compiled again.
 
 numba invalidates a cached function only when *its own* source file changes, not when a kernel
-it calls from another module does. The kernels here call each other across modules (the engine
-inlines the machine, inverter, controller, MRAS and compensator), so the cache lives in a folder
-named after a hash of every source file of the package: any change to any of them starts a
-fresh cache, and an unchanged package reuses it across processes.
+it calls from another module does: the engine inlines the machine, inverter, controller,
+estimators and compensator, all from other files. So each kernel module caches into a folder
+of its own, ``<module>-<key>``, whose key is a hash of
 
-The folder is under ``$IMDRIVE_CACHE_DIR`` if set, else under ``$NUMBA_CACHE_DIR/imdrive`` if
-that is set, else under ``$XDG_CACHE_HOME/imdrive`` (default ``~/.cache/imdrive``); it falls back
-to the system temporary folder if that is not writable.
+* the source of the module and of every kernel module it imports, transitively (read from the
+  ``import`` statements, not by importing); a module that sets ``_CACHE_FOLLOWS_IMPORTERS =
+  True`` (the estimator registry, whose generic entry points compile the step of whichever
+  estimator registered with it) also depends on every module that imports it;
+* the versions of Python, numba, llvmlite and numpy, and the processor architecture.
+
+An edit outside ``kernels/`` (``config/``, ``run/``, the CLI, ...) therefore compiles nothing
+again; an edit of ``kernels/linearise.py`` compiles only the stability kernels, not the drive.
+The key is of contents, not of paths or times: a reinstall, a fresh clone or a copy of the same
+code reuses the cache.
+
+Every kernel file's cache lives in that folder, the estimator registry's generic entry points
+(compiled later, while the engine compiles) included: a numba cache locator of our own
+(:class:`_KernelLocator`) claims every function defined under ``kernels/``, so nothing is ever
+written into the source tree or site-packages. For each module the most recently used
+:data:`KEEP` folders are kept and older ones are removed (with the single-hash
+``kernels-<hash>`` folders of imdrive 0.2 and before).
+
+The folders are under ``$IMDRIVE_CACHE_DIR`` if set, else under ``$NUMBA_CACHE_DIR/imdrive`` if
+that is set, else under ``$XDG_CACHE_HOME/imdrive`` (default ``~/.cache/imdrive``); the system
+temporary folder if that is not writable.
 """
 
 from __future__ import annotations
 
+import ast
 import contextlib
+import functools
 import hashlib
+import json
 import os
+import platform
+import shutil
+import sys
 import tempfile
+from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
-import numba
-
 _PKG = Path(__file__).resolve().parent
+KERNELS = _PKG / "kernels"
+#: Folders kept per kernel module (the most recently used): the current code's, and two earlier
+#: versions a developer may switch back to (another branch, an undone edit).
+KEEP = 3
+_MARK = "_CACHE_FOLLOWS_IMPORTERS"
 
 
-def source_hash(root: Path = _PKG) -> str:
-    """Short hash of every ``.py`` file under ``root`` (names and contents) and numba's version."""
-    h = hashlib.sha256()
-    for p in sorted(root.rglob("*.py")):
-        h.update(str(p.relative_to(root)).encode())
-        h.update(p.read_bytes())
-    h.update(numba.__version__.encode())
-    return h.hexdigest()[:16]
+def _versions() -> bytes:
+    parts = [sys.implementation.cache_tag or "", platform.machine()]
+    for dist in ("numba", "llvmlite", "numpy"):
+        try:
+            parts.append(f"{dist}={version(dist)}")
+        except PackageNotFoundError:  # a source checkout of one of them: its module's version
+            parts.append(f"{dist}={getattr(__import__(dist), '__version__', '?')}")
+    return "\0".join(parts).encode()
 
 
-def cache_dir() -> Path:
+def _module_name(path: Path, root: Path) -> str:
+    rel = path.relative_to(root.parent).with_suffix("")
+    parts = list(rel.parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return "imdrive." + ".".join(parts)
+
+
+def _imports(tree: ast.Module, name: str, is_package: bool, known: set[str]) -> set[str]:
+    """The kernel modules a module (``name``, parsed as ``tree``) imports, from its import
+    statements."""
+    package = name if is_package else name.rpartition(".")[0]
+    found: set[str] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            found.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:  # relative: from the package, up level - 1
+                anchor = package.split(".")
+                anchor = anchor[: len(anchor) - node.level + 1]
+                base = ".".join(anchor + ([base] if base else []))
+            found.add(base)
+            found.update(f"{base}.{a.name}" for a in node.names)  # `from pkg import module`
+    return {m for m in found if m in known and m != name}
+
+
+def _marked(tree: ast.Module) -> bool:
+    return any(
+        isinstance(n, ast.Assign) and any(getattr(t, "id", None) == _MARK for t in n.targets)
+        for n in tree.body
+    )
+
+
+@functools.cache
+def module_keys(root: Path = KERNELS) -> dict[str, str]:
+    """The cache key of every module under ``root`` (``imdrive.kernels`` by default).
+
+    The dependency analysis parses every kernel module (0.1-0.3 s); its result is kept in the
+    cache root under a hash of all the sources, so a process that starts with unchanged kernels
+    only reads and hashes them (a few ms).
+
+    Returns
+    -------
+    dict of str to str
+        Module name -> 16 hex digits: a hash of the module's source, of the sources of the
+        kernel modules it depends on (module docstring) and of the tool versions.
+    """
+    files = {_module_name(p, root): p for p in sorted(root.rglob("*.py"))}
+    text = {m: p.read_bytes() for m, p in files.items()}
+    whole = hashlib.sha256(_versions())
+    for m, t in text.items():
+        whole.update(m.encode() + b"\0" + hashlib.sha256(t).digest())
+    memo = None
+    with contextlib.suppress(OSError):
+        memo = cache_root() / f"module-keys-{whole.hexdigest()[:16]}.json"
+        keys = json.loads(memo.read_text())
+        if isinstance(keys, dict) and set(keys) == set(files):
+            return keys
+    keys = _compute_keys(files, text)
+    if memo is not None:
+        with contextlib.suppress(OSError):
+            tmp = memo.with_name(f"{memo.name}.{os.getpid()}.tmp")
+            tmp.write_text(json.dumps(keys))
+            os.replace(tmp, memo)
+    return keys
+
+
+def _compute_keys(files: dict[str, Path], text: dict[str, bytes]) -> dict[str, str]:
+    trees = {m: ast.parse(text[m], filename=str(p)) for m, p in files.items()}
+    known = set(files)
+    deps = {m: _imports(trees[m], m, p.name == "__init__.py", known) for m, p in files.items()}
+    for m in files:
+        if _marked(trees[m]):
+            deps[m] |= {other for other, d in deps.items() if m in d}
+    for m in files:  # a module's parent packages run first: their files count too
+        parts = m.split(".")
+        deps[m] |= {".".join(parts[:i]) for i in range(2, len(parts))} & known
+    versions = _versions()
+    source = {m: hashlib.sha256(t).digest() for m, t in text.items()}
+    keys = {}
+    for m in files:
+        seen, todo = {m}, [m]
+        while todo:
+            for d in deps[todo.pop()] - seen:
+                seen.add(d)
+                todo.append(d)
+        h = hashlib.sha256(versions)
+        for d in sorted(seen):
+            h.update(d.encode() + b"\0" + source[d])
+        keys[m] = h.hexdigest()[:16]
+    return keys
+
+
+def cache_root() -> Path:
+    """The folder holding every kernel module's cache folder (created if missing)."""
     base = os.environ.get("IMDRIVE_CACHE_DIR")
     if base:
         root = Path(base)
@@ -43,23 +165,136 @@ def cache_dir() -> Path:
     else:
         xdg = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
         root = Path(xdg) / "imdrive"
-    path = root / f"kernels-{source_hash()}"
     try:
-        path.mkdir(parents=True, exist_ok=True)
-        probe = path / ".write-test"
-        probe.write_text("")
-        probe.unlink()
+        root.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=root):
+            pass
     except OSError:
-        path = Path(tempfile.gettempdir()) / "imdrive" / f"kernels-{source_hash()}"
-        path.mkdir(parents=True, exist_ok=True)
-    return path
+        root = Path(tempfile.gettempdir()) / "imdrive"
+        root.mkdir(parents=True, exist_ok=True)
+    return root
+
+
+#: Kept for callers of imdrive 0.2: the folder every kernel cache lives under.
+cache_dir = cache_root
+
+
+def module_folder(module: str, root: Path | None = None) -> Path:
+    """The cache folder of kernel module ``module`` (``imdrive.kernels.engine``, ...)."""
+    return (root or cache_root()) / f"{module}-{module_keys()[module]}"
+
+
+def prune(root: Path | None = None, keep: int = KEEP) -> list[Path]:
+    """Remove all but the ``keep`` most recently used folders of each kernel module, and the
+    single-hash ``kernels-*`` folders of imdrive 0.2; return what was removed."""
+    root = root or cache_root()
+    groups: dict[str, list[Path]] = {}
+    removed = []
+    for p in root.iterdir() if root.is_dir() else ():
+        if p.name.startswith("module-keys-") and p.suffix == ".json":
+            groups.setdefault("module-keys", []).append(p)
+            continue
+        if not p.is_dir():
+            continue
+        if p.name.startswith("kernels-"):
+            removed.append(p)
+        elif p.name.startswith("imdrive.kernels") and "-" in p.name:
+            groups.setdefault(p.name.rpartition("-")[0], []).append(p)
+    for folders in groups.values():
+        folders.sort(key=lambda p: p.stat().st_mtime, reverse=True)
+        removed += folders[keep:]
+    for p in removed:  # another process may be reading an old one: it then compiles afresh
+        if p.is_dir():
+            shutil.rmtree(p, ignore_errors=True)
+        else:
+            p.unlink(missing_ok=True)
+    return removed
+
+
+def _claimed(py_file: str) -> str | None:
+    """The kernel module defined by ``py_file``, if it is one of this package's."""
+    try:
+        path = Path(py_file).resolve()
+        if not path.is_relative_to(KERNELS):
+            return None
+        return _module_name(path, KERNELS)
+    except (OSError, ValueError):
+        return None
+
+
+@functools.cache
+def _used(folder: Path) -> Path:
+    folder.mkdir(parents=True, exist_ok=True)
+    os.utime(folder)  # recency for prune()
+    return folder
+
+
+def _locator_class():
+    from numba.core import caching
+
+    class _KernelLocator(caching._CacheLocator):
+        """numba cache locator for the functions of ``imdrive.kernels``: the module's folder,
+        stamped with its key (a cache entry is stale exactly when the key changes)."""
+
+        def __init__(self, py_func, module: str):
+            self._lineno = py_func.__code__.co_firstlineno
+            self._key = module_keys()[module]
+            self._path = _used(module_folder(module))
+
+        def get_cache_path(self):
+            return str(self._path)
+
+        def get_source_stamp(self):
+            return self._key
+
+        def get_disambiguator(self):
+            return str(self._lineno)
+
+        @classmethod
+        def from_function(cls, py_func, py_file):
+            module = _claimed(py_file)
+            if module is None or module not in module_keys():
+                return None
+            try:
+                return cls(py_func, module)
+            except OSError:  # not writable: numba's own locators decide
+                return None
+
+    return _KernelLocator
+
+
+@functools.cache
+def install() -> bool:
+    """Put the kernel locator first in numba's list (once per process); prune old folders.
+
+    Returns
+    -------
+    bool
+        False if this numba has no locator list (then :func:`kernel_cache` points numba's
+        ``CACHE_DIR`` at the cache root while the kernels are decorated, as before).
+    """
+    from numba.core import caching
+
+    impl = getattr(caching, "CacheImpl", None) or getattr(caching, "_CacheImpl", None)
+    locators = getattr(impl, "_locator_classes", None)
+    if not isinstance(locators, list):
+        return False
+    locators.insert(0, _locator_class())
+    with contextlib.suppress(OSError):
+        prune()
+    return True
 
 
 @contextlib.contextmanager
 def kernel_cache():
-    """Decorate the kernels defined inside this block with the package's cache folder."""
+    """Decorate the kernels defined inside this block with the package's cache folders."""
+    if install():
+        yield
+        return
+    import numba
+
     old = numba.config.CACHE_DIR
-    numba.config.CACHE_DIR = str(cache_dir())
+    numba.config.CACHE_DIR = str(cache_root())
     try:
         yield
     finally:

@@ -1,32 +1,162 @@
-"""The kernel cache folder follows every source file of the package (see imdrive._cache)."""
+"""The kernel cache follows what each kernel depends on, and nothing else (imdrive._cache)."""
 
 from __future__ import annotations
 
+import os
 import shutil
+import subprocess
+import sys
+import textwrap
+import time
 from pathlib import Path
+
+import pytest
 
 import imdrive
 from imdrive import _cache
 from imdrive.kernels.engine import run_drive
 
-
-def test_any_source_change_gives_a_new_cache_folder(tmp_path):
-    pkg = Path(imdrive.__file__).parent
-    copy = tmp_path / "imdrive"
-    shutil.copytree(pkg, copy, ignore=shutil.ignore_patterns("__pycache__"))
-    h0 = _cache.source_hash(copy)
-    assert _cache.source_hash(copy) == h0  # stable
-    assert h0 == _cache.source_hash(pkg)
-    # a change in a kernel the engine calls (not the engine's own file) must invalidate it
-    mras = copy / "kernels" / "estimators" / "mras.py"
-    mras.write_text(mras.read_text() + "\n# changed\n")
-    assert _cache.source_hash(copy) != h0
+PKG = Path(imdrive.__file__).resolve().parent
 
 
-def test_kernels_cache_in_the_hashed_folder(monkeypatch, tmp_path):
-    monkeypatch.setenv("IMDRIVE_CACHE_DIR", str(tmp_path))
-    folder = _cache.cache_dir()
-    assert folder.parent == tmp_path
-    assert folder.name == f"kernels-{_cache.source_hash()}"
-    # the engine was decorated under the package's folder, not numba's default __pycache__
-    assert Path(run_drive._cache._cache_path).parent.name.startswith("kernels-")
+@pytest.fixture
+def copy(tmp_path, monkeypatch):
+    """A copy of the package's sources (no caches), and a cache root of the test's own."""
+    monkeypatch.setenv("IMDRIVE_CACHE_DIR", str(tmp_path / "cache"))
+    dst = tmp_path / "src" / "imdrive"
+    shutil.copytree(PKG, dst, ignore=shutil.ignore_patterns("__pycache__", "*.nbi", "*.nbc"))
+    return dst
+
+
+def _keys(pkg: Path) -> dict[str, str]:
+    _cache.module_keys.cache_clear()
+    return _cache.module_keys(pkg / "kernels")
+
+
+def _edit(path: Path) -> None:
+    path.write_text(path.read_text() + "\n# edited\n")
+
+
+def test_keys_follow_contents_not_paths(copy):
+    assert _keys(copy) == _keys(PKG)  # another folder, the same code: the same cache
+    assert _keys(copy) == _keys(copy)  # from the memo file as from the sources
+
+
+def test_an_edit_outside_the_kernels_changes_no_key(copy):
+    before = _keys(copy)
+    for rel in ("config/scenario.py", "run/simulate.py", "cli/run.py", "_cache.py"):
+        _edit(copy / rel)
+    assert _keys(copy) == before
+
+
+def test_a_kernel_edit_changes_the_keys_of_its_importers_only(copy):
+    before = _keys(copy)
+    _edit(copy / "kernels" / "estimators" / "mras.py")
+    after = _keys(copy)
+    changed = {m for m in before if before[m] != after[m]}
+    # what compiles the MRAS in: itself, the registry's generic step, the stages, the engine,
+    # the batch and stability kernels that call the engine
+    for m in ("estimators.mras", "estimators.registry", "stages", "engine", "batch", "linearise"):
+        assert f"imdrive.kernels.{m}" in changed, m
+    # what does not: the machine model, records, the other estimators' own helpers
+    for m in ("machine", "records", "model", "fuzzy", "estimators.common", "saturation"):
+        assert f"imdrive.kernels.{m}" not in changed, m
+
+
+def test_a_stability_kernel_edit_leaves_the_drive_cached(copy):
+    before = _keys(copy)
+    _edit(copy / "kernels" / "linearise.py")
+    after = _keys(copy)
+    assert {m for m in before if before[m] != after[m]} == {"imdrive.kernels.linearise"}
+
+
+def test_a_user_estimator_changes_the_registry_key_through_its_import(copy):
+    # a new estimator module that registers: the registry's generic entry points compile its
+    # step, so the registry (and all that inline it) must follow it
+    before = _keys(copy)
+    (copy / "kernels" / "estimators" / "zz_new.py").write_text(
+        "from imdrive.kernels.estimators.registry import register_kernel  # noqa: F401\n"
+    )
+    after = _keys(copy)
+    assert after["imdrive.kernels.estimators.registry"] != (
+        before["imdrive.kernels.estimators.registry"]
+    )
+    assert after["imdrive.kernels.engine"] != before["imdrive.kernels.engine"]
+    assert after["imdrive.kernels.machine"] == before["imdrive.kernels.machine"]
+
+
+def test_the_versions_are_part_of_the_key(copy, monkeypatch):
+    before = _keys(copy)
+    monkeypatch.setattr(_cache, "_versions", lambda: b"numba=0.0")
+    assert set(_keys(copy).values()).isdisjoint(before.values())
+
+
+def test_old_folders_are_pruned(tmp_path):
+    now = time.time()
+    for i in range(5):
+        for m in ("imdrive.kernels.engine", "imdrive.kernels.machine"):
+            p = tmp_path / f"{m}-{i:016x}"
+            p.mkdir()
+            os.utime(p, (now - 100 * i, now - 100 * i))
+    (tmp_path / "kernels-0123456789abcdef").mkdir()  # imdrive 0.2's single-hash folder
+    (tmp_path / "someone-elses").mkdir()
+    (tmp_path / "notes.txt").write_text("x")
+    removed = _cache.prune(tmp_path, keep=3)
+    assert len(removed) == 2 * 2 + 1
+    left = sorted(p.name for p in tmp_path.iterdir())
+    assert left == sorted(
+        [f"imdrive.kernels.{m}-{i:016x}" for m in ("engine", "machine") for i in range(3)]
+        + ["someone-elses", "notes.txt"]
+    )
+
+
+def test_the_engine_caches_in_its_module_folder():
+    where = Path(run_drive._cache._cache_path)
+    assert where == _cache.module_folder("imdrive.kernels.engine")
+    assert where.parent == _cache.cache_root()
+
+
+RUN = textwrap.dedent("""
+    import sys
+    from numba.core import event
+    from imdrive.config.scenario import Scenario
+    from imdrive.run.simulate import simulate
+
+    compiled = []
+
+    class Count(event.Listener):
+        def on_start(self, ev):
+            compiled.append(ev.data["dispatcher"].py_func.__qualname__)
+
+        def on_end(self, ev):
+            pass
+
+    event.register("numba:compile", Count())
+    sc = Scenario.read("sensorless", ["simulation.t_end_s=0.05"])
+    res = simulate(sc)
+    assert not res.diverged
+    print(len(compiled), " ".join(compiled[:5]))
+""")
+
+
+@pytest.mark.slow
+def test_an_edit_of_config_or_run_recompiles_nothing(tmp_path):
+    # the package copied elsewhere: the same kernels find the cache of the installed package
+    # (keys are of contents), so only a cold cache compiles here, once
+    dst = tmp_path / "src" / "imdrive"
+    shutil.copytree(PKG, dst, ignore=shutil.ignore_patterns("__pycache__", "*.nbi", "*.nbc"))
+    env = {**os.environ, "PYTHONPATH": str(tmp_path / "src")}
+
+    def run() -> int:
+        res = subprocess.run(
+            [sys.executable, "-c", RUN], cwd=tmp_path, env=env, capture_output=True, text=True
+        )
+        assert res.returncode == 0, res.stderr[-3000:]
+        return int(res.stdout.split()[0])
+
+    run()  # warms the cache if it is cold
+    for rel in ("config/scenario.py", "config/machine.py", "run/simulate.py", "run/build.py"):
+        _edit(dst / rel)
+    assert run() == 0
+    # and nothing was written into the (copied) source tree
+    assert not [p for p in dst.rglob("*") if p.suffix in (".nbi", ".nbc")]

@@ -535,21 +535,20 @@ def _dispatchers():
     return found
 
 
-def test_every_cached_kernel_is_in_the_hashed_cache_folder():
+def test_every_cached_kernel_is_in_its_module_cache_folder():
     from numba.core.caching import NullCache
 
     from imdrive import _cache
 
-    folder = _cache.cache_dir()
     kernels = _dispatchers()
     cached = [(n, d) for n, d in kernels if not isinstance(d._cache, NullCache)]
     assert "imdrive.kernels.engine.run_drive" in dict(cached)  # the walk is not vacuous
     outside = [
         f"{n}: {d._cache._cache_path}"
         for n, d in cached
-        if not Path(d._cache._cache_path).resolve().is_relative_to(folder.resolve())
+        if Path(d._cache._cache_path) != _cache.module_folder(d.py_func.__module__)
     ]
-    assert not outside, f"compiled outside {folder}:\n  " + "\n  ".join(outside)
+    assert not outside, "compiled outside their module's cache folder:\n  " + "\n  ".join(outside)
 
 
 NEW_KERNEL = """
@@ -562,9 +561,9 @@ def doubled(x):
 """
 
 
-def test_a_new_kernel_module_lands_in_the_hashed_folder_without_registration(tmp_path):
+def test_a_new_kernel_module_lands_in_its_cache_folder_without_registration(tmp_path):
     # a copy of the package with two modules nobody registered: one directly under kernels/,
-    # one in a sub-package; imported directly, each must compile into the hashed folder
+    # one in a sub-package; imported directly, each must compile into its module's folder
     copy = tmp_path / "src" / "imdrive"
     shutil.copytree(PKG, copy, ignore=shutil.ignore_patterns("__pycache__"))
     (copy / "kernels" / "zz_new_block.py").write_text(NEW_KERNEL)
@@ -576,12 +575,12 @@ def test_a_new_kernel_module_lands_in_the_hashed_folder_without_registration(tmp
         import imdrive.kernels.estimators.zz_new_estimator as b
         from imdrive import _cache
 
-        folder = _cache.cache_dir()
+        folder = _cache.cache_root()
         for m in (a, b):
             assert Path(m.__file__).is_relative_to(Path.cwd()), m.__file__
             assert m.doubled(1.5) == 3.0
             where = Path(m.doubled._cache._cache_path)
-            assert where.is_relative_to(folder), f"{m.__name__} compiled into {where}"
+            assert where == _cache.module_folder(m.__name__), f"{m.__name__} compiled into {where}"
         print(folder)
         print(sorted(p.name for p in folder.rglob("*.nbi")))
     """)
@@ -593,5 +592,6 @@ def test_a_new_kernel_module_lands_in_the_hashed_folder_without_registration(tmp
     assert res.returncode == 0, res.stderr
     folder_line, index_line = res.stdout.strip().splitlines()
     folder = Path(folder_line)
-    assert folder.parent == cache_root and folder.name.startswith("kernels-")
-    assert index_line.count("doubled") == 2  # one index file per new module, in that folder
+    assert folder == cache_root
+    assert index_line.count("doubled") == 2  # one index file per new module, in its folder
+    assert not list((tmp_path / "src").rglob("*.nbi"))  # nothing in the source tree

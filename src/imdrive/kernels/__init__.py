@@ -1,10 +1,11 @@
 """Compiled blocks: small numba functions of (parameters, state, inputs), and the loops that
 compose them. Nothing here sees a Python object.
 
-Every module of this package is compiled under the package's hashed cache folder
-(:mod:`imdrive._cache`) *by construction*: importing any ``imdrive.kernels.*`` module runs this
-file first, and it imports every module found below it inside :func:`kernel_cache`. A new kernel
-module needs no registration; ``tests/package/test_layers.py`` checks that none escapes.
+Every module of this package is compiled into a cache folder keyed on its own source and on the
+kernel modules it imports (:mod:`imdrive._cache`) *by construction*: importing any
+``imdrive.kernels.*`` module runs this file first, which installs the package's cache locator
+and imports every module found below it. A new kernel module needs no registration;
+``tests/package/test_layers.py`` checks that none escapes.
 """
 
 import importlib

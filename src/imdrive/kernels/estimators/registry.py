@@ -30,7 +30,8 @@ The contract
 Caching
 -------
 The engine inlines the estimator, so its cached machine code must change whenever the
-estimator's source does. The package's own cache folder is named after a hash of the package
+estimator's source does. A kernel module's cache folder is named after a hash of its sources
+and of every kernel module it imports, and this module's after every module that imports it
 (:mod:`imdrive._cache`); an estimator defined outside the package gets a tag field whose
 name carries a hash of its module's name and source file, so an edited user estimator is a
 new record type and is compiled afresh, never taken stale from the cache (and the same text
@@ -52,6 +53,10 @@ from numba.extending import overload
 from numba.np.numpy_support import as_dtype
 
 from imdrive.kernels.records import b1, c16, f8, record_dtype
+
+#: The generic entry points below compile the step of whichever estimator registered here, so
+#: their cache follows every module that imports this one (:mod:`imdrive._cache`).
+_CACHE_FOLLOWS_IMPORTERS = True
 
 #: What the engine hands an estimator each period (SI units; space vectors complex, in the
 #: stationary frame ``_ab`` or the controller's frame ``_dq``).
