@@ -78,8 +78,9 @@ def test_a_user_estimator_changes_the_registry_key_through_its_import(copy):
         "from imdrive.kernels.estimators.registry import register_kernel  # noqa: F401\n"
     )
     after = _keys(copy)
-    assert after["imdrive.kernels.estimators.registry"] != (
-        before["imdrive.kernels.estimators.registry"]
+    assert (
+        after["imdrive.kernels.estimators.registry"]
+        != (before["imdrive.kernels.estimators.registry"])
     )
     assert after["imdrive.kernels.engine"] != before["imdrive.kernels.engine"]
     assert after["imdrive.kernels.machine"] == before["imdrive.kernels.machine"]

@@ -158,6 +158,10 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     args.t0 = time.perf_counter()
+    if not getattr(args, "quiet", False):
+        from imdrive import _compiling
+
+        _compiling.enable()
     try:
         with warnings.catch_warnings():
             warnings.showwarning = _show_warning

@@ -56,7 +56,7 @@ def _cmd_run(args) -> int:
     from imdrive.config.scenario import Scenario
     from imdrive.run.build import build_arrays
     from imdrive.run.files import owns_result_file
-    from imdrive.run.simulate import kernels_cached, simulate
+    from imdrive.run.simulate import simulate
 
     scenario = Scenario.read(args.scenario, args.set or [])
     if args.format:  # an unknown format is bad input before anything runs
@@ -72,8 +72,6 @@ def _cmd_run(args) -> int:
     )
     arrays = build_arrays(scenario)  # every derived quantity checked before anything runs
     if not args.quiet:
-        if not kernels_cached():
-            print("imdrive: compiling the kernels (first run only) ...", file=sys.stderr)
         print(
             f"imdrive: running {scenario.name} ({scenario.simulation.t_end_s:g} s, "
             f"{mode_text(scenario)}) ...",

@@ -11,8 +11,10 @@ and imports every module found below it. A new kernel module needs no registrati
 import importlib
 import pkgutil
 
+from imdrive import _compiling
 from imdrive._cache import kernel_cache
 
 with kernel_cache():
     for _info in pkgutil.walk_packages(__path__, __name__ + "."):
         importlib.import_module(_info.name)
+_compiling.attach()  # a word on the console while compiling, if the command line asked

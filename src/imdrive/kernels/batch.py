@@ -345,7 +345,9 @@ def batch_kernel(P, S, n_steps, log, log_every, out, scratch):
     """
     n_slots = scratch.shape[0]
     for slot in prange(n_slots):
-        _worker(P, S, n_steps, log, log_every, out, slot, n_slots, scratch[slot])
+        # prange's index is unsigned: as int64 the engine keeps the one signature `run` uses
+        s = np.int64(slot)
+        _worker(P, S, n_steps, log, log_every, out, s, np.int64(n_slots), scratch[s])
 
 
 @njit(cache=True, nogil=True)

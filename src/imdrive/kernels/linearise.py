@@ -259,7 +259,8 @@ def solve_point(P, S, i, z, th1, th2, A, Bu, tol, max_iter):
 def solve_points(P, S, Z, TH, A, Bu, status, residual, iterations, tol, max_iter):
     """:func:`solve_point` for every drive ``i`` of ``P``/``S`` (rows of ``Z``, ``A``, ...)."""
     n = Z.shape[0]
-    for i in prange(n):
+    for ii in prange(n):
+        i = np.int64(ii)  # prange's index is unsigned: one signature of the engine, not two
         st, res, it = solve_point(P, S, i, Z[i], TH[i, 0], TH[i, 1], A[i], Bu[i], tol, max_iter)
         status[i] = st
         residual[i] = res
@@ -294,7 +295,8 @@ def step_check(P, S, Z0, Z1, TH, n_steps, n_win, peaks, status):
     keeps NaN in the windows it did not reach).
     """
     n = Z0.shape[0]
-    for i in prange(n):
+    for ii in prange(n):
+        i = np.int64(ii)  # as in solve_points
         unpack_state(Z0[i], S, i)
         x = S.plant[i]
         x.theta1 = TH[i, 0]
