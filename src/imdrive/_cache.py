@@ -191,8 +191,8 @@ def prune(root: Path | None = None, keep: int = KEEP) -> list[Path]:
     groups: dict[str, list[Path]] = {}
     removed = []
     for p in root.iterdir() if root.is_dir() else ():
-        if p.name.startswith("module-keys-") and p.suffix == ".json":
-            groups.setdefault("module-keys", []).append(p)
+        if p.name.startswith(("module-keys-", "warm-")) and p.suffix in (".json", ".done"):
+            groups.setdefault(p.name.split("-")[0], []).append(p)  # memo files, warm-up stamps
             continue
         if not p.is_dir():
             continue

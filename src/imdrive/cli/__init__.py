@@ -55,6 +55,7 @@ from imdrive.cli import (
     run,
     stability,
     sweep,
+    warmup,
 )
 from imdrive.cli._common import (
     EXIT_BAD_INPUT,
@@ -113,7 +114,7 @@ EXIT_CODES_HELP = """exit codes:
 a sweep records its diverged and lost runs in its table and exits 0."""
 
 #: the command groups, in the order ``imdrive --help`` lists them
-COMMANDS = (run, compare, info, paper, sweep, stability, bench, machine, commission)
+COMMANDS = (run, compare, info, paper, sweep, stability, bench, machine, commission, warmup)
 
 
 def build_parser() -> argparse.ArgumentParser:

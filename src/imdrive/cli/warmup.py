@@ -1,0 +1,192 @@
+"""``imdrive warm-up``: compile every kernel entry point into the cache, on every core.
+
+Each compiled entry point is a job: the drive once per registered estimator (the engine is
+specialised by the estimator's records), the batch kernels (sweeps; parallel and, for dask,
+serial) and the stability map's. The first job compiles the MRAS drive, which every other entry
+point links in; the others then run in parallel processes (numba compiles one function at a time
+per process). A job whose kernels are cached takes the time to load them (about 1 s).
+
+The test suite runs it before its workers start (``tests/conftest.py``), so that two workers do
+not compile the same kernel side by side.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import time
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+from imdrive.cli._common import EXIT_INTERNAL, EXIT_OK, _examples
+from imdrive.errors import ConfigError
+
+#: The short run every job compiles with, s (a few control periods).
+T_END_S = 0.002
+
+
+def jobs() -> list[str]:
+    """Every job name, the MRAS drive first: ``drive:<estimator>``, ``batch``,
+    ``batch-serial``, ``stability``."""
+    from imdrive.run.estimators import estimator_names
+
+    names = [n for n in estimator_names() if n != "mras"]
+    return ["drive:mras", *(f"drive:{n}" for n in names), "batch", "batch-serial", "stability"]
+
+
+def _scenario(estimator: str = "mras"):
+    from imdrive.config.scenario import Scenario
+
+    return Scenario.read(
+        "sensorless", [f'control.speed_feedback="{estimator}"', f"simulation.t_end_s={T_END_S}"]
+    )
+
+
+def run_job(name: str) -> None:
+    """Compile (or load) the kernels of job ``name`` in this process."""
+    kind, _, estimator = name.partition(":")
+    if kind == "drive":
+        from imdrive.run.simulate import simulate
+
+        simulate(_scenario(estimator))
+    elif kind in ("batch", "batch-serial"):
+        from imdrive.run.batch import simulate_batch
+
+        simulate_batch([_scenario()] * 2, parallel=kind == "batch")
+    elif kind == "stability":
+        from imdrive.stability.maps import stability_map
+
+        stability_map(_scenario(), [500.0], [0.0])
+    else:
+        raise ConfigError("job", f"unknown job {name!r} (known: {', '.join(jobs())})")
+
+
+def _spawn(name: str) -> tuple[str, float, str]:
+    t0 = time.perf_counter()
+    res = subprocess.run(
+        [sys.executable, "-m", "imdrive", "warm-up", "--job", name],
+        capture_output=True,
+        text=True,
+        env={**os.environ, "NUMBA_NUM_THREADS": os.environ.get("NUMBA_NUM_THREADS", "1")},
+    )
+    err = "" if res.returncode == 0 else (res.stderr.strip().splitlines() or ["?"])[-1]
+    return name, time.perf_counter() - t0, err
+
+
+def _stamp(names) -> Path:
+    """The file that says these jobs' kernels are all cached (named by their cache keys)."""
+    import hashlib
+
+    from imdrive import _cache
+
+    keys = _cache.module_keys()
+    h = hashlib.sha256()
+    for part in (*sorted(names), *(keys[f"imdrive.kernels.{m}"] for m in _STAMPED)):
+        h.update(part.encode() + b"\0")
+    return _cache.cache_root() / f"warm-{h.hexdigest()[:16]}.done"
+
+
+#: The kernel modules whose keys cover every job's entry point (each imports the engine).
+_STAMPED = ("engine", "batch", "linearise")
+
+
+def warm_up(names=None, processes: int | None = None, log=None) -> dict[str, float]:
+    """Compile the kernels of ``names`` (default: every job), in parallel processes.
+
+    Parameters
+    ----------
+    names : sequence of str, optional
+        Jobs (:func:`jobs`); ``drive:mras`` runs first if present.
+    processes : int, optional
+        Parallel processes after the first job (default: the CPUs).
+    log : callable, optional
+        Called with a line per job.
+
+    Returns
+    -------
+    dict of str to float
+        Wall time of each job, s; empty if an earlier warm-up of the same jobs and the same
+        kernels completed (a stamp file in the cache root).
+
+    Raises
+    ------
+    RuntimeError
+        If a job failed (its last line of stderr).
+    """
+    names = list(jobs() if names is None else names)
+    stamp = _stamp(names)
+    if stamp.exists():
+        if log:
+            log("  every job's kernels are cached already")
+        return {}
+    processes = processes or os.cpu_count() or 1
+    first = [n for n in names if n == "drive:mras"]
+    rest = [n for n in names if n != "drive:mras"]
+    times, failed = {}, []
+    for batch in (first, rest):
+        with ThreadPoolExecutor(max(1, min(processes, len(batch) or 1))) as pool:
+            for name, dt, err in pool.map(_spawn, batch):
+                times[name] = dt
+                if err:
+                    failed.append(f"{name}: {err}")
+                if log:
+                    log(f"  {name:<24} {dt:6.1f} s{'  FAILED: ' + err if err else ''}")
+    if failed:
+        raise RuntimeError("; ".join(failed))
+    stamp.touch()
+    return times
+
+
+def _cmd_warm_up(args) -> int:
+    if args.job:
+        run_job(args.job)
+        return EXIT_OK
+    names = None
+    if args.only:
+        names = [n.strip() for n in args.only.split(",") if n.strip()]
+        unknown = sorted(set(names) - set(jobs()))
+        if unknown:
+            raise ConfigError("--only", f"unknown job {unknown[0]!r} (known: {', '.join(jobs())})")
+    if args.processes is not None and args.processes < 1:
+        raise ConfigError("--processes", f"must be at least 1, got {args.processes}")
+    t0 = time.perf_counter()
+    log = None if args.quiet else (lambda line: print(line, file=sys.stderr))
+    if log:
+        log("imdrive: compiling every kernel entry point (a job each; cached ones load in ~1 s)")
+    try:
+        warm_up(names, args.processes, log)
+    except RuntimeError as exc:
+        print(f"imdrive: error: warm-up failed: {exc}", file=sys.stderr)
+        return EXIT_INTERNAL
+    if log:
+        log(f"imdrive: kernels ready in {time.perf_counter() - t0:.1f} s")
+    return EXIT_OK
+
+
+def add_parser(sub) -> None:
+    """Register ``imdrive warm-up``.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The ``imdrive`` parser's sub-commands.
+    """
+    p = sub.add_parser(
+        "warm-up",
+        help="compile every kernel into the cache, in parallel processes",
+        description="Compile every kernel entry point (the drive for each estimator, the batch "
+        "and stability kernels) into the cache, the MRAS drive first, then the rest in parallel "
+        "processes. Optional: any command compiles what it needs on first use.",
+        epilog=_examples("imdrive warm-up", "imdrive warm-up --only drive:mras,batch"),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("--only", metavar="JOBS", help="comma-separated jobs (default: all)")
+    p.add_argument("--processes", type=int, metavar="N", help="parallel processes (default: CPUs)")
+    p.add_argument("--job", help=argparse.SUPPRESS)  # one job, in this process (the workers)
+    p.add_argument("-q", "--quiet", action="store_true", help="print nothing")
+    p.set_defaults(func=_cmd_warm_up)
+
+
+__all__ = ["add_parser", "jobs", "run_job", "warm_up"]
