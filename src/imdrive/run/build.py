@@ -8,6 +8,7 @@ refuses an unknown name) from the configuration and the gain design; the result 
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -132,6 +133,35 @@ def _not_finite(name: str, value, sc: Scenario, sources=DERIVED_SOURCE) -> Confi
     )
 
 
+@functools.lru_cache(maxsize=512)
+def _float_bytes(dtype: np.dtype) -> np.ndarray | None:
+    """Byte offsets of every float64 / complex128 value in a record of ``dtype`` (None if a
+    float field has another width: the caller then checks field by field)."""
+    idx: list[int] = []
+    for name in dtype.names:
+        sub, offset = dtype.fields[name][:2]
+        base = sub.subdtype[0] if sub.subdtype else sub
+        if base.kind not in "fc":
+            continue
+        if base.kind == "f" and base.itemsize != 8 or base.kind == "c" and base.itemsize != 16:
+            return None
+        idx.extend(range(offset, offset + sub.itemsize))
+    return np.asarray(idx, dtype=np.intp)
+
+
+def _all_finite(arr: np.ndarray) -> bool:
+    """Whether every float and complex value of ``arr`` (records or a plain array) is finite."""
+    if arr.dtype.names is None:
+        return arr.dtype.kind not in "fc" or bool(np.isfinite(arr).all())
+    idx = _float_bytes(arr.dtype)
+    if idx is None:
+        return False
+    if not idx.size or not arr.size:
+        return True
+    raw = np.ascontiguousarray(arr).reshape(-1).view(np.uint8).reshape(arr.size, -1)
+    return bool(np.isfinite(np.ascontiguousarray(raw[:, idx]).view(np.float64)).all())
+
+
 def check_finite(arrays: DriveArrays, sc: Scenario) -> None:
     """Refuse arrays holding a non-finite number: every derived quantity must be finite.
 
@@ -142,6 +172,8 @@ def check_finite(arrays: DriveArrays, sc: Scenario) -> None:
     for name, value in arrays.derived.items():
         if not math.isfinite(float(value)):
             raise _not_finite(name, value, sc, arrays.sources or DERIVED_SOURCE)
+    if all(_all_finite(rec) for records in (arrays.params, arrays.state0) for rec in records):
+        return  # the usual case, in one pass per record (the loop below names a bad field)
     for records in (arrays.params, arrays.state0):
         for rec_name, rec in zip(records._fields, records, strict=True):
             fields_ = rec.dtype.names or (None,)
