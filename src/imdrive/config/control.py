@@ -86,9 +86,9 @@ class ControlSettings:
         AfterValidator(_known_estimator),
         setting(
             '"measured": encoder speed; sensorless, the estimate of: "mras" Schauder\'s MRAS, '
-            '"reactive-mras" the reactive-power MRAS, "afo" the adaptive full-order observer, '
-            '"ekf" the extended Kalman filter (docs/estimators.md), or an estimator registered '
-            "by a module of [plugins] modules"
+            '"reactive-mras" the reactive-power MRAS, "smo-mras" the sliding-mode MRAS, "afo" '
+            'the adaptive full-order observer, "ekf" the extended Kalman filter '
+            "(docs/estimators.md), or an estimator registered by a module of [plugins] modules"
         ),
     ] = "measured"
     speed_ref_rpm: Annotated[Profile, setting("speed reference", "rpm")] = C(0.0)

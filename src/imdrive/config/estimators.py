@@ -103,7 +103,10 @@ class EstimatorSettings:
 
 
 @estimator_settings(
-    "reactive-mras", "reactive_mras", description="reactive-power MRAS speed estimator"
+    "reactive-mras",
+    "reactive_mras",
+    description="reactive-power MRAS speed estimator",
+    legend="reactive-power MRAS",
 )
 class ReactiveMrasSettings:
     """Reactive-power MRAS speed estimator (``[reactive_mras]``, Peng & Fukao 1994).
@@ -145,7 +148,9 @@ class ReactiveMrasSettings:
         return EstimatorRecords(dict(K1=K1, K2=K2), derived=derived)
 
 
-@estimator_settings("afo", "afo", description="adaptive full-order flux observer")
+@estimator_settings(
+    "afo", "afo", description="adaptive full-order flux observer", legend="full-order observer"
+)
 class AfoSettings:
     """Adaptive full-order flux observer (``[afo]``, Kubota, Matsuse & Nakano 1993).
 
@@ -321,6 +326,7 @@ _WB = ("Wb", 1.0)
     | {"R1_id_status": ("code", 1.0)},
     flux_error=True,
     description="Schauder's MRAS speed estimator",
+    legend="MRAS",
 )
 class MrasSettings:
     """Schauder's MRAS speed estimator (``[mras]``).

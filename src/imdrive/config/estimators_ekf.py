@@ -10,7 +10,9 @@ from imdrive.config.validation import Float, setting
 from imdrive.design.estimators import default_ekf_noise
 
 
-@estimator_settings("ekf", "ekf", description="extended Kalman filter for speed and R2")
+@estimator_settings(
+    "ekf", "ekf", description="extended Kalman filter for speed and R2", legend="EKF"
+)
 class EkfSettings:
     """Extended Kalman filter for speed and R2 (``[ekf]``); noise as standard deviations.
 

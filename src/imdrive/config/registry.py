@@ -94,12 +94,13 @@ def estimator_settings(
     log_units: dict | None = None,
     flux_error: bool = False,
     description: str = "",
+    legend: str = "",
 ):
     """Class decorator: the settings class of speed estimator ``name`` (its Python half).
 
     The class is made a validated settings table (as every section) and registered, with the
     class attributes ``estimator_name``, ``estimator_section``, ``estimator_log_units``,
-    ``estimator_flux_error`` and ``estimator_description``. It must define
+    ``estimator_flux_error``, ``estimator_description`` and ``estimator_legend``. It must define
     ``records(self, ctx: EstimatorContext) -> EstimatorRecords``, its gain design.
 
     Parameters
@@ -117,6 +118,8 @@ def estimator_settings(
         need.
     description : str
         One line, for lists.
+    legend : str
+        Its short name in figure legends ("MRAS"); default ``name``.
 
     Returns
     -------
@@ -134,6 +137,7 @@ def estimator_settings(
         cls.estimator_flux_error = flux_error
         doc = description or (cls.__doc__ or name).strip().splitlines()[0]
         cls.estimator_description = doc
+        cls.estimator_legend = legend or name
         ESTIMATOR_SETTINGS[name] = cls
         return cls
 

@@ -102,12 +102,21 @@ SIGNALS = {
     "theta_e_rad": "field angle of the controller",
 }
 
-#: the speed estimators' names in legends, by ``control.speed_feedback``
+
+def estimator_legend(speed_feedback: str) -> str:
+    """The legend name of the estimator ``speed_feedback`` selects (its settings class's
+    ``legend``, :func:`imdrive.config.registry.estimator_settings`); the name itself for
+    ``"measured"`` or an unknown one."""
+    from imdrive.config.registry import ESTIMATOR_SETTINGS
+
+    cls = ESTIMATOR_SETTINGS.get(speed_feedback) if speed_feedback != "measured" else None
+    return getattr(cls, "estimator_legend", speed_feedback)
+
+
+#: the speed estimators' names in legends, by ``control.speed_feedback`` (the package's, at
+#: import; kept for imdrive 0.2 callers: :func:`estimator_legend` also knows plug-ins)
 ESTIMATOR_NAMES = {
-    "mras": "MRAS",
-    "reactive-mras": "reactive-power MRAS",
-    "afo": "full-order observer",
-    "ekf": "EKF",
+    name: estimator_legend(name) for name in ("mras", "reactive-mras", "smo-mras", "afo", "ekf")
 }
 
 
@@ -123,7 +132,7 @@ def signal_label(column: str, res=None) -> str:
     label = SIGNALS.get(column, column)
     if column == "speed_est_rpm" and res is not None:
         fb = res.scenario.control.speed_feedback
-        label = f"{label} ({ESTIMATOR_NAMES.get(fb, fb)})"
+        label = f"{label} ({estimator_legend(fb)})"
     return label
 
 
