@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from imdrive.config.plugins import allowing_plugins
 from imdrive.bench.metrics import METRICS, run_metrics
 from imdrive.bench.protocol import CASES, ESTIMATORS, protocol, scenario
 from imdrive.errors import ConfigError
@@ -33,6 +34,8 @@ def run_protocol(
     cases=None,
     drives=None,
     overrides=(),
+    *,
+    allow_plugins: bool | None = None,
 ):
     """Simulate every run of the protocol.
 
@@ -57,6 +60,9 @@ def run_protocol(
     overrides : iterable of str
         Overrides of every drive (``key=value``), applied before the estimator's and the
         case's.
+    allow_plugins : bool, optional
+        True: import the modules a configuration lists in ``plugins.modules`` (their code
+        runs); default: only with ``IMDRIVE_ALLOW_PLUGINS=1`` (:mod:`imdrive.config.plugins`).
 
     Returns
     -------
@@ -80,7 +86,8 @@ def run_protocol(
     runs = list(runs)
     all_cases = {**CASES, **(cases or {})}
     t0 = time.perf_counter()
-    scenarios = [scenario(r, estimators, cases, drives, overrides) for r in runs]
+    with allowing_plugins(allow_plugins):
+        scenarios = [scenario(r, estimators, cases, drives, overrides) for r in runs]
     res = simulate_batch(scenarios, logs=True, parallel=parallel)
     wall = time.perf_counter() - t0
     rows = []
@@ -192,6 +199,8 @@ def bench_estimators(
     drives=None,
     overrides=(),
     parallel: bool = True,
+    *,
+    allow_plugins: bool | None = None,
 ) -> dict:
     """Run the protocol and write ``estimators.csv``, ``<metric>.png``, ``estimators.md``.
 
@@ -207,6 +216,8 @@ def bench_estimators(
         protocol's configuration names.
     parallel : bool
         Run the batch on all cores.
+    allow_plugins : bool, optional
+        As :func:`run_protocol`.
 
     Returns
     -------
@@ -223,7 +234,13 @@ def bench_estimators(
             )
         estimators = {e: ESTIMATORS[e] for e in estimators}
     table, _, wall = run_protocol(
-        quick, parallel, estimators=estimators, cases=cases, drives=drives, overrides=overrides
+        quick,
+        parallel,
+        estimators=estimators,
+        cases=cases,
+        drives=drives,
+        overrides=overrides,
+        allow_plugins=allow_plugins,
     )
     csv = out / "estimators.csv"
     table.to_csv(csv, index=False)

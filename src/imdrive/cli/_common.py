@@ -110,6 +110,17 @@ def add_force(parser, what: str) -> None:
     )
 
 
+def add_allow_plugins(parser) -> None:
+    """The ``--allow-plugins`` option of a command that runs a drive (the plug-in rule of
+    :mod:`imdrive.config.plugins`)."""
+    parser.add_argument(
+        "--allow-plugins",
+        action="store_true",
+        help="import the Python modules the scenario lists in [plugins] modules (their code "
+        "runs; without this, or IMDRIVE_ALLOW_PLUGINS=1, such a scenario is refused)",
+    )
+
+
 class _Parser(argparse.ArgumentParser):
     def error(self, message):  # argparse's own errors: one line, exit 2, like ours
         self.print_usage(sys.stderr)

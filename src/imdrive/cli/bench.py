@@ -6,7 +6,7 @@ import argparse
 import sys
 import time
 
-from imdrive.cli._common import EXIT_OK, _examples, add_force, output_folder
+from imdrive.cli._common import EXIT_OK, _examples, add_allow_plugins, add_force, output_folder
 from imdrive.errors import ConfigError
 
 
@@ -140,4 +140,5 @@ def add_parser(sub) -> None:
         help="the configurations to compare (default: all): " + ", ".join(ESTIMATORS),
     )
     be.add_argument("-q", "--quiet", action="store_true")
+    add_allow_plugins(be)
     be.set_defaults(func=_cmd_bench_estimators)

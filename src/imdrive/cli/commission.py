@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from imdrive.cli._common import EXIT_NOT_IDENTIFIED, EXIT_OK, _examples
+from imdrive.cli._common import EXIT_NOT_IDENTIFIED, EXIT_OK, _examples, add_allow_plugins
 
 
 def _cmd_commission(args) -> int:
@@ -40,4 +40,5 @@ def add_parser(sub) -> None:
     p.add_argument("scenario", help="preset name or scenario file")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder")
     p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a setting")
+    add_allow_plugins(p)
     p.set_defaults(func=_cmd_commission)

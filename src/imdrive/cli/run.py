@@ -11,6 +11,7 @@ from imdrive.cli._common import (
     EXIT_DIVERGED,
     EXIT_LOST_CONTROL,
     EXIT_OK,
+    add_allow_plugins,
     _examples,
     output_folder,
 )
@@ -154,4 +155,5 @@ def add_parser(sub) -> None:
         help="replace an --out folder that holds files other than an imdrive result",
     )
     r.add_argument("-q", "--quiet", action="store_true")
+    add_allow_plugins(r)
     r.set_defaults(func=_cmd_run)

@@ -6,7 +6,7 @@ import argparse
 import sys
 import time
 
-from imdrive.cli._common import EXIT_OK, _examples, add_force, output_folder
+from imdrive.cli._common import EXIT_OK, _examples, add_allow_plugins, add_force, output_folder
 from imdrive.errors import ConfigError
 
 
@@ -156,4 +156,5 @@ def add_parser(sub) -> None:
     st.add_argument("--out", metavar="DIR", required=True)
     add_force(st, "a stability map")
     st.add_argument("-q", "--quiet", action="store_true")
+    add_allow_plugins(st)
     st.set_defaults(func=_cmd_stability)
