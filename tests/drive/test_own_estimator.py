@@ -169,8 +169,8 @@ def test_the_cli_runs_a_scenario_file_naming_the_module(tmp_path):
         )
     )
     out = subprocess.run(
-        [sys.executable, "-m", "imdrive", "run", str(f), "--out", str(tmp_path / "o"), "-q",
-         "--allow-plugins"],  # fmt: skip
+        [sys.executable, "-m", "imdrive", "run", str(f), "--out", str(tmp_path / "o"), "-q"]
+        + ["--allow-plugins"],
         capture_output=True,
         text=True,
     )

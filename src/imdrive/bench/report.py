@@ -9,9 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
-from imdrive.config.plugins import allowing_plugins
 from imdrive.bench.metrics import METRICS, run_metrics
 from imdrive.bench.protocol import CASES, ESTIMATORS, protocol, scenario
+from imdrive.config.plugins import allowing_plugins
 from imdrive.errors import ConfigError
 
 UNITS = {

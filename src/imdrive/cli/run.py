@@ -11,8 +11,8 @@ from imdrive.cli._common import (
     EXIT_DIVERGED,
     EXIT_LOST_CONTROL,
     EXIT_OK,
-    add_allow_plugins,
     _examples,
+    add_allow_plugins,
     output_folder,
 )
 
