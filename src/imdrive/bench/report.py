@@ -207,7 +207,8 @@ def bench_estimators(
     Parameters
     ----------
     out_dir : str or pathlib.Path
-        Folder to write into (created).
+        Folder to write (replaced as a whole, :func:`imdrive._io.replace_folder`; nothing is
+        written when the input is refused or a run fails to build).
     quick : bool
         The quick subset of the protocol.
     estimators, cases, drives, overrides
@@ -224,15 +225,21 @@ def bench_estimators(
     dict
         ``runs`` (count), ``wall_s`` (s), ``csv``, ``markdown`` and ``figures`` (paths).
     """
+    from imdrive._io import replace_folder
+
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
     if estimators is not None and not isinstance(estimators, dict):
+        if isinstance(estimators, str):
+            estimators = [estimators]
+        estimators = list(estimators)
         unknown = [e for e in estimators if e not in ESTIMATORS]
         if unknown:
             raise ConfigError(
                 "estimators", f"no configuration {unknown[0]!r}; known: {', '.join(ESTIMATORS)}"
             )
         estimators = {e: ESTIMATORS[e] for e in estimators}
+    if estimators is not None and not estimators:
+        raise ConfigError("estimators", f"is empty: name one or more of {', '.join(ESTIMATORS)}")
     table, _, wall = run_protocol(
         quick,
         parallel,
@@ -242,9 +249,17 @@ def bench_estimators(
         overrides=overrides,
         allow_plugins=allow_plugins,
     )
-    csv = out / "estimators.csv"
-    table.to_csv(csv, index=False)
-    figs = figures(table, out)
-    md = out / "estimators.md"
-    md.write_text(markdown(table) + "\n")
-    return {"runs": len(table), "wall_s": wall, "csv": csv, "markdown": md, "figures": figs}
+    # the folder as a whole, staged and swapped in (as imdrive run writes its own): a failure
+    # leaves no folder, or the earlier one, never a partial estimators.csv
+    with replace_folder(out) as staging:
+        table.to_csv(staging / "estimators.csv", index=False)
+        figs = figures(table, staging)
+        (staging / "estimators.md").write_text(markdown(table) + "\n")
+    figs = [out / Path(f).name for f in figs]
+    return {
+        "runs": len(table),
+        "wall_s": wall,
+        "csv": out / "estimators.csv",
+        "markdown": out / "estimators.md",
+        "figures": figs,
+    }
