@@ -246,5 +246,7 @@ def test_compare_of_a_result_naming_a_module_imports_nothing(tmp_path, capsys, m
     monkeypatch.setenv(ALLOW_ENV, "1")
     capsys.readouterr()
     rc = main(["compare", str(tmp_path / "a"), str(tmp_path / "a"), "--out", str(tmp_path / "c")])
-    assert rc == 0, _err(capsys)
+    err = _err(capsys)
+    assert rc == 0, err
+    assert "not imported" in err and str(mod) in err  # named, not run
     assert not marker.exists()
