@@ -19,6 +19,9 @@ replace_folder
     staging folder in its place: the old folder's files are all gone, the new ones all there.
 remove_partials
     Delete what killed writers left behind (temporary files and staging folders).
+file_path_problem, real_file
+    The rule for every single file a command writes: a regular file or a link to one (written
+    through), never a folder, a device node, a FIFO or a socket.
 output_folder_problem
     The one rule for every folder a command writes: not the current folder or a parent, not
     under a file, a symbolic link kept (written through), other files refused unless forced.
@@ -368,6 +371,81 @@ def real_folder(folder) -> Path:
     written through instead of being replaced by a real folder."""
     folder = Path(folder)
     return Path(os.path.realpath(folder)) if folder.is_symlink() else folder
+
+
+def file_path_problem(path) -> str | None:
+    """What makes ``path`` a path no command may write a single file at, or None.
+
+    The rule of every command that writes one file (``machine-from-nameplate --out``): a
+    folder, ``.``, ``..`` or an empty name is not a file; an existing path must be a regular
+    file, or a symbolic link to one (kept and written through, :func:`real_file`), never a
+    device node, a FIFO or a socket (replacing ``/dev/null`` by a file breaks the system); a
+    symbolic link to nothing is refused as for a folder; the folder it goes in must exist and
+    not be a file; a name or path the file system cannot hold is refused.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file to write.
+
+    Returns
+    -------
+    str or None
+        One line starting with the path, e.g. ``"/dev/null is a character device, not a
+        regular file"``.
+    """
+    import stat
+
+    text = os.fspath(path)
+    if not str(text).strip():
+        return "is empty: name the file to write"
+    path = Path(text)
+    if path.name in ("", ".", "..") or str(text).endswith(("/", os.sep)):
+        return f"{path} is a folder: name the file to write"
+    try:
+        for part in path.parts:
+            if len(os.fsencode(part)) > 255:
+                return f"a part of the path is longer than 255 bytes: {part[:40]}..."
+        if len(os.fsencode(str(path.absolute()))) > 4096:
+            return "the path is longer than 4096 bytes"
+        if path.is_symlink() and not path.exists():
+            return f"{path} is a symbolic link to nothing"
+        if path.exists():
+            mode = os.stat(path).st_mode
+            if stat.S_ISDIR(mode):
+                return f"{path} is a folder: name the file to write"
+            if not stat.S_ISREG(mode):
+                kind = (
+                    "a character device"
+                    if stat.S_ISCHR(mode)
+                    else "a block device"
+                    if stat.S_ISBLK(mode)
+                    else "a FIFO"
+                    if stat.S_ISFIFO(mode)
+                    else "a socket"
+                    if stat.S_ISSOCK(mode)
+                    else "a special file"
+                )
+                return f"{path} is {kind}, not a regular file: name a file to write"
+        parent = real_file(path).parent
+        for p in (parent, *parent.parents):
+            if p.exists():
+                if not p.is_dir():
+                    return f"{path} is inside {p}, which is a file"
+                break
+        if not parent.is_dir():
+            return f"{parent} is not an existing folder"
+    except (OSError, ValueError) as exc:  # a NUL byte, a loop of links, a name too long
+        return f"{path} is not a usable path ({getattr(exc, 'strerror', None) or exc})"
+    return None
+
+
+def real_file(path) -> Path:
+    """``path`` with its symbolic links resolved: where a single file is written, so that a
+    link the user made (``motor.toml -> machines/m1.toml``) stays a link and its target gets
+    the new content (as :func:`real_folder` for a folder)."""
+    path = Path(path)
+    return Path(os.path.realpath(path)) if path.is_symlink() else path
 
 
 def folder_path_problem(folder) -> str | None:

@@ -251,10 +251,13 @@ def _argv(command: str, out: str | None, tmp_path: Path) -> list[str]:
         return ["bench-estimators", "--quick", *o, "-q"]
     if command == "paper":
         return ["paper", *o]
+    if command == "commission":
+        return ["commission", "sensorless-realistic", *o]
     raise AssertionError(command)
 
 
-WRITERS = ["run", "sweep", "stability", "bench-estimators", "paper"]
+#: every command that writes a folder (commission: refused before its identification run)
+WRITERS = ["run", "sweep", "stability", "bench-estimators", "paper", "commission"]
 #: the commands fast enough here to run to the end
 QUICK_WRITERS = ["run", "sweep", "stability"]
 

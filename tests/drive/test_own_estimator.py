@@ -1,6 +1,7 @@
 """An estimator written outside the package (tests/data/own_estimator.py) runs everywhere the
 package's do: a scenario file, simulate(), a batch of 100 drives, a sweep, the bench; a
-stability map refuses it in one line; the CLI reads it from [plugins] modules."""
+stability map refuses it in one line; the CLI reads it from [plugins] modules. A plug-in is
+opt-in: every read here allows it (allow_plugins=True, --allow-plugins)."""
 
 from __future__ import annotations
 
@@ -32,7 +33,7 @@ BASE = [
 
 
 def _scenario(extra=()):
-    return Scenario.read("sensorless", [*BASE, *extra])
+    return Scenario.read("sensorless", [*BASE, *extra], allow_plugins=True)
 
 
 def test_a_scenario_file_names_the_module_and_the_drive_tracks():
@@ -127,7 +128,7 @@ def test_a_sweep_runs_it(tmp_path):
         load_Nm = [0, 6]
         """
     )
-    sweep = parse_sweep(text, tmp_path / "own.toml")
+    sweep = parse_sweep(text, tmp_path, allow_plugins=True)
     table = run_sweep(sweep, tmp_path / "store", figures=False, report=False, progress=False)
     assert len(table) == 4 and (table["status"] == 0).all()
     # the estimate holds the speed within its bias (-1.8 rpm at 700 rpm, 12 N m); below
@@ -141,7 +142,7 @@ def test_the_bench_compares_it():
 
     mine = {"flux-angle": [f'plugins.modules=["{MODULE}"]', 'control.speed_feedback="flux-angle"']}
     runs = [Run("flux-angle", "steady-1000", "average"), Run("mras", "steady-1000", "average")]
-    table, _, _ = run_protocol(runs=runs, estimators=mine)
+    table, _, _ = run_protocol(runs=runs, estimators=mine, allow_plugins=True)
     assert list(table["estimator"]) == ["flux-angle", "mras"]
     assert not table["diverged"].any()
 
@@ -168,7 +169,8 @@ def test_the_cli_runs_a_scenario_file_naming_the_module(tmp_path):
         )
     )
     out = subprocess.run(
-        [sys.executable, "-m", "imdrive", "run", str(f), "--out", str(tmp_path / "o"), "-q"],
+        [sys.executable, "-m", "imdrive", "run", str(f), "--out", str(tmp_path / "o"), "-q"]
+        + ["--allow-plugins"],
         capture_output=True,
         text=True,
     )

@@ -88,7 +88,13 @@ from imdrive.analysis.nameplate_lee import (
     locked_rotor_current_A,
 )
 from imdrive.config.machine import MachineParams
+from imdrive.config.validation import FLOAT_MAX_MAGNITUDE, FLOAT_MIN_MAGNITUDE
 from imdrive.errors import ConfigError
+
+#: the bound of every nameplate magnitude: the scenario's (imdrive.config.validation)
+_MAGNITUDE = (FLOAT_MIN_MAGNITUDE, FLOAT_MAX_MAGNITUDE)
+_UNITS = {"power_W": "W", "voltage_V": "V", "frequency_Hz": "Hz", "speed_rpm": "rpm",
+          "current_A": "A"}  # fmt: skip
 
 __all__ = [
     "DEFAULT_BREAKDOWN_RATIO",
@@ -177,12 +183,40 @@ class Nameplate:
             v = getattr(self, name)
             if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
                 raise ConfigError(name, f"must be a finite number > 0, got {v!r}")
-        if not (isinstance(self.poles, int) and self.poles >= 2 and self.poles % 2 == 0):
-            raise ConfigError("poles", f"must be an even integer >= 2, got {self.poles!r}")
+            if not _MAGNITUDE[0] <= v <= _MAGNITUDE[1]:  # the scenario's own bound
+                unit = _UNITS[name]
+                raise ConfigError(
+                    name,
+                    f"must be between {_MAGNITUDE[0]:g} and {_MAGNITUDE[1]:g} {unit} (got {v:g} "
+                    f"{unit}): derived quantities would overflow or vanish",
+                )
+        if not (isinstance(self.poles, int) and 2 <= self.poles <= 1000 and self.poles % 2 == 0):
+            raise ConfigError("poles", f"must be an even integer 2-1000, got {self.poles!r}")
         for name in ("power_factor", "efficiency"):
             v = getattr(self, name)
-            if not (math.isfinite(v) and 0 < v < 1):
-                raise ConfigError(name, f"must be between 0 and 1 (exclusive), got {v!r}")
+            if not (isinstance(v, int | float) and math.isfinite(v) and 0.01 <= v < 1):
+                raise ConfigError(name, f"must be at least 0.01 and below 1, got {v!r}")
+        for name, hi in (("breakdown_torque_ratio", 20.0), ("starting_current_ratio", 50.0)):
+            v = getattr(self, name)
+            if v is not None and not (isinstance(v, int | float) and 1 < v <= hi):
+                raise ConfigError(name, f"must be > 1 and <= {hi:g} (finite), got {v!r}")
+        if self.J_kgm2 is not None and not (
+            isinstance(self.J_kgm2, int | float)
+            and math.isfinite(self.J_kgm2)
+            and _MAGNITUDE[0] <= self.J_kgm2 <= _MAGNITUDE[1]
+        ):
+            raise ConfigError("J_kgm2", f"must be a finite number > 0, got {self.J_kgm2!r}")
+        # the values against each other: the input power the plate implies against the rated
+        # power (a real motor's are within a few per cent)
+        implied = math.sqrt(3.0) * self.voltage_V * self.current_A
+        implied *= self.power_factor * self.efficiency
+        if not (implied < math.inf and 1.0 / 3.0 <= implied / self.power_W <= 3.0):
+            raise ConfigError(
+                "power_W",
+                f"{self.power_W:.4g} W contradicts sqrt(3) V I cos phi eta = {implied:.4g} W "
+                "(more than a factor of 3 apart): check the power, voltage, current, power "
+                "factor and efficiency",
+            )
         if not 0.05 <= self.leakage_split <= 0.95:
             raise ConfigError("leakage_split", "must be within 0.05-0.95")
         n_sync = 120.0 * self.frequency_Hz / self.poles
@@ -190,12 +224,6 @@ class Nameplate:
             raise ConfigError(
                 "speed_rpm", f"must be below the synchronous speed 120 f / poles = {n_sync:g} rpm"
             )
-        if self.breakdown_torque_ratio is not None and not self.breakdown_torque_ratio > 1:
-            raise ConfigError("breakdown_torque_ratio", "must be > 1")
-        if self.starting_current_ratio is not None and not self.starting_current_ratio > 1:
-            raise ConfigError("starting_current_ratio", "must be > 1")
-        if self.J_kgm2 is not None and not self.J_kgm2 > 0:
-            raise ConfigError("J_kgm2", "must be > 0")
         if self.code_letter is not None and self.code_letter not in NEMA_CODE_LETTERS:
             raise ConfigError("code_letter", "must be a NEMA code letter A-V (not I, O, Q)")
         slip = 1.0 - self.speed_rpm / n_sync
@@ -296,6 +324,19 @@ def estimate_circuit(
     -----
     The methods and their assumptions are in the module docstring.
     """
+    try:
+        return _estimate_circuit(plate, description, method, **options)
+    except (ArithmeticError, ValueError) as exc:  # extreme data overflow in the estimate
+        if isinstance(exc, ConfigError):
+            raise
+        raise ConfigError(
+            "nameplate",
+            f"the circuit cannot be estimated from these values ({type(exc).__name__}: "
+            f"{exc}): some are far outside a physical range",
+        ) from None
+
+
+def _estimate_circuit(plate, description, method, **options) -> NameplateFit:
     if method == "lee":
         return estimate_circuit_lee(plate, description, **options)
     if method != "fit":

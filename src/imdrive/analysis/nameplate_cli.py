@@ -4,7 +4,6 @@ write the machine as a TOML file for ``[machine] file = "..."``."""
 from __future__ import annotations
 
 import sys
-from pathlib import Path
 
 from imdrive.analysis.nameplate import LEAKAGE_SPLIT, Nameplate, NameplateFit, estimate_circuit
 from imdrive.errors import ConfigError
@@ -124,6 +123,14 @@ def machine_from_nameplate_command(args) -> int:
     int
         0 (errors are raised as :class:`~imdrive.errors.ConfigError`).
     """
+    out = None
+    if args.out is not None:  # checked before any work: a device, FIFO or folder is refused
+        from imdrive._io import file_path_problem, real_file
+
+        problem = file_path_problem(args.out)
+        if problem is not None:
+            raise ConfigError("--out", problem)
+        out = real_file(args.out)  # a symbolic link stays one: its target is written
     method = _method(args)
     options = _lee_options(args)
     if method == "fit" and options:
@@ -138,15 +145,10 @@ def machine_from_nameplate_command(args) -> int:
     for what in fit.assumed:
         print(f"imdrive: note: assumed {what}", file=sys.stderr)
     _notes(fit)
-    if args.out:
+    if out is not None:
         from imdrive._io import atomic_write_text
 
-        out = Path(args.out)
-        if out.is_dir() or out.name in ("", ".", ".."):
-            raise ConfigError("--out", f"{out} is a folder: name the TOML file to write")
-        if not out.absolute().parent.is_dir():
-            raise ConfigError("--out", f"{out.parent} is not an existing folder")
-        atomic_write_text(out, text)
+        atomic_write_text(out, text)  # a temporary file renamed in the target's folder
         print(f"imdrive: wrote {args.out}", file=sys.stderr)
     else:
         sys.stdout.write(text)

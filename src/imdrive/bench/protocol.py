@@ -293,4 +293,11 @@ def scenario(run: Run, estimators: dict | None = None, cases=None, drives=None, 
         "simulation.log_every=10",
         f'name="{run.estimator}.{run.case}.{run.drive}"',  # a safe folder name
     ]
-    return Scenario.read(base, ov)
+    sc = Scenario.read(base, ov)
+    if sc.drive.mode != "vector":  # no speed loop: no reference to hold, nothing to estimate
+        raise ConfigError(
+            "drives",
+            f'{base!r} runs open-loop ([drive] mode = "{sc.drive.mode}"): the estimator bench '
+            'needs a field-oriented drive ([drive] mode = "vector")',
+        )
+    return sc

@@ -11,6 +11,7 @@ import numpy as np
 
 from imdrive.bench.metrics import METRICS, run_metrics
 from imdrive.bench.protocol import CASES, ESTIMATORS, protocol, scenario
+from imdrive.config.plugins import allowing_plugins
 from imdrive.errors import ConfigError
 
 UNITS = {
@@ -33,6 +34,8 @@ def run_protocol(
     cases=None,
     drives=None,
     overrides=(),
+    *,
+    allow_plugins: bool | None = None,
 ):
     """Simulate every run of the protocol.
 
@@ -57,6 +60,9 @@ def run_protocol(
     overrides : iterable of str
         Overrides of every drive (``key=value``), applied before the estimator's and the
         case's.
+    allow_plugins : bool, optional
+        True: import the modules a configuration lists in ``plugins.modules`` (their code
+        runs); default: only with ``IMDRIVE_ALLOW_PLUGINS=1`` (:mod:`imdrive.config.plugins`).
 
     Returns
     -------
@@ -80,7 +86,8 @@ def run_protocol(
     runs = list(runs)
     all_cases = {**CASES, **(cases or {})}
     t0 = time.perf_counter()
-    scenarios = [scenario(r, estimators, cases, drives, overrides) for r in runs]
+    with allowing_plugins(allow_plugins):
+        scenarios = [scenario(r, estimators, cases, drives, overrides) for r in runs]
     res = simulate_batch(scenarios, logs=True, parallel=parallel)
     wall = time.perf_counter() - t0
     rows = []
@@ -192,13 +199,16 @@ def bench_estimators(
     drives=None,
     overrides=(),
     parallel: bool = True,
+    *,
+    allow_plugins: bool | None = None,
 ) -> dict:
     """Run the protocol and write ``estimators.csv``, ``<metric>.png``, ``estimators.md``.
 
     Parameters
     ----------
     out_dir : str or pathlib.Path
-        Folder to write into (created).
+        Folder to write (replaced as a whole, :func:`imdrive._io.replace_folder`; nothing is
+        written when the input is refused or a run fails to build).
     quick : bool
         The quick subset of the protocol.
     estimators, cases, drives, overrides
@@ -207,27 +217,49 @@ def bench_estimators(
         protocol's configuration names.
     parallel : bool
         Run the batch on all cores.
+    allow_plugins : bool, optional
+        As :func:`run_protocol`.
 
     Returns
     -------
     dict
         ``runs`` (count), ``wall_s`` (s), ``csv``, ``markdown`` and ``figures`` (paths).
     """
+    from imdrive._io import replace_folder
+
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
     if estimators is not None and not isinstance(estimators, dict):
+        if isinstance(estimators, str):
+            estimators = [estimators]
+        estimators = list(estimators)
         unknown = [e for e in estimators if e not in ESTIMATORS]
         if unknown:
             raise ConfigError(
                 "estimators", f"no configuration {unknown[0]!r}; known: {', '.join(ESTIMATORS)}"
             )
         estimators = {e: ESTIMATORS[e] for e in estimators}
+    if estimators is not None and not estimators:
+        raise ConfigError("estimators", f"is empty: name one or more of {', '.join(ESTIMATORS)}")
     table, _, wall = run_protocol(
-        quick, parallel, estimators=estimators, cases=cases, drives=drives, overrides=overrides
+        quick,
+        parallel,
+        estimators=estimators,
+        cases=cases,
+        drives=drives,
+        overrides=overrides,
+        allow_plugins=allow_plugins,
     )
-    csv = out / "estimators.csv"
-    table.to_csv(csv, index=False)
-    figs = figures(table, out)
-    md = out / "estimators.md"
-    md.write_text(markdown(table) + "\n")
-    return {"runs": len(table), "wall_s": wall, "csv": csv, "markdown": md, "figures": figs}
+    # the folder as a whole, staged and swapped in (as imdrive run writes its own): a failure
+    # leaves no folder, or the earlier one, never a partial estimators.csv
+    with replace_folder(out) as staging:
+        table.to_csv(staging / "estimators.csv", index=False)
+        figs = figures(table, staging)
+        (staging / "estimators.md").write_text(markdown(table) + "\n")
+    figs = [out / Path(f).name for f in figs]
+    return {
+        "runs": len(table),
+        "wall_s": wall,
+        "csv": out / "estimators.csv",
+        "markdown": out / "estimators.md",
+        "figures": figs,
+    }

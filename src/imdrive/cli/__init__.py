@@ -164,7 +164,7 @@ def main(argv: list[str] | None = None) -> int:
 
         _compiling.enable()
     try:
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), _plugin_rule(args):
             warnings.showwarning = _show_warning
             return args.func(args)
     except ConfigError as exc:
@@ -186,6 +186,30 @@ def main(argv: list[str] | None = None) -> int:
             f"internal error ({type(exc).__name__}: {msg}); set IMDRIVE_DEBUG=1 for the traceback",
             EXIT_INTERNAL,
         )
+
+
+#: the commands that only look at files: they never import a plug-in module
+LOOKING_COMMANDS = ("show", "compare")
+
+
+def _plugin_rule(args):
+    """The plug-in rule of this invocation (:mod:`imdrive.config.plugins`): a command that
+    only looks at files (``show``, ``compare``, ``sweep --dry-run``) imports no module; one
+    that runs a drive imports them with ``--allow-plugins`` (or ``IMDRIVE_ALLOW_PLUGINS=1``)."""
+    import contextlib
+
+    look = args.command in LOOKING_COMMANDS or (
+        args.command == "sweep" and getattr(args, "dry_run", False)
+    )
+    if look:
+        from imdrive.config.plugins import looking
+
+        return looking()
+    if getattr(args, "allow_plugins", False):
+        from imdrive.config.plugins import allowing_plugins
+
+        return allowing_plugins(True)
+    return contextlib.nullcontext()
 
 
 def _did_you_mean(exc: ConfigError, args) -> str:

@@ -6,7 +6,7 @@ import argparse
 import sys
 import time
 
-from imdrive.cli._common import EXIT_OK, _examples, add_force, output_folder
+from imdrive.cli._common import EXIT_OK, _examples, add_allow_plugins, add_force, output_folder
 from imdrive.errors import ConfigError
 
 
@@ -23,6 +23,9 @@ def _numbers(text: str, option: str) -> list[float]:
         raise ConfigError(option, f"a comma-separated list of numbers, not {text!r}") from None
     if not values:
         raise ConfigError(option, "is empty")
+    bad = [v for v in values if not abs(v) < float("inf")]
+    if bad:
+        raise ConfigError(option, f"must be finite numbers, got {bad[0]!r}")
     return values
 
 
@@ -47,10 +50,31 @@ def bench_setup(args) -> dict:
 
     overrides = list(args.set or [])
     kw: dict = {"quick": args.quick, "overrides": overrides}
-    if args.estimators:
-        kw["estimators"] = [e.strip() for e in args.estimators.split(",") if e.strip()]
+    if args.estimators is not None:
+        from imdrive.bench.protocol import ESTIMATORS
+
+        names = [e.strip() for e in args.estimators.split(",") if e.strip()]
+        if not names:
+            raise ConfigError(
+                "--estimators", f"is empty: name one or more of {', '.join(ESTIMATORS)}"
+            )
+        unknown = [e for e in names if e not in ESTIMATORS]
+        if unknown:
+            raise ConfigError(
+                "--estimators", f"no configuration {unknown[0]!r}; known: {', '.join(ESTIMATORS)}"
+            )
+        kw["estimators"] = names
     base = args.base
     if base is not None:
+        from imdrive.config.scenario import Scenario
+
+        mode = Scenario.read(base, overrides).drive.mode
+        if mode != "vector":  # the bench holds a speed reference with an estimator in the loop
+            raise ConfigError(
+                "--base",
+                f'{base!r} runs open-loop ([drive] mode = "{mode}"): the estimator bench needs '
+                'a field-oriented drive (add --set drive.mode="vector" or choose another)',
+            )
         kw["drives"] = {_run_folder_name(base): base}
     if args.speeds is not None or args.loads is not None:
         ref = base or DRIVES["average"]
@@ -140,4 +164,5 @@ def add_parser(sub) -> None:
         help="the configurations to compare (default: all): " + ", ".join(ESTIMATORS),
     )
     be.add_argument("-q", "--quiet", action="store_true")
+    add_allow_plugins(be)
     be.set_defaults(func=_cmd_bench_estimators)

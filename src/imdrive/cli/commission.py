@@ -5,23 +5,35 @@ from __future__ import annotations
 import argparse
 import sys
 
-from imdrive.cli._common import EXIT_NOT_IDENTIFIED, EXIT_OK, _examples
+from imdrive.cli._common import (
+    EXIT_NOT_IDENTIFIED,
+    EXIT_OK,
+    _examples,
+    add_allow_plugins,
+    add_force,
+    output_folder,
+)
 
 
 def _cmd_commission(args) -> int:
     from imdrive.commission import CommissioningFailed, commission
+    from imdrive.commission.identify import owns_commission_file
     from imdrive.config.scenario import Scenario
 
     sc = Scenario.read(args.scenario, args.set or [])
+    # the folder rule of every command, before the identification run starts
+    out = output_folder(
+        args.out, owns=owns_commission_file, force=args.force, what="a commissioning result"
+    )
     try:
-        res = commission(sc, args.out)
+        res = commission(sc, out, force=args.force)
     except CommissioningFailed as exc:
         print(f"imdrive: commissioning failed: {exc}", file=sys.stderr)
         return EXIT_NOT_IDENTIFIED
     for key, err in res.relative_error.items():
         text = "-" if err is None else f"{100 * err:+7.2f} %"
         print(f"{key:12s} {text}")
-    print(f"wrote {args.out}/summary.json, identified.toml and the figures ({res.wall_s:.1f} s)")
+    print(f"wrote {out}/summary.json, identified.toml and the figures ({res.wall_s:.1f} s)")
     return EXIT_OK
 
 
@@ -39,5 +51,7 @@ def add_parser(sub) -> None:
     )
     p.add_argument("scenario", help="preset name or scenario file")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder")
+    add_force(p, "a commissioning result")
     p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a setting")
+    add_allow_plugins(p)
     p.set_defaults(func=_cmd_commission)

@@ -22,6 +22,14 @@ def _cmd_compare(args) -> int:
         args.out, "compare", owns=_owns_compare_file, force=args.force, what="a comparison"
     )
     paths = cmp.save(out)
+    from imdrive.config.plugins import looked_past
+
+    if looked_past():  # compare only looks: a run's plug-in modules are named, never imported
+        print(
+            "imdrive: note: plug-in modules of the runs, not imported (comparing runs none of "
+            f"their code): {', '.join(looked_past())}",
+            file=sys.stderr,
+        )
     if not args.quiet:
         print(
             f"imdrive: compared {len(cmp.runs)} runs -> " + ", ".join(str(p) for p in paths),

@@ -59,9 +59,11 @@ def _cmd_show(args) -> int:
             + rated_point_comment(m)
         )
         return EXIT_OK
+    from imdrive.config.plugins import looking
     from imdrive.config.scenario import Scenario
 
-    scenario = Scenario.read(args.preset)
+    with looking() as skipped:  # looking at a file never runs its plug-in modules
+        scenario = Scenario.read(args.preset)
     if args.all:
         text = scenario.to_toml() + "\n" + rated_point_comment(scenario.machine)
     elif args.preset in preset_names():
@@ -70,8 +72,20 @@ def _cmd_show(args) -> int:
         from imdrive.config.presets import scenario_text
 
         text = scenario_text(args.preset)
-    sys.stdout.write(_mode_comment(scenario) + text)
+    sys.stdout.write(_mode_comment(scenario) + _plugins_comment(skipped) + text)
     return EXIT_OK
+
+
+def _plugins_comment(skipped) -> str:
+    """The lines of ``imdrive show`` naming the plug-in modules it did not import."""
+    if not skipped:
+        return ""
+    return (
+        "# plug-in modules, not imported (showing a file runs none of its code; their "
+        "estimator's\n# settings are unchecked; a run needs --allow-plugins): "
+        + ", ".join(skipped)
+        + "\n"
+    )
 
 
 def _cmd_fuzzy_table(args) -> int:

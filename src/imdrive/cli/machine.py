@@ -40,7 +40,7 @@ def add_parser(sub) -> None:
         ("--speed", "speed", float, "rated speed, rpm"),
         ("--current", "current", float, "rated line current, A rms"),
         ("--pf", "pf", float, "rated power factor (0-1)"),
-        ("--efficiency", "efficiency", float, "rated efficiency (0-1, not %)"),
+        ("--efficiency", "efficiency", float, "rated efficiency (0-1, not %%)"),
     ):
         mn.add_argument(flag, dest=dest, type=kind, required=True, help=text)
     mn.add_argument("--breakdown-ratio", type=float, help="breakdown torque / rated torque")

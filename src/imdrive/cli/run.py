@@ -12,6 +12,7 @@ from imdrive.cli._common import (
     EXIT_LOST_CONTROL,
     EXIT_OK,
     _examples,
+    add_allow_plugins,
     output_folder,
 )
 
@@ -152,4 +153,5 @@ def add_parser(sub) -> None:
         help="replace an --out folder that holds files other than an imdrive result",
     )
     r.add_argument("-q", "--quiet", action="store_true")
+    add_allow_plugins(r)
     r.set_defaults(func=_cmd_run)

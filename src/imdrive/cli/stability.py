@@ -6,7 +6,7 @@ import argparse
 import sys
 import time
 
-from imdrive.cli._common import EXIT_OK, _examples, add_force, output_folder
+from imdrive.cli._common import EXIT_OK, _examples, add_allow_plugins, add_force, output_folder
 from imdrive.errors import ConfigError
 
 
@@ -56,6 +56,30 @@ def _default_grid(scenario) -> tuple[str, str]:
     return f"0:{n:.6g}:50", f"{-t:.6g}:{t:.6g}:41"
 
 
+#: how far from the machine's rated point a map may reach (multiples of the synchronous
+#: speed and of the rated torque): beyond, the linearisation's matrices overflow
+MAP_REACH = 10.0
+
+
+def _check_within_machine(scenario, speeds, torques) -> None:
+    """The map's axes within :data:`MAP_REACH` times the machine's synchronous speed and
+    rated torque (a one-line ConfigError naming the option otherwise)."""
+    from imdrive.config.machine import rated_point
+
+    rp = rated_point(scenario.machine)
+    for name, values, bound, unit, what in (
+        ("--speeds", speeds, MAP_REACH * rp.synchronous_speed_rpm, "rpm", "synchronous speed"),
+        ("--torques", torques, MAP_REACH * rp.torque_Nm, "N m", "rated torque"),
+    ):
+        worst = float(max(abs(values[0]), abs(values[-1])))
+        if worst > bound:
+            raise ConfigError(
+                name,
+                f"{worst:.4g} {unit} is beyond {MAP_REACH:g} x the machine's {what} "
+                f"({bound:.4g} {unit})",
+            )
+
+
 def _owns_stability_file(name: str) -> bool:
     """The files ``imdrive stability`` writes: stability.csv, stability*.png."""
     return name == "stability.csv" or (name.startswith("stability") and name.endswith(".png"))
@@ -64,7 +88,7 @@ def _owns_stability_file(name: str) -> bool:
 def _cmd_stability(args) -> int:
     import pandas as pd
 
-    from imdrive._io import atomic_path
+    from imdrive._io import replace_folder
     from imdrive.config.scenario import Scenario
 
     r1 = _parse_ratios(args.R1_ratios, "--r1-ratios")
@@ -73,6 +97,7 @@ def _cmd_stability(args) -> int:
     speed_range, torque_range = _default_grid(scenario)
     speeds = _parse_range(args.speeds or speed_range, "--speeds")
     torques = _parse_range(args.torques or torque_range, "--torques")
+    _check_within_machine(scenario, speeds, torques)
     out = output_folder(
         args.out, owns=_owns_stability_file, force=args.force, what="a stability map"
     )
@@ -92,15 +117,14 @@ def _cmd_stability(args) -> int:
     for label, df in {**over_r1, **over_r2}.items():
         frames.append(df.assign(map=label))
     wall = time.perf_counter() - t0
-    out.mkdir(parents=True, exist_ok=True)
-    with atomic_path(out / "stability.csv") as tmp:
-        pd.concat(frames, ignore_index=True).to_csv(tmp, index=False)
-    with atomic_path(out / "stability.png") as tmp:
-        plot_map(base, tmp, title=f"{scenario.name}: small-signal stability")
-    for name, over in (("stability_R1.png", over_r1), ("stability_R2.png", over_r2)):
-        if over:
-            with atomic_path(out / name) as tmp:
-                plot_overlay({"as configured": base, **over}, tmp)
+    # the folder as a whole, as imdrive run writes its own: staged, then put in place, so a
+    # failure (or a kill) in a figure leaves no complete-looking stability.csv behind
+    with replace_folder(out) as staging:
+        pd.concat(frames, ignore_index=True).to_csv(staging / "stability.csv", index=False)
+        plot_map(base, staging / "stability.png", title=f"{scenario.name}: small-signal stability")
+        for name, over in (("stability_R1.png", over_r1), ("stability_R2.png", over_r2)):
+            if over:
+                plot_overlay({"as configured": base, **over}, staging / name)
     if not args.quiet:
         ok = base["status"] == "ok"
         print(
@@ -156,4 +180,5 @@ def add_parser(sub) -> None:
     st.add_argument("--out", metavar="DIR", required=True)
     add_force(st, "a stability map")
     st.add_argument("-q", "--quiet", action="store_true")
+    add_allow_plugins(st)
     st.set_defaults(func=_cmd_stability)

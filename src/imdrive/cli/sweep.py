@@ -7,7 +7,7 @@ import sys
 import time
 import tomllib
 
-from imdrive.cli._common import EXIT_OK, _examples, output_folder
+from imdrive.cli._common import EXIT_OK, _examples, add_allow_plugins, output_folder
 from imdrive.errors import ConfigError
 
 
@@ -37,6 +37,13 @@ def _cmd_sweep(args) -> int:
             f"({' x '.join(str(n) for n in sweep.shape) if not sweep.random else 'random'}), "
             f"{sweep.n_chunks(cs)} chunks of {cs}, axes: {', '.join(a.name for a in sweep.axes)}"
         )
+        from imdrive.config.plugins import looked_past
+
+        if looked_past():
+            print(
+                "plug-in modules, not imported (a dry run runs none of their code; their "
+                f"estimator's settings are unchecked): {', '.join(looked_past())}"
+            )
         print(
             f"validated: {val.get('checked', 0)} distinct scenarios"
             + (
@@ -123,4 +130,5 @@ def add_parser(sub) -> None:
     sw.add_argument("--list", action="store_true", help="list the built-in sweeps")
     sw.add_argument("--show", action="store_true", help="print the sweep file")
     sw.add_argument("-q", "--quiet", action="store_true")
+    add_allow_plugins(sw)
     sw.set_defaults(func=_cmd_sweep)

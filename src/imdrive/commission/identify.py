@@ -199,20 +199,34 @@ def identified_scenario(sc: Scenario, res: CommissioningResult) -> dict:
     return d
 
 
+#: the files :func:`write_outputs` writes (the folder rule's ``owns``)
+COMMISSION_FILES = ("summary.json", "identified.toml")
+
+
+def owns_commission_file(name: str) -> bool:
+    """Whether ``name`` is a file ``imdrive commission`` writes (``summary.json``,
+    ``identified.toml``, its PNG figures)."""
+    return name in COMMISSION_FILES or name.endswith(".png")
+
+
 def write_outputs(sc: Scenario, res: CommissioningResult, out) -> None:
-    """``summary.json``, ``identified.toml`` (written under a temporary name, renamed last)
-    and the figures into folder ``out``."""
-    from imdrive._io import atomic_write_text
+    """``summary.json``, ``identified.toml`` and the figures as the folder ``out``.
+
+    The folder is replaced as a whole (:func:`imdrive._io.replace_folder`, as ``imdrive run``
+    writes its own): the files are written into a staging folder beside it, which then takes
+    its place, so a second commissioning killed while it draws its figures leaves the first
+    one's folder as it was, never a folder that mixes two runs.
+    """
+    from imdrive._io import replace_folder
     from imdrive.commission.figures import save_figures
     from imdrive.config.toml_writer import dumps
 
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
     data = identified_scenario(sc, res)
     Scenario.from_dict(data)  # what is written must run
     summary = res.summary()
     summary["controller_model_keys"] = "controller_model" in SECTIONS
     summary["scenario"] = sc.to_dict()
-    save_figures(res, out)
-    atomic_write_text(out / "summary.json", json.dumps(summary, indent=2, default=float))
-    atomic_write_text(out / "identified.toml", dumps(data))
+    with replace_folder(Path(out)) as staging:
+        save_figures(res, staging)
+        (staging / "summary.json").write_text(json.dumps(summary, indent=2, default=float))
+        (staging / "identified.toml").write_text(dumps(data))

@@ -236,8 +236,9 @@ def _rated_point_uncached(m: MachineParams) -> RatedPoint:
     sources = {}
     if m.rated_speed_rpm is not None:
         speed, sources["speed_rpm"] = m.rated_speed_rpm, "nameplate"
-    elif m.rated_torque_Nm is not None:
-        speed, sources["speed_rpm"] = P / m.rated_torque_Nm * 30.0 / math.pi, "P / T_rated"
+    elif m.rated_torque_Nm is not None:  # checked as a given speed is
+        speed = _derived_speed_rule(m, n_sync, "machine.rated_torque_Nm")
+        sources["speed_rpm"] = "P / T_rated"
     else:
         s_p, P_max = _max_mech_power(m, s_bd)
         if not P < P_max:
@@ -304,6 +305,23 @@ def _rated_point_uncached(m: MachineParams) -> RatedPoint:
     )
 
 
+def _derived_speed_rule(m: MachineParams, n_sync: float, field: str) -> float:
+    """The rated speed ``P / T_rated`` derived from a given rated torque, refused (naming
+    ``field``) unless it is above 0 and below the synchronous speed, as a given one is: a
+    rated torque below ``P / w_sync`` made a "rated speed" above synchronous, a negative
+    slip, and NaN in every per-unit-of-slip figure."""
+    speed = m.rated_power_W / m.rated_torque_Nm * 30.0 / math.pi
+    if not 0.0 < speed < n_sync:
+        T_min = m.rated_power_W / (n_sync * math.pi / 30.0)
+        raise ConfigError(
+            field,
+            f"{m.rated_torque_Nm:g} N m gives a rated speed rated_power_W / rated_torque_Nm = "
+            f"{speed:.6g} rpm, not below the synchronous speed {n_sync:.6g} rpm: the rated "
+            f"torque must be above {T_min:.6g} N m (or give rated_speed_rpm)",
+        )
+    return speed
+
+
 def check_nameplate(m: MachineParams) -> None:
     """Refuse a nameplate that contradicts the circuit; warn of a suspicious one.
 
@@ -316,7 +334,8 @@ def check_nameplate(m: MachineParams) -> None:
     ------
     ConfigError
         (Field names relative to ``[machine]``: the settings class prefixes them.) A rated
-        speed not below synchronous speed; a given rated torque (or ``P / w_m`` of a
+        speed not below synchronous speed, given or derived from a given rated torque
+        (``P / T_rated``); a given rated torque (or ``P / w_m`` of a
         given rated speed) not below the circuit's breakdown torque at rated voltage and
         frequency; a given rated current (or ``P / (sqrt 3 V eta cos phi)`` of given
         efficiency and power factor) not above the circuit's no-load current. The message
@@ -338,6 +357,8 @@ def check_nameplate(m: MachineParams) -> None:
             f"{m.rated_speed_rpm:g} rpm must be below the synchronous speed "
             f"60 rated_frequency_Hz / pole_pairs = {n_sync:.6g} rpm",
         )
+    if m.rated_speed_rpm is None and m.rated_torque_Nm is not None:
+        _derived_speed_rule(m, n_sync, "rated_torque_Nm")
     _, T_bd = _breakdown(m, V, f)
     circuit = (
         "(the circuit R1_ohm, R2_ohm, Ll1_H, Ll2_H, M_H at rated_voltage_V, rated_frequency_Hz)"

@@ -92,7 +92,14 @@ from imdrive.config.plant import (  # noqa: F401  (C and the profile types: re-e
     SaturationSettings,
     ThermalSettings,
 )
-from imdrive.config.plugins import PluginSettings, import_plugins
+from imdrive.config.plugins import (
+    HOW_TO_ALLOW,
+    PluginSettings,
+    allowing_plugins,
+    changed_modules,
+    import_plugins,
+    resolve_plugin_paths,
+)
 from imdrive.config.profiles import Profile  # noqa: F401  (re-export)
 from imdrive.config.sensors import SensorSettings
 from imdrive.config.simulation import DEFAULT_LOG_RATE_HZ, SimulationSettings, default_log_every
@@ -329,9 +336,11 @@ class Scenario:
                     f"carrier period per control period; got {self.simulation.Ts_s:g})",
                 )
         fb = self.control.speed_feedback
-        gives_e_d0 = fb == "measured" or ESTIMATOR_SETTINGS[fb].estimator_flux_error
+        # an estimator not registered here is an unimported plug-in's (imdrive show): unchecked
+        known = fb == "measured" or fb in ESTIMATOR_SETTINGS
+        gives_e_d0 = fb == "measured" or (known and ESTIMATOR_SETTINGS[fb].estimator_flux_error)
         injecting = resolve(self).inj_amp != 0.0
-        if not gives_e_d0 and (self.compensator.enabled or injecting):
+        if known and not gives_e_d0 and (self.compensator.enabled or injecting):
             with_e_d0 = [n for n, c in ESTIMATOR_SETTINGS.items() if c.estimator_flux_error]
             raise ConfigError(
                 "control.speed_feedback",
@@ -370,6 +379,12 @@ class Scenario:
             (defaults where the table is absent).
         """
         name = self.control.speed_feedback
+        if name != "measured" and name not in ESTIMATOR_SETTINGS:
+            raise ConfigError(
+                "control.speed_feedback",
+                f'"{name}" is a plug-in estimator whose module was not imported '
+                f"(plugins.modules: {list(self.plugins.modules)}; {HOW_TO_ALLOW})",
+            )
         cls = ESTIMATOR_SETTINGS["mras" if name == "measured" else name]
         if cls.estimator_section is not None:
             return getattr(self, cls.estimator_section)
@@ -389,13 +404,17 @@ class Scenario:
 
     # -- construction ----------------------------------------------------------------------
     @classmethod
-    def from_dict(cls, data: dict) -> Scenario:
+    def from_dict(cls, data: dict, *, allow_plugins: bool | None = None) -> Scenario:
         """Build and validate a scenario from its TOML-shaped dictionary.
 
         Parameters
         ----------
         data : dict
             The scenario file's tables, as ``tomllib`` reads them.
+        allow_plugins : bool, optional
+            True: import the modules of ``[plugins] modules`` (their code runs); default: only
+            with ``IMDRIVE_ALLOW_PLUGINS=1`` (:mod:`imdrive.config.plugins`), else a module not
+            yet imported is refused.
 
         Returns
         -------
@@ -404,11 +423,17 @@ class Scenario:
         """
         if not isinstance(data, dict):
             raise ConfigError("scenario", "must be a table")
-        return validate(cls, data)
+        with allowing_plugins(allow_plugins):
+            return validate(cls, data)
 
     @classmethod
     def from_toml(
-        cls, text: str, overrides: list[str] | tuple[str, ...] = (), *, base_dir=None
+        cls,
+        text: str,
+        overrides: list[str] | tuple[str, ...] = (),
+        *,
+        base_dir=None,
+        allow_plugins: bool | None = None,
     ) -> Scenario:
         """Parse TOML text, apply ``key.path=value`` overrides, validate.
 
@@ -419,8 +444,11 @@ class Scenario:
         overrides : list of str
             ``key.path=value`` strings (values parsed as TOML), applied in order.
         base_dir : str or pathlib.Path, optional
-            The folder a relative ``[machine] file`` of ``text`` is read from (the scenario
-            file's); default the working directory, as for an override's.
+            The folder a relative ``[machine] file`` or ``[plugins] modules`` path of ``text``
+            is read from (the scenario file's); default the working directory, as for an
+            override's.
+        allow_plugins : bool, optional
+            Import the scenario's plug-in modules (:meth:`from_dict`).
 
         Returns
         -------
@@ -432,11 +460,18 @@ class Scenario:
             raise ConfigError("text", f"must be the TOML text (a str), got {type(text).__name__}")
         data = parse_toml(text, "scenario")
         resolve_machine_file(data, base_dir)
+        resolve_plugin_paths(data, base_dir)
         apply_overrides(data, overrides)  # one layer on the file (config/pairs.py)
-        return cls.from_dict(data)
+        return cls.from_dict(data, allow_plugins=allow_plugins)
 
     @classmethod
-    def read(cls, preset_or_path: str, overrides: list[str] | tuple[str, ...] = ()) -> Scenario:
+    def read(
+        cls,
+        preset_or_path: str,
+        overrides: list[str] | tuple[str, ...] = (),
+        *,
+        allow_plugins: bool | None = None,
+    ) -> Scenario:
         """A built-in preset by name, or a scenario file by path.
 
         Parameters
@@ -446,6 +481,10 @@ class Scenario:
             ``summary.json`` (its ``"scenario"``, to run it again).
         overrides : list of str
             ``key.path=value`` strings (values parsed as TOML), as ``imdrive run --set``.
+        allow_plugins : bool, optional
+            True: import the modules of its ``[plugins] modules`` (their code runs; relative
+            paths from the file's folder); default: only with ``IMDRIVE_ALLOW_PLUGINS=1``,
+            else a module not yet imported is refused (:mod:`imdrive.config.plugins`).
 
         Returns
         -------
@@ -466,12 +505,17 @@ class Scenario:
             )
         _check_override_list(overrides)
         if str(preset_or_path).endswith(".json") and preset_or_path not in preset_names():
-            return cls._from_summary(preset_or_path, overrides)
+            return cls._from_summary(preset_or_path, overrides, allow_plugins)
         base_dir = None if preset_or_path in preset_names() else Path(preset_or_path).parent
-        return cls.from_toml(scenario_text(preset_or_path), overrides, base_dir=base_dir)
+        return cls.from_toml(
+            scenario_text(preset_or_path),
+            overrides,
+            base_dir=base_dir,
+            allow_plugins=allow_plugins,
+        )
 
     @classmethod
-    def _from_summary(cls, path, overrides) -> Scenario:
+    def _from_summary(cls, path, overrides, allow_plugins=None) -> Scenario:
         """The scenario a ``summary.json`` records (with overrides applied)."""
         import json
 
@@ -485,9 +529,24 @@ class Scenario:
             raise ConfigError("scenario", f"{path}: JSON nested too deeply to read") from None
         if not isinstance(data, dict) or not isinstance(data.get("scenario"), dict):
             raise ConfigError("scenario", f'{path} holds no "scenario" table (a summary.json)')
+        recorded = data.get("plugins")
         data = data["scenario"]
+        resolve_plugin_paths(data, Path(path).parent)
+        for spec in changed_modules(recorded):
+            import warnings
+
+            from imdrive.errors import ConfigWarning
+
+            warnings.warn(
+                ConfigWarning(
+                    "plugins.modules",
+                    f"{spec} has changed since the run {path} records (its sha256 differs): "
+                    "this rerun uses the module as it is now",
+                ),
+                stacklevel=3,
+            )
         apply_overrides(data, overrides)
-        return cls.from_dict(data)
+        return cls.from_dict(data, allow_plugins=allow_plugins)
 
     def with_(self, **changes) -> Scenario:
         """A copy with whole sections replaced (``sc.with_(simulation=...)``), validated again.

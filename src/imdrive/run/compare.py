@@ -12,6 +12,7 @@ from __future__ import annotations
 import html
 import json
 import math
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import SimpleNamespace
@@ -91,25 +92,92 @@ def load_run(folder, label: str | None = None) -> Run:
 
     from imdrive.config.scenario import Scenario
 
+    if not isinstance(folder, str | os.PathLike):
+        raise ConfigError("run", f"must be a result folder's path, got {type(folder).__name__}")
     folder = Path(folder)
     summary_path = folder / "summary.json"
     if not summary_path.is_file():
+        if summary_path.exists() or summary_path.is_symlink():
+            raise ConfigError("run", f"{summary_path}: not a regular file")
         raise ConfigError("run", f"{folder}: no summary.json (not a result folder)")
+    summary = _read_summary(summary_path)
     table = None
     for name, reader in (("timeseries.parquet", pd.read_parquet), ("timeseries.csv", pd.read_csv)):
-        if (folder / name).is_file():
-            table = reader(folder / name)
+        path = folder / name
+        if path.is_file():
+            _check_size(path)
+            try:
+                table = reader(path)
+            except (MemoryError, KeyboardInterrupt):
+                raise
+            except Exception as exc:  # pandas' and pyarrow's many errors: not a table
+                raise ConfigError(
+                    "run", f"{path}: cannot be read as a table ({_one_line(exc)})"
+                ) from None
             break
+        if path.exists() or path.is_symlink():
+            raise ConfigError("run", f"{path}: not a regular file")
     if table is None:
         raise ConfigError(
             "run", f"{folder}: no timeseries.csv or .parquet (run it with output.csv = true)"
         )
-    summary = json.loads(summary_path.read_text(encoding="utf-8"))
+    signals = _signals(table, path)
     scenario = Scenario.read(str(summary_path))
-    signals = {c: table[c].to_numpy(dtype=float) for c in table.columns}
     return Run(
         label or folder.name, signals, scenario, summary, _metrics(signals, scenario, summary)
     )
+
+
+#: the largest result file :func:`load_run` reads (a bound, not a format rule: a 3 s run at
+#: the default logging is a few MB; a week-long one in Parquet stays below it)
+MAX_RESULT_BYTES = 4 * 1024**3
+MAX_SUMMARY_BYTES = 64 * 1024**2
+
+
+def _one_line(exc: BaseException) -> str:
+    text = str(exc).splitlines()[0][:200] if str(exc) else ""
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+
+
+def _check_size(path: Path, limit: int = MAX_RESULT_BYTES) -> None:
+    size = path.stat().st_size
+    if size > limit:
+        raise ConfigError("run", f"{path}: {size} bytes, more than a result holds ({limit})")
+
+
+def _read_summary(path: Path) -> dict:
+    """A result's ``summary.json``, refused in one line naming it when it is not one."""
+    _check_size(path, MAX_SUMMARY_BYTES)
+    raw = path.read_bytes()
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError:
+        raise ConfigError("run", f"{path}: not UTF-8 text (summary.json is UTF-8 JSON)") from None
+    try:
+        data = json.loads(text)
+    except RecursionError:
+        raise ConfigError("run", f"{path}: JSON nested too deeply to read") from None
+    except ValueError as exc:
+        raise ConfigError("run", f"{path}: not valid JSON ({exc})") from None
+    if not isinstance(data, dict) or not isinstance(data.get("scenario"), dict):
+        raise ConfigError("run", f'{path}: holds no "scenario" table (not an imdrive summary)')
+    return data
+
+
+def _signals(table, path: Path) -> dict:
+    """The table's columns as float arrays: a time series with ``time_s`` and rows, every
+    column numeric (one line naming the file and the column otherwise)."""
+    if "time_s" not in table.columns:
+        raise ConfigError("run", f"{path}: no time_s column (not an imdrive time series)")
+    if len(table) == 0:
+        raise ConfigError("run", f"{path}: no rows (an empty time series)")
+    signals = {}
+    for c in table.columns:
+        try:
+            signals[str(c)] = table[c].to_numpy(dtype=float)
+        except (TypeError, ValueError):
+            raise ConfigError("run", f"{path}: column {str(c)[:60]!r} is not numeric") from None
+    return signals
 
 
 def _from_result(res, label: str | None) -> Run:
@@ -299,10 +367,18 @@ def compare(runs, labels=None, signals=None) -> Comparison:
     """
     from imdrive.run.result import SimulationResult
 
+    if isinstance(runs, str | os.PathLike | SimulationResult) or not hasattr(runs, "__iter__"):
+        raise ConfigError(
+            "runs", f"must be a list of result folders or results, got {type(runs).__name__}"
+        )
     runs = list(runs)
     if not runs:
         raise ConfigError("runs", "give at least one run")
+    if labels is not None and (isinstance(labels, str) or not hasattr(labels, "__iter__")):
+        raise ConfigError("labels", f"must be a list of names, got {type(labels).__name__}")
     labels = list(labels) if labels is not None else [None] * len(runs)
+    if len(labels) != len(runs):
+        raise ConfigError("labels", f"{len(labels)} names for {len(runs)} runs: give one each")
     loaded = [
         _from_result(r, lab) if isinstance(r, SimulationResult) else load_run(r, lab)
         for r, lab in zip(runs, labels, strict=True)

@@ -112,6 +112,8 @@ SUMMARY_DOCS = {
     "the share of the compensator's time R2_hat was held, since when and why (voltage limit, "
     "stator frequency band, gated transient); `R2_observable`: estimated at the end, or not "
     "observable here and why",
+    "plugins": "each module of `[plugins] modules` -> the sha256 of its file (null: not "
+    "readable); a rerun of this summary.json warns when a module has changed since",
 }
 
 

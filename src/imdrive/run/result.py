@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from imdrive.config.perunit import lost_control_rpm
+from imdrive.config.plugins import module_hashes
 from imdrive.config.rated import rated_point_dict
 from imdrive.kernels.engine import S_CURRENT, S_NAN, S_OK, S_SPEED, DriveParams, DriveState
 from imdrive.kernels.machine import magnetic_energy
@@ -467,6 +468,9 @@ class SimulationResult:
     def summary(self) -> dict:
         """What ``summary.json`` holds.
 
+        ``"plugins"`` maps each plug-in module of the scenario to the sha256 of its file, so
+        a rerun of the ``summary.json`` says when a module has changed since.
+
         Returns
         -------
         dict
@@ -494,6 +498,7 @@ class SimulationResult:
             "compensation": self.compensation_metrics(),
             "machine_rated": rated_point_dict(self.scenario.machine),
             "verdict": self.verdict,
+            "plugins": module_hashes(self.scenario.plugins.modules),
         }
 
     def _resolved_defaults(self) -> dict:

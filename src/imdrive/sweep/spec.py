@@ -32,6 +32,7 @@ import numpy as np
 
 from imdrive.config.overrides import parse_toml
 from imdrive.config.pairs import set_layer
+from imdrive.config.plugins import allowing_plugins, resolve_plugin_paths
 from imdrive.config.presets import scenario_text
 from imdrive.config.scenario import Scenario
 from imdrive.config.validation import check_name, slug
@@ -123,6 +124,8 @@ def parse_sweep(
     folder: Path | None = None,
     default_name: str = "sweep",
     max_runs: int = DEFAULT_MAX_RUNS,
+    *,
+    allow_plugins: bool | None = None,
 ) -> Sweep:
     """Read and validate a sweep from its TOML text.
 
@@ -141,12 +144,21 @@ def parse_sweep(
         Name when the file gives none.
     max_runs : int
         Refuse a sweep of more runs.
+    allow_plugins : bool, optional
+        True: import the modules its scenario lists in ``[plugins] modules`` (their code
+        runs; relative paths from the sweep file's folder); default: only with
+        ``IMDRIVE_ALLOW_PLUGINS=1`` (:mod:`imdrive.config.plugins`).
 
     Returns
     -------
     Sweep
         The resolved, validated sweep.
     """
+    with allowing_plugins(allow_plugins):
+        return _parse_sweep(text, folder, default_name, max_runs)
+
+
+def _parse_sweep(text, folder, default_name, max_runs) -> Sweep:
     max_runs = _int(max_runs, "--max-runs")
     data = _read_toml(text)
     name, desc = _name_and_description(data, default_name)
@@ -210,10 +222,19 @@ def _base_data(data: dict, folder: Path | None) -> dict:
         base_data = parse_toml(scenario_text(base_ref), "base", base_ref)
     except ConfigError as exc:
         raise ConfigError("base", exc.rule) from None
+    if Path(base_ref).suffix == ".toml":  # a file: its plug-in paths from its folder
+        resolve_plugin_paths(base_data, Path(base_ref).parent)
     sets = data.get("set", {})
     if not isinstance(sets, dict):
         raise ConfigError("set", "must be a table of scenario keys")
-    set_layer(base_data, _flatten(sets, "set"), "[set]")  # one layer on the base (pairs)
+    items = _flatten(sets, "set")
+    if folder is not None:  # the sweep file's own plug-in paths from its folder
+        for k, (parts, value) in enumerate(items):
+            if tuple(parts) == ("plugins", "modules") and isinstance(value, list):
+                table = {"plugins": {"modules": value}}
+                resolve_plugin_paths(table, folder)
+                items[k] = (parts, table["plugins"]["modules"])
+    set_layer(base_data, items, "[set]")  # one layer on the base (pairs)
     return base_data
 
 
@@ -312,7 +333,9 @@ def _build_one_axis(sweep: Sweep, axis: Axis, value) -> Scenario:
     return single.scenario(0)
 
 
-def load_sweep(ref: str, max_runs: int | None = None) -> Sweep:
+def load_sweep(
+    ref: str, max_runs: int | None = None, *, allow_plugins: bool | None = None
+) -> Sweep:
     """A built-in sweep by name, or a sweep file by path.
 
     Parameters
@@ -321,6 +344,8 @@ def load_sweep(ref: str, max_runs: int | None = None) -> Sweep:
         A name of :func:`sweep_names` or a path.
     max_runs : int, optional
         Refuse a sweep of more runs (default :data:`DEFAULT_MAX_RUNS`).
+    allow_plugins : bool, optional
+        Import the plug-in modules its scenario lists (:func:`parse_sweep`).
 
     Returns
     -------
@@ -335,4 +360,10 @@ def load_sweep(ref: str, max_runs: int | None = None) -> Sweep:
         check_argument(max_runs, int, "max_runs", "an integer")
     text, folder = sweep_text(ref)
     default = ref if folder is None else slug(Path(ref).stem)
-    return parse_sweep(text, folder, default, DEFAULT_MAX_RUNS if max_runs is None else max_runs)
+    return parse_sweep(
+        text,
+        folder,
+        default,
+        DEFAULT_MAX_RUNS if max_runs is None else max_runs,
+        allow_plugins=allow_plugins,
+    )
