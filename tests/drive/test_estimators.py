@@ -10,6 +10,7 @@ published or analytic property each.
 """
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -29,7 +30,6 @@ from imdrive.kernels.estimators.reactive_mras import (
 )
 from imdrive.kernels.model import MODEL_STATE
 from imdrive.kernels.records import new_record
-from imdrive.run.batch import simulate_batch
 from imdrive.run.build import build_arrays, copy_state
 from imdrive.run.simulate import new_log, simulate
 
@@ -52,9 +52,10 @@ def _steady(est, rpm, *extra):
 
 @pytest.fixture(scope="module")
 def steady_runs():
+    # one drive at a time: the drive kernel of every estimator is compiled once for all the
+    # tests (imdrive warm-up), a batch kernel would be compiled again for each estimator
     cases = [(e, rpm) for e in ESTIMATORS for rpm in (1000, 150)]
-    res = simulate_batch([_steady(e, rpm) for e, rpm in cases], window_s=0.5)
-    return dict(zip(cases, res.metrics.itertuples(), strict=True))
+    return {c: SimpleNamespace(**simulate(_steady(*c)).metrics(window_s=0.5)) for c in cases}
 
 
 @pytest.mark.slow  # end to end: closed-loop runs of seconds
@@ -101,10 +102,12 @@ def test_reactive_mras_kernel_does_not_use_R1():
 
 
 def test_reactive_mras_accurate_with_R1_error_where_schauder_is_not():
-    res = simulate_batch(
-        [_steady(e, 150, f"estimator.R1_ohm={1.3 * 0.435}") for e in ("reactive-mras", "mras")]
-    )
-    err = res.metrics["speed_est_error_rpm"].to_numpy()
+    err = [
+        simulate(_steady(e, 150, f"estimator.R1_ohm={1.3 * 0.435}")).metrics(window_s=0.5)[
+            "speed_est_error_rpm"
+        ]
+        for e in ("reactive-mras", "mras")
+    ]
     assert abs(err[0]) < 0.1
     assert abs(err[1]) > 1.0
 
