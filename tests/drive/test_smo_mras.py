@@ -21,6 +21,7 @@ with -6 N m, 10 rpm with -3 N m, and holds 80, 40 and 20 rpm with those loads.
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -31,7 +32,6 @@ from imdrive.kernels.estimators.registry import ESTIMATOR_INPUT
 from imdrive.kernels.estimators.smo_mras import KERNEL, smo_mras_estimate
 from imdrive.kernels.model import MODEL_STATE
 from imdrive.kernels.records import new_record
-from imdrive.run.batch import simulate_batch
 from imdrive.run.simulate import simulate
 
 # Table IV machine (ohm, H), control period (s), and the default design: W = 0.1 x 2 pi 60,
@@ -154,9 +154,13 @@ LOST = ((60, -12), (20, -6), (10, -3))
 
 @pytest.fixture(scope="module")
 def runs():
+    # one drive at a time: the drive kernel of the estimator is compiled once for all the tests
+    # (imdrive warm-up), a batch kernel would be compiled for its records on top
     cases = [*HOLDS, *((rpm, load, ()) for rpm, load in LOST)]
-    res = simulate_batch([_scenario(r, l, *e) for r, l, e in cases], window_s=1.0)
-    return dict(zip(cases, res.metrics.itertuples(), strict=True))
+    return {
+        (r, l, e): SimpleNamespace(**simulate(_scenario(r, l, *e)).metrics(window_s=1.0))
+        for r, l, e in cases
+    }
 
 
 @pytest.mark.parametrize("case", list(HOLDS), ids=lambda c: f"{c[0]}rpm{c[1]:+d}Nm{len(c[2])}")
