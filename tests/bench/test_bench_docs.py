@@ -16,6 +16,7 @@ from imdrive.bench.report import run_protocol
 from imdrive.cli import main
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_estimators_page_is_the_rendering_of_the_stored_bench():
     committed = docs.DOC_PATH.read_text(encoding="utf-8")
     assert committed == docs.page(committed, docs.read_table()), (
@@ -31,6 +32,7 @@ def test_stored_bench_is_the_full_protocol():
     assert got == {(r.estimator, r.case, r.drive) for r in protocol()}
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_check_fails_on_a_stale_page(tmp_path):
     page = tmp_path / "estimators.md"
     text = docs.DOC_PATH.read_text(encoding="utf-8").replace("| steady-150 |", "| steady-15 |", 1)

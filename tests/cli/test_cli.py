@@ -55,6 +55,7 @@ def short_run(tmp_path_factory):
     return proc, out, tmp
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_run_exit_code_and_files(short_run):
     proc, out, tmp = short_run
     assert proc.returncode == 0, proc.stderr
@@ -138,6 +139,7 @@ def test_run_in_process_with_capsys(tmp_path, capsys):
     assert "final speed" in cap.err
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_presets():
     proc = _imdrive("presets")
     assert proc.returncode == 0, proc.stderr
@@ -209,6 +211,7 @@ def _assert_bad_input(proc, out: Path, field: str, rule: str):
     assert _nothing_written(out), list(out.iterdir())
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 @pytest.mark.parametrize(("setting", "field", "rule"), BAD_SET, ids=[b[0] for b in BAD_SET])
 def test_bad_set(tmp_path, setting, field, rule):
     out = tmp_path / "out"
@@ -217,6 +220,7 @@ def test_bad_set(tmp_path, setting, field, rule):
     assert not (tmp_path / "out" / "free-acceleration").exists()
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_bad_input_into_existing_empty_folder(tmp_path):
     out = tmp_path / "existing"
     out.mkdir()
@@ -268,6 +272,7 @@ BAD_FILES = {
 }
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 @pytest.mark.parametrize("case", list(BAD_FILES))
 def test_bad_scenario_file(tmp_path, case):
     text, field, rule = BAD_FILES[case]
@@ -291,6 +296,7 @@ def test_good_scenario_file_runs(tmp_path):
     assert (out / "summary.json").exists()
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 @pytest.mark.parametrize(
     ("args", "field", "rule"),
     [
@@ -306,6 +312,7 @@ def test_bad_preset_or_override_syntax(tmp_path, args, field, rule):
     _assert_bad_input(proc, out, field, rule)
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_scenario_path_is_a_folder(tmp_path):
     folder = tmp_path / "adir.toml"
     folder.mkdir()
@@ -314,6 +321,7 @@ def test_scenario_path_is_a_folder(tmp_path):
     _assert_bad_input(proc, out, "scenario", "neither a preset")
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_out_is_a_file(tmp_path):
     out = tmp_path / "afile"
     out.write_text("keep me")

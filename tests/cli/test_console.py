@@ -25,6 +25,7 @@ LOW_SPEED = [
 ]
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_load_step_dip_matches_the_closed_form_for_the_default_gains():
     # kp = J a / k_t, ki = kp a / 4: double pole at -a/2, peak 2 dT / (e J a)
     J, k_t, a, dT = 0.069, 1.35, 2 * math.pi * 5.0, 12.0
@@ -35,11 +36,13 @@ def test_load_step_dip_matches_the_closed_form_for_the_default_gains():
     assert load_step_dip_rpm(J, k_t, 4 * kp, 4 * kp * 4 * a / 4, dT) < got / 3
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_the_rotated_mras_error_rides_through_the_same_load_step(tmp_path):
     assert main(["run", "sensorless", *[a for s in LOW_SPEED[:-1] for a in ("--set", s)],
                  "--out", str(tmp_path / "r")]) == 0  # fmt: skip
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_low_speed_loss_names_the_estimator_and_where_to_look(tmp_path, capsys):
     code = main(["run", "sensorless", *[a for s in LOW_SPEED for a in ("--set", s)],
                  "--out", str(tmp_path / "r")])  # fmt: skip
@@ -107,6 +110,7 @@ def test_presets_are_aligned_and_list_the_sweeps(capsys):
     assert len(starts) == 1, starts  # every description starts in the same column
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_open_loop_scenario_says_so(tmp_path, capsys):
     f = tmp_path / "scratch.toml"
     f.write_text('[machine]\npreset = "paper-table-iv"\n[simulation]\nt_end_s = 0.2\n')

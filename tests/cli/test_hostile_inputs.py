@@ -300,6 +300,7 @@ def _litter(folder: Path) -> list[str]:
     return sorted(p.name for p in folder.iterdir() if p.name.startswith(".partial"))
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 @pytest.mark.parametrize("command", QUICK_WRITERS)
 def test_a_symlinked_out_is_kept_and_written_through_twice(in_tmp, capsys, command):
     target = in_tmp / "real"
@@ -328,6 +329,7 @@ def test_stale_staging_left_as_links_is_removed(in_tmp, capsys):
     assert _litter(in_tmp / "out") == [] and target.is_dir()
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 @pytest.mark.parametrize("command", QUICK_WRITERS)
 def test_a_rerun_into_its_own_folder_and_force_are_allowed(in_tmp, capsys, command):
     argv = _argv(command, "res", in_tmp)
@@ -391,6 +393,7 @@ def tiny_reference(tmp_path_factory):
     return run_sweep(parse_sweep(TINY), out, progress=False, figures=False, report=False)
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 @pytest.mark.parametrize("how", TAMPER.values(), ids=TAMPER.keys())
 def test_resume_over_a_tampered_chunk_gives_the_uninterrupted_table(tmp_path, tiny_reference, how):
     out = tmp_path / "store"
@@ -420,6 +423,7 @@ def _closed_port() -> int:
     return port
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 @pytest.mark.parametrize(
     "address", ["not a url", "localhost", "tcp://h", "foo://h:1", "tcp://127.0.0.1:{port}"]
 )
@@ -616,6 +620,7 @@ _VALUE = st.one_of(
 _KEY = st.sampled_from([k for k in KEYS if not k.startswith("simulation.t_end")])
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 @hypothesis.settings(
     max_examples=120,
     deadline=None,
@@ -711,6 +716,7 @@ def _hostile_file(draw):
     return "\n".join(lines) + "\n"
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 @hypothesis.settings(
     max_examples=60,
     deadline=None,

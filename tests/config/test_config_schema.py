@@ -283,6 +283,7 @@ def test_json_schema_names_every_section():
     json.dumps(schema)  # serialisable as is
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 @pytest.mark.parametrize("name", preset_names())
 def test_every_preset_validates_against_the_json_schema(name):
     jsonschema = pytest.importorskip("jsonschema")
@@ -320,6 +321,7 @@ def test_config_imports_no_numba_kernels_or_runner(path):
             assert name.startswith(allowed), (path, name)
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_config_import_loads_no_numba():
     code = (
         "import sys, imdrive.config.docs, imdrive.config.overrides, imdrive.config.presets; "

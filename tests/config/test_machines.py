@@ -256,6 +256,7 @@ def test_plausible_nameplate_does_not_warn():
         )
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_cli_prints_a_config_warning_as_one_line(tmp_path):
     f = tmp_path / "s.toml"
     f.write_text("[machine]\nrated_speed_rpm = 1500\n")

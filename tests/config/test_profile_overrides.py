@@ -50,6 +50,7 @@ def test_bad_element_is_one_config_error(spec, words):
         im.Scenario.read("sensorless", [spec])
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_cli_set_one_element(tmp_path, capsys):
     out = tmp_path / "r"
     code = main(["show", "sensorless", "--all"])

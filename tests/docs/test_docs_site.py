@@ -14,6 +14,7 @@ import sys
 import textwrap
 from pathlib import Path
 
+import pytest
 import yaml
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -31,6 +32,7 @@ def _config() -> dict:
     return yaml.load((ROOT / "mkdocs.yml").read_text(), Loader=yaml.SafeLoader)
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_site_builds_strict_with_every_page_and_the_api_reference(tmp_path):
     site = tmp_path / "site"
     proc = _build(ROOT / "mkdocs.yml", site)
@@ -97,6 +99,7 @@ def _mini_project(tmp_path: Path, page: str, module: str = "") -> Path:
     return config
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_a_link_to_a_repository_file_becomes_its_path_and_a_missing_one_fails(tmp_path):
     page = "# Home\n\nThe layer rules: [the layer test](../tests/test_layers.py).\n"
     config = _mini_project(tmp_path, page)
@@ -125,6 +128,7 @@ def test_strict_build_fails_on_a_broken_anchor(tmp_path):
     assert "no-such-heading" in proc.stdout + proc.stderr
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_strict_build_fails_on_a_docstring_that_does_not_match_its_signature(tmp_path):
     module = '''\
         def scale(x_s: float) -> float:
@@ -148,6 +152,7 @@ def test_strict_build_fails_on_a_docstring_that_does_not_match_its_signature(tmp
     assert "y_s" in proc.stdout + proc.stderr
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_strict_build_of_the_same_mini_site_passes_when_it_is_right(tmp_path):
     module = '''\
         def scale(x_s: float) -> float:

@@ -123,6 +123,7 @@ def test_every_results_table_in_docs_is_generated():
     )
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_generated_tables_are_the_rendering_of_their_data():
     assert doctables.stale() == [], "run 'python -m imdrive.studies.doctables'"
     assert doctables.main(["--check"]) == 0
@@ -132,6 +133,7 @@ def test_generated_tables_are_the_rendering_of_their_data():
     assert {"realistic-compensation", "blind-band", "map-validation", "estimator-timing"} <= names
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_check_fails_on_an_edited_table(tmp_path):
     doctables.pages()  # registers the tables
     docs = tmp_path / "docs"

@@ -97,6 +97,7 @@ def _reactive_outputs(R1_hat):
     return np.array(out)
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_reactive_mras_kernel_does_not_use_R1():
     np.testing.assert_array_equal(_reactive_outputs(0.435), _reactive_outputs(1.3 * 0.435))
 

@@ -69,6 +69,7 @@ def _machine_rhs(m):
     return rhs, inv
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_switching_matches_solve_ivp_with_switching_instants_as_breakpoints():
     sc = _sc("free-acceleration", "inverter.model=switching", "simulation.t_end_s=0.02")
     res = simulate(sc)
@@ -147,6 +148,7 @@ def _dead_time_reference(sc, res, rhs, stator_current, t_d, drop):
     return np.array(i_ref)
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_dead_time_and_device_drops_match_solve_ivp():
     """The same bridge with a 2 us dead time and 1 V device drops, written here from the
     rule (a gate change towards the state the current's diode imposes is immediate, the other
@@ -191,6 +193,7 @@ def test_sampled_currents_agree_with_the_average_model_within_the_sampling_error
     assert np.max(d) < 1e-3 * amp, (np.max(d), amp)
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_current_ripple_at_standstill_matches_the_svpwm_formula():
     """At standstill with a DC reference V along alpha (sector boundary: one active vector),
     the alpha current's ripple is ``V (Ts - t1) / (2 sigma L1)`` peak to peak, with
@@ -481,6 +484,7 @@ def _saturated_rhs(m, curve):
     return rhs, currents
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 @pytest.mark.parametrize("V_ll", [220.0, 270.0])
 def test_saturated_switching_matches_solve_ivp_with_switching_instants_as_breakpoints(V_ll):
     """Saturation on the switching bridge: the inrush from standstill (the flux's DC offset
@@ -517,6 +521,7 @@ def test_saturated_switching_matches_solve_ivp_with_switching_instants_as_breakp
     assert err <= 1e-4, err
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 @pytest.mark.parametrize("V_ll", [220.0, 270.0])
 def test_saturated_dead_time_matches_solve_ivp(V_ll):
     """Saturation with dead time and device drops (the short intervals between a gate command

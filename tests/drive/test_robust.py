@@ -223,6 +223,7 @@ def test_online_R1_removes_the_R2_bias_of_an_R1_error():
     assert abs(m1["speed_error_rpm"]) < 0.1
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_thermal_model_at_150_rpm_speed_error_under_1_rpm():
     """R1 and R2 heat together (+13-15 % in 40 s, thermal time constants shortened to 15 s)."""
 

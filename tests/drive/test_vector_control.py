@@ -190,6 +190,7 @@ def test_divergence_is_reported_with_time_and_signal():
     assert exc.value.result is res and exc.value.time_s == res.end_time_s
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_cli_divergence_exit_code_and_partial_results(tmp_path, capsys):
     out = tmp_path / "run"
     rc = main(["run", "sensorless", "--out", str(out), "-q", *_unstable()])

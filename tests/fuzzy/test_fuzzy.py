@@ -361,6 +361,7 @@ def violations(r):
     return int(np.maximum(0, r[:-1] - r[1:]).sum() + np.maximum(0, r[:, :-1] - r[:, 1:]).sum())
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_fitted_rules_quality_and_fit_reproduces_it():
     ours = fz.compile_table(fz.FITTED_RULES)
     assert fz.table_score(ours) == (FITTED_N_DIFF, FITTED_ABS)

@@ -87,6 +87,7 @@ def _run_law(ratio, w_e, t_end=6.0, rate=2.0, u_c=1.2, ie_r1=False, c0=0.0, R1_i
     return np.array(k_seen), s, m
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 @pytest.mark.parametrize("ratio", [0.8, 1.25])
 @pytest.mark.parametrize("w_e", [2 * math.pi * 10.0, -2 * math.pi * 33.0])
 def test_scale_converges_to_the_true_over_assumed_error(ratio, w_e):
@@ -98,17 +99,20 @@ def test_scale_converges_to_the_true_over_assumed_error(ratio, w_e):
     assert 0.2 < share < 0.6
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_below_its_frequency_the_scale_holds():
     k, _, _ = _run_law(1.25, 2 * math.pi * 2.0)
     assert np.all(k == 1.0)
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_the_learned_share_leaves_a_standstill_R1():
     c0 = 0.2  # ohm of apparent resistance per unit of the compensation at standstill
     k, s, m = _run_law(1.25, 2 * math.pi * 10.0, ie_r1=True, c0=c0, R1_id=True)
     assert m["R1_hat"] == pytest.approx(0.6 - (k[-1] - 1.0) * c0, rel=1e-9)
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_no_share_leaves_an_R1_the_standstill_run_did_not_identify():
     # the identification could not (R1_id false): R1_hat holds none of the residual
     k, s, m = _run_law(1.25, 2 * math.pi * 10.0, ie_r1=True, c0=0.2, R1_id=False)
@@ -164,6 +168,7 @@ def _run_stator_law(ratio, w_e, ripple, R1_hat, t_end=6.0, rate=2.0, u_c=1.2):
     return np.array(k_seen)
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 @pytest.mark.parametrize("ratio", [0.8, 1.25])
 @pytest.mark.parametrize("w_e", [2 * math.pi * 10.0, -2 * math.pi * 90.0])
 @pytest.mark.parametrize(("ripple", "R1_hat"), [(0.3, 0.6), (0.0, 0.78)])

@@ -184,6 +184,7 @@ def test_pole_voltages_of_a_pole_state():
     assert pole_voltages_ab(_params(), s, VDC, 0.0, 0.0) == pytest.approx((0.0, 0.0), abs=1e-9)
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_advance_moves_every_switching_legs_commands_earlier_and_keeps_the_pulse():
     Ts = TS
     s = np.zeros(1, dtype=INVERTER_STATE)[0]

@@ -119,6 +119,7 @@ def _run_afo(trajectory, w0, n):
     return np.array(w), np.array(e), s
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_afo_true_state_is_a_fixed_point(trajectory):
     w, e, s = _run_afo(trajectory, W_R, 5000)
     assert np.max(np.abs(w - W_R)) < 1e-4 * W_R
@@ -161,6 +162,7 @@ def _run_ekf(trajectory, w0, n, estimate_R2=False):
     return np.array(w), np.array(r2), s
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 @pytest.mark.parametrize("estimate_R2", [False, True])
 def test_ekf_true_state_is_a_fixed_point(trajectory, estimate_R2):
     w, r2, s = _run_ekf(trajectory, W_R, 5000, estimate_R2)

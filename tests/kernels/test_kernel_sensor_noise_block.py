@@ -8,6 +8,7 @@ the samples come in (a continued run starts anywhere, a batch block starts again
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from numba import njit
 
 from imdrive.kernels.records import new_record
@@ -43,6 +44,7 @@ def test_block_gives_the_pairs_of_every_sample_in_any_order():
     assert buf["noise_n"] == NOISE_BLOCK
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_drawn_measurement_is_the_measurement_bit_for_bit():
     p = new_record(
         SENSOR_PARAMS, phase_model=True, gain_a=1.0025, gain_b=0.9975, offset_a=0.02,

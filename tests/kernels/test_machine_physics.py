@@ -147,6 +147,7 @@ def free_acceleration_1s():
     return sc, res, v_a, v_b, ref
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_zoh_voltage_sequence_is_the_one_logged(free_acceleration_1s):
     sc, res, v_a, v_b, _ = free_acceleration_1s
     n = len(v_a)

@@ -16,6 +16,7 @@ def _state():
     return np.zeros(1, dtype=COMPENSATOR_STATE)[0]
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 @pytest.mark.parametrize("w_s, T2, f", [(30.0, 0.1, 2.0), (-12.0, 0.25, 4.0), (5.0, 0.05, 1.0)])
 def test_sinusoidal_q_error_gives_the_first_order_response(w_s, T2, f):
     """A q error ``Q sin(w t)`` gives, once settled, ``Im(G(jw) Q e^{jwt})`` with
@@ -43,6 +44,7 @@ def test_constant_q_error_settles_at_the_dc_gain():
     assert c == pytest.approx(40.0 * 0.08 * 2e-3, rel=1e-6)
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 @pytest.mark.parametrize("w_e", [45.0, -45.0, 2.0, -2.0])
 def test_filter_leakage_of_the_d_error_is_taken_out(w_e):
     """Through the MRAS's ``s/(s + wc)`` a d error leaks ``wc/w_e`` of itself into q: a pure d

@@ -69,6 +69,7 @@ def _identify(t2_hat_ratio=1.0, levels=2, magnetise_s=0.5, hold_T2=16.0):
     return m, s, left_at
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 @pytest.mark.parametrize("t2_hat_ratio", [1 / 1.4, 1.0, 1 / 0.6])  # R2_hat(0) 1.4, 1, 0.6 R2
 def test_two_levels_identify_R1_and_the_residual(t2_hat_ratio):
     m, s, left_at = _identify(t2_hat_ratio)

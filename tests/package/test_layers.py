@@ -302,6 +302,7 @@ def rank_violations():
     return found
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_every_module_has_a_layer():
     missing = sorted({layer(m) for m in graph().modules if layer(m) and layer(m) not in RANK})
     assert not missing, f"give these a rank in RANK of tests/package/test_layers.py: {missing}"
@@ -361,6 +362,7 @@ def test_numba_free_layers_statically(name):
         assert not bad, f"importing {module} would load numba through:\n  " + "\n  ".join(bad)
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_numba_free_layers_at_run_time():
     mods = [m for m in graph().modules if layer(m) in NUMBA_FREE]
     code = textwrap.dedent(f"""
@@ -564,6 +566,7 @@ def doubled(x):
 """
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_a_new_kernel_module_lands_in_its_cache_folder_without_registration(tmp_path):
     # a copy of the package with two modules nobody registered: one directly under kernels/,
     # one in a sub-package; imported directly, each must compile into its module's folder

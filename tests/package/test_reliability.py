@@ -509,6 +509,7 @@ def _scenario_dicts(draw):
     return data
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 @hypothesis.settings(max_examples=300, deadline=None, derandomize=True)
 @hypothesis.given(_scenario_dicts())
 def test_loader_gives_a_clean_error_or_a_scenario_that_builds(data):
@@ -625,6 +626,7 @@ def test_manifest_complete_only_after_the_figures(tmp_path, monkeypatch):
     assert math.isfinite(pd.read_parquet(out / "runs.parquet")["speed_error_rpm"].iloc[0])
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_final_values_are_at_t_end_whatever_log_every():
     from imdrive.run.simulate import simulate
 

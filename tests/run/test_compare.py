@@ -28,6 +28,7 @@ def two_runs(tmp_path_factory):
     return root / "mras", root / "ekf"
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_compare_command_writes_figure_metrics_and_report(two_runs, tmp_path):
     out = tmp_path / "cmp"
     assert main(["compare", *map(str, two_runs), "--out", str(out), "-q"]) == 0
@@ -53,6 +54,7 @@ def test_compare_in_python_overlays_and_names_the_runs(two_runs):
     assert len(cmp._repr_png_()) > 10_000
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_compare_report_renders_in_a_browser(two_runs, tmp_path):
     from data.browser import assert_rendered, render
 

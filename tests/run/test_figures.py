@@ -219,6 +219,7 @@ def _sweep_frame(sweep, h: Heatmap, fn):
     return df
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_heatmap_annotations_are_sized_to_cells_and_contrast():
     sweep = load_sweep("detuning-map")
     h = sweep.heatmaps[0]
@@ -260,6 +261,7 @@ value = "speed_error_rpm"
 """
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_heatmap_cells_too_small_are_not_annotated():
     sweep = parse_sweep(DENSE)
     h = sweep.heatmaps[0]

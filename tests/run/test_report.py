@@ -76,6 +76,7 @@ def test_full_rate_14s_report_is_small():
     assert size < 5e6, f"{size / 1e6:.2f} MB"
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_run_report_renders_in_a_browser(tmp_path, short_run):
     path = tmp_path / "report.html"
     path.write_text(run_report(short_run), encoding="utf-8")
@@ -130,6 +131,7 @@ cols = "variant"
 """
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_sweep_report_renders_in_a_browser(tmp_path):
     from imdrive.sweep import load_sweep, run_sweep
 

@@ -116,6 +116,7 @@ def test_linearisation_matches_nonlinear_responses(sensorless, speed, torque, r1
     assert worst < 1e-3
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_statespace_names_and_response(sensorless):
     op = operating_point(sensorless, 1000, 12)
     sys_ = op.to_statespace()
@@ -200,6 +201,7 @@ def test_map_agrees_with_simulation(sensorless):
 # -- command line ---------------------------------------------------------------------------
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_cli_writes_table_and_figures(tmp_path, capsys):
     out = tmp_path / "st"
     code = main(
@@ -218,6 +220,7 @@ def test_cli_writes_table_and_figures(tmp_path, capsys):
     assert {"speed_rpm", "torque_Nm", "max_real_1_per_s", "stable", "map"} <= set(df.columns)
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 @pytest.mark.parametrize(
     "args, field",
     [

@@ -115,6 +115,7 @@ def test_run_scenarios_equal_scenario_read_with_the_same_overrides(small_file):
         assert _apply(base, key, value) == Scenario.read("sensorless", [f"{'.'.join(key)}={text}"])
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_random_sweep_is_reproducible_and_inside_the_ranges(tmp_path):
     text = """
 base = "sensorless"
@@ -165,6 +166,7 @@ def test_step_ranges_and_preset_sweep():
 # running
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_local_sweep_table_matches_single_runs(local_run):
     sweep, out, df = local_run
     assert list(df["run"]) == list(range(12))
@@ -261,6 +263,7 @@ BAD = [
 ]
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 @pytest.mark.parametrize("label, axes, field", BAD, ids=[b[0] for b in BAD])
 def test_bad_sweep_file_names_the_field_and_runs_nothing(tmp_path, label, axes, field):
     f = tmp_path / "bad.toml"
@@ -274,6 +277,7 @@ def test_bad_sweep_file_names_the_field_and_runs_nothing(tmp_path, label, axes, 
     assert not out.exists()
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_existing_store_needs_resume(tmp_path, small_file):
     out = tmp_path / "store"
     out.mkdir()

@@ -103,10 +103,7 @@ class EstimatorSettings:
 
 
 @estimator_settings(
-    "reactive-mras",
-    "reactive_mras",
-    description="reactive-power MRAS speed estimator",
-    legend="reactive-power MRAS",
+    "reactive-mras", "reactive_mras", description="reactive-power MRAS speed estimator"
 )
 class ReactiveMrasSettings:
     """Reactive-power MRAS speed estimator (``[reactive_mras]``, Peng & Fukao 1994).

@@ -21,7 +21,6 @@ from imdrive.config.validation import Float, setting
     log_units={"smo_sigma": ("rad", 1.0), "smo_u": ("rpm", 60.0 / (2.0 * math.pi))},
     flux_error=True,
     description="sliding-mode MRAS speed estimator",
-    legend="sliding-mode MRAS",
 )
 class SmoMrasSettings:
     """Sliding-mode MRAS speed estimator (``[smo_mras]``, after Comanescu & Xu, IEEE Trans.

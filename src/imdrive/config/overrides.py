@@ -407,3 +407,36 @@ def apply_override(data: dict, spec: str) -> None:
     """Apply ``key.path=value`` to a scenario dictionary (see :func:`parse_override`)."""
     parts, value = parse_override(spec)
     set_path(data, parts, value)
+
+
+def override_items(overrides) -> list[tuple[tuple[str, ...], object]]:
+    """``(key path, value)`` pairs of ``--set`` strings or of a ``{dotted key: value}`` dict.
+
+    Parameters
+    ----------
+    overrides : list of str or dict
+        ``["control.speed_ref_rpm=1500", ...]`` (values parsed as TOML) or
+        ``{"control.speed_ref_rpm": 1500, ...}``.
+
+    Returns
+    -------
+    list of tuple
+        In the given order.
+
+    Raises
+    ------
+    ConfigError
+        A key that is not a dotted str or names no setting, or a malformed string.
+    """
+    if not isinstance(overrides, dict):
+        _check_override_list(overrides)
+        return [parse_override(o) for o in overrides]
+    items = []
+    for key, value in overrides.items():
+        if not isinstance(key, str):
+            raise ConfigError("overrides", f"a key must be a dotted str, got {type(key).__name__}")
+        parts = tuple(key.split("."))
+        if not is_setting(parts):
+            raise ConfigError(str(key), "no such setting")
+        items.append((parts, value))
+    return items

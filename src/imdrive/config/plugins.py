@@ -349,3 +349,48 @@ def module_spec_of(cls: type) -> str | None:
     if name.startswith("imdrive_plugin_"):
         return getattr(mod, "__file__", None)
     return name
+
+
+def summary_scenario(path) -> dict:
+    """The scenario table a ``summary.json`` records, its plug-in paths made absolute from the
+    file's folder; a :class:`~imdrive.errors.ConfigWarning` for each module whose sha256 differs
+    from the one recorded.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The ``summary.json``.
+
+    Returns
+    -------
+    dict
+        Its ``"scenario"`` table (TOML-shaped), not yet validated.
+    """
+    import json
+    import warnings
+
+    from imdrive.errors import ConfigWarning
+
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise ConfigError("scenario", f"cannot read {path}: {exc}") from None
+    except ValueError as exc:
+        raise ConfigError("scenario", f"{path} is not valid JSON: {exc}") from None
+    except RecursionError:
+        raise ConfigError("scenario", f"{path}: JSON nested too deeply to read") from None
+    if not isinstance(data, dict) or not isinstance(data.get("scenario"), dict):
+        raise ConfigError("scenario", f'{path} holds no "scenario" table (a summary.json)')
+    recorded = data.get("plugins")
+    data = data["scenario"]
+    resolve_plugin_paths(data, Path(path).parent)
+    for spec in changed_modules(recorded):
+        warnings.warn(
+            ConfigWarning(
+                "plugins.modules",
+                f"{spec} has changed since the run {path} records (its sha256 differs): "
+                "this rerun uses the module as it is now",
+            ),
+            stacklevel=4,
+        )
+    return data

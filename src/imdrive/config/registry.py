@@ -119,7 +119,8 @@ def estimator_settings(
     description : str
         One line, for lists.
     legend : str
-        Its short name in figure legends ("MRAS"); default ``name``.
+        Its short name in figure legends ("MRAS"); default the description without a
+        trailing " speed estimator", else ``name``.
 
     Returns
     -------
@@ -137,7 +138,7 @@ def estimator_settings(
         cls.estimator_flux_error = flux_error
         doc = description or (cls.__doc__ or name).strip().splitlines()[0]
         cls.estimator_description = doc
-        cls.estimator_legend = legend or name
+        cls.estimator_legend = legend or doc.removesuffix(" speed estimator") or name
         ESTIMATOR_SETTINGS[name] = cls
         return cls
 

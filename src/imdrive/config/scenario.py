@@ -74,6 +74,7 @@ from imdrive.config.overrides import (  # noqa: F401  (the private ones: re-expo
     apply_override,
     is_setting,
     is_table_class,
+    override_items,
     parse_override,
     parse_toml,
     scenario_keys,
@@ -96,9 +97,9 @@ from imdrive.config.plugins import (
     HOW_TO_ALLOW,
     PluginSettings,
     allowing_plugins,
-    changed_modules,
     import_plugins,
     resolve_plugin_paths,
+    summary_scenario,
 )
 from imdrive.config.profiles import Profile  # noqa: F401  (re-export)
 from imdrive.config.sensors import SensorSettings
@@ -427,14 +428,7 @@ class Scenario:
             return validate(cls, data)
 
     @classmethod
-    def from_toml(
-        cls,
-        text: str,
-        overrides: list[str] | tuple[str, ...] = (),
-        *,
-        base_dir=None,
-        allow_plugins: bool | None = None,
-    ) -> Scenario:
+    def from_toml(cls, text: str, overrides=(), *, base_dir=None, allow_plugins=None) -> Scenario:
         """Parse TOML text, apply ``key.path=value`` overrides, validate.
 
         Parameters
@@ -482,9 +476,7 @@ class Scenario:
         overrides : list of str
             ``key.path=value`` strings (values parsed as TOML), as ``imdrive run --set``.
         allow_plugins : bool, optional
-            True: import the modules of its ``[plugins] modules`` (their code runs; relative
-            paths from the file's folder); default: only with ``IMDRIVE_ALLOW_PLUGINS=1``,
-            else a module not yet imported is refused (:mod:`imdrive.config.plugins`).
+            Import its plug-in modules, relative paths from the file's folder (:meth:`from_dict`).
 
         Returns
         -------
@@ -505,48 +497,12 @@ class Scenario:
             )
         _check_override_list(overrides)
         if str(preset_or_path).endswith(".json") and preset_or_path not in preset_names():
-            return cls._from_summary(preset_or_path, overrides, allow_plugins)
+            data = summary_scenario(preset_or_path)  # a run's summary.json: its scenario
+            apply_overrides(data, overrides)
+            return cls.from_dict(data, allow_plugins=allow_plugins)
         base_dir = None if preset_or_path in preset_names() else Path(preset_or_path).parent
-        return cls.from_toml(
-            scenario_text(preset_or_path),
-            overrides,
-            base_dir=base_dir,
-            allow_plugins=allow_plugins,
-        )
-
-    @classmethod
-    def _from_summary(cls, path, overrides, allow_plugins=None) -> Scenario:
-        """The scenario a ``summary.json`` records (with overrides applied)."""
-        import json
-
-        try:
-            data = json.loads(Path(path).read_text(encoding="utf-8"))
-        except OSError as exc:
-            raise ConfigError("scenario", f"cannot read {path}: {exc}") from None
-        except ValueError as exc:
-            raise ConfigError("scenario", f"{path} is not valid JSON: {exc}") from None
-        except RecursionError:
-            raise ConfigError("scenario", f"{path}: JSON nested too deeply to read") from None
-        if not isinstance(data, dict) or not isinstance(data.get("scenario"), dict):
-            raise ConfigError("scenario", f'{path} holds no "scenario" table (a summary.json)')
-        recorded = data.get("plugins")
-        data = data["scenario"]
-        resolve_plugin_paths(data, Path(path).parent)
-        for spec in changed_modules(recorded):
-            import warnings
-
-            from imdrive.errors import ConfigWarning
-
-            warnings.warn(
-                ConfigWarning(
-                    "plugins.modules",
-                    f"{spec} has changed since the run {path} records (its sha256 differs): "
-                    "this rerun uses the module as it is now",
-                ),
-                stacklevel=3,
-            )
-        apply_overrides(data, overrides)
-        return cls.from_dict(data, allow_plugins=allow_plugins)
+        text = scenario_text(preset_or_path)
+        return cls.from_toml(text, overrides, base_dir=base_dir, allow_plugins=allow_plugins)
 
     def with_(self, **changes) -> Scenario:
         """A copy with whole sections replaced (``sc.with_(simulation=...)``), validated again.
@@ -582,22 +538,8 @@ class Scenario:
         ConfigError
             Naming the key for an unknown setting or a value that breaks a rule.
         """
-        if not isinstance(overrides, dict):
-            _check_override_list(overrides)
+        items = override_items(overrides)
         data = self.to_dict()
-        if isinstance(overrides, dict):
-            items = []
-            for key, value in overrides.items():
-                if not isinstance(key, str):
-                    raise ConfigError(
-                        "overrides", f"a key must be a dotted str, got {type(key).__name__}"
-                    )
-                parts = tuple(key.split("."))
-                if not is_setting(parts):
-                    raise ConfigError(str(key), "no such setting")
-                items.append((parts, value))
-        else:
-            items = [parse_override(o) for o in overrides]
         if getattr(self.simulation, "_log_every_auto", False):
             # the default decimation follows Ts_s: let it be derived again from the new one
             data["simulation"].pop("log_every", None)
