@@ -115,7 +115,7 @@ def module_keys(root: Path = KERNELS) -> dict[str, str]:
     for m, t in text.items():
         whole.update(m.encode() + b"\0" + hashlib.sha256(t).digest())
     memo = None
-    with contextlib.suppress(OSError):
+    with contextlib.suppress(OSError, ValueError):  # no memo yet, or a damaged one
         memo = cache_root() / f"module-keys-{whole.hexdigest()[:16]}.json"
         keys = json.loads(memo.read_text())
         if isinstance(keys, dict) and set(keys) == set(files):

@@ -42,6 +42,13 @@ def test_keys_follow_contents_not_paths(copy):
     assert _keys(copy) == _keys(copy)  # from the memo file as from the sources
 
 
+def test_a_damaged_memo_is_computed_again(copy, tmp_path):
+    before = _keys(copy)
+    for memo in (tmp_path / "cache").glob("module-keys-*.json"):
+        memo.write_text("{not json")
+    assert _keys(copy) == before
+
+
 def test_an_edit_outside_the_kernels_changes_no_key(copy):
     before = _keys(copy)
     for rel in ("config/scenario.py", "run/simulate.py", "cli/run.py", "_cache.py"):
