@@ -292,3 +292,32 @@ def test_commission_folder_is_replaced_whole_and_a_failed_write_keeps_the_old(
     assert {p.name: p.read_bytes() for p in out.iterdir()} == first
     assert sorted(p.name for p in tmp_path.iterdir()) == ["c"]  # no staging left
     assert json.loads((out / "summary.json").read_text())["identified"] == {"R1_ohm": 1.0}
+
+
+# -- class 10: a summary.json path is checked before it is opened ---------------------------
+
+
+@pytest.mark.parametrize("kind", ["fifo", "dev-zero", "too-big"])
+def test_a_special_or_huge_summary_json_is_refused_without_reading_it(tmp_path, kind):
+    import subprocess
+    import sys
+
+    path = tmp_path / "summary.json"
+    if kind == "fifo":
+        os.mkfifo(path)  # opening it would block until a writer comes: the run hung
+    elif kind == "dev-zero":
+        path.symlink_to("/dev/zero")  # read to the end: memory ran out
+    else:
+        with open(path, "wb") as f:  # sparse: 65 MB that take no disk
+            f.truncate(65 * 1024**2)
+    res = subprocess.run(
+        [sys.executable, "-m", "imdrive", "run", str(path), "-q", "--out", str(tmp_path / "o")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert res.returncode == 2, res.stderr
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and "summary.json" in lines[0], lines
+    assert ("not a regular file" if kind != "too-big" else "bytes") in lines[0]
+    assert not (tmp_path / "o").exists()

@@ -366,21 +366,12 @@ def summary_scenario(path) -> dict:
     dict
         Its ``"scenario"`` table (TOML-shaped), not yet validated.
     """
-    import json
     import warnings
 
+    from imdrive._io import read_summary_json
     from imdrive.errors import ConfigWarning
 
-    try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise ConfigError("scenario", f"cannot read {path}: {exc}") from None
-    except ValueError as exc:
-        raise ConfigError("scenario", f"{path} is not valid JSON: {exc}") from None
-    except RecursionError:
-        raise ConfigError("scenario", f"{path}: JSON nested too deeply to read") from None
-    if not isinstance(data, dict) or not isinstance(data.get("scenario"), dict):
-        raise ConfigError("scenario", f'{path} holds no "scenario" table (a summary.json)')
+    data = read_summary_json(path)
     recorded = data.get("plugins")
     data = data["scenario"]
     resolve_plugin_paths(data, Path(path).parent)

@@ -10,7 +10,6 @@ signals in linked zoomable panels, each with its own time axis, and the metrics 
 from __future__ import annotations
 
 import html
-import json
 import math
 import os
 from dataclasses import dataclass, field
@@ -19,6 +18,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from imdrive._io import read_summary_json
 from imdrive.errors import ConfigError
 
 #: the default panels: (quantity, columns); a panel is drawn when a run has one of its columns
@@ -100,7 +100,7 @@ def load_run(folder, label: str | None = None) -> Run:
         if summary_path.exists() or summary_path.is_symlink():
             raise ConfigError("run", f"{summary_path}: not a regular file")
         raise ConfigError("run", f"{folder}: no summary.json (not a result folder)")
-    summary = _read_summary(summary_path)
+    summary = read_summary_json(summary_path, "run")
     table = None
     for name, reader in (("timeseries.parquet", pd.read_parquet), ("timeseries.csv", pd.read_csv)):
         path = folder / name
@@ -131,7 +131,6 @@ def load_run(folder, label: str | None = None) -> Run:
 #: the largest result file :func:`load_run` reads (a bound, not a format rule: a 3 s run at
 #: the default logging is a few MB; a week-long one in Parquet stays below it)
 MAX_RESULT_BYTES = 4 * 1024**3
-MAX_SUMMARY_BYTES = 64 * 1024**2
 
 
 def _one_line(exc: BaseException) -> str:
@@ -143,25 +142,6 @@ def _check_size(path: Path, limit: int = MAX_RESULT_BYTES) -> None:
     size = path.stat().st_size
     if size > limit:
         raise ConfigError("run", f"{path}: {size} bytes, more than a result holds ({limit})")
-
-
-def _read_summary(path: Path) -> dict:
-    """A result's ``summary.json``, refused in one line naming it when it is not one."""
-    _check_size(path, MAX_SUMMARY_BYTES)
-    raw = path.read_bytes()
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError:
-        raise ConfigError("run", f"{path}: not UTF-8 text (summary.json is UTF-8 JSON)") from None
-    try:
-        data = json.loads(text)
-    except RecursionError:
-        raise ConfigError("run", f"{path}: JSON nested too deeply to read") from None
-    except ValueError as exc:
-        raise ConfigError("run", f"{path}: not valid JSON ({exc})") from None
-    if not isinstance(data, dict) or not isinstance(data.get("scenario"), dict):
-        raise ConfigError("run", f'{path}: holds no "scenario" table (not an imdrive summary)')
-    return data
 
 
 def _signals(table, path: Path) -> dict:
