@@ -28,6 +28,7 @@ _FILE = "compile-times.json"
 
 _wanted = False
 _attached = False
+_stream = None  # where the notices go (None: sys.stderr at the time)
 
 
 def enable(stream=None) -> None:
@@ -37,9 +38,6 @@ def enable(stream=None) -> None:
     _stream = stream
     if "imdrive.kernels" in sys.modules:  # kernels already loaded: attach now
         attach()
-
-
-_stream = None
 
 
 def _times_path():

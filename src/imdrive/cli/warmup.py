@@ -69,6 +69,7 @@ def _spawn(name: str) -> tuple[str, float, str]:
         [sys.executable, "-m", "imdrive", "warm-up", "--job", name],
         capture_output=True,
         text=True,
+        # compiling is one thread's work; the jobs themselves are the parallelism
         env={**os.environ, "NUMBA_NUM_THREADS": os.environ.get("NUMBA_NUM_THREADS", "1")},
     )
     err = "" if res.returncode == 0 else (res.stderr.strip().splitlines() or ["?"])[-1]
