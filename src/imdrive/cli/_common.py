@@ -101,30 +101,6 @@ def output_folder(
     return out
 
 
-def output_file(given: str) -> Path:
-    """The single file a command writes (``--out FILE``), checked before any work starts
-    (:func:`imdrive._io.file_path_problem`): a regular file or a symbolic link to one, never a
-    folder, a device node, a FIFO or a socket.
-
-    Parameters
-    ----------
-    given : str
-        ``--out``.
-
-    Returns
-    -------
-    pathlib.Path
-        Where to write atomically (:func:`imdrive._io.atomic_write_text`): ``given``, or the
-        target of the symbolic link ``given`` is, so the link stays one and is written through.
-    """
-    from imdrive._io import file_path_problem, real_file
-
-    problem = file_path_problem(given)
-    if problem is not None:
-        raise ConfigError("--out", problem)
-    return real_file(given)
-
-
 def add_force(parser, what: str) -> None:
     """The ``--force`` option of a command that writes a folder."""
     parser.add_argument(

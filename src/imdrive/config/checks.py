@@ -181,12 +181,12 @@ def plugin_rules(sc) -> None:
     """Each ``[plugins.settings.NAME]`` table valid for its estimator's settings class
     (stored back with its defaults filled in); the module of a plug-in estimator in use
     listed in ``plugins.modules``, so a rerun or a worker process imports it again."""
-    from imdrive.config.plugins import looking_past_plugins
+    from imdrive.config.plugins import looked_past
 
     tables = {}
     for name, table in sc.plugins.settings.items():
         cls = ESTIMATOR_SETTINGS.get(name)
-        if cls is None and looking_past_plugins():  # shown, not run: left as given
+        if cls is None and looked_past():  # shown, not run: left as given
             tables[name] = table
             continue
         if cls is None or cls.estimator_section is not None:

@@ -21,9 +21,9 @@ NonNegativeProfile = Annotated[Profile, ProfileValues(ge=0.0)]
 def _known_estimator(name: str) -> str:
     """``"measured"`` or a registered estimator (the package's, or a plug-in's)."""
     if name != "measured" and name not in ESTIMATOR_SETTINGS:
-        from imdrive.config.plugins import looking_past_plugins
+        from imdrive.config.plugins import looked_past
 
-        if looking_past_plugins():  # shown, not run: the unimported plug-in may define it
+        if looked_past():  # shown, not run: the unimported plug-in may define it
             return name
         first = ("measured", "mras", "reactive-mras", "afo", "ekf")  # the package's, in order
         known = [n for n in first if n == "measured" or n in ESTIMATOR_SETTINGS]

@@ -129,15 +129,10 @@ def looking():
         _LOOKING.reset(token)
 
 
-def looking_past_plugins() -> bool:
-    """Inside :func:`looking`, with a module left unimported: an estimator name that no
-    module registered may be the plug-in's, and its settings stay unchecked."""
-    skipped = _LOOKING.get()
-    return bool(skipped)
-
-
 def looked_past() -> list[str]:
-    """The modules left unimported so far inside :func:`looking` (empty outside it).
+    """The modules left unimported so far inside :func:`looking` (empty outside it); while
+    it is not empty, an estimator name no module registered may be the plug-in's, and its
+    settings stay unchecked.
 
     Returns
     -------
