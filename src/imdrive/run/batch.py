@@ -181,7 +181,7 @@ def stack_drives(arrays) -> tuple[DriveParams, DriveState]:
             tables.append(table)
         table_idx[g] = seen[key]
     records = {
-        name: np.concatenate([getattr(a.params, name) for a in arrays])
+        name: _rows([getattr(a.params, name) for a in arrays])
         for name in DriveParams._fields
         if name not in ("prof_t", "prof_v", "tables", "table_idx")
     }
@@ -193,9 +193,20 @@ def stack_drives(arrays) -> tuple[DriveParams, DriveState]:
         table_idx=table_idx,
     )
     state = DriveState(
-        *(np.concatenate([a.state0[j] for a in arrays]) for j in range(len(DriveState._fields)))
+        *(_rows([a.state0[j] for a in arrays]) for j in range(len(DriveState._fields)))
     )
     return params, state
+
+
+def _rows(arrs: list) -> np.ndarray:
+    """``np.concatenate(arrs)`` along the first axis for arrays of one dtype, as bytes: numpy's
+    own promotes a structured dtype field by field for every array (about 1 ms per drive for
+    the drive's records, a third of a batch's set-up)."""
+    dt = arrs[0].dtype
+    if any(a.dtype is not dt and a.dtype != dt for a in arrs):
+        return np.concatenate(arrs)
+    raw = b"".join(np.ascontiguousarray(a).tobytes() for a in arrs)
+    return np.frombuffer(raw, dtype=dt).reshape((-1, *arrs[0].shape[1:])).copy()
 
 
 def _stack(items, log_every: int, n_rows: int, window_s: float, parallel: bool):
