@@ -19,9 +19,6 @@ replace_folder
     staging folder in its place: the old folder's files are all gone, the new ones all there.
 remove_partials
     Delete what killed writers left behind (temporary files and staging folders).
-read_summary_json
-    A result's ``summary.json``, read only if it is a regular file of bounded size holding a
-    ``"scenario"`` table (``Scenario.read`` of a summary, ``imdrive compare``).
 file_path_problem, real_file
     The rule for every single file a command writes: a regular file or a link to one (written
     through), never a folder, a device node, a FIFO or a socket.
@@ -374,57 +371,6 @@ def real_folder(folder) -> Path:
     written through instead of being replaced by a real folder."""
     folder = Path(folder)
     return Path(os.path.realpath(folder)) if folder.is_symlink() else folder
-
-
-#: the largest ``summary.json`` read (one holds a scenario and a few hundred values: ~20 kB)
-MAX_SUMMARY_BYTES = 64 * 1024**2
-
-
-def read_summary_json(path, field: str = "scenario") -> dict:
-    """A result's ``summary.json`` as a dict, or one :class:`~imdrive.errors.ConfigError`.
-
-    Refused, naming ``path``: what is not a regular file (a FIFO would block the read, a link
-    to ``/dev/zero`` would never end), more than :data:`MAX_SUMMARY_BYTES`, not UTF-8, not
-    JSON, nested too deeply, or without a ``"scenario"`` table.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The file.
-    field : str
-        The field the error names (``"scenario"``, ``"run"``).
-
-    Returns
-    -------
-    dict
-        The whole summary.
-    """
-    import json
-    import stat
-
-    from imdrive.errors import ConfigError
-
-    path = Path(path)
-    try:
-        st = os.stat(path)
-        if not stat.S_ISREG(st.st_mode):
-            raise ConfigError(field, f"{path}: not a regular file")
-        if st.st_size > MAX_SUMMARY_BYTES:
-            raise ConfigError(field, f"{path}: {st.st_size} bytes, more than a summary.json holds")
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise ConfigError(field, f"cannot read {path}: {exc.strerror or exc}") from None
-    try:
-        data = json.loads(raw.decode("utf-8"))
-    except UnicodeDecodeError:
-        raise ConfigError(field, f"{path}: not UTF-8 text (summary.json is UTF-8 JSON)") from None
-    except RecursionError:
-        raise ConfigError(field, f"{path}: JSON nested too deeply to read") from None
-    except ValueError as exc:
-        raise ConfigError(field, f"{path} is not valid JSON: {exc}") from None
-    if not isinstance(data, dict) or not isinstance(data.get("scenario"), dict):
-        raise ConfigError(field, f'{path} holds no "scenario" table (not an imdrive summary)')
-    return data
 
 
 def file_path_problem(path) -> str | None:

@@ -344,39 +344,3 @@ def module_spec_of(cls: type) -> str | None:
     if name.startswith("imdrive_plugin_"):
         return getattr(mod, "__file__", None)
     return name
-
-
-def summary_scenario(path) -> dict:
-    """The scenario table a ``summary.json`` records, its plug-in paths made absolute from the
-    file's folder; a :class:`~imdrive.errors.ConfigWarning` for each module whose sha256 differs
-    from the one recorded.
-
-    Parameters
-    ----------
-    path : str or pathlib.Path
-        The ``summary.json``.
-
-    Returns
-    -------
-    dict
-        Its ``"scenario"`` table (TOML-shaped), not yet validated.
-    """
-    import warnings
-
-    from imdrive._io import read_summary_json
-    from imdrive.errors import ConfigWarning
-
-    data = read_summary_json(path)
-    recorded = data.get("plugins")
-    data = data["scenario"]
-    resolve_plugin_paths(data, Path(path).parent)
-    for spec in changed_modules(recorded):
-        warnings.warn(
-            ConfigWarning(
-                "plugins.modules",
-                f"{spec} has changed since the run {path} records (its sha256 differs): "
-                "this rerun uses the module as it is now",
-            ),
-            stacklevel=4,
-        )
-    return data

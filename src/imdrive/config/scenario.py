@@ -99,11 +99,11 @@ from imdrive.config.plugins import (
     allowing_plugins,
     import_plugins,
     resolve_plugin_paths,
-    summary_scenario,
 )
 from imdrive.config.profiles import Profile  # noqa: F401  (re-export)
 from imdrive.config.sensors import SensorSettings
 from imdrive.config.simulation import DEFAULT_LOG_RATE_HZ, SimulationSettings, default_log_every
+from imdrive.config.summary_file import summary_scenario
 from imdrive.config.validation import (  # noqa: F401  (re-exports)
     Bool,
     Float,

@@ -18,7 +18,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from imdrive._io import read_summary_json
+from imdrive.config.summary_file import read_summary_json
 from imdrive.errors import ConfigError
 
 #: the default panels: (quantity, columns); a panel is drawn when a run has one of its columns
