@@ -206,12 +206,15 @@ class CompensatorSettings:
         Int, setting("gating: decisions still skipped after a gated one", ge=0)
     ] = 1
     step_law: Annotated[
-        Literal["table", "adaptive"],
+        Literal["table", "adaptive", "kalman"],
         setting(
             '"table": R̂2 changes by G_CR_ohm × the table\'s level (the paper); "adaptive": '
             "inside the first threshold a continuous level fine_gain × (scaled E) and an "
             "integrated drift rate, for fine and ramp-following adaptation "
-            "(kernels/compensator.py)"
+            '(kernels/compensator.py); "kalman": the detected error over its analytic '
+            "sensitivity, filtered by a Kalman filter on R2 and its drift rate (section "
+            "[kalman], kernels/r2_kalman.py); the table's gains, the fine band and the drift "
+            "keys then have no effect"
         ),
     ] = "table"
     fine_gain: Annotated[

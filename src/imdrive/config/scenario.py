@@ -101,6 +101,8 @@ from imdrive.config.plugins import (
     resolve_plugin_paths,
 )
 from imdrive.config.profiles import Profile  # noqa: F401  (re-export)
+from imdrive.config.r2_kalman import KalmanLawSettings  # noqa: F401  (the law registers)
+from imdrive.config.r2_laws import law_sections
 from imdrive.config.sensors import SensorSettings
 from imdrive.config.simulation import DEFAULT_LOG_RATE_HZ, SimulationSettings, default_log_every
 from imdrive.config.summary_file import summary_scenario
@@ -248,8 +250,10 @@ class Scenario:
     ] = ControllerModelSettings()
     # one section per estimator of the package (mras, reactive_mras, afo, ekf, ...), from
     # their settings classes (config/estimators.py): a new estimator adds its own
-    for _section, _cls in package_sections().items():
-        __annotations__[_section] = Annotated[_cls, setting(_cls.estimator_description)]
+    # and one per R2 law with a section of its own (config/r2_laws.py)
+    for _section, _cls in (package_sections() | law_sections()).items():
+        _doc = getattr(_cls, "estimator_description", None) or _cls.law_description
+        __annotations__[_section] = Annotated[_cls, setting(_doc)]
         locals()[_section] = _cls()
     del _section, _cls
     plugins: Annotated[PluginSettings, setting("estimators from the user's own modules")] = (

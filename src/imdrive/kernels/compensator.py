@@ -1,4 +1,6 @@
-"""The fuzzy-logic rotor-resistance compensator in the drive (paper §4, Fig. 1).
+"""The fuzzy-logic rotor-resistance compensator in the drive (paper §4, Fig. 1), its injection,
+detection and gating; with ``p.kf`` the decisions go to the model-based law of
+:mod:`imdrive.kernels.r2_kalman` instead of the fuzzy table.
 
 Every compensator period (``p.n`` control periods) after the enable time it forms
 
@@ -12,8 +14,8 @@ updates
 
     R2_hat <- clip(R2_hat + G_CR * CR, R2_min, R2_max)
 
-The slip calculation (which runs after the compensator in the same period) and the MRAS (from
-the next sample on) read ``R2_hat`` from the controller's model (MODEL_STATE).
+The slip calculation (after the compensator in the same period) and the MRAS (from the next
+sample on) read ``R2_hat`` from the controller's model (MODEL_STATE).
 
 Persistent-excitation variant (this project's, not the paper's): a sinusoid of amplitude
 ``p.inj_amp`` and frequency ``p.inj_freq`` is added to the flux-current reference id*
@@ -26,8 +28,8 @@ part of their difference has the sign of ``T2_hat - T2``, i.e. it is negative wh
 ``R2_hat > R2`` — the same sign convention as the paper's e_d0, so the same table applies.
 A constant (e.g. discretisation) bias of e_d0 averages out.
 
-By default E is the mean of the input over the compensator period rather than a single sample
-(``p.average``): a boxcar anti-aliasing filter that keeps ripple out of the quantiser.
+By default E is the mean of the input over the compensator period (``p.average``), not a
+sample: a boxcar anti-aliasing filter that keeps ripple out of the quantiser.
 
 R2 identification from a low-frequency AC component superimposed on the flux command is the
 method of Kubota and Matsuse (H. Kubota, K. Matsuse, "Speed sensorless field-oriented control
@@ -157,6 +159,7 @@ from imdrive.kernels.detection import (  # noqa: F401  (MAX_HP_CORRECTION: old p
 )
 from imdrive.kernels.drift_rate import drift_update
 from imdrive.kernels.fuzzy import lookup
+from imdrive.kernels.r2_kalman import kalman_decision, kalman_hold
 from imdrive.kernels.records import b1, f8, record_dtype
 from imdrive.kernels.sensitivity import (  # noqa: F401  (in_phase_sensitivity: old path)
     fine_loop_gain_ratio,
@@ -218,6 +221,12 @@ COMPENSATOR_PARAMS = record_dtype(
         ("drift_unwind", f8),  # adaptive law: drift gain's multiple against a growing error
         ("drift_margin", f8),  # and the shrink of the error that counts as closing it
         ("R2_tuned", f8),  # adaptive law: R2_hat its fine gain is tuned at, ohm (0: fixed gain)
+        ("kf", b1),  # the Kalman law (r2_kalman.py) instead of the table's levels
+        ("kf_r", f8),  # its measurement noise, relative to R2_hat, per decision
+        ("kf_q", f8),  # its drift-rate noise, relative to kf_R2, 1/s per sqrt(s)
+        ("kf_p0", f8),  # its prior: the relative uncertainty of R2_hat(0)
+        ("kf_R2", f8),  # R2_hat(0), ohm
+        ("kf_T", f8),  # the decision period, s
     ]
 )
 
@@ -264,6 +273,11 @@ COMPENSATOR_STATE = record_dtype(
         ("cpl_ws", f8),  # the slip command it uses, low-passed over T2_hat, rad/s
         ("damp_n", f8),  # overshoot damping: halvings of the table's steps in force
         ("big_sign", f8),  # and the sign of the last table-level step (0: none yet)
+        ("kf_init", b1),  # Kalman law: the prior is set
+        ("kf_P00", f8),  # its covariance: R2, ohm^2
+        ("kf_P01", f8),  # R2 and its rate, ohm^2/s
+        ("kf_P11", f8),  # the rate, ohm^2/s^2
+        ("kf_sd", f8),  # the posterior standard deviation of R2 over R2_hat
     ]
 )
 
@@ -333,19 +347,13 @@ def demodulate(p, s, e_dq0, sine, cosine, w_e, w_s, T2_hat, Ts):
 
 
 @njit(cache=True)
-def compensator_input(p, s, e_d0):
-    """The signal the compensator feeds on: e_d0 (paper) or its demodulated version, Wb."""
-    if p.demodulated:
-        return s.demod
-    return e_d0
-
-
-@njit(cache=True)
 def compensator_update(p, s, m, table, E):
     """One compensator decision from the input ``E`` (Wb); updates ``m.R2_hat`` (MODEL_STATE).
 
     Returns the output level CR.
     """
+    if p.kf:  # the model-based law (r2_kalman.py)
+        return kalman_decision(p, s, m, E)
     if not s.started:
         s.started = True
         s.E_prev = E  # no change is known at the first sample
@@ -497,7 +505,7 @@ def _gate_decide(p, s, w_e):
             flags |= 8
     if s.inj_back > 0.5:  # the injection backed off (voltage headroom, field weakening)
         flags |= 32
-    if p.fine and s.inj_new:
+    if (p.fine or p.kf) and s.inj_new:
         # the injection started in this period: its first windows held a fraction of a period
         # and the flux's start-up transient (measured on injection-fig6: the first two
         # decisions stepped R2_hat 0.5 % the wrong way); settle as after a frequency switch
@@ -525,16 +533,17 @@ def compensator_step(p, s, m, table, e_d0, t, k, w_e=0.0):
     if t < p.t_on:
         return
     n = max(int(p.n), 1)
-    s.acc += compensator_input(p, s, e_d0)
+    x = s.demod if p.demodulated else e_d0  # the input: e_d0 (paper) or demodulated
+    s.acc += x
     if p.fine and n % 2 == 0:
         _compensator_step_sliding(p, s, m, table, k, n, w_e)
         return
     if k % n != 0:
         return
-    if p.average and s.started:
+    if p.average and (s.started or p.kf):  # (the Kalman law: always the window's mean)
         E = s.acc / n
     else:
-        E = compensator_input(p, s, e_d0)
+        E = x
     s.acc = 0.0
     if p.gate:
         flags = _gate_decide(p, s, w_e)
@@ -542,6 +551,8 @@ def compensator_step(p, s, m, table, e_d0, t, k, w_e=0.0):
         if flags != 0:
             s.started = False  # no change of E is known across a frozen period
             s.live = False
+            if p.kf:
+                kalman_hold(p, s, m, p.kf_T)
             return
     compensator_update(p, s, m, table, E)
 

@@ -322,6 +322,7 @@ def compensator_fields(sc: Scenario, D: Resolved) -> tuple[dict, dict]:
         cpl_wmin=2 * math.pi * sc.machine.rated_frequency_Hz * inj.decouple_slip_fmin_pu,
         **_gating(sc, r),
         **_thermal(sc, D),
+        **_kalman(sc, D),
     )
     derived = {
         "compensator_period_steps": n_comp,
@@ -433,6 +434,22 @@ def _thermal(sc, D: Resolved) -> dict:
         "th_tau": comp.thermal_time_constant_s,
         "th_Rth": D.rotor_Rth,
         "th_alpha": comp.thermal_alpha_per_K,
+    }
+
+
+def _kalman(sc, D: Resolved) -> dict:
+    """The model-based law's parameters (``compensator.step_law = "kalman"``; off: none):
+    its noise levels relative to R2 (section ``[kalman]``), R̂2(0) and the decision period."""
+    if sc.compensator.step_law != "kalman":
+        return {}
+    k = sc.kalman
+    return {
+        "kf": True,
+        "kf_r": k.noise_pu,
+        "kf_q": k.drift_pu,
+        "kf_p0": k.prior_pu,
+        "kf_R2": D.R2_hat,
+        "kf_T": D.n_comp * sc.simulation.Ts_s,
     }
 
 
