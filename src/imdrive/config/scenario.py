@@ -167,6 +167,7 @@ SECTIONS: dict[str, type] = {
     "estimator": EstimatorSettings,
     "controller_model": ControllerModelSettings,
     **package_sections(),
+    **law_sections(),
     "plugins": PluginSettings,
     "flux_injection": FluxInjectionSettings,
     "compensator": CompensatorSettings,
@@ -200,8 +201,8 @@ class Scenario:
         Time-varying plant, load torque, DC-link inverter, which controller drives it,
         open-loop voltage, field-oriented speed control.
     estimator, mras, reactive_mras, afo, ekf : settings section
-        The controller's machine model and the speed estimators' settings (one section per
-        estimator of the package, from its settings class).
+        The controller's machine model, the speed estimators' and the R2 laws' settings (one
+        section per estimator and per law of the package, from its settings class).
     controller_model : ControllerModelSettings
         The controller's magnetising curve and inverter-error table (commissioning's).
     plugins : PluginSettings
@@ -248,9 +249,8 @@ class Scenario:
     controller_model: Annotated[
         ControllerModelSettings, setting("the controller's magnetising curve and inverter error")
     ] = ControllerModelSettings()
-    # one section per estimator of the package (mras, reactive_mras, afo, ekf, ...), from
-    # their settings classes (config/estimators.py): a new estimator adds its own
-    # and one per R2 law with a section of its own (config/r2_laws.py)
+    # one section per estimator of the package (mras, reactive_mras, afo, ekf, ...) and per R2
+    # law with a section (config/estimators.py, r2_laws.py): a new one adds its own
     for _section, _cls in (package_sections() | law_sections()).items():
         _doc = getattr(_cls, "estimator_description", None) or _cls.law_description
         __annotations__[_section] = Annotated[_cls, setting(_doc)]
@@ -592,9 +592,9 @@ class Scenario:
         return out
 
 
-# the estimators' sections come from their settings classes (package_sections), so a new
-# estimator of the package is named in the docstring without an edit here
+# the estimators' and laws' sections come from their settings classes, so a new one of the
+# package is named in the docstring without an edit here
 _FOUR = "mras, reactive_mras, afo, ekf"
 assert Scenario.__doc__ and _FOUR in Scenario.__doc__
-Scenario.__doc__ = Scenario.__doc__.replace(_FOUR, ", ".join(package_sections()), 1)
+Scenario.__doc__ = Scenario.__doc__.replace(_FOUR, ", ".join(package_sections() | law_sections()))
 del _FOUR
