@@ -3,7 +3,8 @@ the analytic sensitivity, the steady gains are those of the discrete algebraic R
 equation (scipy's solver), a ramp of R2 is followed with no steady lag (the drift state takes
 its slope), a gated window grows the covariance and moves nothing; and in the drive, from
 R2_hat(0) = 0.8 and 1.2 R2 on three machines at points of four kinds (half speed, low speed at
-rated load, regenerating at 0.1 speed, rated speed), R2_hat ends within 1 %."""
+rated load, regenerating at 0.1 speed, rated speed), R2_hat ends within 1 % with the MRAS and
+within 1.5 % with the AFO (through the detector's own flux error)."""
 
 from __future__ import annotations
 
@@ -110,7 +111,7 @@ def test_a_gated_window_grows_the_covariance_and_moves_nothing():
     assert s["kf_sd"] == pytest.approx(math.sqrt(s["kf_P00"]) / R2)
 
 
-def _run(machine: str, speed_pu: float, load_pu: float, ratio: float):
+def _run(machine, speed_pu, load_pu, ratio, estimator="mras", extra=()):
     mach = imdrive.machine_preset(machine)
     rp = rated_point(mach)
     n = speed_pu * rp.synchronous_speed_rpm
@@ -120,9 +121,11 @@ def _run(machine: str, speed_pu: float, load_pu: float, ratio: float):
         [
             f"machine.preset='{machine}'",
             "compensator.step_law='kalman'",
+            f"control.speed_feedback='{estimator}'",
             f"estimator.R2_ratio={ratio}",
             f"control.speed_ref_rpm={{initial=0, changes=[{{at=0.5, to={n:.3f}, over=1.0}}]}}",
             f"load.torque_Nm={{initial=0, changes=[{{at=2.0, to={T_L:.4f}}}]}}",
+            *extra,
         ],
     )
     return imdrive.simulate(sc)
@@ -144,3 +147,29 @@ def test_the_drive_tracks_R2_with_the_kalman_law(machine, speed_pu, load_pu, rat
     err = res["R2_hat_ohm"][-1] / res["R2_ohm"][-1] - 1.0
     assert abs(err) < 0.01, f"R2_hat ends {100 * err:+.2f} % off"
     assert res.verdict["verdict_ok"], res.verdict["verdict_text"]
+
+
+@pytest.mark.parametrize(
+    "machine, speed_pu, load_pu, ratio",
+    [
+        ("paper-table-iv", 0.1, -1.0, 1.2),
+        ("paper-table-iv", 1.0, 1.0, 0.8),
+        ("aalto-2.2kw", 0.2, 1.0, 0.8),
+        ("aalto-2.2kw", 0.05, 0.5, 1.2),
+    ],
+)
+def test_the_afo_tracks_R2_through_the_detectors_own_flux_error(machine, speed_pu, load_pu, ratio):
+    """The AFO gives no flux error; the detection forms its own (kernels/flux_detector.py),
+    and the same law converges (the scenario was refused before). R1_hat is exact: the AFO
+    does not adapt R1, and the detector's voltage model carries an R1 error into R2_hat (from
+    R1_hat = 1.1 R1 these four points ended +5.3, -19.7, -4.1 and within 1.5 %)."""
+    res = _run(machine, speed_pu, load_pu, ratio, "afo", ["estimator.R1_ratio=1.0"])
+    assert res.par.comp[0]["det"]
+    err = res["R2_hat_ohm"][-1] / res["R2_ohm"][-1] - 1.0
+    assert abs(err) < 0.015, f"R2_hat ends {100 * err:+.2f} % off"
+    assert res.verdict["verdict_ok"], res.verdict["verdict_text"]
+
+
+def test_the_mras_hands_its_own_flux_error_over():
+    res = _run("paper-table-iv", 0.5, 0.5, 1.2)
+    assert not res.par.comp[0]["det"]

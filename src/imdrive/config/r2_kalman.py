@@ -17,9 +17,10 @@ class KalmanLawSettings:
 
     Each decision window's detected flux error is divided by its analytic sensitivity to R2
     (the injection's in-phase flux response,
-    :func:`~imdrive.kernels.sensitivity.in_phase_sensitivity`), which measures the relative R2 error; a two-state Kalman filter
-    (R2 and its drift rate) weighs that measurement against its prediction. The step size,
-    the ramp following and the damping are its gains; no other setting shapes them.
+    :func:`~imdrive.kernels.sensitivity.in_phase_sensitivity`), which measures the relative
+    R2 error; a two-state Kalman filter (R2 and its drift rate) weighs that measurement
+    against its prediction. The step size, the ramp following and the damping are its gains;
+    no other setting shapes them.
     """
 
     noise_pu: Annotated[

@@ -84,7 +84,6 @@ from imdrive.config.overrides import (  # noqa: F401  (the private ones: re-expo
     table_paths,
 )
 from imdrive.config.pairs import apply_overrides, check_pairs, set_layer
-from imdrive.config.perunit import resolve
 from imdrive.config.plant import (  # noqa: F401  (C and the profile types: re-exports)
     C,
     LoadSettings,
@@ -341,17 +340,8 @@ class Scenario:
                     f"carrier period per control period; got {self.simulation.Ts_s:g})",
                 )
         fb = self.control.speed_feedback
-        # an estimator not registered here is an unimported plug-in's (imdrive show): unchecked
-        known = fb == "measured" or fb in ESTIMATOR_SETTINGS
-        gives_e_d0 = fb == "measured" or (known and ESTIMATOR_SETTINGS[fb].estimator_flux_error)
-        injecting = resolve(self).inj_amp != 0.0
-        if known and not gives_e_d0 and (self.compensator.enabled or injecting):
-            with_e_d0 = [n for n, c in ESTIMATOR_SETTINGS.items() if c.estimator_flux_error]
-            raise ConfigError(
-                "control.speed_feedback",
-                f'"{fb}" gives no flux error e_d0: the compensator and the injection need '
-                f'"measured" or one of {with_e_d0}',
-            )
+        # an estimator that gives no flux error e_dq0 (AFO, EKF) gets the detection's own
+        # (kernels/flux_detector.py): the compensator and the injection run with any estimator
         r2a = self.estimator.R2_adaptation
         if r2a != "compensator":
             if fb != r2a:

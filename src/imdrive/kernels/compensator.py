@@ -160,7 +160,7 @@ from imdrive.kernels.detection import (  # noqa: F401  (MAX_HP_CORRECTION: old p
 from imdrive.kernels.drift_rate import drift_update
 from imdrive.kernels.fuzzy import lookup
 from imdrive.kernels.r2_kalman import kalman_decision, kalman_hold
-from imdrive.kernels.records import b1, f8, record_dtype
+from imdrive.kernels.records import b1, c16, f8, record_dtype
 from imdrive.kernels.sensitivity import (  # noqa: F401  (in_phase_sensitivity: old path)
     fine_loop_gain_ratio,
     in_phase_sensitivity,
@@ -227,6 +227,8 @@ COMPENSATOR_PARAMS = record_dtype(
         ("kf_p0", f8),  # its prior: the relative uncertainty of R2_hat(0)
         ("kf_R2", f8),  # R2_hat(0), ohm
         ("kf_T", f8),  # the decision period, s
+        ("det", b1),  # the estimator gives no flux error: the detector's own (flux_detector.py)
+        ("det_wc", f8),  # its filter corner, rad/s
     ]
 )
 
@@ -278,6 +280,9 @@ COMPENSATOR_STATE = record_dtype(
         ("kf_P01", f8),  # R2 and its rate, ohm^2/s
         ("kf_P11", f8),  # the rate, ohm^2/s^2
         ("kf_sd", f8),  # the posterior standard deviation of R2 over R2_hat
+        ("dt_lam_i", c16),  # flux detector: current model, Wb (stationary frame)
+        ("dt_lam_v", c16),  # its filtered voltage model, Wb
+        ("dt_lam_f", c16),  # its filtered current model, Wb
     ]
 )
 

@@ -51,6 +51,7 @@ from imdrive.kernels.estimators.registry import (
     estimator_log,
     estimator_step,
 )
+from imdrive.kernels.flux_detector import detector_flux_error
 from imdrive.kernels.ifoc import (
     dead_time_advance,
     field_weakening,
@@ -257,6 +258,8 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc
         w_ref, i_inj, hold_R1, Ts, t,
     )  # fmt: skip
     w_r_hat, e_dq0 = estimator_step(pe, mdl, est, inp)
+    if pk.det:  # the estimator gives no flux error: the detection forms its own
+        e_dq0 = detector_flux_error(pk, cmp, mdl, inp, w_r_hat)
 
     if pk.inj_amp != 0.0:
         T2_hat = incremental_L2(mdl) / mdl.R2_hat

@@ -20,6 +20,7 @@ from imdrive.config.current_control import current_controller
 from imdrive.config.field_weakening import field_weakening_on
 from imdrive.config.perunit import Resolved, adc_range_A, sign_band_A
 from imdrive.config.profiles import Profile
+from imdrive.config.registry import ESTIMATOR_SETTINGS
 from imdrive.config.scaled import flux_injection_frequency_Hz, plant_thermal_resistances
 from imdrive.config.scenario import Scenario
 from imdrive.config.speed_gain import speed_gain_flux_scaling
@@ -323,6 +324,8 @@ def compensator_fields(sc: Scenario, D: Resolved) -> tuple[dict, dict]:
         **_gating(sc, r),
         **_thermal(sc, D),
         **_kalman(sc, D),
+        det=comp.enabled and not gives_flux_error(sc.control.speed_feedback),
+        det_wc=sc.mras.wc_rad_s,
     )
     derived = {
         "compensator_period_steps": n_comp,
@@ -435,6 +438,16 @@ def _thermal(sc, D: Resolved) -> dict:
         "th_Rth": D.rotor_Rth,
         "th_alpha": comp.thermal_alpha_per_K,
     }
+
+
+def gives_flux_error(speed_feedback: str) -> bool:
+    """Whether the estimator ``speed_feedback`` runs hands the R2 detection a flux error
+    (the MRAS family; ``"measured"`` runs the MRAS beside); otherwise the detection forms its
+    own (:mod:`imdrive.kernels.flux_detector`)."""
+    if speed_feedback == "measured":
+        return True
+    cls = ESTIMATOR_SETTINGS.get(speed_feedback)
+    return cls is not None and bool(cls.estimator_flux_error)
 
 
 def _kalman(sc, D: Resolved) -> dict:
