@@ -118,6 +118,9 @@ class Estimate(NamedTuple):
     i_inj: float  # the R2 compensator's injected d-axis current, A
     v_use: float  # last period's voltage over Vdc_meas/sqrt 3
     v_fw: float  # the voltage use the field weakening sees (the injection's headroom)
+    hold_R1: bool  # the estimator's R1 adaptation was held this period (its input)
+    R1_after: float  # the model's R1_hat right after the estimator's step, ohm (before the
+    R2_after: float  # compensator), and its R2_hat: what a recording needs to replay it
 
 
 class Command(NamedTuple):
@@ -155,7 +158,7 @@ SCRATCH = record_dtype(
 )
 
 #: The open-loop drive's :class:`Estimate`: no estimator runs.
-NO_ESTIMATE = Estimate(0.0, 0j, 0.0, 0.0, 0.0)
+NO_ESTIMATE = Estimate(0.0, 0j, 0.0, 0.0, 0.0, False, 0.0, 0.0)
 
 
 @njit(cache=True, inline="always")
@@ -257,6 +260,8 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc
         w_ref, i_inj, hold_R1, Ts, t,
     )  # fmt: skip
     w_r_hat, e_dq0 = estimator_step(pe, mdl, est, inp)
+    R1_after = mdl.R1_hat
+    R2_after = mdl.R2_hat
 
     if pk.inj_amp != 0.0:
         T2_hat = incremental_L2(mdl) / mdl.R2_hat
@@ -274,7 +279,7 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc
         compensator_step(pk, cmp, mdl, table, e_dq0.real, t, smpl.k, ctl.w_e)
         if pk.th_on:  # the rotor thermal model carries R2_hat while it is held
             thermal_step(pk, cmp, mdl, ctl.i_s_dq.imag, t, Ts)
-    return Estimate(w_r_hat, e_dq0, i_inj, v_use, v_fw)
+    return Estimate(w_r_hat, e_dq0, i_inj, v_use, v_fw, hold_R1, R1_after, R2_after)
 
 
 @njit(cache=True, inline="always")
