@@ -175,3 +175,147 @@ def write_recording(res, folder) -> None:
         table.replace_schema_metadata(meta), str(folder / "recording.parquet"), compression="zstd"
     )
     (folder / "recording.toml").write_text(dumps(recording_meta(res)))
+
+
+# --- reading a recording back ---------------------------------------------------------------
+
+
+class Recording:
+    """A recording read and checked by :func:`read_recording`.
+
+    Attributes
+    ----------
+    path : pathlib.Path
+        The data file.
+    columns : dict
+        Column name -> float64 array (every value finite, time strictly increasing).
+    meta : dict
+        ``recording.toml`` beside it (empty for a foreign recording).
+    period_s : float
+        The median sample period, s.
+    """
+
+    def __init__(self, path: Path, columns: dict, meta: dict, period_s: float):
+        self.path = path
+        self.columns = columns
+        self.meta = meta
+        self.period_s = period_s
+
+    @property
+    def rows(self) -> int:
+        """Number of rows."""
+        return len(self.columns["time_s"])
+
+    def has(self, *names: str) -> bool:
+        """Whether every column of ``names`` is in the recording."""
+        return all(n in self.columns for n in names)
+
+
+def _data_file(path) -> Path:
+    """The data file of ``path``: itself, or a run folder's ``recording.parquet``."""
+    p = Path(path)
+    if p.is_dir():
+        p = p / "recording.parquet"
+    if not p.is_file():
+        raise ConfigError(str(path), "no such recording (a recording.parquet or its run folder)")
+    return p
+
+
+def _read_table(p: Path) -> dict[str, np.ndarray]:
+    """Column name -> array of the Parquet file ``p`` (one line naming the file if unreadable)."""
+    if p.stat().st_size == 0:
+        raise ConfigError(str(p), "is empty: a recording needs at least two rows")
+    import pyarrow.parquet as pq
+
+    try:
+        table = pq.read_table(str(p))
+    except Exception as exc:  # pyarrow's many error types: one line, bad input
+        raise ConfigError(str(p), f"is not a readable Parquet file ({exc})") from None
+    out = {}
+    for name in table.column_names:
+        try:
+            out[name] = np.ascontiguousarray(table[name].to_numpy(), dtype=np.float64)
+        except (TypeError, ValueError):
+            raise ConfigError(f"{p}: column {name}", "must hold numbers") from None
+    return out
+
+
+def check_columns(where: str, cols: dict[str, np.ndarray]) -> float:
+    """Check the rules every recording follows; return its median sample period, s.
+
+    Rules, each broken one a :class:`~imdrive.errors.ConfigError` naming the column (and the
+    row, counted from 0) and the rule: at least two rows; the :data:`REQUIRED` columns; every
+    value finite; time strictly increasing; every sample period within
+    :data:`PERIOD_TOLERANCE` of the median.
+    """
+    n = len(cols["time_s"]) if "time_s" in cols else len(next(iter(cols.values()), []))
+    if n == 0:
+        raise ConfigError(where, "is empty: a recording needs at least two rows")
+    for name in REQUIRED:
+        if name not in cols:
+            raise ConfigError(
+                f"{where}: column {name}",
+                f"missing: a recording needs the columns {', '.join(REQUIRED)}",
+            )
+    if n < 2:
+        raise ConfigError(where, "has one row: a recording needs at least two rows")
+    for name, v in cols.items():
+        bad = np.flatnonzero(~np.isfinite(v))
+        if bad.size:
+            k = int(bad[0])
+            raise ConfigError(
+                f"{where}: column {name} row {k}", f"is {v[k]}: every value must be finite"
+            )
+    t = cols["time_s"]
+    dt = np.diff(t)
+    bad = np.flatnonzero(dt <= 0.0)
+    if bad.size:
+        k = int(bad[0]) + 1
+        how = "repeats" if dt[k - 1] == 0.0 else "goes back from"
+        raise ConfigError(
+            f"{where}: column time_s row {k}",
+            f"time {t[k]!r} s {how} row {k - 1}'s {t[k - 1]!r} s: time must increase strictly",
+        )
+    period = float(np.median(dt))
+    bad = np.flatnonzero(np.abs(dt - period) > PERIOD_TOLERANCE * period)
+    if bad.size:
+        k = int(bad[0]) + 1
+        raise ConfigError(
+            f"{where}: column time_s row {k}",
+            f"the sample period {dt[k - 1]:.6g} s there differs from the median {period:.6g} s "
+            f"by more than {PERIOD_TOLERANCE:.0%}: a recording must be sampled at a steady rate",
+        )
+    return period
+
+
+def read_recording(path) -> Recording:
+    """Read and check a recording: ``recording.parquet`` (or its run folder), with
+    ``recording.toml`` beside it if there is one.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file or the folder holding it.
+
+    Returns
+    -------
+    Recording
+
+    Raises
+    ------
+    ConfigError
+        One line naming the file, column and row, and the rule (:func:`check_columns`).
+    """
+    import tomllib
+
+    p = _data_file(path)
+    cols = _read_table(p)
+    period = check_columns(str(p), cols)
+    meta = {}
+    toml = p.with_suffix(".toml")
+    if toml.is_file():
+        try:
+            meta = tomllib.loads(toml.read_text())
+        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+            raise ConfigError(str(toml), f"is not valid TOML ({exc})") from None
+    return Recording(p, cols, meta, period)
