@@ -146,7 +146,7 @@ def add_parser(sub) -> None:
         action="append",
         metavar="NAME[,NAME]",
         help="write exactly these outputs besides summary.json, whatever [output] says: "
-        "csv, mat, parquet, figures, report (repeatable)",
+        "csv, mat, parquet, figures, report, recording (repeatable)",
     )
     r.add_argument(
         "--force",

@@ -264,7 +264,7 @@ def check_columns(where: str, cols: dict[str, np.ndarray]) -> float:
         if bad.size:
             k = int(bad[0])
             raise ConfigError(
-                f"{where}: column {name} row {k}", f"is {v[k]}: every value must be finite"
+                f"{where}: column {name} row {k}", f"is {float(v[k])}: every value must be finite"
             )
     t = cols["time_s"]
     dt = np.diff(t)
@@ -274,7 +274,8 @@ def check_columns(where: str, cols: dict[str, np.ndarray]) -> float:
         how = "repeats" if dt[k - 1] == 0.0 else "goes back from"
         raise ConfigError(
             f"{where}: column time_s row {k}",
-            f"time {t[k]!r} s {how} row {k - 1}'s {t[k - 1]!r} s: time must increase strictly",
+            f"time {float(t[k]):.9g} s {how} row {k - 1}'s {float(t[k - 1]):.9g} s: time must "
+            "increase strictly",
         )
     period = float(np.median(dt))
     bad = np.flatnonzero(np.abs(dt - period) > PERIOD_TOLERANCE * period)

@@ -110,6 +110,19 @@ def _scenario(rec: Recording, scenario):
     return Scenario.read(str(scenario))
 
 
+def _scenario_of(sc, name: str):
+    """The scenario with ``name`` as its estimator: ``sc`` itself for the run's own (its records
+    exactly as the run's); another with the compensator off where the estimator gives no flux
+    error for it (the compensator is not replayed: its R2_hat comes from the recording)."""
+    own = sc.control.speed_feedback
+    if own == name or (own == "measured" and name == "mras"):
+        return sc
+    try:
+        return sc.with_overrides({"control.speed_feedback": name})
+    except ConfigError:
+        return sc.with_overrides({"control.speed_feedback": name, "compensator.enabled": False})
+
+
 def _estimator_names(estimators, rec: Recording) -> list[str]:
     from imdrive.run.estimators import estimator_names
 
@@ -244,14 +257,7 @@ def replay(recording, scenario=None, estimators=None, out=None, *, force=False) 
         problem = output_folder_problem(out, lambda n: n in REPLAY_FILES, force, "a replay")
         if problem is not None:
             raise ConfigError("--out", problem)
-    drives = {}
-    for name in names:
-        sc_e = sc if sc.control.speed_feedback == name else sc
-        if sc.control.speed_feedback != name and not (
-            name == "mras" and sc.control.speed_feedback == "measured"
-        ):
-            sc_e = sc.with_overrides({"control.speed_feedback": name})
-        drives[name] = build_arrays(sc_e)
+    drives = {name: build_arrays(_scenario_of(sc, name)) for name in names}
     first = drives[names[0]]
     Ts = _period(rec, float(first.params.sim[0]["Ts"]))
     rows, model_given, defaulted = replay_rows(rec, first.state0.sample[0])
