@@ -77,7 +77,7 @@ def test_round_trip_follows_the_compensators_R2_hat(tmp_path):
             "estimator.R2_ohm": 1.0,
         },
     )
-    assert np.unique(res.recording["R2_hat_ohm"]).size > 5  # it did write
+    assert np.unique(res.recording["R2_hat_ohm"]).size >= 3  # it wrote R2_hat, twice at least
     res.save(tmp_path / "run", formats=["recording"])
     rep = replay(tmp_path / "run", estimators="mras")
     assert_round_trip(res, rep, "mras")
