@@ -62,8 +62,26 @@ class ReplayResult:
     summary: dict = field(default_factory=dict)
 
     def save(self, out_dir, force: bool = False) -> list[Path]:
-        """Write ``timeseries.parquet`` and ``summary.json`` as the folder ``out_dir``
-        (staged, replaced as a whole; an existing folder of other files only with ``force``).
+        """Write ``timeseries.parquet`` and ``summary.json`` as the folder ``out_dir``.
+
+        The folder is written staged and replaced as a whole (:func:`imdrive._io.replace_folder`).
+
+        Parameters
+        ----------
+        out_dir : str or pathlib.Path
+            The replay folder.
+        force : bool
+            Replace a folder that holds other files.
+
+        Returns
+        -------
+        list of pathlib.Path
+            The files written.
+
+        Raises
+        ------
+        ConfigError
+            ``out_dir`` holds other files and ``force`` is False (nothing written).
         """
         import json
 
