@@ -222,15 +222,19 @@ def _data_file(path) -> Path:
 
 
 def _read_table(p: Path) -> dict[str, np.ndarray]:
-    """Column name -> array of the Parquet file ``p`` (one line naming the file if unreadable)."""
+    """Column name -> array of the Parquet (or, named ``*.csv``, CSV) file ``p`` (one line
+    naming the file if unreadable)."""
     if p.stat().st_size == 0:
         raise ConfigError(str(p), "is empty: a recording needs at least two rows")
+    import pyarrow.csv as pcsv
     import pyarrow.parquet as pq
 
+    csv = p.suffix.lower() == ".csv"
     try:
-        table = pq.read_table(str(p))
+        table = pcsv.read_csv(str(p)) if csv else pq.read_table(str(p))
     except Exception as exc:  # pyarrow's many error types: one line, bad input
-        raise ConfigError(str(p), f"is not a readable Parquet file ({exc})") from None
+        kind = "CSV" if csv else "Parquet"
+        raise ConfigError(str(p), f"is not a readable {kind} file ({exc})") from None
     out = {}
     for name in table.column_names:
         try:
@@ -290,8 +294,8 @@ def check_columns(where: str, cols: dict[str, np.ndarray]) -> float:
 
 
 def read_recording(path) -> Recording:
-    """Read and check a recording: ``recording.parquet`` (or its run folder), with
-    ``recording.toml`` beside it if there is one.
+    """Read and check a recording: ``recording.parquet`` (or its run folder), or a CSV file
+    with the same column names, with a ``.toml`` of the same name beside it if there is one.
 
     Parameters
     ----------

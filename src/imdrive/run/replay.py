@@ -257,6 +257,7 @@ def replay(recording, scenario=None, estimators=None, out=None, *, force=False) 
     Returns
     -------
     ReplayResult
+        Each estimator's speed estimate and R2_hat (``signals``) and its summary.
 
     Raises
     ------
