@@ -31,6 +31,7 @@ _LAZY = {
     "simulate_batch": "imdrive.run.batch",
     "SimulationResult": "imdrive.run.result",
     "BatchResult": "imdrive.run.batch",
+    "replay": "imdrive.run.replay",
 }
 
 
@@ -53,6 +54,7 @@ __all__ = [
     "__version__",
     "machine_preset",
     "machine_presets",
+    "replay",
     "simulate",
     "simulate_batch",
 ]

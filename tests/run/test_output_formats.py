@@ -24,6 +24,8 @@ def test_existing_file_names_are_kept():
         "timeseries.parquet",
         "report.html",
         "*.png",
+        "recording.parquet",
+        "recording.toml",
     }
     assert set(RESULT_FILES) == {
         "summary.json",
@@ -31,6 +33,8 @@ def test_existing_file_names_are_kept():
         "report.html",
         "timeseries.mat",
         "timeseries.parquet",
+        "recording.parquet",
+        "recording.toml",
     }
 
 

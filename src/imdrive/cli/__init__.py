@@ -52,6 +52,7 @@ from imdrive.cli import (
     info,
     machine,
     paper,
+    replay,
     run,
     stability,
     sweep,
@@ -114,7 +115,7 @@ EXIT_CODES_HELP = """exit codes:
 a sweep records its diverged and lost runs in its table and exits 0."""
 
 #: the command groups, in the order ``imdrive --help`` lists them
-COMMANDS = (run, compare, info, paper, sweep, stability, bench, machine, commission, warmup)
+COMMANDS = (run, replay, compare, info, paper, sweep, stability, bench, machine, commission, warmup)
 
 
 def build_parser() -> argparse.ArgumentParser:

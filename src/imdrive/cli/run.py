@@ -78,10 +78,11 @@ def _cmd_run(args) -> int:
             f"{mode_text(scenario)}) ...",
             file=sys.stderr,
         )
-    res = simulate(scenario, arrays)
     formats = None
     if args.format:
         formats = [f.strip() for spec in args.format for f in spec.split(",") if f.strip()]
+    # the recording is taken during the run: --format recording asks for it too
+    res = simulate(scenario, arrays, record=None if formats is None else "recording" in formats)
     res.save(out, force=args.force, formats=formats)
     s = res.summary()
     if res.diverged or res.lost_control:
@@ -145,7 +146,7 @@ def add_parser(sub) -> None:
         action="append",
         metavar="NAME[,NAME]",
         help="write exactly these outputs besides summary.json, whatever [output] says: "
-        "csv, mat, parquet, figures, report (repeatable)",
+        "csv, mat, parquet, figures, report, recording (repeatable)",
     )
     r.add_argument(
         "--force",

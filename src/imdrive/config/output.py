@@ -38,3 +38,12 @@ class OutputSettings:
             "smaller (pandas.read_parquet; units in the schema metadata)"
         ),
     ] = False
+    recording: Annotated[
+        Bool,
+        setting(
+            "write recording.parquet and recording.toml: what the controller saw every control "
+            "period (measured currents, DC-link voltage, commanded voltage, encoder speed, "
+            "injection, and the context its speed estimator read), the input of imdrive "
+            "replay (docs/replay.md)"
+        ),
+    ] = False

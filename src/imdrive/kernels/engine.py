@@ -26,6 +26,7 @@ from imdrive.kernels import compensator, ifoc, inverter, machine, model, sensors
 from imdrive.kernels.bridge import switching_period  # noqa: F401  (re-exported: old path)
 from imdrive.kernels.estimators import afo, ekf, mras, reactive_mras, registry  # noqa: F401  (the package's estimators register on import)
 from imdrive.kernels.inverter import INV_SWITCHING, MAX_EVENTS  # noqa: F401  (MAX_EVENTS: old path)
+from imdrive.kernels.recording import record_after, record_before
 from imdrive.kernels.records import b1, c16, f8, i8, record_dtype
 from imdrive.kernels.stages import (
     NO_ESTIMATE,
@@ -165,7 +166,7 @@ DriveState.__getattr__ = _old_estimator_field
 
 
 @njit(cache=True, error_model="numpy")
-def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
+def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True, rec=None):
     """Simulate drive ``i`` of ``P``/``S`` for ``n_steps`` control periods (``S`` in place).
 
     Compiled with numpy's error model: a division by zero in the loop gives inf or NaN, which
@@ -237,6 +238,9 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
         t = (k0 + k) * Ts
         prof = profiles(pp, pt, pv, pn, t, foc, mdl, Ts)
         smpl = measure(pp, psen, x, ctl, prof, t, k0 + k, i_next_ab, have_next, scratch[0])
+        if rec is not None:  # pruned at compile time without a recording
+            if k < rec.shape[0]:
+                record_before(rec[k], smpl, mdl, ctl)
         estm = NO_ESTIMATE
         if foc:
             estm = estimate(
@@ -244,6 +248,9 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True):
             )  # fmt: skip
         cmd = control(sim, pc, x, mdl, ctl, smp, prof, smpl, estm, foc)
         mod = modulate(pinv, pc, smp, smpl, cmd, switching, Vdc_meas, scratch[0], Ts)
+        if rec is not None:
+            if k < rec.shape[0]:
+                record_after(rec[k], x, smp, mdl, prof, estm, foc)
 
         logged = log_every > 0 and k % log_every == 0 and k // log_every < n_rows
         if logged:

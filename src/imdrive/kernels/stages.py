@@ -119,6 +119,9 @@ class Estimate(NamedTuple):
     i_inj: float  # the R2 compensator's injected d-axis current, A
     v_use: float  # last period's voltage over Vdc_meas/sqrt 3
     v_fw: float  # the voltage use the field weakening sees (the injection's headroom)
+    hold_R1: bool  # the estimator's R1 adaptation was held this period (its input)
+    R1_after: float  # the model's R1_hat right after the estimator's step, ohm (before the
+    R2_after: float  # compensator), and its R2_hat: what a recording needs to replay it
 
 
 class Command(NamedTuple):
@@ -156,7 +159,7 @@ SCRATCH = record_dtype(
 )
 
 #: The open-loop drive's :class:`Estimate`: no estimator runs.
-NO_ESTIMATE = Estimate(0.0, 0j, 0.0, 0.0, 0.0)
+NO_ESTIMATE = Estimate(0.0, 0j, 0.0, 0.0, 0.0, False, 0.0, 0.0)
 
 
 @njit(cache=True, inline="always")
@@ -258,6 +261,8 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc
         w_ref, i_inj, hold_R1, Ts, t,
     )  # fmt: skip
     w_r_hat, e_dq0 = estimator_step(pe, mdl, est, inp)
+    R1_after = mdl.R1_hat
+    R2_after = mdl.R2_hat
     if pk.det:  # the estimator gives no flux error: the detection forms its own
         e_dq0 = detector_flux_error(pk, cmp, mdl, inp, w_r_hat)
 
@@ -277,7 +282,7 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc
         compensator_step(pk, cmp, mdl, table, e_dq0.real, t, smpl.k, ctl.w_e)
         if pk.th_on:  # the rotor thermal model carries R2_hat while it is held
             thermal_step(pk, cmp, mdl, ctl.i_s_dq.imag, t, Ts)
-    return Estimate(w_r_hat, e_dq0, i_inj, v_use, v_fw)
+    return Estimate(w_r_hat, e_dq0, i_inj, v_use, v_fw, hold_R1, R1_after, R2_after)
 
 
 @njit(cache=True, inline="always")

@@ -108,6 +108,8 @@ class SimulationResult:
     end_values : dict or None
         The signals at t_end when the last logged row is earlier; None: the last logged row
         is the final state.
+    recording : dict or None
+        ``simulate(record=True)``: what the controller saw each period (imdrive.run.recording).
     diverged : bool
         Whether the run stopped early because a state left its physical bounds.
     """
@@ -125,6 +127,7 @@ class SimulationResult:
     #: the signals at t_end when the last logged row is earlier (log_every does not divide the
     #: number of periods); None: the last logged row is the final state
     end_values: dict | None = None
+    recording: dict | None = None
 
     def __post_init__(self):
         # renamed columns' old names keep answering (with a DeprecationWarning) for a release

@@ -9,6 +9,7 @@ import numpy as np
 from imdrive.config.scenario import Scenario
 from imdrive.errors import ConfigError
 from imdrive.kernels.engine import LOG, S_OK, run_drive
+from imdrive.kernels.recording import RECORDING
 from imdrive.run.build import DriveArrays, build_arrays, copy_state
 from imdrive.run.result import SimulationResult, columns_from_log
 
@@ -54,7 +55,9 @@ def kernels_cached() -> bool:
         return True
 
 
-def simulate(scenario: Scenario, arrays: DriveArrays | None = None) -> SimulationResult:
+def simulate(
+    scenario: Scenario, arrays: DriveArrays | None = None, record: bool | None = None
+) -> SimulationResult:
     """Run one drive.
 
     A run whose states diverge is not an exception: the result has ``diverged = True``, the
@@ -68,6 +71,9 @@ def simulate(scenario: Scenario, arrays: DriveArrays | None = None) -> Simulatio
         use, rather than failing later inside the run.
     arrays : DriveArrays, optional
         The scenario's compiled records, if already built (``build_arrays(scenario)``).
+    record : bool, optional
+        Record what the controller saw every control period into ``result.recording``
+        (:mod:`imdrive.run.recording`); None: as ``[output] recording`` says.
 
     Returns
     -------
@@ -90,24 +96,28 @@ def simulate(scenario: Scenario, arrays: DriveArrays | None = None) -> Simulatio
     n_rows = a.n_steps // a.log_every + 1
     log = new_log(n_rows, a.log)
     state = copy_state(a.state0)
+    if record is None:
+        record = bool(scenario.output.recording)
+    rec = np.zeros(a.n_steps + 1, dtype=RECORDING) if record else None
     # a zero-length call loads (or compiles) the kernel, so wall_time_s measures the run alone
     t0 = time.perf_counter()
-    run_drive(a.params, copy_state(a.state0), 0, 0, log[:0], 1)
+    run_drive(a.params, copy_state(a.state0), 0, 0, log[:0], 1, 0, True, rec)
     startup = time.perf_counter() - t0
     t0 = time.perf_counter()
     n_main = (a.n_steps // a.log_every) * a.log_every
     end_row = None
     if n_main == a.n_steps:
-        status, k_end = run_drive(a.params, state, 0, a.n_steps, log, a.log_every)
+        status, k_end = run_drive(a.params, state, 0, a.n_steps, log, a.log_every, 0, True, rec)
     else:
         # the last logged row is before t_end: run the rest in a second call (consecutive calls
         # reproduce one long call exactly), which logs the row at n_main (the one the first
         # call, without its closing sample, left out) and the state at t_end
-        status, k_end = run_drive(a.params, state, 0, n_main, log, a.log_every, 0, False)
+        status, k_end = run_drive(a.params, state, 0, n_main, log, a.log_every, 0, False, rec)
         if status == S_OK:
             tail = new_log(2, a.log)
             rest = a.n_steps - n_main
-            status, k_rest = run_drive(a.params, state, 0, rest, tail, rest, n_main, True)
+            rec_rest = None if rec is None else rec[n_main:]
+            status, k_rest = run_drive(a.params, state, 0, rest, tail, rest, n_main, True, rec_rest)
             log[-1] = tail[0]
             k_end = n_main + k_rest
             if status == S_OK:
@@ -132,4 +142,10 @@ def simulate(scenario: Scenario, arrays: DriveArrays | None = None) -> Simulatio
             for k, v in columns_from_log(end_row, res.vector, res.extra_units).items()
         }
     res.startup_s = startup
+    if rec is not None:
+        from imdrive.run.recording import recording_columns
+
+        rows = rec[: k_end + 1 if status == S_OK else k_end]
+        vdc_meas = float(a.params.sensor[0]["vdc_gain"] * a.params.inverter[0]["Vdc"])
+        res.recording = recording_columns(rows, float(a.params.plant[0]["n_p"]), vdc_meas)
     return res

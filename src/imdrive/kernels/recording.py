@@ -1,0 +1,81 @@
+"""The recording of a closed-loop run: what the controller saw, every control period.
+
+A recording row ``k`` holds what the drive's controller measured and decided at the sample
+``t_k`` (the signals a drive's data log holds) and the controller's own values that its speed
+estimator read at that sample (the context a replay needs to run the estimator exactly as the
+closed loop did, :mod:`imdrive.kernels.replay`):
+
+* signals: the measured current (the estimator's ``i_ab``), the voltage the controller
+  commanded at ``t_k`` for the period ``[t_k, t_k + Ts)`` less its inverter-error
+  compensation (what it believes reaches the terminals: the estimator's ``v_ab`` at the next
+  sample), the rotor's speed (an ideal encoder), the R2 compensator's injected current;
+* context: the controller's angle, frequency, current and speed references, whether the R1
+  adaptation was held, and the model's ``R1_hat``, ``R2_hat``, ``M_hat`` as the estimator read
+  them and ``R1_hat``, ``R2_hat`` right after its step (so a replay can tell the controller's
+  writes to its model, by the R2 compensator or the magnetising curve, from the estimator's
+  own adaptation).
+
+:func:`imdrive.kernels.engine.run_drive` fills it through :func:`record_before` (before the
+estimator's step) and :func:`record_after` (once the period's voltage is commanded) when it is
+given a ``rec`` array; without one the two calls are compiled out.
+"""
+
+from __future__ import annotations
+
+from numba import njit
+
+from imdrive.kernels.records import b1, c16, f8, record_dtype
+
+#: One row of a recording, SI units (space vectors complex in the stationary frame ``_ab`` or
+#: the controller's ``_dq``).
+RECORDING = record_dtype(
+    [
+        ("time", f8),  # the sample t_k, s
+        ("i_ab", c16),  # the measured stator current at t_k, A
+        ("v_cmd_ab", c16),  # commanded for [t_k, t_k + Ts), less the inverter compensation, V
+        ("w_m", f8),  # the rotor's mechanical speed at t_k (an ideal encoder), rad/s
+        ("i_inj", f8),  # the R2 compensator's injected d-axis current this period, A
+        ("theta_e", f8),  # the controller's d-axis angle at t_k, rad
+        ("w_e", f8),  # the controller's stator frequency the estimator read, electrical rad/s
+        ("i_ref_dq", c16),  # the current references of the last period, A
+        ("w_ref", f8),  # the speed reference, mechanical rad/s
+        ("hold_R1", b1),  # the estimator's R1 adaptation held this period
+        ("R1_hat", f8),  # the controller's model as the estimator read it, ohm
+        ("R2_hat", f8),
+        ("M_hat", f8),  # H
+        ("R1_after", f8),  # R1_hat and R2_hat right after the estimator's step, ohm
+        ("R2_after", f8),
+        ("w_r_hat", f8),  # the estimator's speed estimate, electrical rad/s
+    ]
+)
+
+
+@njit(cache=True, inline="always")
+def record_before(row, smpl, mdl, ctl):
+    """Before the estimator's step: the controller's values it reads at this sample."""
+    row.time = smpl.t
+    row.i_ab = smpl.i_meas_ab
+    row.theta_e = smpl.theta_k
+    row.w_e = ctl.w_e
+    row.i_ref_dq = ctl.i_ref_dq
+    row.R1_hat = mdl.R1_hat
+    row.R2_hat = mdl.R2_hat
+    row.M_hat = mdl.M_hat
+
+
+@njit(cache=True, inline="always")
+def record_after(row, x, smp, mdl, prof, estm, foc):
+    """Once the period's voltage is commanded (``smp.v_prev_ab``, which the next estimator
+    step reads): the command, the speed, the estimator's outputs and hold."""
+    row.v_cmd_ab = smp.v_prev_ab
+    row.w_m = x.w_m
+    row.i_inj = estm.i_inj
+    row.w_ref = prof.w_ref
+    row.hold_R1 = estm.hold_R1
+    row.w_r_hat = estm.w_r_hat
+    if foc:
+        row.R1_after = estm.R1_after
+        row.R2_after = estm.R2_after
+    else:  # no estimator ran
+        row.R1_after = mdl.R1_hat
+        row.R2_after = mdl.R2_hat
