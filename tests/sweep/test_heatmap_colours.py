@@ -96,3 +96,10 @@ def test_a_zero_cell_of_the_html_report_is_not_grey(value):
     cmap = mpl.colormaps[sweep_figures.CMAP_SIGNED if value == "speed_error_rpm" else "viridis"]
     for t in np.linspace(0.0, 1.0, 21):
         assert np.allclose(_plotly_colour(scale, t), cmap(t)[:3], atol=0.03), t
+
+
+def test_the_stability_map_uses_the_same_grey():
+    """The stability map draws Re(s) on RdBu_r too: its 0 is the map's near-white centre."""
+    from imdrive.stability.plots import NO_STEADY_STATE
+
+    assert NO_STEADY_STATE == sweep_figures.NONE_FINITE
