@@ -53,14 +53,38 @@ def _nameplate(*extra, **changes) -> list[str]:
 # class 12: every command's --help
 
 
-def test_every_commands_help_prints(capsys):
-    parser = build_parser()
-    sub = next(a for a in parser._actions if a.dest == "command")
-    for name in sub.choices:
-        with pytest.raises(SystemExit) as exc:
-            main([name, "--help"])
-        assert exc.value.code == 0, name
-    assert "not %" in capsys.readouterr().out  # machine-from-nameplate's efficiency text
+def _commands(parser, prefix=()) -> list[tuple[str, ...]]:
+    """Every command path of the parser, sub-commands of sub-commands included, read from the
+    argparse parser itself so that a new command is covered without editing this list."""
+    import argparse
+
+    found = [prefix]
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for name, child in action.choices.items():
+                found += _commands(child, (*prefix, name))
+    return found
+
+
+COMMAND_PATHS = _commands(build_parser())
+
+
+def test_the_command_list_is_read_from_the_parser():
+    assert len(COMMAND_PATHS) > 10 and ("machine-from-nameplate",) in COMMAND_PATHS
+
+
+@pytest.mark.parametrize("path", COMMAND_PATHS, ids=lambda p: " ".join(p) or "imdrive")
+def test_every_commands_help_prints(path):
+    """``imdrive ... --help``: exit 0, the usage on stdout, nothing on stderr (issue 39: the
+    ``%`` of machine-from-nameplate's help ended in a traceback)."""
+    out, err = io.StringIO(), io.StringIO()
+    with redirect_stdout(out), redirect_stderr(err), pytest.raises(SystemExit) as exc:
+        main([*path, "--help"])
+    assert exc.value.code == 0, err.getvalue()
+    assert err.getvalue() == ""
+    assert out.getvalue().startswith(f"usage: {' '.join(('imdrive', *path))} ")
+    if path == ("machine-from-nameplate",):
+        assert "not %" in out.getvalue()  # its efficiency text, the % that crashed it
 
 
 # ------------------------------------------------------------------------------------------

@@ -207,7 +207,7 @@ def test_both_members_on_the_command_line_exit_2(tmp_path, capsys):
 def test_a_replacing_pair_in_one_file_is_deprecated_not_refused(tmp_path):
     """``G_CR_pu`` was documented to replace ``G_CR_ohm``: both in a file still run so."""
     path = tmp_path / "both.toml"
-    path.write_text("[compensator]\nG_CR_ohm = 0.01\nG_CR_pu = 0.02\n")
+    path.write_text('[drive]\nmode = "vector"\n[compensator]\nG_CR_ohm = 0.01\nG_CR_pu = 0.02\n')
     with pytest.warns(ConfigWarning, match="G_CR_pu is used \\(deprecated: set one of them\\)"):
         sc = Scenario.read(str(path))
     from imdrive.config.perunit import resolve

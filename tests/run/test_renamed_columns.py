@@ -112,3 +112,25 @@ def test_bench_metrics_take_a_mapping_with_the_old_name():
     with pytest.warns(DeprecationWarning):
         got = run_metrics({**sig, "R2_est_ohm": 1.1 * np.ones_like(t)}, 0.5, False)
     assert got == pytest.approx(want, nan_ok=True)
+
+
+def test_every_rename_is_in_the_changelog():
+    """Issue 39: ``R2_est_ohm`` became ``R2_hat_ohm`` with no changelog entry. Each renamed
+    column and metric is named, old and new, in CHANGELOG.md."""
+    from pathlib import Path
+
+    changelog = (Path(__file__).resolve().parents[2] / "CHANGELOG.md").read_text("utf-8")
+    for old, new in RENAMED_COLUMNS.items():
+        assert f"`{old}`" in changelog and f"`{new}`" in changelog, old
+    for old in RENAMED_METRICS:
+        assert f"`{old}`" in changelog, old
+
+
+def test_an_old_csv_reader_gets_the_old_names_back_as_documented(res, tmp_path):
+    """docs/outputs.md's recipe for a script that reads timeseries.csv by the old names."""
+    import pandas as pd
+
+    res.to_csv(tmp_path / "r.csv")
+    old_names = {new: old for old, new in RENAMED_COLUMNS.items()}
+    df = pd.read_csv(tmp_path / "r.csv").rename(columns=old_names)
+    np.testing.assert_allclose(df["R2_est_ohm"], res.signals["R2_hat_ohm"], rtol=1e-9)

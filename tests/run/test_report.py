@@ -215,3 +215,31 @@ def test_reports_state_the_machine_derived_lost_control_bound(short_run):
     note = lost_control_note(two)
     big = lost_control_rpm(im.Scenario.read("sensorless", ["machine.preset=krause-50hp"]))
     assert "paper-table-iv: 158 rpm" in note and f"krause-50hp: {big:.3g} rpm" in note
+
+
+def test_data_limits_fit_a_constant_signal_and_a_moving_one():
+    from imdrive.run.plots import data_limits
+
+    assert data_limits(np.full(50, 0.145)) == pytest.approx((0.13775, 0.15225))
+    lo, hi = data_limits(np.linspace(0.0, 1500.0, 50))
+    assert lo == pytest.approx(-75.0) and hi == pytest.approx(1575.0)
+    assert data_limits(np.zeros(3)) == (-1.0, 1.0)
+    assert data_limits([np.nan, np.inf]) == (-1.0, 1.0)
+
+
+def test_run_report_r2_panel_fits_its_data(short_run):
+    """Issue 39: the report's R2 panel spanned -0.5 .. 1 ohm for an R2 of 0.145 ohm (plotly.js
+    autoranges a constant v as v - 1 .. v + 1). Every panel's y-range now fits its data."""
+    from imdrive.run.report import _run_figure
+
+    fig, arrays, _ = _run_figure(short_run, 2000)
+    layout = fig["layout"]
+    titles = [a["text"] for a in layout["annotations"]]
+    i = next(k for k, t in enumerate(titles) if "rotor resistance" in t)
+    lo, hi = layout["yaxis" if i == 0 else f"yaxis{i + 1}"]["range"]
+    r2 = np.concatenate([short_run.signals["R2_ohm"], short_run.signals["R2_hat_ohm"]])
+    assert lo <= r2.min() and hi >= r2.max()
+    assert 0.0 < lo and hi - lo <= 0.25 * np.abs(r2).max() + (r2.max() - r2.min())
+    for k in range(len(titles)):  # every panel has a finite range that holds its traces
+        lo, hi = layout["yaxis" if k == 0 else f"yaxis{k + 1}"]["range"]
+        assert np.isfinite([lo, hi]).all() and lo < hi

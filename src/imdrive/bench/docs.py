@@ -4,14 +4,15 @@ The tables between the page's ``<!-- begin generated ... -->`` and ``<!-- end ge
 markers are the rendering of ``docs/data/estimators.csv``, the ``estimators.csv`` that
 ``imdrive bench-estimators`` writes for the full protocol. Usage::
 
-    python -m imdrive.bench.docs --run     # run the full bench (160 runs), store its CSV, rewrite
+    python -m imdrive.bench.docs --run     # run the full bench (180 runs), store its CSV, rewrite
     python -m imdrive.bench.docs           # rewrite the tables from the stored CSV
     python -m imdrive.bench.docs --check   # exit 1 if the tables are not the CSV's rendering
 
 ``tests/bench/test_bench_docs.py`` checks that the page is the rendering of the CSV, and that the
-CSV is still what the code computes: it reruns the protocol's quick subset (12 of the 160 runs,
+CSV is still what the code computes: it reruns the protocol's quick subset (12 of the 180 runs,
 a documented subset: :data:`~imdrive.bench.protocol.QUICK_ESTIMATORS` x
-:data:`~imdrive.bench.protocol.QUICK_CASES` on the average drive) and compares those rows.
+:data:`~imdrive.bench.protocol.QUICK_CASES` on the average drive) and three runs of the
+realistic drive (MRAS, MRAS + fuzzy, AFO), and compares those rows with the stored CSV.
 """
 
 from __future__ import annotations
@@ -115,7 +116,7 @@ def main(argv: list[str] | None = None) -> int:
         prog="python -m imdrive.bench.docs",
         description="Write the result tables of docs/estimators.md from the bench's CSV.",
     )
-    ap.add_argument("--run", action="store_true", help="run the full bench first (160 runs)")
+    ap.add_argument("--run", action="store_true", help="run the full bench first (180 runs)")
     ap.add_argument("--check", action="store_true", help="exit 1 if the tables are stale")
     ap.add_argument("--path", type=Path, default=DOC_PATH)
     ap.add_argument("--csv", type=Path, default=CSV_PATH)

@@ -28,6 +28,10 @@ Exit codes
     naming the test and why); no ``identified.toml`` is written.
 130
     Interrupted (Ctrl-C).
+141 (``EXIT_CLOSED_PIPE``)
+    The standard output's reader closed it (``imdrive presets | head -2``): the command stops
+    quietly, with no message, and exits as a process that the shell saw killed by SIGPIPE
+    (128 + 13), like ``yes | head``. 141 rather than 0: a run cut short this way is not done.
 
 A sweep records its diverging runs (``diverged``, ``status``), those that lost control
 (``lost_control``, ``lost_control_at_s``) and the runs that could not be built (``status`` -1,
@@ -60,6 +64,7 @@ from imdrive.cli import (
 )
 from imdrive.cli._common import (
     EXIT_BAD_INPUT,
+    EXIT_CLOSED_PIPE,
     EXIT_DIVERGED,
     EXIT_ENVIRONMENT,
     EXIT_INTERNAL,
@@ -79,6 +84,7 @@ from imdrive.errors import ConfigError, ConfigWarning, EnvironmentFailure, descr
 
 __all__ = [
     "EXIT_BAD_INPUT",
+    "EXIT_CLOSED_PIPE",
     "EXIT_DIVERGED",
     "EXIT_ENVIRONMENT",
     "EXIT_INTERNAL",
@@ -112,6 +118,7 @@ EXIT_CODES_HELP = """exit codes:
   5    internal error (a bug); IMDRIVE_DEBUG=1 shows the traceback
   6    imdrive commission: a test did not converge (it says which and why), nothing written
   130  interrupted (Ctrl-C)
+  141  stdout's reader closed it (| head): stopped quietly, as on SIGPIPE
 a sweep records its diverged and lost runs in its table and exits 0."""
 
 #: the command groups, in the order ``imdrive --help`` lists them
@@ -157,6 +164,32 @@ def _show_warning(message, category, filename, lineno, file=None, line=None):
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run the ``imdrive`` command; returns its exit code (the module docstring lists them)."""
+    try:
+        try:
+            code = _main(argv)
+        finally:
+            # flushed here, so that a closed pipe shows now and not in the interpreter's exit
+            # ("Exception ignored ... BrokenPipeError"), also after --help's SystemExit
+            sys.stdout.flush()
+    except BrokenPipeError:
+        return _closed_pipe()
+    return code
+
+
+def _closed_pipe() -> int:
+    """The reader of stdout went away: point stdout at /dev/null, so that nothing else (the
+    interpreter's last flush) fails on it, and exit quietly (:data:`EXIT_CLOSED_PIPE`)."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError):  # a stdout without a file descriptor (captured, replaced)
+        pass
+    return EXIT_CLOSED_PIPE
+
+
+def _main(argv: list[str] | None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     args.t0 = time.perf_counter()
@@ -172,6 +205,8 @@ def main(argv: list[str] | None = None) -> int:
         return _fail(f"{exc}{_did_you_mean(exc, args)}", EXIT_BAD_INPUT)
     except EnvironmentFailure as exc:
         return _fail(exc.cause, EXIT_ENVIRONMENT)
+    except BrokenPipeError:
+        raise  # stdout's reader went away: main() ends quietly
     except MemoryError:
         return _fail("out of memory (a smaller sweep, chunk or log_every?)", EXIT_ENVIRONMENT)
     except OSError as exc:

@@ -18,6 +18,7 @@ EXIT_LOST_CONTROL = 3
 EXIT_ENVIRONMENT = 4
 EXIT_INTERNAL = 5
 EXIT_NOT_IDENTIFIED = 6  # a commissioning test did not converge
+EXIT_CLOSED_PIPE = 141  # stdout's reader went away (`| head`): 128 + SIGPIPE, as the shell's
 
 OUT_ROOT = Path("out")  # default output root: out/NAME, out/sweep-NAME
 NAME_MAX_BYTES = 255  # longest file name on common file systems (ext4, xfs, btrfs, apfs)

@@ -30,6 +30,8 @@ def _cmd_commission(args) -> int:
     except CommissioningFailed as exc:
         print(f"imdrive: commissioning failed: {exc}", file=sys.stderr)
         return EXIT_NOT_IDENTIFIED
+    if args.quiet:  # as run -q: no compile notice, no summary; warnings and errors still shown
+        return EXIT_OK
     for key, err in res.relative_error.items():
         text = "-" if err is None else f"{100 * err:+7.2f} %"
         print(f"{key:12s} {text}")
@@ -53,5 +55,12 @@ def add_parser(sub) -> None:
     p.add_argument("--out", required=True, metavar="DIR", help="output folder")
     add_force(p, "a commissioning result")
     p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a setting")
+    p.add_argument(
+        "-q",
+        "--quiet",
+        action="store_true",
+        help="print no compile notice and no result table (as run -q); warnings and errors "
+        "are still printed",
+    )
     add_allow_plugins(p)
     p.set_defaults(func=_cmd_commission)

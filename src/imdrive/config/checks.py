@@ -16,9 +16,48 @@ from imdrive.config.compensator import check_whole_injection_periods
 from imdrive.config.overrides import _to_plain
 from imdrive.config.perunit import resolve  # noqa: F401  (for callers' convenience)
 from imdrive.config.plugins import PluginSettings, module_spec_of
-from imdrive.config.registry import ESTIMATOR_SETTINGS
+from imdrive.config.registry import ESTIMATOR_SETTINGS, package_sections
 from imdrive.config.validation import validate
 from imdrive.errors import ConfigError, ConfigWarning
+
+#: sections only a field-oriented drive reads (``[drive] mode = "vector"``); the estimators'
+#: own sections (``[mras]``, ``[ekf]`` ...) are added by :func:`vector_only_sections`
+VECTOR_ONLY = (
+    "control",
+    "estimator",
+    "controller_model",
+    "flux_injection",
+    "compensator",
+    "injection",
+)
+
+
+def vector_only_sections() -> tuple[str, ...]:
+    """The sections an open-loop drive ignores: :data:`VECTOR_ONLY` and each estimator's."""
+    return (*VECTOR_ONLY, *package_sections())
+
+
+def drive_mode_given(data: dict) -> None:
+    """A scenario file without ``[drive] mode`` runs open loop (the default, kept for the
+    files that rely on it); one that nevertheless sets keys of a section only vector control
+    reads (``[control]``, ``[estimator]``, ``[compensator]`` ...) meant a field-oriented drive
+    and would have run open loop with those keys silently ignored: bad input, naming them.
+
+    An explicit ``mode = "open-loop"`` is the user's choice and passes (the console's closing
+    line says that [control] and the estimator are unused).
+    """
+    drive = data.get("drive")
+    if drive is not None and (not isinstance(drive, dict) or "mode" in drive):
+        return  # a mode given (or a [drive] of the wrong type, which validation names)
+    given = [k for k in vector_only_sections() if isinstance(data.get(k), dict) and data[k]]
+    if given:
+        names = ", ".join(f"[{k}]" for k in given)
+        raise ConfigError(
+            "drive.mode",
+            f"not given, so the drive would run open loop and ignore {names}, which only "
+            'vector control reads: add [drive] mode = "vector" (field-oriented control), or '
+            'mode = "open-loop" to run open loop without them',
+        )
 
 
 def machine_defaults(sc) -> None:

@@ -39,11 +39,11 @@ class DriveSettings:
     mode: Annotated[
         Literal["open-loop", "vector"],
         setting(
-            '"open-loop" (the default, so a file without [drive] runs the machine on the '
-            "sinusoidal voltage of [open_loop] and ignores [control], [estimator], "
-            '[compensator] and [injection]); "vector": field-oriented speed control ([control]) '
-            "with its speed feedback, estimator and compensator. Every vector preset sets "
-            '"vector"'
+            '"open-loop" (the default): the machine on the sinusoidal voltage of [open_loop]; '
+            "[control], [estimator], [compensator], [injection] and the estimators' sections "
+            "are unused, so a file that sets any of them without a [drive] mode is refused "
+            '(exit 2); "vector": field-oriented speed control ([control]) with its speed '
+            'feedback, estimator and compensator. Every vector preset sets "vector"'
         ),
     ] = "open-loop"
 

@@ -26,6 +26,7 @@ from pydantic import model_validator
 
 from imdrive.config.checks import (
     compensator_rules,
+    drive_mode_given,
     machine_defaults,
     per_unit_warnings,
     plugin_rules,
@@ -419,7 +420,9 @@ class Scenario:
         if not isinstance(data, dict):
             raise ConfigError("scenario", "must be a table")
         with allowing_plugins(allow_plugins):
-            return validate(cls, data)
+            scenario = validate(cls, data)
+        drive_mode_given(data)  # after each section's rules: [control] without [drive]
+        return scenario
 
     @classmethod
     def from_toml(cls, text: str, overrides=(), *, base_dir=None, allow_plugins=None) -> Scenario:

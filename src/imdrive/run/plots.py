@@ -166,6 +166,38 @@ def zoom_limits(values, q: float = 0.5, pad: float = 0.15) -> tuple[float, float
     return lo - pad * span, hi + pad * span
 
 
+def data_limits(values, pad: float = 0.05) -> tuple[float, float]:
+    """y-limits that fit ``values``: their finite range, widened on each side by ``pad`` of
+    the span or of the largest magnitude, whichever is more.
+
+    The magnitude term is for a (nearly) constant signal: a plant's R2 and an estimate that is
+    not adapted. Left to itself plotly.js spans a constant ``v`` as ``v - 1 .. v + 1`` (ticks
+    -0.5 .. 1 ohm for an R2 of 0.145 ohm); here it is ``0.95 v .. 1.05 v``.
+
+    Parameters
+    ----------
+    values : array_like
+        The samples to show, in the unit they are drawn in.
+    pad : float
+        Margin on each side, as a fraction of ``max(hi - lo, max |v|)``.
+
+    Returns
+    -------
+    (float, float)
+        ``(lo - m, hi + m)`` with ``m = pad * max(hi - lo, max |v|)``; ``(-1, 1)`` when there
+        is no finite sample or all are zero.
+    """
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    if v.size == 0:
+        return -1.0, 1.0
+    lo, hi = float(v.min()), float(v.max())
+    m = pad * max(hi - lo, abs(lo), abs(hi))
+    if m == 0.0:  # all zero
+        return -1.0, 1.0
+    return lo - m, hi + m
+
+
 def steady_start(res) -> float:
     """Start of the steady-state window of a run, s: where the compensator switches on when it
     is enabled (the presets switch it on once the start-up has settled); otherwise 1 s after

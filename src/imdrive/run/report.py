@@ -337,7 +337,13 @@ def _run_figure(res, max_points: int) -> tuple[dict, dict, int]:
     one zooms all); after the flux-error panel, the same errors with the y-range of the
     steady state (:func:`imdrive.run.plots.steady_start`), where the start-up transient would
     hide them (as ``estimator.png``)."""
-    from imdrive.run.plots import display_unit, signal_label, steady_start, zoom_limits
+    from imdrive.run.plots import (
+        data_limits,
+        display_unit,
+        signal_label,
+        steady_start,
+        zoom_limits,
+    )
 
     s = res.signals
     panels = []
@@ -382,8 +388,11 @@ def _run_figure(res, max_points: int) -> tuple[dict, dict, int]:
             **({"matches": "x"} if i else {}),
         }
         yaxis = {"domain": [top - h, top], "title": {"text": unit}}
-        if y_range is not None:
-            yaxis["range"] = list(y_range)
+        zoom = y_range is not None
+        # every panel's range from its data: plotly.js spans a constant v as v - 1 .. v + 1
+        if y_range is None:
+            y_range = data_limits(np.concatenate([arrays[c] for c, _, _ in cols]))
+        yaxis["range"] = [float(x) for x in y_range]
         layout[f"yaxis{ax}"] = yaxis
         layout["annotations"].append(
             {
@@ -397,7 +406,6 @@ def _run_figure(res, max_points: int) -> tuple[dict, dict, int]:
                 "showarrow": False,
             }
         )
-        zoom = y_range is not None
         for col, label, dash in cols:
             colour.setdefault(col, TRACE_COLOURS[len(colour) % len(TRACE_COLOURS)])
             data.append(

@@ -9,6 +9,11 @@ import numpy as np
 
 from imdrive.stability.linear import STATUS_OK
 
+#: the colour of a point without a steady state: the sweep heatmaps' "none finite" grey
+#: (:data:`imdrive.sweep.figures.NONE_FINITE`), far from RdBu_r's near-white centre, which
+#: is Re(s) = 0; the lighter 0.8 grey used before was close to it
+NO_STEADY_STATE = "#8c8c8c"
+
 
 def _grid(df, column):
     sp = np.unique(df["speed_rpm"].to_numpy())
@@ -45,7 +50,7 @@ def map_figure(df, title: str = "", clip: float = 20.0):
     _, _, st = _grid(d, "_st")
     fig = new_figure(figsize=(7.5, 5.0), dpi=120, layout="constrained")
     ax = fig.add_subplot()
-    ax.set_facecolor("0.8")
+    ax.set_facecolor(NO_STEADY_STATE)
     mesh = ax.pcolormesh(
         tq, sp, np.clip(re, -clip, clip), cmap="RdBu_r", vmin=-clip, vmax=clip, shading="nearest"
     )
@@ -57,7 +62,9 @@ def map_figure(df, title: str = "", clip: float = 20.0):
     ax.set_xlabel("load torque, N m  (< 0: regenerating)")
     ax.set_ylabel("speed reference, rpm")
     n_un = int((d["status"] == STATUS_OK).sum() - d["stable"].sum())
-    ax.set_title(title or f"small-signal stability: {n_un} unstable points, grey = no steady state")
+    ax.set_title(
+        title or f"small-signal stability: {n_un} unstable points, dark grey = no steady state"
+    )
     return fig
 
 

@@ -20,6 +20,31 @@ from imdrive.sweep.spec import Heatmap, Sweep
 
 SIGNED_METRICS = ("speed_error_rpm", "speed_est_error_rpm", "R2_error_pct")
 
+#: colour maps of a signed metric (diverging, centred on zero) and of any other metric
+CMAP_SIGNED, CMAP_PLAIN = "RdBu_r", "viridis"
+
+#: the colour of a cell with no finite value (PNGs and the HTML report): a mid grey, at least
+#: 0.32 (RGB distance) from every colour of both maps. The light grey used before (0.85) was
+#: within 0.11 of RdBu_r's near-white centre, so a signed metric's 0 read as "none finite".
+NONE_FINITE = "#8c8c8c"
+
+
+#: what the title says of :data:`NONE_FINITE`
+NONE_FINITE_TEXT = "dark grey: none finite"
+
+
+def plotly_scale(cmap: str, n: int = 21) -> list[list]:
+    """The matplotlib colour map ``cmap`` as a plotly colour scale of ``n`` stops, so that the
+    HTML report's cells have the PNGs' colours (plotly.js's own ``RdBu`` is grey at its
+    centre, the colour of a cell with no value)."""
+    import matplotlib
+
+    colours = matplotlib.colormaps[cmap](np.linspace(0.0, 1.0, n))
+    return [
+        [float(t), "rgb({},{},{})".format(*(int(round(255 * c)) for c in rgba[:3]))]
+        for t, rgba in zip(np.linspace(0.0, 1.0, n), colours, strict=True)
+    ]
+
 
 def _aggregate(series, how: str):
     if how == "absmax":
@@ -57,7 +82,7 @@ def heatmap_figure(sweep: Sweep, df, h: Heatmap):
     axs = fig.subplots(len(rows), len(cols), squeeze=False)
     signed = h.value in SIGNED_METRICS
     vmin, vmax = colour_range(df[h.value], signed)
-    style = {"cmap": "RdBu_r" if signed else "viridis", "vmin": vmin, "vmax": vmax}
+    style = {"cmap": CMAP_SIGNED if signed else CMAP_PLAIN, "vmin": vmin, "vmax": vmax}
     mappable = None
     annotate = []
     for r, rv in enumerate(rows):
@@ -68,7 +93,7 @@ def heatmap_figure(sweep: Sweep, df, h: Heatmap):
                 sel = sel[sel[h.rows] == rv]
             if h.cols:
                 sel = sel[sel[h.cols] == cv]
-            ax.set_facecolor("0.85")
+            ax.set_facecolor(NONE_FINITE)
             if sweep.random:
                 mappable = _scatter_panel(ax, sweep, sel, h, style)
             else:
@@ -83,7 +108,7 @@ def heatmap_figure(sweep: Sweep, df, h: Heatmap):
                 ax.set_title(title, fontsize=9)
     if mappable is not None:
         fig.colorbar(mappable, ax=axs, label=h.value, shrink=0.9)
-    agg = f" ({aggregation_text(sweep, h)}; grey: none finite)"
+    agg = f" ({aggregation_text(sweep, h)}; {NONE_FINITE_TEXT})"
     fig.suptitle(f"{sweep.name}: {h.value}{agg}", fontsize=10)
     if annotate:
         fig.draw_without_rendering()  # the final layout gives the cells' size

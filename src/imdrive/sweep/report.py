@@ -21,6 +21,10 @@ from imdrive.run.metrics import lost_control_check, lost_control_rule
 from imdrive.run.report import html_page, html_table
 from imdrive.run.status import verdict_counts
 from imdrive.sweep.figures import (
+    CMAP_PLAIN,
+    CMAP_SIGNED,
+    NONE_FINITE,
+    NONE_FINITE_TEXT,
     SIGNED_METRICS,
     _levels,
     _tiny,
@@ -30,13 +34,9 @@ from imdrive.sweep.figures import (
     colour_range,
     heat_grid,
     panel_selections,
+    plotly_scale,
 )
 from imdrive.sweep.spec import Heatmap, Sweep, _build_one_axis
-
-#: Diverging scale for signed errors (plotly's RdBu: blue below zero, red above, as the PNGs'
-#: matplotlib RdBu_r), sequential otherwise
-SIGNED_SCALE = "RdBu"
-PLAIN_SCALE = "Viridis"
 
 
 def heatmap_plot(sweep: Sweep, df, h: Heatmap, div: str) -> dict:
@@ -61,7 +61,7 @@ def heatmap_plot(sweep: Sweep, df, h: Heatmap, div: str) -> dict:
     """
     signed = h.value in SIGNED_METRICS
     zr = colour_range(df[h.value], signed)
-    scale = SIGNED_SCALE if signed else PLAIN_SCALE
+    scale = plotly_scale(CMAP_SIGNED if signed else CMAP_PLAIN)  # the PNGs' colours
     rows = [axis_label(v) for v in _levels(sweep, h.rows)] if h.rows else [None]
     cols = [axis_label(v) for v in _levels(sweep, h.cols)] if h.cols else [None]
     nr, nc = len(rows), len(cols)
@@ -73,11 +73,11 @@ def heatmap_plot(sweep: Sweep, df, h: Heatmap, div: str) -> dict:
     data, annotations = [], []
     layout: dict = {
         "title": {
-            "text": html.escape(f"{h.value}: {aggregation_text(sweep, h)}; grey: none finite"),
+            "text": html.escape(f"{h.value}: {aggregation_text(sweep, h)}; {NONE_FINITE_TEXT}"),
             "font": {"size": 14},
         },
         "margin": {"l": 80, "r": 20, "t": 60, "b": 60},
-        "plot_bgcolor": "#d9d9d9",
+        "plot_bgcolor": NONE_FINITE,
     }
     hover = f"{h.x} = %{{x}}<br>{h.y} = %{{y}}<br>{h.value} = %{{{{V}}:.4g}}<extra></extra>"
     for k, (title, sel) in enumerate(panels):
