@@ -34,14 +34,17 @@ VECTOR_ONLY = (
 
 def vector_only_sections() -> tuple[str, ...]:
     """The sections an open-loop drive ignores: :data:`VECTOR_ONLY` and each estimator's."""
-    return (*VECTOR_ONLY, *package_sections())
+    from imdrive.config.r2_laws import law_sections
+
+    return (*VECTOR_ONLY, *package_sections(), *law_sections())
 
 
 def drive_mode_given(data: dict) -> None:
     """A scenario file without ``[drive] mode`` runs open loop (the default, kept for the
     files that rely on it); one that nevertheless sets keys of a section only vector control
-    reads (``[control]``, ``[estimator]``, ``[compensator]`` ...) meant a field-oriented drive
-    and would have run open loop with those keys silently ignored: bad input, naming them.
+    reads (``[control]``, ``[estimator]``, ``[compensator]`` ...) most likely meant a
+    field-oriented drive, and those keys are ignored: a deprecation warning naming them (such
+    a file will be refused in a later release; it still runs open loop as before).
 
     An explicit ``mode = "open-loop"`` is the user's choice and passes (the console's closing
     line says that [control] and the estimator are unused).
@@ -52,13 +55,13 @@ def drive_mode_given(data: dict) -> None:
     given = [k for k in vector_only_sections() if isinstance(data.get(k), dict) and data[k]]
     if given:
         names = ", ".join(f"[{k}]" for k in given)
-        raise ConfigError(
-            "drive.mode",
-            f"not given, so the drive would run open loop and ignore {names}, which only "
-            'vector control reads: add [drive] mode = "vector" (field-oriented control), or '
-            'mode = "open-loop" to run open loop without them',
+        rule = (
+            f"not given, so the drive runs open loop and ignores {names}, which only vector "
+            'control reads: add [drive] mode = "vector" (field-oriented control), or mode = '
+            '"open-loop" to run open loop without them (deprecated: a file like this one will '
+            "be refused in a later release)"
         )
-
+        warnings.warn(ConfigWarning("drive.mode", rule), stacklevel=4)
 
 def machine_defaults(sc) -> None:
     """Defaults that follow the machine, filled in (and derived again when the machine
