@@ -371,7 +371,7 @@ def replay(
     limits = _limits(sc)
     model_given = all(m in rec.columns for m in MODEL_COLUMNS)
     ests = [_Estimator(n, drives[n], Ts, model_given) for n in names]
-    n_rows = rec.rows // q if q > 1 else rec.rows
+    n_rows = rec.rows // q
     t0 = time.perf_counter()
     stage = replace_folder(out) if out is not None else contextlib.nullcontext(None)
     with stage as staging:
@@ -383,8 +383,6 @@ def replay(
                 check_units(rec, cols, k0, limits)
                 sink.emit(dec.push(cols) if dec is not None else cols)
                 bar.advance(len(cols["time_s"]))
-            if dec is not None:
-                sink.emit(dec.finish())
         res = sink.result(out)
         elapsed = time.perf_counter() - t0
         res.summary = {
