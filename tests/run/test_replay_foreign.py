@@ -289,9 +289,9 @@ def test_a_4x_recording_decimated_gives_the_controller_rate_estimates(tmp_path):
     every 4th instant and, as the voltage of each period [t_k, t_k + Ts), the mean of the
     four commands applied over it: that is the controller-rate recording, made from the same
     samples without any filtering, from the decimator's first row on (it drops the first and
-    last 12 periods, whose filter window would reach beyond the recording). Both are replayed with the drive's scenario at Ts; the
-    4x one goes through the decimator (the anti-aliasing FIR on the currents and the
-    encoder, the period mean on the voltages). The speed estimates of mras, afo and ekf
+    last 12 periods, whose filter window would reach beyond the recording). Both are
+    replayed with the drive's scenario at Ts; the 4x one goes through the decimator (the
+    anti-aliasing FIR on the currents and the encoder, the period mean on the voltages). The speed estimates of mras, afo and ekf
     must agree within 0.1 rpm over the whole run while they move by hundreds of rpm; a
     filter with a phase lag, or a voltage taken at the wrong instant, breaks it (the
     estimators compare current with voltage).
@@ -333,3 +333,29 @@ def test_read_recording_with_a_map_gives_the_recordings_columns(run, tmp_path):
     with pytest.raises(ConfigError, match="voltage.kind: must be one of"):
         parse_map({"time": {"column": "t"}, "current": {"columns": ["a", "b"]},
                    "voltage": {"columns": ["x", "y"], "kind": "ab"}})  # fmt: skip
+
+
+def test_compare_takes_replay_folders_and_replay_writes_its_report(run, tmp_path):
+    """A replay folder holds replay.png and report.html; imdrive compare takes it with a
+    line per estimator, its metrics the replay's errors."""
+    from imdrive.run.compare import compare
+
+    _, folder = run
+    a = tmp_path / "rep-a"
+    replay(folder, estimators=["mras", "afo"], out=a)
+    html = (a / "report.html").read_text()
+    assert "speed estimate - encoder" in html and "afo" in html
+    assert (a / "replay.png").stat().st_size > 10_000
+    out = tmp_path / "cmp"
+    c = compare([a])
+    assert [r.label for r in c.runs] == ["rep-a: mras", "rep-a: afo"]
+    assert {"speed", "speed estimate error", "rotor resistance estimate"} <= {
+        q for q, _ in c.panels
+    }
+    m = c.metrics
+    rep = replay(folder, estimators=["mras", "afo"])
+    assert m.loc["speed_error_rms_rpm", "rep-a: afo"] == pytest.approx(
+        rep.summary["estimators"]["afo"]["speed_error_rpm"]["rms"]
+    )
+    assert main(["compare", str(a), "--out", str(out), "-q"]) == 0
+    assert (out / "report.html").is_file() and (out / "metrics.csv").is_file()

@@ -24,6 +24,9 @@ import numpy as np
 from imdrive.errors import ConfigError
 from imdrive.run.recording_columns import COLUMNS, PERIOD_TOLERANCE, REQUIRED
 
+#: recording columns a replay does not read (the phase currents repeat the alpha-beta ones)
+UNUSED = ("i_a_meas_A", "i_b_meas_A", "i_c_meas_A", "speed_est_rpm")
+
 #: rows per chunk: a few MB per column, and numba's per-call cost negligible
 CHUNK_ROWS = 1 << 18
 
@@ -121,8 +124,8 @@ class RecordingFile:
         if path.stat().st_size == 0:
             raise ConfigError(where, "is empty: a recording needs at least two rows")
         names = self._names()
-        if mapping is None:
-            self._read = [n for n in names if n in COLUMNS]
+        if mapping is None:  # the columns a replay uses (not the phases nor the run's estimate)
+            self._read = [n for n in names if n in COLUMNS and n not in UNUSED]
             self.columns = list(self._read)
             for name in REQUIRED:
                 if name not in names:

@@ -136,7 +136,11 @@ class _Writer:
         if self._w is None:
             meta = {b"imdrive.units": json.dumps({n: unit_of(n) for n in cols}).encode()}
             schema = table.schema.with_metadata(meta)
-            self._w = pq.ParquetWriter(str(self.path), schema, compression="zstd")
+            # zstd's fastest level: the estimates barely compress, and the writer must keep
+            # up with the estimators (a 10^7-row replay)
+            self._w = pq.ParquetWriter(
+                str(self.path), schema, compression="zstd", compression_level=1
+            )
         self._w.write_table(table.cast(self._w.schema))
 
     def close(self) -> None:
@@ -393,7 +397,7 @@ def replay(
             "controller_period": controller_period,
             "decimation": q,
             "rows_replayed": sink.done,
-            "scenario": sc.name,
+            "scenario_name": sc.name,
             "mapping": None if rec.mapping is None else rec.mapping.describe(),
             "context_defaulted": sink.defaulted,
             "model": "the recorded controller's writes" if model_given else "the scenario's",
@@ -402,6 +406,7 @@ def replay(
             "elapsed_s": elapsed,
             "real_time_factor": sink.done * Ts / elapsed if elapsed > 0 else None,
             "estimators": {e.name: e.summary() for e in ests},
+            "scenario": sc.to_dict(),  # as a run's summary.json: Scenario.read takes it
         }
         if staging is not None:
             _finish(staging, res)

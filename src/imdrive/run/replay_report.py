@@ -118,7 +118,7 @@ def report(res) -> str:
         html.escape(
             f"{s.get('rows_replayed')} control periods of {s.get('period_replayed_s'):g} s "
             f"replayed from {s.get('rows')} recorded rows (decimation {s.get('decimation')}) "
-            f"on the scenario {s.get('scenario')}; model: {s.get('model')}."
+            f"on the scenario {s.get('scenario_name')}; model: {s.get('model')}."
         )
     ]
     for name, e in s.get("estimators", {}).items():
@@ -130,8 +130,13 @@ def report(res) -> str:
         notes.append(f"<span{cls}>{html.escape(text)}</span>")
     if b > 1:
         notes.append(html.escape(f"Shown as the min and max of every {b} kept samples."))
-    tables = [html_table(flatten(s), "summary (summary.json)")]
-    return html_page(f"imdrive replay: {s.get('scenario')}", notes, [fig], arrays, tables)
+    keep = {k: v for k, v in s.items() if k != "scenario"}
+    tables = [
+        html_table(flatten(keep), "summary (summary.json)"),
+        html_table(flatten(s.get("scenario", {})), "scenario replayed with"),
+    ]
+    title = f"imdrive replay: {s.get('scenario_name')}"
+    return html_page(title, notes, [fig], arrays, tables)
 
 
 def write_report(res, path) -> Path:
