@@ -283,18 +283,18 @@ def test_the_decimator_in_chunks_is_the_decimator_in_one():
 def test_a_4x_recording_decimated_gives_the_controller_rate_estimates(tmp_path):
     """A recording at 4 x the controller rate, decimated, within 0.1 rpm of one at its rate.
 
-    How the two recordings are made: one drive, logged at two rates. The drive is simulated
-    with its controller (and so its log) at Ts/4 = 25 us and recorded: that is the 4x
-    recording. A logger at Ts = 100 us on the same drive would hold the current sampled at
-    every 4th instant and, as the voltage of each period [t_k, t_k + Ts), the mean of the
-    four commands applied over it: that is the controller-rate recording, made from the same
-    samples without any filtering, from the decimator's first row on (it drops the first and
-    last 12 periods, whose filter window would reach beyond the recording). Both are
-    replayed with the drive's scenario at Ts; the 4x one goes through the decimator (the
-    anti-aliasing FIR on the currents and the encoder, the period mean on the voltages). The speed estimates of mras, afo and ekf
-    must agree within 0.1 rpm over the whole run while they move by hundreds of rpm; a
-    filter with a phase lag, or a voltage taken at the wrong instant, breaks it (the
-    estimators compare current with voltage).
+    How the two recordings are made: one drive, logged at two rates. The drive is simulated with
+    its controller (and so its log) at Ts/4 = 25 us and recorded: that is the 4x recording. A
+    logger at Ts = 100 us on the same drive would hold the current sampled at every 4th instant
+    and, as the voltage of each period [t_k, t_k + Ts), the mean of the four commands applied
+    over it: that is the controller-rate recording, made from the same samples without any
+    filtering, from the decimator's first row on (it drops the first and last 12 periods, whose
+    filter window would reach beyond the recording). Both are replayed with the drive's scenario
+    at Ts; the 4x one goes through the decimator (the anti-aliasing FIR on the currents and the
+    encoder, the period mean on the voltages). The speed estimates of mras, afo and ekf must
+    agree within 0.1 rpm over the whole run while they move by hundreds of rpm; a filter with a
+    phase lag, or a voltage taken at the wrong instant, breaks it (the estimators compare
+    current with voltage).
     """
     sc = im.Scenario.read("sensorless").with_overrides(SHORT)
     fast = simulate(sc.with_overrides({"simulation.Ts_s": 2.5e-5}), record=True).recording
