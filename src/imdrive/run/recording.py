@@ -158,7 +158,7 @@ class Recording:
     meta : dict
         ``recording.toml`` beside it (empty for a foreign recording).
     period_s : float
-        The median sample period, s.
+        The mean sample period, s (every period within 1 % of the median).
     """
 
     def __init__(self, path: Path, columns: dict, meta: dict, period_s: float):
