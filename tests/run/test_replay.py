@@ -112,7 +112,12 @@ def test_cli_run_format_recording_and_replay(tmp_path, capsys):
     assert rec.rows == 2001
     out = tmp_path / "rep"
     assert main(["replay", str(run), "--estimators", "mras,afo", "--out", str(out)]) == 0
-    assert sorted(p.name for p in out.iterdir()) == ["summary.json", "timeseries.parquet"]
+    assert sorted(p.name for p in out.iterdir()) == [
+        "replay.png",
+        "report.html",
+        "summary.json",
+        "timeseries.parquet",
+    ]
     t = pq.read_table(out / "timeseries.parquet")
     assert {"speed_est_mras_rpm", "speed_est_afo_rpm", "R2_hat_afo_ohm"} <= set(t.column_names)
     assert "replayed 2001 rows" in capsys.readouterr().err

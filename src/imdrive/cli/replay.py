@@ -16,10 +16,12 @@ def _default_name(recording: str) -> str:
 
 
 def _cmd_replay(args) -> int:
-    from imdrive.run.recording import read_recording
+    from imdrive.run.recording_read import open_recording
     from imdrive.run.replay import REPLAY_FILES, replay
 
-    rec = read_recording(args.recording)  # bad input refused before anything is written
+    # the file opened and its time checked before anything is written; every other rule is
+    # checked as it streams, into a staging folder that a refusal removes
+    rec = open_recording(args.recording, args.map)
     out = output_folder(
         args.out,
         _default_name(args.recording),
@@ -28,7 +30,15 @@ def _cmd_replay(args) -> int:
         force=args.force,
         what="an imdrive replay",
     )
-    res = replay(rec, args.scenario, args.estimators, out, force=args.force)
+    res = replay(
+        rec,
+        args.scenario,
+        args.estimators,
+        out,
+        controller_period=args.controller_period,
+        force=args.force,
+        progress=None if not args.quiet else False,
+    )
     if not args.quiet:
         s = res.summary
         parts = []
@@ -37,7 +47,8 @@ def _cmd_replay(args) -> int:
             how = e["status"] if err is None else f"{e['status']}, RMS error {err['rms']:.3g} rpm"
             parts.append(f"{name} ({how})")
         print(
-            f"imdrive: replayed {s['rows']} rows ({s['rows'] * s['period_replayed_s']:g} s) with "
+            f"imdrive: replayed {s['rows_replayed']} rows "
+            f"({s['rows_replayed'] * s['period_replayed_s']:g} s) with "
             f"{', '.join(parts)}; {s['real_time_factor']:.0f}x real time -> {out}",
             file=sys.stderr,
         )
@@ -57,18 +68,39 @@ def add_parser(sub) -> None:
         help="run speed estimators on a drive's recording",
         description="Run registered speed estimators open loop on a recording (imdrive run "
         "--format recording writes one), through the code the closed loop runs. Writes "
-        "timeseries.parquet (speed_est_<estimator>_rpm, R2_hat_<estimator>_ohm) and "
+        "timeseries.parquet (speed_est_<estimator>_rpm, R2_hat_<estimator>_ohm), "
         "summary.json (each estimator's speed error against the recorded encoder, its "
-        "status) into out/replay-NAME unless --out says otherwise. The R2-tracking law is not "
-        "replayed: R2_hat follows the recorded controller's writes. Exit codes: imdrive --help.",
+        "status), replay.png and report.html into out/replay-NAME unless --out says "
+        "otherwise. A recording from elsewhere (CSV, Parquet or MAT) is read through a "
+        "mapping file (--map, docs/replay.md); one sampled faster than the controller is "
+        "decimated to its period. The file is streamed in chunks. The R2-tracking law is "
+        "not replayed: R2_hat follows the recorded controller's writes. Exit codes: "
+        "imdrive --help (2: bad input, nothing written).",
         epilog=_examples(
             "imdrive run sensorless --format recording --out out/run1",
             "imdrive replay out/run1 --estimators mras,afo,ekf --out out/run1-replay",
             "imdrive replay rec.parquet --scenario my.toml --estimators smo-mras",
+            "imdrive replay scope.csv --map map.toml --scenario my.toml --estimators mras,afo",
         ),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    r.add_argument("recording", metavar="RECORDING", help="recording.parquet or its run folder")
+    r.add_argument(
+        "recording",
+        metavar="RECORDING",
+        help="recording.parquet or its run folder; a .csv, .parquet or .mat file",
+    )
+    r.add_argument(
+        "--map",
+        metavar="MAP_TOML",
+        help="mapping file: each signal's column, unit and scale (docs/replay.md)",
+    )
+    r.add_argument(
+        "--controller-period",
+        choices=("scenario", "file"),
+        default="scenario",
+        help="run the estimators at the scenario's simulation.Ts_s (default; a faster "
+        "recording is decimated to it) or at the recording's own sample period",
+    )
     r.add_argument(
         "--scenario",
         metavar="PRESET_OR_FILE",

@@ -101,6 +101,15 @@ def load_run(folder, label: str | None = None) -> Run:
             raise ConfigError("run", f"{summary_path}: not a regular file")
         raise ConfigError("run", f"{folder}: no summary.json (not a result folder)")
     summary = read_summary_json(summary_path, "run")
+    if is_replay_summary(summary):
+        runs = load_replay(folder, label, summary)
+        if len(runs) != 1:
+            raise ConfigError(
+                "run",
+                f"{folder}: a replay of {len(runs)} estimators (compare() takes it, one line "
+                "per estimator)",
+            )
+        return runs[0]
     table = None
     for name, reader in (("timeseries.parquet", pd.read_parquet), ("timeseries.csv", pd.read_csv)):
         path = folder / name
@@ -126,6 +135,65 @@ def load_run(folder, label: str | None = None) -> Run:
     return Run(
         label or folder.name, signals, scenario, summary, _metrics(signals, scenario, summary)
     )
+
+
+def is_replay_summary(summary: dict) -> bool:
+    """Whether a ``summary.json`` is a replay's (:mod:`imdrive.run.replay`)."""
+    return "estimators" in summary and "period_replayed_s" in summary
+
+
+def load_replay(folder, label: str | None = None, summary: dict | None = None) -> list[Run]:
+    """A replay folder as one :class:`Run` per estimator: ``speed_rpm`` the recorded encoder,
+    ``speed_est_rpm`` and ``R2_hat_ohm`` the estimator's, labelled ``FOLDER: ESTIMATOR``;
+    its metrics the replay's (speed error against the encoder, R2_hat at the end, status).
+
+    Raises
+    ------
+    ConfigError
+        The folder has no readable ``timeseries.parquet``.
+    """
+    import pandas as pd
+
+    folder = Path(folder)
+    if summary is None:
+        summary = read_summary_json(folder / "summary.json", "run")
+    path = folder / "timeseries.parquet"
+    if not path.is_file():
+        raise ConfigError("run", f"{folder}: a replay without its timeseries.parquet")
+    _check_size(path)
+    try:
+        table = pd.read_parquet(path)
+    except (MemoryError, KeyboardInterrupt):
+        raise
+    except Exception as exc:  # pyarrow's many errors: not a table
+        raise ConfigError("run", f"{path}: cannot be read as a table ({_one_line(exc)})") from None
+    s = _signals(table, path)
+    base = label or folder.name
+    name = summary.get("scenario_name")
+    scenario = SimpleNamespace(
+        name=str(name), description=f"replay of {summary.get('recording')} on {name}"
+    )
+    runs = []
+    for name, e in summary["estimators"].items():
+        key = name.replace("-", "_")
+        sig = {"time_s": s["time_s"]}
+        if "speed_enc_rpm" in s:
+            sig["speed_rpm"] = s["speed_enc_rpm"]
+        for col, src in (("speed_est_rpm", "speed_est"), ("R2_hat_ohm", "R2_hat")):
+            unit = col.rsplit("_", 1)[1]
+            if f"{src}_{key}_{unit}" in s:
+                sig[col] = s[f"{src}_{key}_{unit}"]
+        err = e.get("speed_error_rpm") or {}
+        m = {
+            "status": e.get("status"),
+            "speed_error_mean_rpm": err.get("mean"),
+            "speed_error_rms_rpm": err.get("rms"),
+            "speed_error_max_rpm": err.get("max"),
+            "R2_hat_end_ohm": e.get("R2_hat_end_ohm"),
+            "real_time_factor": summary.get("real_time_factor"),
+        }
+        runs.append(Run(f"{base}: {name}", sig, scenario, summary, m))
+    return runs
 
 
 #: the largest result file :func:`load_run` reads (a bound, not a format rule: a 3 s run at
@@ -322,13 +390,26 @@ def _cell(v) -> str:
     return str(v)
 
 
+def _replay_folder(folder) -> bool:
+    if not isinstance(folder, str | os.PathLike):
+        return False
+    p = Path(folder) / "summary.json"
+    if not p.is_file():
+        return False
+    try:
+        return is_replay_summary(read_summary_json(p, "run"))
+    except ConfigError:
+        return False
+
+
 def compare(runs, labels=None, signals=None) -> Comparison:
     """Several runs side by side.
 
     Parameters
     ----------
     runs : iterable of (str, pathlib.Path or SimulationResult)
-        Result folders or results in memory (at least one).
+        Result folders, replay folders (``imdrive replay``: one line per estimator,
+        :func:`load_replay`) or results in memory (at least one).
     labels : list of str, optional
         Their names (default: a folder's name, a result's scenario name).
     signals : list of str, optional
@@ -359,10 +440,14 @@ def compare(runs, labels=None, signals=None) -> Comparison:
     labels = list(labels) if labels is not None else [None] * len(runs)
     if len(labels) != len(runs):
         raise ConfigError("labels", f"{len(labels)} names for {len(runs)} runs: give one each")
-    loaded = [
-        _from_result(r, lab) if isinstance(r, SimulationResult) else load_run(r, lab)
-        for r, lab in zip(runs, labels, strict=True)
-    ]
+    loaded = []
+    for r, lab in zip(runs, labels, strict=True):
+        if isinstance(r, SimulationResult):
+            loaded.append(_from_result(r, lab))
+        elif _replay_folder(r):  # a replay: a line per estimator
+            loaded.extend(load_replay(r, lab))
+        else:
+            loaded.append(load_run(r, lab))
     seen: dict[str, int] = {}
     for r in loaded:  # two folders of one name stay apart
         seen[r.label] = seen.get(r.label, 0) + 1

@@ -23,63 +23,29 @@ import numpy as np
 
 from imdrive.errors import ConfigError
 
+# the columns and their rules (re-exported here, where they were first defined)
+from imdrive.run.recording_columns import (
+    COLUMNS,
+    CONTEXT_DEFAULTS,
+    MODEL_COLUMNS,
+    PERIOD_TOLERANCE,
+    REQUIRED,
+)
+
+__all__ = [
+    "COLUMNS",
+    "CONTEXT_DEFAULTS",
+    "MODEL_COLUMNS",
+    "PERIOD_TOLERANCE",
+    "REQUIRED",
+    "Recording",
+    "read_recording",
+    "recording_columns",
+    "recording_meta",
+    "write_recording",
+]
+
 SQRT3 = math.sqrt(3.0)
-
-#: column -> (unit, meaning); the unit is also the name's suffix
-COLUMNS = {
-    "time_s": ("s", "the sample t_k = k Ts: the start of control period k"),
-    "i_a_meas_A": ("A", "measured stator current of phase a (from the measured alpha-beta)"),
-    "i_b_meas_A": ("A", "phase b"),
-    "i_c_meas_A": ("A", "phase c"),
-    "i_alpha_meas_A": (
-        "A",
-        "measured stator current, alpha (amplitude-invariant Clarke; the estimator's i_ab)",
-    ),
-    "i_beta_meas_A": ("A", "measured stator current, beta"),
-    "vdc_meas_V": ("V", "DC-link voltage as the controller measures it"),
-    "v_alpha_cmd_V": (
-        "V",
-        "voltage the controller commanded at t_k for [t_k, t_k + Ts), "
-        "less its inverter-error compensation: what it believes reaches the "
-        "terminals, the estimator's voltage at the next sample; alpha",
-    ),
-    "v_beta_cmd_V": ("V", "the same, beta"),
-    "speed_enc_rpm": ("rpm", "the rotor's mechanical speed at t_k (an ideal encoder)"),
-    "i_inj_A": ("A", "the R2 compensator's injected d-axis current this period"),
-    "speed_est_rpm": ("rpm", "the run's own speed estimate after this sample's step"),
-    # context: the controller's values its estimator read at t_k
-    "theta_e_rad": ("rad", "the controller's field angle at t_k"),
-    "w_e_rad_s": ("rad/s", "the controller's stator frequency (electrical) the estimator read"),
-    "id_ref_A": ("A", "the flux-current reference of the last period"),
-    "iq_ref_A": ("A", "the torque-current reference of the last period"),
-    "w_ref_rad_s": ("rad/s", "the speed reference (mechanical)"),
-    "hold_R1_flag": ("1", "1 where the estimator's R1 adaptation was held"),
-    "R1_hat_ohm": ("ohm", "the controller's R1_hat as the estimator read it"),
-    "R2_hat_ohm": ("ohm", "the controller's R2_hat as the estimator read it"),
-    "M_hat_H": ("H", "the controller's magnetising inductance as the estimator read it"),
-    "R1_hat_after_ohm": ("ohm", "R1_hat right after the run's estimator's step"),
-    "R2_hat_after_ohm": ("ohm", "R2_hat right after the run's estimator's step"),
-}
-
-#: what a replay needs from every recording
-REQUIRED = ("time_s", "i_alpha_meas_A", "i_beta_meas_A", "v_alpha_cmd_V", "v_beta_cmd_V")
-
-#: a context column -> the value a replay takes where a recording lacks it
-CONTEXT_DEFAULTS = {
-    "theta_e_rad": 0.0,  # the estimator's flux error then comes in the stationary frame
-    "w_e_rad_s": 0.0,
-    "id_ref_A": 0.0,
-    "iq_ref_A": 0.0,
-    "w_ref_rad_s": 0.0,
-    "i_inj_A": 0.0,
-    "hold_R1_flag": 1.0,  # an R1 law cannot tell regeneration without the references: held
-}
-
-#: the model columns: all or none (with them the replayed model follows the controller's)
-MODEL_COLUMNS = ("R1_hat_ohm", "R2_hat_ohm", "M_hat_H", "R1_hat_after_ohm", "R2_hat_after_ohm")
-
-#: the sample period may vary by this much around its median
-PERIOD_TOLERANCE = 0.01
 
 
 def recording_columns(rec: np.ndarray, n_p: float, vdc_meas: float) -> dict[str, np.ndarray]:
@@ -192,7 +158,7 @@ class Recording:
     meta : dict
         ``recording.toml`` beside it (empty for a foreign recording).
     period_s : float
-        The median sample period, s.
+        The mean sample period, s (every period within 1 % of the median).
     """
 
     def __init__(self, path: Path, columns: dict, meta: dict, period_s: float):
@@ -200,6 +166,7 @@ class Recording:
         self.columns = columns
         self.meta = meta
         self.period_s = period_s
+        self.mapping = None
 
     @property
     def rows(self) -> int:
@@ -210,97 +177,30 @@ class Recording:
         """Whether every column of ``names`` is in the recording."""
         return all(n in self.columns for n in names)
 
+    def column_of(self, name: str) -> str:
+        """The file column(s) a recording column comes from (for messages)."""
+        return name if self.mapping is None else self.mapping.column_of(name)
 
-def _data_file(path) -> Path:
-    """The data file of ``path``: itself, or a run folder's ``recording.parquet``."""
-    p = Path(path)
-    if p.is_dir():
-        p = p / "recording.parquet"
-    if not p.is_file():
-        raise ConfigError(str(path), "no such recording (a recording.parquet or its run folder)")
-    return p
-
-
-def _read_table(p: Path) -> dict[str, np.ndarray]:
-    """Column name -> array of the Parquet (or, named ``*.csv``, CSV) file ``p`` (one line
-    naming the file if unreadable)."""
-    if p.stat().st_size == 0:
-        raise ConfigError(str(p), "is empty: a recording needs at least two rows")
-    import pyarrow.csv as pcsv
-    import pyarrow.parquet as pq
-
-    csv = p.suffix.lower() == ".csv"
-    try:
-        table = pcsv.read_csv(str(p)) if csv else pq.read_table(str(p))
-    except Exception as exc:  # pyarrow's many error types: one line, bad input
-        kind = "CSV" if csv else "Parquet"
-        raise ConfigError(str(p), f"is not a readable {kind} file ({exc})") from None
-    out = {}
-    for name in table.column_names:
-        try:
-            out[name] = np.ascontiguousarray(table[name].to_numpy(), dtype=np.float64)
-        except (TypeError, ValueError):
-            raise ConfigError(f"{p}: column {name}", "must hold numbers") from None
-    return out
+    def chunks(self, size: int = 1 << 18):
+        """(first row, columns) slices of ``size`` rows, as a file's
+        :meth:`~imdrive.run.recording_read.RecordingFile.chunks`."""
+        for k in range(0, self.rows, size):
+            yield k, {n: v[k : k + size] for n, v in self.columns.items()}
 
 
-def check_columns(where: str, cols: dict[str, np.ndarray]) -> float:
-    """Check the rules every recording follows; return its median sample period, s.
-
-    Rules, each broken one a :class:`~imdrive.errors.ConfigError` naming the column (and the
-    row, counted from 0) and the rule: at least two rows; the :data:`REQUIRED` columns; every
-    value finite; time strictly increasing; every sample period within
-    :data:`PERIOD_TOLERANCE` of the median.
-    """
-    n = len(cols["time_s"]) if "time_s" in cols else len(next(iter(cols.values()), []))
-    if n == 0:
-        raise ConfigError(where, "is empty: a recording needs at least two rows")
-    for name in REQUIRED:
-        if name not in cols:
-            raise ConfigError(
-                f"{where}: column {name}",
-                f"missing: a recording needs the columns {', '.join(REQUIRED)}",
-            )
-    if n < 2:
-        raise ConfigError(where, "has one row: a recording needs at least two rows")
-    for name, v in cols.items():
-        bad = np.flatnonzero(~np.isfinite(v))
-        if bad.size:
-            k = int(bad[0])
-            raise ConfigError(
-                f"{where}: column {name} row {k}", f"is {float(v[k])}: every value must be finite"
-            )
-    t = cols["time_s"]
-    dt = np.diff(t)
-    bad = np.flatnonzero(dt <= 0.0)
-    if bad.size:
-        k = int(bad[0]) + 1
-        how = "repeats" if dt[k - 1] == 0.0 else "goes back from"
-        raise ConfigError(
-            f"{where}: column time_s row {k}",
-            f"time {float(t[k]):.9g} s {how} row {k - 1}'s {float(t[k - 1]):.9g} s: time must "
-            "increase strictly",
-        )
-    period = float(np.median(dt))
-    bad = np.flatnonzero(np.abs(dt - period) > PERIOD_TOLERANCE * period)
-    if bad.size:
-        k = int(bad[0]) + 1
-        raise ConfigError(
-            f"{where}: column time_s row {k}",
-            f"the sample period {dt[k - 1]:.6g} s there differs from the median {period:.6g} s "
-            f"by more than {PERIOD_TOLERANCE:.0%}: a recording must be sampled at a steady rate",
-        )
-    return period
-
-
-def read_recording(path) -> Recording:
-    """Read and check a recording: ``recording.parquet`` (or its run folder), or a CSV file
-    with the same column names, with a ``.toml`` of the same name beside it if there is one.
+def read_recording(path, mapping=None) -> Recording:
+    """Read and check a whole recording into memory: ``recording.parquet`` (or its run
+    folder), a CSV or MAT file with the same column names, or any of them with a ``mapping``
+    (:mod:`imdrive.run.recording_map`). A ``.toml`` of the same name beside it is its
+    ``meta``. For a large file :func:`imdrive.run.recording_read.open_recording` reads it in
+    chunks instead.
 
     Parameters
     ----------
     path : str or pathlib.Path
         The file or the folder holding it.
+    mapping : str, pathlib.Path, dict or RecordingMap, optional
+        How the file's columns map to the recording's.
 
     Returns
     -------
@@ -309,18 +209,13 @@ def read_recording(path) -> Recording:
     Raises
     ------
     ConfigError
-        One line naming the file, column and row, and the rule (:func:`check_columns`).
+        One line naming the file, column and row, and the rule.
     """
-    import tomllib
+    from imdrive.run.recording_read import open_recording
 
-    p = _data_file(path)
-    cols = _read_table(p)
-    period = check_columns(str(p), cols)
-    meta = {}
-    toml = p.with_suffix(".toml")
-    if toml.is_file():
-        try:
-            meta = tomllib.loads(toml.read_text())
-        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-            raise ConfigError(str(toml), f"is not valid TOML ({exc})") from None
-    return Recording(p, cols, meta, period)
+    f = open_recording(path, mapping)
+    parts = [c for _, c in f.chunks()]
+    cols = {n: np.concatenate([c[n] for c in parts]) for n in parts[0]}
+    rec = Recording(f.path, cols, f.meta, f.period_s)
+    rec.mapping = f.mapping
+    return rec

@@ -1,17 +1,18 @@
 """Replay: registered speed estimators run open loop on a drive's recording.
 
-:func:`replay` reads a recording (:mod:`imdrive.run.recording`), builds each estimator's
-records from the scenario exactly as a closed-loop run of it would
+:func:`replay` reads a recording (:mod:`imdrive.run.recording_read`: the recording's own
+Parquet, or CSV, Parquet or MAT with a mapping, :mod:`imdrive.run.recording_map`), builds each
+estimator's records from the scenario exactly as a closed-loop run of it would
 (:func:`~imdrive.run.build.build_arrays` with ``control.speed_feedback`` set to the estimator),
 and runs it over the recorded rows through the registry's generic step
 (:func:`imdrive.kernels.replay.replay_estimator`): the code the closed loop runs, so a
 closed-loop run's recording replayed with its own estimator gives back its speed estimate,
 and an estimator of the user's own (``[plugins] modules``) replays too.
 
-Each estimator is compiled once (and cached); the recording is read once and every estimator
-runs over its rows. The result holds ``speed_est_<estimator>_rpm`` and
-``R2_hat_<estimator>_ohm`` per estimator (hyphens become underscores) and a summary: the
-speed-estimate error against the recorded encoder (mean, RMS, largest), the status.
+The recording is streamed: read a chunk at a time (pass one reads only its time, to check
+it and count the rows), brought to the controller's period where it is sampled faster
+(:mod:`imdrive.run.decimate`), every estimator run over the chunk (its state carried to the
+next), the chunk's estimates written out; the memory is bounded by the chunk, not the file.
 
 R2_hat: the R2-tracking law is not replayed yet. With a recording that carries the
 controller's model, an estimator's ``R2_hat`` follows what the recorded controller wrote (its
@@ -22,21 +23,33 @@ where :func:`imdrive.kernels.replay.replay_estimator` writes the recorded R2_hat
 
 from __future__ import annotations
 
+import contextlib
 import math
 import time
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from imdrive.errors import ConfigError
 from imdrive.kernels.replay import R_OK, REPLAY_ROW, replay_estimator
-from imdrive.run.recording import CONTEXT_DEFAULTS, MODEL_COLUMNS, Recording, read_recording
+from imdrive.run.recording import CONTEXT_DEFAULTS, MODEL_COLUMNS, Recording
+from imdrive.run.recording_read import CHUNK_ROWS, open_recording
+from imdrive.run.replay_inputs import (
+    _estimator_names,
+    _limits,
+    _scenario,
+    _scenario_of,
+    check_units,
+    decimation,
+)
 
 #: the files a replay folder holds
-REPLAY_FILES = ("timeseries.parquet", "summary.json")
+REPLAY_FILES = ("timeseries.parquet", "summary.json", "replay.png", "report.html")
 
 RPM = 30.0 / math.pi
+
+#: points per signal kept for the figures at most
+PLOT_POINTS = 20000
 
 
 def column_name(estimator: str, quantity: str, unit: str) -> str:
@@ -44,7 +57,6 @@ def column_name(estimator: str, quantity: str, unit: str) -> str:
     return f"{quantity}_{estimator.replace('-', '_')}_{unit}"
 
 
-@dataclass
 class ReplayResult:
     """What :func:`replay` found.
 
@@ -52,132 +64,115 @@ class ReplayResult:
     ----------
     signals : dict
         ``time_s``, ``speed_enc_rpm`` (where recorded), and per estimator
-        ``speed_est_<estimator>_rpm`` and ``R2_hat_<estimator>_ohm``.
+        ``speed_est_<estimator>_rpm`` and ``R2_hat_<estimator>_ohm``; read from the replay
+        folder's ``timeseries.parquet`` on first use when the replay wrote one.
     summary : dict
         The recording, the period replayed, what context it carried, and per estimator its
         status and speed-estimate error against the encoder (``summary.json``).
+    folder : pathlib.Path or None
+        The replay folder, where it was written.
     """
 
-    signals: dict
-    summary: dict = field(default_factory=dict)
+    def __init__(self, signals: dict | None, summary: dict | None = None, folder=None):
+        self._signals = signals
+        self.summary = summary or {}
+        self.folder = None if folder is None else Path(folder)
+        self.plot: dict = {}  # the thinned signals the figures draw
+
+    @property
+    def signals(self) -> dict:
+        if self._signals is None and self.folder is not None:
+            import pyarrow.parquet as pq
+
+            t = pq.read_table(str(self.folder / "timeseries.parquet"))
+            self._signals = {n: t[n].to_numpy() for n in t.column_names}
+        return self._signals
 
     def save(self, out_dir, force: bool = False) -> list[Path]:
-        """Write ``timeseries.parquet`` and ``summary.json`` as the folder ``out_dir``.
-
-        The folder is written staged and replaced as a whole (:func:`imdrive._io.replace_folder`).
-
-        Parameters
-        ----------
-        out_dir : str or pathlib.Path
-            The replay folder.
-        force : bool
-            Replace a folder that holds other files.
-
-        Returns
-        -------
-        list of pathlib.Path
-            The files written.
+        """Write the replay folder ``out_dir`` (``timeseries.parquet``, ``summary.json``,
+        ``replay.png``, ``report.html``), staged and replaced as a whole
+        (:func:`imdrive._io.replace_folder`).
 
         Raises
         ------
         ConfigError
             ``out_dir`` holds other files and ``force`` is False (nothing written).
         """
+        from imdrive._io import replace_folder
+
+        _check_out(out_dir, force)
+        with replace_folder(out_dir) as staging:
+            w = _Writer(staging)
+            w.write(self.signals)
+            w.close()
+            _finish(staging, self)
+        return [Path(out_dir) / n for n in REPLAY_FILES]
+
+
+def _check_out(out, force: bool) -> None:
+    from imdrive._io import output_folder_problem
+
+    problem = output_folder_problem(out, lambda n: n in REPLAY_FILES, force, "an imdrive replay")
+    if problem is not None:
+        raise ConfigError("--out", problem)
+
+
+class _Writer:
+    """``timeseries.parquet`` written a chunk at a time (units in the schema's metadata)."""
+
+    def __init__(self, folder: Path):
+        self.path = folder / "timeseries.parquet"
+        self._w = None
+
+    def write(self, cols: dict) -> None:
         import json
 
         import pyarrow as pa
         import pyarrow.parquet as pq
 
-        from imdrive._io import output_folder_problem, replace_folder
         from imdrive.run.columns import unit_of
-        from imdrive.run.files import summary_json
 
-        out_dir = Path(out_dir)
-        problem = output_folder_problem(
-            out_dir, lambda n: n in REPLAY_FILES, force, "an imdrive replay"
-        )
-        if problem is not None:
-            raise ConfigError("--out", problem)
-        table = pa.table({k: np.asarray(v) for k, v in self.signals.items()})
-        meta = {b"imdrive.units": json.dumps({n: unit_of(n) for n in self.signals}).encode()}
-        with replace_folder(out_dir) as staging:
-            pq.write_table(
-                table.replace_schema_metadata(meta),
-                str(staging / "timeseries.parquet"),
-                compression="zstd",
+        table = pa.table({k: np.asarray(v) for k, v in cols.items()})
+        if self._w is None:
+            meta = {b"imdrive.units": json.dumps({n: unit_of(n) for n in cols}).encode()}
+            schema = table.schema.with_metadata(meta)
+            # zstd's fastest level: the estimates barely compress, and the writer must keep
+            # up with the estimators (a 10^7-row replay)
+            self._w = pq.ParquetWriter(
+                str(self.path), schema, compression="zstd", compression_level=1
             )
-            (staging / "summary.json").write_text(summary_json(self.summary))
-        return [out_dir / n for n in REPLAY_FILES]
+        self._w.write_table(table.cast(self._w.schema))
+
+    def close(self) -> None:
+        if self._w is not None:
+            self._w.close()
 
 
-def _scenario(rec: Recording, scenario):
-    """The scenario to replay with: the one given, or the recording's own."""
-    from imdrive.config.scenario import Scenario
+def _finish(folder: Path, res: ReplayResult) -> None:
+    """``summary.json``, ``replay.png`` and ``report.html`` into ``folder``."""
+    from imdrive.run.files import summary_json
+    from imdrive.run.replay_report import write_figure, write_report
 
-    if scenario is None:
-        data = rec.meta.get("scenario")
-        if not data:
-            raise ConfigError(
-                "--scenario",
-                f"{rec.path} has no recording.toml naming its scenario: give the drive's "
-                "scenario (its machine and controller model set the estimators' records)",
-            )
-        return Scenario.from_dict(data)
-    if isinstance(scenario, Scenario):
-        return scenario
-    return Scenario.read(str(scenario))
+    (folder / "summary.json").write_text(summary_json(res.summary))
+    if not res.plot:
+        res.plot = dict(res.signals)
+    write_figure(res, folder / "replay.png")
+    write_report(res, folder / "report.html")
 
 
-def _scenario_of(sc, name: str):
-    """The scenario with ``name`` as its estimator: ``sc`` itself for the run's own (its records
-    exactly as the run's); another with the compensator off where the estimator gives no flux
-    error for it (the compensator is not replayed: its R2_hat comes from the recording)."""
-    own = sc.control.speed_feedback
-    if own == name or (own == "measured" and name == "mras"):
-        return sc
-    try:
-        return sc.with_overrides({"control.speed_feedback": name})
-    except ConfigError:
-        return sc.with_overrides({"control.speed_feedback": name, "compensator.enabled": False})
+def replay_rows(cols: dict, prev: dict) -> tuple[np.ndarray, bool, list[str]]:
+    """A chunk of the recording as :data:`~imdrive.kernels.replay.REPLAY_ROW` rows: each
+    row's current, the previous row's current and voltage, the context columns or their
+    defaults.
 
-
-def _estimator_names(estimators, rec: Recording) -> list[str]:
-    from imdrive.run.estimators import estimator_names
-
-    if estimators is None:
-        estimators = [rec.meta.get("recording", {}).get("estimator", "mras")]
-    if isinstance(estimators, str):
-        estimators = [e.strip() for e in estimators.split(",") if e.strip()]
-    names = list(dict.fromkeys("mras" if e == "measured" else e for e in estimators))
-    known = [n for n in estimator_names() if n != "measured"]
-    for n in names:
-        if n not in known:
-            raise ConfigError("--estimators", f"no estimator {n!r} (known: {', '.join(known)})")
-    if not names:
-        raise ConfigError("--estimators", f"name at least one of {', '.join(known)}")
-    return names
-
-
-def _period(rec: Recording, Ts: float) -> float:
-    """The period the estimators integrate over: the controller's where the recording is
-    sampled at its rate (within 1 %), the recording's own where it is faster."""
-    if rec.period_s > 1.01 * Ts:
-        raise ConfigError(
-            f"{rec.path}: column time_s",
-            f"sample period {rec.period_s:.6g} s is longer than the controller's Ts "
-            f"{Ts:.6g} s (simulation.Ts_s): a recording slower than the controller cannot be "
-            "replayed (the estimators integrate over one control period)",
-        )
-    if rec.period_s >= 0.99 * Ts:
-        return Ts
-    t = rec.columns["time_s"]
-    return float((t[-1] - t[0]) / (len(t) - 1))
-
-
-def replay_rows(rec: Recording, sample0) -> tuple[np.ndarray, bool, list[str]]:
-    """The recording as :data:`~imdrive.kernels.replay.REPLAY_ROW` rows: each row's current,
-    the previous row's current and voltage (row 0: the drive's initial ``sample0``, a
-    ``SAMPLE_STATE`` record), the context columns or their defaults.
+    Parameters
+    ----------
+    cols : dict
+        The chunk's recording columns.
+    prev : dict
+        The last row before the chunk: ``i_ab``, ``v_ab`` (for the first chunk the drive's
+        initial ``SAMPLE_STATE``), and ``R1_after``/``R2_after`` (NaN for the first chunk: the
+        recorded model taken as it is). Updated to the chunk's last row.
 
     Returns
     -------
@@ -187,62 +182,141 @@ def replay_rows(rec: Recording, sample0) -> tuple[np.ndarray, bool, list[str]]:
     defaulted : list of str
         The context columns the recording lacks (taken from :data:`CONTEXT_DEFAULTS`).
     """
-    c = rec.columns
-    n = rec.rows
+    c = cols
+    n = len(c["time_s"])
     rows = np.zeros(n, dtype=REPLAY_ROW)
     rows["t"] = c["time_s"]
-    i_ab = np.empty(n, dtype=np.complex128)
-    i_ab.real = c["i_alpha_meas_A"]
-    i_ab.imag = c["i_beta_meas_A"]
-    v_ab = np.empty(n, dtype=np.complex128)
-    v_ab.real = c["v_alpha_cmd_V"]
-    v_ab.imag = c["v_beta_cmd_V"]
+    i_ab = c["i_alpha_meas_A"] + 1j * c["i_beta_meas_A"]
+    v_ab = c["v_alpha_cmd_V"] + 1j * c["v_beta_cmd_V"]
     rows["i_ab"] = i_ab
     rows["i_prev_ab"][1:] = i_ab[:-1]
-    rows["i_prev_ab"][0] = sample0["i_prev_ab"]
+    rows["i_prev_ab"][0] = prev["i_ab"]
     rows["v_ab"][1:] = v_ab[:-1]  # commanded at t_{k-1} for the period that ends at t_k
-    rows["v_ab"][0] = sample0["v_prev_ab"]
+    rows["v_ab"][0] = prev["v_ab"]
+    prev["i_ab"], prev["v_ab"] = i_ab[-1], v_ab[-1]
     defaulted = [name for name in CONTEXT_DEFAULTS if name not in c]
-    ctx = {name: c.get(name, np.full(n, CONTEXT_DEFAULTS[name])) for name in CONTEXT_DEFAULTS}
+    ctx = {name: c.get(name, CONTEXT_DEFAULTS[name]) for name in CONTEXT_DEFAULTS}
     rows["theta_e"] = ctx["theta_e_rad"]
     rows["w_e"] = ctx["w_e_rad_s"]
-    i_ref = np.empty(n, dtype=np.complex128)
-    i_ref.real = ctx["id_ref_A"]
-    i_ref.imag = ctx["iq_ref_A"]
-    rows["i_ref_dq"] = i_ref
+    rows["i_ref_dq"] = np.asarray(ctx["id_ref_A"]) + 1j * np.asarray(ctx["iq_ref_A"])
     rows["w_ref"] = ctx["w_ref_rad_s"]
     rows["i_inj"] = ctx["i_inj_A"]
-    rows["hold_R1"] = ctx["hold_R1_flag"] != 0.0
-    model_given = rec.has(*MODEL_COLUMNS)
+    rows["hold_R1"] = np.asarray(ctx["hold_R1_flag"]) != 0.0
+    model_given = all(m in c for m in MODEL_COLUMNS)
     if model_given:
         rows["R1_hat"] = c["R1_hat_ohm"]
         rows["R2_hat"] = c["R2_hat_ohm"]
         rows["M_hat"] = c["M_hat_H"]
-        # the model the run's estimator left at the last sample; row 0: none (take the
-        # recorded model as it is)
+        # the model the run's estimator left at the last sample
         rows["R1_prev"][1:] = c["R1_hat_after_ohm"][:-1]
         rows["R2_prev"][1:] = c["R2_hat_after_ohm"][:-1]
-        rows["R1_prev"][0] = np.nan
-        rows["R2_prev"][0] = np.nan
+        rows["R1_prev"][0] = prev["R1_after"]
+        rows["R2_prev"][0] = prev["R2_after"]
+        prev["R1_after"] = c["R1_hat_after_ohm"][-1]
+        prev["R2_after"] = c["R2_hat_after_ohm"][-1]
     return rows, model_given, defaulted
 
 
-def _error_stats(est_rpm: np.ndarray, enc_rpm: np.ndarray) -> dict:
-    e = est_rpm - enc_rpm
-    return {
-        "mean": float(np.mean(e)),
-        "rms": float(np.sqrt(np.mean(e * e))),
-        "max": float(np.max(np.abs(e))),
-    }
+class _Errors:
+    """The speed-estimate error against the encoder, accumulated chunk by chunk."""
+
+    def __init__(self):
+        self.n, self.s, self.s2, self.mx = 0, 0.0, 0.0, 0.0
+
+    def add(self, e: np.ndarray) -> None:
+        if e.size:
+            self.n += e.size
+            self.s += float(np.sum(e))
+            self.s2 += float(np.sum(e * e))
+            self.mx = max(self.mx, float(np.max(np.abs(e))))
+
+    def stats(self) -> dict | None:
+        if self.n == 0:
+            return None
+        return {"mean": self.s / self.n, "rms": math.sqrt(self.s2 / self.n), "max": self.mx}
 
 
-def replay(recording, scenario=None, estimators=None, out=None, *, force=False) -> ReplayResult:
-    """Run speed estimators open loop on a recording.
+class _Estimator:
+    """One estimator's records and what it has given so far."""
+
+    def __init__(self, name: str, a, Ts: float, model_given: bool):
+        self.name = name
+        self.a = a
+        self.mdl = a.state0.model.copy()
+        self.est = a.state0.est.copy()
+        self.n_p = float(a.params.plant[0]["n_p"])
+        self.Ts = Ts
+        self.model_given = model_given
+        self.status = R_OK
+        self.n_ok = 0  # rows replayed with every state finite
+        self.diverged_at = None
+        self.errors = _Errors()
+        self.R2_end = None
+        self.wall = 0.0
+        w, R2 = np.zeros(0), np.zeros(0)  # compile (or load from the cache) before timing
+        none = np.zeros(0, REPLAY_ROW)
+        replay_estimator(a.params.est, self.mdl, self.est, none, Ts, model_given, w, R2)
+
+    def run(self, rows: np.ndarray, enc) -> tuple[np.ndarray, np.ndarray]:
+        n = len(rows)
+        w = np.full(n, np.nan)
+        R2 = np.full(n, np.nan)
+        if self.status == R_OK:
+            t0 = time.perf_counter()
+            status, k_end = replay_estimator(
+                self.a.params.est, self.mdl, self.est, rows, self.Ts, self.model_given, w, R2
+            )
+            self.wall += time.perf_counter() - t0
+            n_ok = k_end if status == R_OK else k_end - 1
+            if status != R_OK:
+                self.status = status
+                self.diverged_at = float(rows["t"][k_end - 1])
+            if n_ok:
+                self.R2_end = float(R2[n_ok - 1])
+                if enc is not None:
+                    self.errors.add(w[:n_ok] / self.n_p * RPM - enc[:n_ok])
+            self.n_ok += n_ok
+        return w / self.n_p * RPM, R2
+
+    def summary(self) -> dict:
+        s = {"status": "ok" if self.status == R_OK else "diverged"}
+        if self.diverged_at is not None:
+            s["diverged_at_s"] = self.diverged_at
+        s["speed_error_rpm"] = self.errors.stats()
+        s["R2_hat_end_ohm"] = self.R2_end
+        return s
+
+
+def _source(recording, mapping):
+    if isinstance(recording, Recording):
+        if mapping is not None:
+            raise ConfigError("mapping", "applies to a file: give the recording's path")
+        return recording
+    if hasattr(recording, "chunks") and hasattr(recording, "period_s"):
+        return recording  # a RecordingFile already opened
+    return open_recording(recording, mapping)
+
+
+def replay(
+    recording,
+    scenario=None,
+    estimators=None,
+    out=None,
+    *,
+    mapping=None,
+    controller_period: str = "scenario",
+    force: bool = False,
+    progress: bool | None = False,
+    chunk_rows: int = CHUNK_ROWS,
+) -> ReplayResult:
+    """Run speed estimators open loop on a recording, streamed in chunks.
 
     Parameters
     ----------
-    recording : str, pathlib.Path or Recording
-        ``recording.parquet``, the run folder holding it, or a :class:`Recording`.
+    recording : str, pathlib.Path, Recording or RecordingFile
+        ``recording.parquet`` or its run folder, a Parquet, CSV or MAT file, or a recording
+        already read (:func:`~imdrive.run.recording.read_recording`) or opened
+        (:func:`~imdrive.run.recording_read.open_recording`).
     scenario : str, pathlib.Path or Scenario, optional
         The drive's scenario (machine, controller model, estimator settings); default: the
         one ``recording.toml`` names.
@@ -250,9 +324,22 @@ def replay(recording, scenario=None, estimators=None, out=None, *, force=False) 
         Registered estimators (``"mras,afo"`` or ``["mras", "afo"]``); default: the one the
         recorded run used.
     out : str or pathlib.Path, optional
-        Write ``timeseries.parquet`` and ``summary.json`` there (:meth:`ReplayResult.save`).
+        Write the replay folder there (``timeseries.parquet``, ``summary.json``,
+        ``replay.png``, ``report.html``), streamed; the result's ``signals`` are then read
+        back from it on first use.
+    mapping : str, pathlib.Path or dict, optional
+        A mapping file (``map.toml``, :mod:`imdrive.run.recording_map`) for a recording with
+        other column names or units.
+    controller_period : {"scenario", "file"}
+        ``"scenario"``: the estimators run at ``simulation.Ts_s``, a faster recording is
+        decimated to it (an integer ratio, :mod:`imdrive.run.decimate`); ``"file"``: at the
+        recording's own sample period.
     force : bool
         Replace a folder of other files.
+    progress : bool or None
+        A progress bar on stderr: True, False, or None (only on a terminal).
+    chunk_rows : int
+        Rows read at a time.
 
     Returns
     -------
@@ -262,69 +349,118 @@ def replay(recording, scenario=None, estimators=None, out=None, *, force=False) 
     Raises
     ------
     ConfigError
-        Bad input (the recording, the scenario, an unknown estimator, ``--out``): nothing
-        written.
+        Bad input (the recording, the mapping, units that contradict the scenario, an unknown
+        estimator, ``--out``): one line, and nothing written.
     """
+    from imdrive._io import replace_folder
+    from imdrive._progress import Progress
     from imdrive.run.build import build_arrays
+    from imdrive.run.decimate import Decimator
 
-    rec = recording if isinstance(recording, Recording) else read_recording(recording)
+    rec = _source(recording, mapping)
     sc = _scenario(rec, scenario)
+    if controller_period == "file":
+        sc = sc.with_overrides({"simulation.Ts_s": float(rec.period_s)})
+    elif controller_period != "scenario":
+        raise ConfigError(
+            "--controller-period", f"must be scenario or file, got {controller_period!r}"
+        )
     names = _estimator_names(estimators, rec)
     if out is not None:  # refused before anything runs
-        from imdrive._io import output_folder_problem
-
-        problem = output_folder_problem(out, lambda n: n in REPLAY_FILES, force, "a replay")
-        if problem is not None:
-            raise ConfigError("--out", problem)
+        _check_out(out, force)
     drives = {name: build_arrays(_scenario_of(sc, name)) for name in names}
     first = drives[names[0]]
-    Ts = _period(rec, float(first.params.sim[0]["Ts"]))
-    rows, model_given, defaulted = replay_rows(rec, first.state0.sample[0])
-    n_p = float(first.params.plant[0]["n_p"])
-    c = rec.columns
-    signals = {"time_s": c["time_s"]}
-    enc = c.get("speed_enc_rpm")
-    if enc is not None:
-        signals["speed_enc_rpm"] = enc
-    per_est = {}
-    wall = 0.0
-    for name in names:
-        a = drives[name]
-        mdl = a.state0.model.copy()
-        est = a.state0.est.copy()
-        w = np.full(rec.rows, np.nan)
-        R2 = np.full(rec.rows, np.nan)
-        replay_estimator(a.params.est, mdl, est, rows[:0], Ts, model_given, w, R2)  # compile
-        t0 = time.perf_counter()
-        status, k_end = replay_estimator(a.params.est, mdl, est, rows, Ts, model_given, w, R2)
-        wall += time.perf_counter() - t0
-        speed = w / n_p * RPM
-        signals[column_name(name, "speed_est", "rpm")] = speed
-        signals[column_name(name, "R2_hat", "ohm")] = R2
-        s = {"status": "ok" if status == R_OK else "diverged"}
-        if status != R_OK:
-            s["diverged_at_s"] = float(c["time_s"][k_end - 1])
-        n_ok = k_end if status == R_OK else k_end - 1
-        s["speed_error_rpm"] = (
-            _error_stats(speed[:n_ok], enc[:n_ok]) if enc is not None and n_ok > 0 else None
-        )
-        s["R2_hat_end_ohm"] = float(R2[n_ok - 1]) if n_ok > 0 else None
-        per_est[name] = s
-    duration = rec.rows * Ts
-    summary = {
-        "recording": str(rec.path),
-        "rows": rec.rows,
-        "sample_period_s": rec.period_s,
-        "period_replayed_s": Ts,
-        "scenario": sc.name,
-        "context_defaulted": defaulted,
-        "model": "the recorded controller's writes" if model_given else "the scenario's",
-        "R2_law": "none: R2_hat as the recorded controller wrote it, or the estimator's own",
-        "wall_time_s": wall,
-        "real_time_factor": duration / wall if wall > 0 else None,
-        "estimators": per_est,
-    }
-    res = ReplayResult(signals, summary)
-    if out is not None:
-        res.save(out, force=force)
+    Ts = float(first.params.sim[0]["Ts"])
+    q = decimation(rec, Ts)
+    limits = _limits(sc)
+    model_given = all(m in rec.columns for m in MODEL_COLUMNS)
+    ests = [_Estimator(n, drives[n], Ts, model_given) for n in names]
+    n_rows = rec.rows // q
+    t0 = time.perf_counter()
+    stage = replace_folder(out) if out is not None else contextlib.nullcontext(None)
+    with stage as staging:
+        sink = _Sink(ests, first.state0.sample[0], staging, max(1, n_rows // PLOT_POINTS))
+        bar = Progress(rec.rows, "replay", unit="rows", enabled=progress, lines=None)
+        with bar:
+            dec = Decimator(q) if q > 1 else None
+            for k0, cols in rec.chunks(chunk_rows):
+                check_units(rec, cols, k0, limits)
+                sink.emit(dec.push(cols) if dec is not None else cols)
+                bar.advance(len(cols["time_s"]))
+        res = sink.result(out)
+        elapsed = time.perf_counter() - t0
+        res.summary = {
+            "recording": str(rec.path),
+            "rows": rec.rows,
+            "sample_period_s": rec.period_s,
+            "period_replayed_s": Ts,
+            "controller_period": controller_period,
+            "decimation": q,
+            "rows_replayed": sink.done,
+            "scenario_name": sc.name,
+            "mapping": None if rec.mapping is None else rec.mapping.describe(),
+            "context_defaulted": sink.defaulted,
+            "model": "the recorded controller's writes" if model_given else "the scenario's",
+            "R2_law": "none: R2_hat as the recorded controller wrote it, or the estimator's own",
+            "wall_time_s": sum(e.wall for e in ests),
+            "elapsed_s": elapsed,
+            "real_time_factor": sink.done * Ts / elapsed if elapsed > 0 else None,
+            "estimators": {e.name: e.summary() for e in ests},
+            "scenario": sc.to_dict(),  # as a run's summary.json: Scenario.read takes it
+        }
+        if staging is not None:
+            _finish(staging, res)
     return res
+
+
+class _Sink:
+    """Where the replayed chunks go: every estimator run over them, the estimates written
+    (``timeseries.parquet`` in ``staging``) or kept in memory, every ``stride``-th row kept
+    for the figures."""
+
+    def __init__(self, ests, sample0, staging, stride: int):
+        self.ests = ests
+        self.prev = {
+            "i_ab": sample0["i_prev_ab"],
+            "v_ab": sample0["v_prev_ab"],
+            "R1_after": np.nan,
+            "R2_after": np.nan,
+        }
+        self.writer = _Writer(staging) if staging is not None else None
+        self.memory: dict[str, list] = {}
+        self.kept: dict[str, list] = {}
+        self.stride = stride
+        self.done = 0
+        self.defaulted: list[str] = []
+
+    def emit(self, cols: dict) -> None:
+        if not cols or len(cols["time_s"]) == 0:
+            return
+        rows, _, self.defaulted = replay_rows(cols, self.prev)
+        enc = cols.get("speed_enc_rpm")
+        sig = {"time_s": cols["time_s"]}
+        if enc is not None:
+            sig["speed_enc_rpm"] = enc
+        for e in self.ests:
+            speed, R2 = e.run(rows, enc)
+            sig[column_name(e.name, "speed_est", "rpm")] = speed
+            sig[column_name(e.name, "R2_hat", "ohm")] = R2
+        if self.writer is not None:
+            self.writer.write(sig)
+        else:
+            for k, v in sig.items():
+                self.memory.setdefault(k, []).append(v)
+        first = (-self.done) % self.stride
+        for k, v in sig.items():
+            self.kept.setdefault(k, []).append(v[first :: self.stride])
+        self.done += len(rows)
+
+    def result(self, out) -> ReplayResult:
+        if self.writer is not None:
+            self.writer.close()
+        signals = None
+        if self.writer is None:
+            signals = {k: np.concatenate(v) for k, v in self.memory.items()}
+        res = ReplayResult(signals, {}, out)
+        res.plot = {k: np.concatenate(v) for k, v in self.kept.items()}
+        return res

@@ -1,0 +1,150 @@
+"""Replay of a 10^7-row recording: wall time, real-time factor and peak memory.
+
+The targets (issue 41): a 10^7-row recording replayed in under 1 GiB, at least 100 x real
+time for three estimators.
+
+The file: the ``sensorless`` preset is simulated and recorded for 11 s under a speed cycle
+(0 -> +900 rpm -> -900 rpm -> 0); the 10 s from t = 1 s (magnetised, at rest) to 11 s (at
+rest again) are written again and again, time continued, until the file has ``--rows`` rows
+(10^7 at Ts = 100 us: 1000 s of drive). The tiles join where the drive is at rest and
+magnetised, so the estimators see a nearly continuous recording; the join is not exact (the
+load and the flux are not bit for bit the same), which matters nothing for time and memory.
+The file is written a row group at a time (``pyarrow.parquet.ParquetWriter``), all columns of
+``recording.parquet``.
+
+The measurement: ``imdrive replay FILE --scenario sensorless --estimators ... --out DIR -q``
+in a child process (after one warm-up run that compiles or loads the estimators from the
+numba cache), ``--repeat`` times; wall time of the command, the replay's own elapsed time
+and real-time factor (``summary.json``), and the child's peak resident memory
+(``resource.getrusage(RUSAGE_CHILDREN).ru_maxrss``, each run in a fresh child so the peak is
+its own).
+
+Usage::
+
+    python benchmarks/bench_replay.py [--rows 10000000] [--estimators mras,afo,ekf]
+        [--repeat 3] [--csv] [--keep DIR]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from _measured import machine_line, span
+
+CYCLE = {
+    "initial": 0,
+    "changes": [
+        {"at": 1.5, "to": 900, "over": 1.0},
+        {"at": 4.0, "to": -900, "over": 2.0},
+        {"at": 7.5, "to": 0, "over": 1.0},
+    ],
+}
+
+
+def make_file(path: Path, rows: int, csv: bool) -> float:
+    """Write the recording (module docstring); return the seconds it took."""
+    import numpy as np
+    import pyarrow as pa
+    import pyarrow.csv as pcsv
+    import pyarrow.parquet as pq
+
+    import imdrive as im
+    from imdrive.run.simulate import simulate
+
+    t0 = time.perf_counter()
+    sc = im.Scenario.read("sensorless").with_overrides(
+        {"simulation.t_end_s": 11.0, "control.speed_ref_rpm": CYCLE}
+    )
+    res = simulate(sc, record=True)
+    Ts = sc.simulation.Ts_s
+    k0 = int(round(1.0 / Ts))
+    k1 = int(round(11.0 / Ts))
+    tile = {k: v[k0:k1] for k, v in res.recording.items()}
+    n_tile = k1 - k0
+    writer = None
+    done = 0
+    while done < rows:
+        n = min(n_tile, rows - done)
+        cols = {k: v[:n] for k, v in tile.items()}
+        cols["time_s"] = (done + np.arange(n)) * Ts
+        table = pa.table(cols)
+        if csv:
+            if writer is None:
+                writer = pcsv.CSVWriter(str(path), table.schema)
+            writer.write_table(table)
+        else:
+            if writer is None:
+                writer = pq.ParquetWriter(str(path), table.schema, compression="zstd")
+            writer.write_table(table, row_group_size=1 << 18)
+        done += n
+    writer.close()
+    return time.perf_counter() - t0
+
+
+def replay_once(path: Path, estimators: str, out: Path) -> dict:
+    """One replay in a fresh child process: its wall time and peak RSS."""
+    code = (
+        "import resource, subprocess, sys, time; t0 = time.perf_counter(); "
+        "rc = subprocess.call(sys.argv[1:]); "
+        "print(time.perf_counter() - t0, "
+        "resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss, rc)"
+    )
+    cmd = [sys.executable, "-m", "imdrive", "replay", str(path), "--scenario", "sensorless"]
+    cmd += ["--estimators", estimators, "--out", str(out), "--force", "-q"]
+    line = subprocess.run(
+        [sys.executable, "-c", code, *cmd], capture_output=True, text=True, check=True
+    ).stdout.split()
+    wall, rss_kb, rc = float(line[0]), int(line[1]), int(line[2])
+    if rc != 0:
+        raise SystemExit(f"imdrive replay failed (exit {rc})")
+    summary = json.loads((out / "summary.json").read_text())
+    return {
+        "wall_s": wall,
+        "peak_rss_MiB": rss_kb / 1024.0,
+        "elapsed_s": summary["elapsed_s"],
+        "real_time_factor": summary["real_time_factor"],
+        "estimators_s": summary["wall_time_s"],
+        "rows": summary["rows_replayed"],
+    }
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--rows", type=int, default=10_000_000)
+    ap.add_argument("--estimators", default="mras,afo,ekf")
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--csv", action="store_true", help="a CSV file instead of Parquet")
+    ap.add_argument("--keep", metavar="DIR", help="write the file there and keep it")
+    args = ap.parse_args()
+    print(machine_line())
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(args.keep or tmp)
+        folder.mkdir(parents=True, exist_ok=True)
+        path = folder / ("recording.csv" if args.csv else "big.parquet")
+        if not path.exists():
+            took = make_file(path, args.rows, args.csv)
+            print(f"wrote {path} ({os.path.getsize(path) / 2**20:.0f} MiB) in {took:.0f} s")
+        out = Path(tmp) / "replay"
+        replay_once(path, args.estimators, out)  # warm-up: the numba cache
+        runs = [replay_once(path, args.estimators, out) for _ in range(args.repeat)]
+    r = runs[0]
+    print(f"{r['rows']} rows ({r['rows'] * 1e-4:g} s of drive), estimators {args.estimators}:")
+    for key, unit in (
+        ("wall_s", "s"),
+        ("elapsed_s", "s"),
+        ("estimators_s", "s"),
+        ("real_time_factor", "x"),
+        ("peak_rss_MiB", "MiB"),
+    ):
+        print(f"  {key:18s} {span([x[key] for x in runs], unit)}")
+
+
+if __name__ == "__main__":
+    main()

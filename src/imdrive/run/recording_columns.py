@@ -1,0 +1,58 @@
+"""The columns of a drive's recording and the rules a recording follows (what
+:mod:`imdrive.run.recording` writes and :mod:`imdrive.run.recording_read` reads)."""
+
+#: column -> (unit, meaning); the unit is also the name's suffix
+COLUMNS = {
+    "time_s": ("s", "the sample t_k = k Ts: the start of control period k"),
+    "i_a_meas_A": ("A", "measured stator current of phase a (from the measured alpha-beta)"),
+    "i_b_meas_A": ("A", "phase b"),
+    "i_c_meas_A": ("A", "phase c"),
+    "i_alpha_meas_A": (
+        "A",
+        "measured stator current, alpha (amplitude-invariant Clarke; the estimator's i_ab)",
+    ),
+    "i_beta_meas_A": ("A", "measured stator current, beta"),
+    "vdc_meas_V": ("V", "DC-link voltage as the controller measures it"),
+    "v_alpha_cmd_V": (
+        "V",
+        "voltage the controller commanded at t_k for [t_k, t_k + Ts), "
+        "less its inverter-error compensation: what it believes reaches the "
+        "terminals, the estimator's voltage at the next sample; alpha",
+    ),
+    "v_beta_cmd_V": ("V", "the same, beta"),
+    "speed_enc_rpm": ("rpm", "the rotor's mechanical speed at t_k (an ideal encoder)"),
+    "i_inj_A": ("A", "the R2 compensator's injected d-axis current this period"),
+    "speed_est_rpm": ("rpm", "the run's own speed estimate after this sample's step"),
+    # context: the controller's values its estimator read at t_k
+    "theta_e_rad": ("rad", "the controller's field angle at t_k"),
+    "w_e_rad_s": ("rad/s", "the controller's stator frequency (electrical) the estimator read"),
+    "id_ref_A": ("A", "the flux-current reference of the last period"),
+    "iq_ref_A": ("A", "the torque-current reference of the last period"),
+    "w_ref_rad_s": ("rad/s", "the speed reference (mechanical)"),
+    "hold_R1_flag": ("1", "1 where the estimator's R1 adaptation was held"),
+    "R1_hat_ohm": ("ohm", "the controller's R1_hat as the estimator read it"),
+    "R2_hat_ohm": ("ohm", "the controller's R2_hat as the estimator read it"),
+    "M_hat_H": ("H", "the controller's magnetising inductance as the estimator read it"),
+    "R1_hat_after_ohm": ("ohm", "R1_hat right after the run's estimator's step"),
+    "R2_hat_after_ohm": ("ohm", "R2_hat right after the run's estimator's step"),
+}
+
+#: what a replay needs from every recording
+REQUIRED = ("time_s", "i_alpha_meas_A", "i_beta_meas_A", "v_alpha_cmd_V", "v_beta_cmd_V")
+
+#: a context column -> the value a replay takes where a recording lacks it
+CONTEXT_DEFAULTS = {
+    "theta_e_rad": 0.0,  # the estimator's flux error then comes in the stationary frame
+    "w_e_rad_s": 0.0,
+    "id_ref_A": 0.0,
+    "iq_ref_A": 0.0,
+    "w_ref_rad_s": 0.0,
+    "i_inj_A": 0.0,
+    "hold_R1_flag": 1.0,  # an R1 law cannot tell regeneration without the references: held
+}
+
+#: the model columns: all or none (with them the replayed model follows the controller's)
+MODEL_COLUMNS = ("R1_hat_ohm", "R2_hat_ohm", "M_hat_H", "R1_hat_after_ohm", "R2_hat_after_ohm")
+
+#: the sample period may vary by this much around its median
+PERIOD_TOLERANCE = 0.01
