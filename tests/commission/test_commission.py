@@ -39,7 +39,7 @@ def test_commissioning_failed_names_the_test():
 
 @pytest.mark.slow
 def test_a_test_that_does_not_settle_exits_6_and_writes_nothing(tmp_path, monkeypatch, capsys):
-    monkeypatch.setattr(dc_module, "DWELL_TAU", 0.3)  # far too short for the rotor flux
+    monkeypatch.setattr(dc_module, "DWELL_T2", 0.3)  # far too short for the rotor flux
     out = tmp_path / "c"
     assert main(["commission", "sensorless-realistic", "--out", str(out)]) == 6
     err = capsys.readouterr().err

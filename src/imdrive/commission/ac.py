@@ -44,20 +44,21 @@ from imdrive.commission.base import (
     NO_SPEED_LOOP,
     CommissioningFailed,
     Nameplate,
-    fundamental,
     run_test,
     test_scenario,
     whole_frequency,
     window,
 )
 
-#: The test frequencies, per unit of rated slip frequency.
-FREQUENCIES_PU = (0.5, 1.0, 2.0)
+#: The test frequencies, in units of the measured rotor corner frequency ``1/T2``.
+FREQUENCIES_T2 = (1.0, 4.0, 16.0)
 #: The DC bias and the sinusoid's amplitude, per unit of the rated magnetising current.
 BIAS_PU = 0.4
 AMPLITUDE_PU = 0.2
-#: Settling before the measurement, in units of 1/w_slip; whole periods measured.
-SETTLE_TAU = 10.0
+#: Settling before the measurement, in rotor time constants (measured); then whole periods
+#: over at least :data:`MEASURE_T2` rotor time constants and :data:`PERIODS` periods.
+SETTLE_T2 = 6.0
+MEASURE_T2 = 2.0
 PERIODS = 4
 
 
@@ -98,7 +99,9 @@ def standstill_impedance(w, R1, Ll, M, R2):
     return R1 + jw * Ll + jw * M * (R2 + jw * Ll) / (R2 + jw * (M + Ll))
 
 
-def ac_test(sc, npl: Nameplate, R1: float, L1_0: float, I_m: float, table, model) -> AcResult:
+def ac_test(
+    sc, npl: Nameplate, R1: float, L1_0: float, I_m: float, table, model, T2: float
+) -> AcResult:
     """Run the standstill AC test on scenario ``sc`` (module docstring).
 
     Parameters
@@ -116,14 +119,17 @@ def ac_test(sc, npl: Nameplate, R1: float, L1_0: float, I_m: float, table, model
     model : dict
         The controller's model (``[estimator]`` keys): its ``M_H`` turns the bias into a flux
         reference.
+    T2 : float
+        The rotor time constant (the first test's), s: the frequencies are
+        :data:`FREQUENCIES_T2` / T2, the settling :data:`SETTLE_T2` T2.
     """
     I_dc, I_ac = BIAS_PU * I_m, AMPLITUDE_PU * I_m
-    settle = SETTLE_TAU * npl.tau_slip
+    settle = SETTLE_T2 * T2
     Z, ws, total = [], [], 0.0
-    for f_pu in FREQUENCIES_PU:
-        f = whole_frequency(f_pu * npl.w_slip / (2.0 * math.pi), npl.Ts_s)
+    for x in FREQUENCIES_T2:
+        f = whole_frequency(x / (2.0 * math.pi * T2), npl.Ts_s)
         w = 2.0 * math.pi * f
-        t_end = settle + PERIODS / f
+        t_end = settle + max(PERIODS, math.ceil(MEASURE_T2 * T2 * f)) / f
         scen = test_scenario(
             sc,
             "ac",
@@ -145,8 +151,8 @@ def ac_test(sc, npl: Nameplate, R1: float, L1_0: float, I_m: float, table, model
         )
         res = run_test(scen, "ac")
         t, v, i = window(res, settle, t_end, npl.delay, table)
-        V = fundamental(v.real, t, w)
-        I = fundamental(i.real, t, w)
+        V = detrended_fundamental(v.real, t, w)
+        I = detrended_fundamental(i.real, t, w)
         if not 0.8 < abs(I) / I_ac < 1.2:
             raise CommissioningFailed(
                 "ac",
@@ -157,6 +163,16 @@ def ac_test(sc, npl: Nameplate, R1: float, L1_0: float, I_m: float, table, model
         ws.append(w)
         total += t_end
     return _fit(np.array(ws), np.array(Z), R1, L1_0, total)
+
+
+def detrended_fundamental(x: np.ndarray, t: np.ndarray, w: float) -> complex:
+    """Complex amplitude ``X`` of the component ``Re(X e^{jwt})`` of the real signal ``x``, by
+    least squares together with a straight line ``a + b t``: what is left of the bias's flux
+    transient (a slow exponential) is taken by the line, not by the sinusoid."""
+    tm = t - np.mean(t)
+    A = np.column_stack((np.ones_like(tm), tm, np.cos(w * t), -np.sin(w * t)))
+    coef, *_ = np.linalg.lstsq(A, x, rcond=None)
+    return complex(coef[2], coef[3])
 
 
 def _fit(w: np.ndarray, Z: np.ndarray, R1: float, L1_0: float, duration: float) -> AcResult:

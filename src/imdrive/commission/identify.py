@@ -23,6 +23,7 @@ from imdrive.commission.base import check_commissionable, guess_model, nameplate
 from imdrive.commission.dc import dc_test
 from imdrive.commission.inertia import acceleration_test
 from imdrive.commission.noload import noload_test
+from imdrive.commission.rotor_time import rotor_time_test
 from imdrive.config.scenario import SECTIONS, Scenario
 
 #: The flux range over which the magnetising curve's accuracy is stated, per unit of rated.
@@ -76,18 +77,20 @@ def identify(sc: Scenario) -> CommissioningResult:
     check_commissionable(sc)
     npl = nameplate(sc)
     model = guess_model(npl)
-    dc = dc_test(sc, npl, model)
+    step = rotor_time_test(sc, npl, model)
+    T2 = step.T2_s
+    dc = dc_test(sc, npl, model, T2)
     table = (dc.i_A, dc.u_V)
-    nl = noload_test(sc, npl, dc.R1_ohm, table, model)
+    nl = noload_test(sc, npl, dc.R1_ohm, table, model, T2)
     Ll = model["Ll1_H"]
     for _ in range(2):  # the magnetising current depends (a little) on the leakage found
         _, I_m = nl.at_flux(npl.psi_rated_Wb, Ll)
-        ac = ac_test(sc, npl, dc.R1_ohm, nl.L1_lowest, I_m, table, model)
+        ac = ac_test(sc, npl, dc.R1_ohm, nl.L1_lowest, I_m, table, model, T2)
         Ll = ac.Ll_H
     M, _ = nl.at_flux(npl.psi_rated_Wb, Ll)
     L1 = M + Ll
     ident = {"R1_ohm": dc.R1_ohm, "R2_ohm": ac.R2_ohm, "Ll1_H": Ll, "Ll2_H": Ll, "M_H": M}
-    acc = acceleration_test(sc, npl, ident, L1 / ac.R2_ohm, sc.machine.rated_power_W, table)
+    acc = acceleration_test(sc, npl, ident, L1 / ac.R2_ohm, npl.power_W, table)
     psi, Lm = nl.magnetising_curve(Ll)
     identified = {
         "R1_ohm": dc.R1_ohm,
@@ -97,11 +100,13 @@ def identify(sc: Scenario) -> CommissioningResult:
         "Ll_H": Ll,
         "M_H": M,
         "J_kgm2": acc.J_kgm2,
+        "T2_step_s": T2,
         "magnetising": {"psi_Wb": psi.tolist(), "Lm_H": Lm.tolist()},
         "inverter_error": {"i_A": dc.i_A.tolist(), "u_V": dc.u_V.tolist()},
     }
     true = truth(sc, psi)
     durations = {
+        "rotor-time": step.duration_s,
         "dc": dc.duration_s,
         "no-load": nl.duration_s,
         "ac": ac.duration_s,
@@ -113,7 +118,7 @@ def identify(sc: Scenario) -> CommissioningResult:
         relative_error=relative_errors(identified, true, npl.psi_rated_Wb),
         durations_s=durations,
         wall_s=time.perf_counter() - t_wall,
-        tests={"dc": dc, "no-load": nl, "ac": ac, "acceleration": acc},
+        tests={"rotor-time": step, "dc": dc, "no-load": nl, "ac": ac, "acceleration": acc},
     )
 
 
