@@ -210,10 +210,13 @@ def test_scenario(sc: Scenario, test: str, t_end: float, **sections) -> Scenario
     d["name"] = f"{sc.name[:80]}-commission-{test}"
     d["controller_model"] = {}  # uncommissioned: a scenario already commissioned starts over
     d["load"].update(torque_Nm=0.0, viscous_Nms=0.0, fan_Nms2=0.0)
-    d["compensator"]["enabled"] = False
-    d["injection"]["amplitude_A"] = 0.0
-    d["injection"]["amplitude_pu"] = None
+    # R2 tracking and its signals: every key at its default (off), so that no setting of the
+    # user's (injection.frequency_pu, headroom_voltage, ...) changes what a test imposes
+    d["compensator"] = {}
+    d["injection"] = {}
     d["flux_injection"] = {}
+    d["mras"].update(R1_standstill=False, R1_rate_per_s=0.0, R1_rate_pu=None)
+    d["afo"]["R1_adaptation"] = False
     d["control"].update(
         field_weakening=False,
         dead_time_compensation="none",
@@ -234,6 +237,40 @@ def test_scenario(sc: Scenario, test: str, t_end: float, **sections) -> Scenario
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         return Scenario.from_dict(d)
+
+
+def switched_off(sc: Scenario) -> list[str]:
+    """What the user's scenario has on that the tests run without (:func:`test_scenario`),
+    one line each (``key: why``), for the console."""
+    out = []
+    inj, comp, ctl, mras = sc.injection, sc.compensator, sc.control, sc.mras
+    if comp.enabled:
+        out.append("compensator.enabled: R2 tracking; R2 is what commissioning identifies")
+    if inj.amplitude_A > 0.0 or (inj.amplitude_pu or 0.0) > 0.0:
+        out.append("injection: R2 tracking's signal; the AC test imposes its own")
+    if sc.flux_injection.amplitude > 0.0:
+        out.append("flux_injection: the AC test uses its own (a dither)")
+    if ctl.field_weakening:
+        out.append("control.field_weakening: no test runs above base speed")
+    if ctl.dead_time_compensation != "none":
+        out.append(
+            "control.dead_time_compensation: the tests measure the inverter's error "
+            "(compensating it from the DC test's table where they need to)"
+        )
+    if mras.R1_standstill:
+        out.append("mras.R1_standstill: R1 is what the DC test identifies")
+    if mras.R1_rate_per_s > 0.0 or mras.R1_rate_pu is not None:
+        out.append("mras.R1_rate_pu/R1_rate_per_s (online R1): the tests hold their model")
+    if sc.afo.R1_adaptation:
+        out.append("afo.R1_adaptation: the tests hold their model")
+    if sc.estimator.R2_adaptation != "compensator":
+        out.append(
+            f'estimator.R2_adaptation = "{sc.estimator.R2_adaptation}": the tests hold their model'
+        )
+    cm = sc.controller_model
+    if cm.uses_magnetising_curve or cm.uses_inverter_error:
+        out.append("[controller_model]: its tables are what commissioning identifies")
+    return out
 
 
 #: The speed loop of a standstill test: no torque current (a gain of 1e-12 A per rad/s, no

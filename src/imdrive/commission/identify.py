@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from imdrive.commission.ac import ac_test
-from imdrive.commission.base import check_commissionable, guess_model, nameplate
+from imdrive.commission.base import check_commissionable, guess_model, nameplate, switched_off
 from imdrive.commission.dc import dc_test
 from imdrive.commission.inertia import acceleration_test
 from imdrive.commission.noload import noload_test
@@ -51,6 +51,11 @@ class CommissioningResult:
         Wall time of the run.
     tests : dict
         Each test's result object (for the figures).
+    switched_off : list of str
+        What the input scenario has on that the tests ran without, one line each
+        (:func:`~imdrive.commission.base.switched_off`).
+    nameplate : dict
+        Where the rated current, speed and torque the tests used came from.
     """
 
     identified: dict
@@ -59,6 +64,8 @@ class CommissioningResult:
     durations_s: dict
     wall_s: float
     tests: dict = field(default_factory=dict)
+    switched_off: list = field(default_factory=list)
+    nameplate: dict = field(default_factory=dict)
 
     def summary(self) -> dict:
         """The ``summary.json`` content."""
@@ -68,6 +75,8 @@ class CommissioningResult:
             "relative_error": self.relative_error,
             "durations_s": self.durations_s,
             "wall_s": self.wall_s,
+            "switched_off": self.switched_off,
+            "nameplate": self.nameplate,
         }
 
 
@@ -118,6 +127,13 @@ def identify(sc: Scenario) -> CommissioningResult:
         relative_error=relative_errors(identified, true, npl.psi_rated_Wb),
         durations_s=durations,
         wall_s=time.perf_counter() - t_wall,
+        switched_off=switched_off(sc),
+        nameplate={
+            "I_rated_peak_A": npl.I_rated_A,
+            "speed_rpm": npl.speed_rpm,
+            "torque_Nm": npl.torque_Nm,
+            "sources": npl.sources,
+        },
         tests={"rotor-time": step, "dc": dc, "no-load": nl, "ac": ac, "acceleration": acc},
     )
 
