@@ -185,7 +185,8 @@ def relative_errors(ident: dict, true: dict, psi_rated: float) -> dict:
 
 def identified_scenario(sc: Scenario, res: CommissioningResult) -> dict:
     """The input scenario with its controller's model replaced by the identified one (TOML-
-    shaped): ``[estimator]`` R1, R2, leakages, M; the speed PI's gains from the identified J;
+    shaped, self-contained: the machine inlined, without ``preset`` or ``file``, so the file
+    runs wherever it is moved): ``[estimator]`` R1, R2, leakages, M; the speed PI's gains from the identified J;
     the inverter's error as the dead-time feed-forward's assumed dead time (when the scenario
     compensates it) and, where the scenario has the section, ``[controller_model]``'s tables.
     """
@@ -195,6 +196,14 @@ def identified_scenario(sc: Scenario, res: CommissioningResult) -> dict:
     ident = res.identified
     d = sc.to_dict()
     d["name"] = f"{sc.name[:85]}-commissioned"
+    d["description"] = (
+        f"{sc.name}, its controller's model from `imdrive commission` (R1, R2, leakage, M, "
+        "J, magnetising curve, inverter error identified on this drive)"
+    )
+    # self-contained and movable: the machine inlined (every field is in the dict), with no
+    # preset name beside the keys that override it and no path to a machine file
+    d["machine"].pop("preset", None)
+    d["machine"].pop("file", None)
     est = d["estimator"]
     for key in ("R1_ohm", "R2_ohm", "M_H"):
         est[key] = ident[key]
