@@ -186,9 +186,10 @@ def relative_errors(ident: dict, true: dict, psi_rated: float) -> dict:
 def identified_scenario(sc: Scenario, res: CommissioningResult) -> dict:
     """The input scenario with its controller's model replaced by the identified one (TOML-
     shaped, self-contained: the machine inlined, without ``preset`` or ``file``, so the file
-    runs wherever it is moved): ``[estimator]`` R1, R2, leakages, M; the speed PI's gains from the identified J;
-    the inverter's error as the dead-time feed-forward's assumed dead time (when the scenario
-    compensates it) and, where the scenario has the section, ``[controller_model]``'s tables.
+    runs wherever it is moved): ``[estimator]`` R1, R2, leakages, M; the speed PI's gains
+    from the identified J; the inverter's error as the dead-time feed-forward's assumed dead
+    time (when the scenario compensates it) and, where the scenario has the section,
+    ``[controller_model]``'s tables.
     """
     from imdrive.config.perunit import speed_bandwidth_Hz
     from imdrive.design.gains import default_speed_gains
