@@ -25,6 +25,11 @@ def _cmd_commission(args) -> int:
     out = output_folder(
         args.out, owns=owns_commission_file, force=args.force, what="a commissioning result"
     )
+    from imdrive.commission.base import switched_off
+
+    if not args.quiet:  # one line per setting the tests run without
+        for line in switched_off(sc):
+            print(f"switched off for the tests: {line}")
     try:
         res = commission(sc, out, force=args.force)
     except CommissioningFailed as exc:

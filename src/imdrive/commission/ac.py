@@ -1,4 +1,4 @@
-"""Standstill AC test near rated slip frequency: the leakage (sigma L1) and R2.
+"""Standstill AC test above the rotor corner: the leakage (sigma L1) and R2.
 
 Method (the standstill frequency-response test of Schierling 1988 and of the self-commissioning
 literature, e.g. Ruff and Grotstollen 1993; the locked-rotor impedance of IEC 60034-28:2012
@@ -8,10 +8,12 @@ current controllers impose, along the alpha axis, a DC bias plus a sinusoid,
     i_alpha = I_dc + I_ac sin(w t),   I_dc = :data:`BIAS_PU` I_m,  I_ac = :data:`AMPLITUDE_PU` I_m
 
 (``I_m``: the rated magnetising current the no-load test measured), at the frequencies
-:data:`FREQUENCIES_PU` x rated slip frequency. The bias keeps every phase current away from
+:data:`FREQUENCIES_T2` / T2 (1, 4 and 16 times the rotor corner ``1/T2`` the first test
+measured, :mod:`~imdrive.commission.rotor_time`). The bias keeps every phase current away from
 zero (phase a between 0.2 and 0.6 ``I_m``, b and c half of it, opposite), so the inverter's loss
 is constant and has no component at ``w``: the test needs no inverter model. The impedance
-``Z(jw) = V/I`` of the fundamental phasors is fitted (least squares on ``Z`` relative to
+``Z(jw) = V/I`` of the fundamental phasors (with a straight line fitted beside them, which
+takes the rest of the bias's flux transient) is fitted (least squares on ``Z`` relative to
 ``|Z|``) by the T-circuit at standstill with equal leakages (IEC 60034-28's convention when
 the design is not known)::
 
@@ -22,14 +24,33 @@ the no-load test's lowest level (the bias and the sinusoid stay below 0.6 x rate
 the incremental inductance is within a few 0.1 % of the secant one of the lowest level). Then
 ``sigma L1 = L1 - M^2/L1`` with ``L1``, ``M`` at the rated flux.
 
-Duration: per frequency :data:`SETTLE_TAU` = 10/w_slip of settling, then
-:data:`PERIODS` whole periods (8 s in all on the Table IV machine); currents up to 0.6 ``I_m``.
+Why these frequencies: the leakage shows in ``Z`` only where ``w Ll`` is not small against
+``R1 + R2``, above the rotor corner. At 0.5-2 x rated slip frequency (the test's former
+frequencies, ``w T2`` = 2.2-9 on the 500 hp and 2250 hp machines, 0.7-2.9 on Table IV) ``w Ll``
+is 1-7 % of ``|Z|``, so a 1 % error in ``Z`` moved ``Ll`` by 10-40 %; at 1-16 ``/T2`` by 5 %
+for a 1 % phase error, 0 % for a 1 % gain error, on every library machine.
+
+The dither: the current controllers close their loop on the ADC's quantised current. Without
+noise to spread it, a current that crosses few ADC steps per period lags the quantised one the
+controllers impose (the integral acts on a quantised error) by up to half a step: on the 500 hp
+and 2250 hp machines, whose magnetising current is 0.22 of rated (and the ADC's range 4.36 x
+rated peak), the sinusoid crosses 20 steps and ``Z`` turned by 1-1.5 %, ``sigma L1`` -7...-11
+% (a 16-bit ADC, or 0.5 A of sensor noise, removed it: the error is the quantiser's). A
+sinusoid of :data:`DITHER_LSB` ADC steps on the flux command (``[flux_injection]``) at
+about a quarter of the current controllers' bandwidth spreads the current over the steps
+(:func:`dither`; the drive knows its ADC); the fundamental's window holds whole periods of
+it, so it leaves no component at ``w``.
+
+Duration: per frequency :data:`SETTLE_T2` = 6 T2 of settling, then whole periods over at
+least :data:`MEASURE_T2` = 2 T2 (5 s in all on the Table IV machine, 91 s on the 2250 hp one);
+currents up to 0.6 ``I_m``.
 
 What limits the accuracy: the leakage split (with ``Ll1 != Ll2`` the fitted ``R2`` is the
 plant's times ``L1/L2``: a few 0.1 % to 2 % for leakages +-30 % apart); the voltage signal is
 small (``|Z| I_ac``, a few volts) against the current sensors' noise through the current
 controllers, averaged over whole periods; ``R1`` enters ``Re Z`` directly, so an ``R1`` error
-``dR1`` moves ``R2`` by about ``dR1 (L2/M)^2 (1 + (w T2)^-2)``.
+``dR1`` moves ``R2`` by about ``dR1 (L2/M)^2 (1 + (w T2)^-2)``; the current sensors' gain
+error, which scales ``Z``.
 """
 
 from __future__ import annotations
@@ -44,21 +65,26 @@ from imdrive.commission.base import (
     NO_SPEED_LOOP,
     CommissioningFailed,
     Nameplate,
-    fundamental,
     run_test,
     test_scenario,
     whole_frequency,
     window,
 )
 
-#: The test frequencies, per unit of rated slip frequency.
-FREQUENCIES_PU = (0.5, 1.0, 2.0)
+#: The test frequencies, in units of the measured rotor corner frequency ``1/T2``.
+FREQUENCIES_T2 = (1.0, 4.0, 16.0)
 #: The DC bias and the sinusoid's amplitude, per unit of the rated magnetising current.
 BIAS_PU = 0.4
 AMPLITUDE_PU = 0.2
-#: Settling before the measurement, in units of 1/w_slip; whole periods measured.
-SETTLE_TAU = 10.0
+#: Settling before the measurement, in rotor time constants (measured); then whole periods
+#: over at least :data:`MEASURE_T2` rotor time constants and :data:`PERIODS` periods.
+SETTLE_T2 = 6.0
+MEASURE_T2 = 2.0
 PERIODS = 4
+#: The dither's amplitude, in steps of the current sensors' ADC, and its frequency, in units
+#: of the current controllers' bandwidth (module docstring).
+DITHER_LSB = 4.0
+DITHER_BANDWIDTH = 0.25
 
 
 @dataclass
@@ -98,7 +124,9 @@ def standstill_impedance(w, R1, Ll, M, R2):
     return R1 + jw * Ll + jw * M * (R2 + jw * Ll) / (R2 + jw * (M + Ll))
 
 
-def ac_test(sc, npl: Nameplate, R1: float, L1_0: float, I_m: float, table, model) -> AcResult:
+def ac_test(
+    sc, npl: Nameplate, R1: float, L1_0: float, I_m: float, table, model, T2: float
+) -> AcResult:
     """Run the standstill AC test on scenario ``sc`` (module docstring).
 
     Parameters
@@ -116,14 +144,18 @@ def ac_test(sc, npl: Nameplate, R1: float, L1_0: float, I_m: float, table, model
     model : dict
         The controller's model (``[estimator]`` keys): its ``M_H`` turns the bias into a flux
         reference.
+    T2 : float
+        The rotor time constant (the first test's), s: the frequencies are
+        :data:`FREQUENCIES_T2` / T2, the settling :data:`SETTLE_T2` T2.
     """
     I_dc, I_ac = BIAS_PU * I_m, AMPLITUDE_PU * I_m
-    settle = SETTLE_TAU * npl.tau_slip
+    settle = SETTLE_T2 * T2
     Z, ws, total = [], [], 0.0
-    for f_pu in FREQUENCIES_PU:
-        f = whole_frequency(f_pu * npl.w_slip / (2.0 * math.pi), npl.Ts_s)
+    for x in FREQUENCIES_T2:
+        f = whole_frequency(x / (2.0 * math.pi * T2), npl.Ts_s)
         w = 2.0 * math.pi * f
-        t_end = settle + PERIODS / f
+        n_periods = 2 * math.ceil(0.5 * max(PERIODS, MEASURE_T2 * T2 * f))  # even
+        t_end = settle + n_periods / f
         scen = test_scenario(
             sc,
             "ac",
@@ -140,13 +172,14 @@ def ac_test(sc, npl: Nameplate, R1: float, L1_0: float, I_m: float, table, model
                 "headroom": False,
                 "compensate_filter": False,
             },
+            flux_injection=dither(sc, I_dc, f),
             estimator=model,
             plant=HELD_ROTOR,
         )
         res = run_test(scen, "ac")
         t, v, i = window(res, settle, t_end, npl.delay, table)
-        V = fundamental(v.real, t, w)
-        I = fundamental(i.real, t, w)
+        V = detrended_fundamental(v.real, t, w)
+        I = detrended_fundamental(i.real, t, w)
         if not 0.8 < abs(I) / I_ac < 1.2:
             raise CommissioningFailed(
                 "ac",
@@ -157,6 +190,36 @@ def ac_test(sc, npl: Nameplate, R1: float, L1_0: float, I_m: float, table, model
         ws.append(w)
         total += t_end
     return _fit(np.array(ws), np.array(Z), R1, L1_0, total)
+
+
+def dither(sc, I_dc: float, f: float) -> dict:
+    """The ``[flux_injection]`` keys of the dither at test frequency ``f`` (Hz) on the bias
+    current ``I_dc`` (A): :data:`DITHER_LSB` ADC steps (the drive knows its ADC: ``sensor.
+    adc_bits`` and its range) at the odd multiple of ``f/2`` nearest :data:`DITHER_BANDWIDTH`
+    x the current controllers' bandwidth, so an even number of the test's periods holds whole
+    periods of it; none without an ADC."""
+    from imdrive.config.perunit import adc_range_A
+
+    bits = sc.sensor.adc_bits
+    if not bits:
+        return {"amplitude": 0.0}
+    lsb = 2.0 * adc_range_A(sc) / 2**bits
+    n = max(round(DITHER_BANDWIDTH * sc.control.current_bandwidth_Hz / f - 0.5), 1)
+    return {
+        "amplitude": min(DITHER_LSB * lsb / I_dc, 0.5),
+        "frequency_Hz": (n + 0.5) * f,
+        "frequency_pu": None,
+    }
+
+
+def detrended_fundamental(x: np.ndarray, t: np.ndarray, w: float) -> complex:
+    """Complex amplitude ``X`` of the component ``Re(X e^{jwt})`` of the real signal ``x``, by
+    least squares together with a straight line ``a + b t``: what is left of the bias's flux
+    transient (a slow exponential) is taken by the line, not by the sinusoid."""
+    tm = t - np.mean(t)
+    A = np.column_stack((np.ones_like(tm), tm, np.cos(w * t), -np.sin(w * t)))
+    coef, *_ = np.linalg.lstsq(A, x, rcond=None)
+    return complex(coef[2], coef[3])
 
 
 def _fit(w: np.ndarray, Z: np.ndarray, R1: float, L1_0: float, duration: float) -> AcResult:

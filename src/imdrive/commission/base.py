@@ -1,27 +1,31 @@
 """Common ground of the identification run: what the drive knows before it starts, the test
 scenarios built from the user's, and the signals a drive sees.
 
-A commissioning drive knows its nameplate (rated voltage, frequency, current, speed, torque,
-pole pairs), its DC link (through its own sensor), its control period and computation delay;
-it sees its measured currents and the voltages it commands. Everything a test imposes is
-stated in per-unit of the nameplate (:class:`Nameplate`): currents in rated peak current,
-frequencies in rated slip frequency, durations in ``1/w_slip`` (the rated slip's time scale,
-which sets the rotor time constant's order: ``T2 ~ (i_q/i_d)/w_slip``).
+A commissioning drive knows its nameplate (rated voltage, frequency, power, pole pairs and,
+when the plate gives them, current, speed, torque, efficiency, power factor), its DC link
+(through its own sensor), its control period and computation delay; it sees its measured
+currents and the voltages it commands. Currents a test imposes are stated in per-unit of the
+nameplate (:class:`Nameplate`); durations and frequencies in units of the rotor time constant
+``T2`` the first test measures (:mod:`~imdrive.commission.rotor_time`), never of the
+nameplate's slip (which is missing from many plates, and only sets ``T2`` to within a factor of
+4 between a 3 hp and a 2 MW machine).
 
 The plant's parameters are never read here: a test scenario's controller model
 (``[estimator]``) is set explicitly, first from per-unit guesses (:func:`guess_model`), then
-from what the earlier tests identified.
+from what the earlier tests identified. A nameplate that lacks the rated current is completed
+from its power and voltage with the efficiency and power factor it gives, or
+:data:`TYPICAL_EFFICIENCY_PF`; one that lacks the speed, from its torque, or the synchronous
+speed (:func:`nameplate`: ``sources`` says which).
 """
 
 from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from imdrive.config.rated import rated_point
 from imdrive.config.scenario import Scenario
 from imdrive.errors import ConfigError
 from imdrive.run.simulate import simulate
@@ -44,6 +48,12 @@ class CommissioningFailed(RuntimeError):
         super().__init__(f"commissioning test {test!r} did not converge: {reason}")
 
 
+#: The product efficiency x power factor assumed when the nameplate gives neither the rated
+#: current nor both of them: 0.8 (4-pole IEC motors: about 0.7 at 2 kW, 0.8 at 40 kW, 0.85 at
+#: 400 kW). It sets only the test currents (in per-unit of rated), which tolerate +-20 %.
+TYPICAL_EFFICIENCY_PF = 0.8
+
+
 @dataclass(frozen=True)
 class Nameplate:
     """What the drive knows before it identifies anything (SI units; currents peak).
@@ -54,8 +64,6 @@ class Nameplate:
         Rated current, peak (phase), A.
     f_rated_Hz, w_rated : float
         Rated frequency, Hz, and electrical rad/s.
-    w_slip : float
-        Rated slip frequency, electrical rad/s (``s_rated w_rated``).
     V_phase_V : float
         Rated phase voltage, peak, V.
     psi_rated_Wb : float
@@ -70,12 +78,15 @@ class Nameplate:
         Control period, s.
     delay : int
         Computation delay, periods.
+    power_W : float
+        Rated power, W.
+    sources : dict
+        Where ``current``, ``speed`` and ``torque`` came from (``"nameplate"`` or the rule).
     """
 
     I_rated_A: float
     f_rated_Hz: float
     w_rated: float
-    w_slip: float
     V_phase_V: float
     psi_rated_Wb: float
     n_p: int
@@ -84,6 +95,8 @@ class Nameplate:
     Vdc_meas_V: float
     Ts_s: float
     delay: int
+    power_W: float = 0.0
+    sources: dict = field(default_factory=dict)
 
     @property
     def v_max(self) -> float:
@@ -95,31 +108,55 @@ class Nameplate:
         """Base impedance, rated phase voltage over rated current, ohm."""
         return self.V_phase_V / self.I_rated_A
 
-    @property
-    def tau_slip(self) -> float:
-        """``1/w_slip``, s: the time unit of the tests' durations."""
-        return 1.0 / self.w_slip
-
 
 def nameplate(sc: Scenario) -> Nameplate:
-    """The nameplate and drive data of scenario ``sc`` (``config/rated.py`` ``rated_point``)."""
+    """The nameplate and drive data of scenario ``sc``: the machine's nameplate fields only.
+
+    Rated current: the plate's; else ``P / (sqrt 3 V eta cos phi)`` with the plate's
+    efficiency and power factor, each :data:`TYPICAL_EFFICIENCY_PF` ** 0.5 when missing.
+    Rated speed: the plate's; else ``P / T`` from its torque; else the synchronous speed
+    ``60 f / n_p`` (the acceleration test's speeds are fractions of it). Rated torque: the
+    plate's; else ``P / w_m``. Nothing is read from the plant's circuit (a real drive has
+    only its nameplate), unlike :func:`imdrive.config.rated.rated_point`, which completes a
+    nameplate from the circuit.
+    """
     m = sc.machine
-    rp = rated_point(m)
-    w = 2.0 * math.pi * rp.frequency_Hz
+    P, V, f = m.rated_power_W, m.rated_voltage_V, m.rated_frequency_Hz
+    src = {}
+    if m.rated_current_rms_A is not None:
+        I_rms, src["current"] = m.rated_current_rms_A, "nameplate"
+    else:
+        typ = math.sqrt(TYPICAL_EFFICIENCY_PF)
+        eta = m.rated_efficiency if m.rated_efficiency is not None else typ
+        pf = m.rated_power_factor if m.rated_power_factor is not None else typ
+        I_rms = P / (math.sqrt(3.0) * V * eta * pf)
+        src["current"] = f"P / (sqrt 3 V eta cos phi), eta cos phi = {eta * pf:.3g}"
+    n_sync = 60.0 * f / m.pole_pairs
+    if m.rated_speed_rpm is not None:
+        speed, src["speed"] = m.rated_speed_rpm, "nameplate"
+    elif m.rated_torque_Nm is not None:
+        speed, src["speed"] = min(P / m.rated_torque_Nm * 30.0 / math.pi, n_sync), "P / T"
+    else:
+        speed, src["speed"] = n_sync, "synchronous (not on the nameplate)"
+    if m.rated_torque_Nm is not None:
+        torque, src["torque"] = m.rated_torque_Nm, "nameplate"
+    else:
+        torque, src["torque"] = P / (speed * math.pi / 30.0), "P / w_m"
     psi = sc.control.flux_ref_Wb.points[0][1] if sc.control.flux_ref_Wb else m.rated_flux_Wb
     return Nameplate(
-        I_rated_A=rp.current_peak_A,
-        f_rated_Hz=rp.frequency_Hz,
-        w_rated=w,
-        w_slip=rp.slip * w,
-        V_phase_V=rp.voltage_V * math.sqrt(2.0 / 3.0),
+        I_rated_A=math.sqrt(2.0) * I_rms,
+        f_rated_Hz=f,
+        w_rated=2.0 * math.pi * f,
+        V_phase_V=V * math.sqrt(2.0 / 3.0),
         psi_rated_Wb=psi,
         n_p=m.pole_pairs,
-        torque_Nm=rp.torque_Nm,
-        speed_rpm=rp.speed_rpm,
+        torque_Nm=torque,
+        speed_rpm=speed,
         Vdc_meas_V=sc.sensor.vdc_gain * sc.inverter.Vdc_V,
         Ts_s=sc.simulation.Ts_s,
         delay=sc.control.delay_periods,
+        power_W=P,
+        sources=src,
     )
 
 
@@ -173,10 +210,13 @@ def test_scenario(sc: Scenario, test: str, t_end: float, **sections) -> Scenario
     d["name"] = f"{sc.name[:80]}-commission-{test}"
     d["controller_model"] = {}  # uncommissioned: a scenario already commissioned starts over
     d["load"].update(torque_Nm=0.0, viscous_Nms=0.0, fan_Nms2=0.0)
-    d["compensator"]["enabled"] = False
-    d["injection"]["amplitude_A"] = 0.0
-    d["injection"]["amplitude_pu"] = None
+    # R2 tracking and its signals: every key at its default (off), so that no setting of the
+    # user's (injection.frequency_pu, headroom_voltage, ...) changes what a test imposes
+    d["compensator"] = {}
+    d["injection"] = {}
     d["flux_injection"] = {}
+    d["mras"].update(R1_standstill=False, R1_rate_per_s=0.0, R1_rate_pu=None)
+    d["afo"]["R1_adaptation"] = False
     d["control"].update(
         field_weakening=False,
         dead_time_compensation="none",
@@ -197,6 +237,40 @@ def test_scenario(sc: Scenario, test: str, t_end: float, **sections) -> Scenario
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         return Scenario.from_dict(d)
+
+
+def switched_off(sc: Scenario) -> list[str]:
+    """What the user's scenario has on that the tests run without (:func:`test_scenario`),
+    one line each (``key: why``), for the console."""
+    out = []
+    inj, comp, ctl, mras = sc.injection, sc.compensator, sc.control, sc.mras
+    if comp.enabled:
+        out.append("compensator.enabled: R2 tracking; R2 is what commissioning identifies")
+    if inj.amplitude_A > 0.0 or (inj.amplitude_pu or 0.0) > 0.0:
+        out.append("injection: R2 tracking's signal; the AC test imposes its own")
+    if sc.flux_injection.amplitude > 0.0:
+        out.append("flux_injection: the AC test uses its own (a dither)")
+    if ctl.field_weakening:
+        out.append("control.field_weakening: no test runs above base speed")
+    if ctl.dead_time_compensation != "none":
+        out.append(
+            "control.dead_time_compensation: the tests measure the inverter's error "
+            "(compensating it from the DC test's table where they need to)"
+        )
+    if mras.R1_standstill:
+        out.append("mras.R1_standstill: R1 is what the DC test identifies")
+    if mras.R1_rate_per_s > 0.0 or mras.R1_rate_pu is not None:
+        out.append("mras.R1_rate_pu/R1_rate_per_s (online R1): the tests hold their model")
+    if sc.afo.R1_adaptation:
+        out.append("afo.R1_adaptation: the tests hold their model")
+    if sc.estimator.R2_adaptation != "compensator":
+        out.append(
+            f'estimator.R2_adaptation = "{sc.estimator.R2_adaptation}": the tests hold their model'
+        )
+    cm = sc.controller_model
+    if cm.uses_magnetising_curve or cm.uses_inverter_error:
+        out.append("[controller_model]: its tables are what commissioning identifies")
+    return out
 
 
 #: The speed loop of a standstill test: no torque current (a gain of 1e-12 A per rad/s, no

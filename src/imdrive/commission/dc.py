@@ -19,8 +19,12 @@ every phase, ``e`` is constant: the slope of ``V(I)`` over the upper levels (at 
 inverter's threshold voltage). Below, ``u`` is unfolded level by level on the ladder of
 halving currents, ``u(I_k) = 1.5 (V_k - R1 I_k) - u(I_k/2)``.
 
-Duration: :data:`LEVELS_PU` (11 levels) of ``DWELL_TAU`` = 12/w_slip each (0.72 s on the
-Table IV machine; 8 s in all); currents 1 % to 100 % of rated peak current.
+Duration: :data:`LEVELS_PU` (11 levels) of :data:`DWELL_T2` = 10 rotor time constants each
+(``T2`` measured by :mod:`~imdrive.commission.rotor_time`: 0.97 s on the Table IV machine,
+11 s in all; 17.7 s per level on the 2250 hp one); currents 1 % to 100 % of rated peak
+current. Ten time constants: a level's flux transient, about ``R2 dI`` in volts at its start,
+is then below 1e-3 of the level's voltage over the averaging window (the settling check,
+:data:`SETTLED_TOL`).
 
 What limits the accuracy: the rotor-flux transient after each step (its voltage
 ``(M/L2) dpsi_r/dt`` decays with the rotor time constant; the level is averaged over its last
@@ -53,8 +57,8 @@ LEVELS_PU = (0.01, 0.02, 0.04, 0.08, 0.16, 0.32, 0.4, 0.5, 0.64, 0.8, 1.0)
 #: Levels from which the inverter's loss is on its plateau in every phase (half the current
 #: in phases b and c), per unit of rated current: the R1 slope is fitted over them.
 PLATEAU_PU = 0.3
-#: Time at each level, in units of 1/w_slip.
-DWELL_TAU = 12.0
+#: Time at each level, in rotor time constants (measured).
+DWELL_T2 = 10.0
 #: Fraction of each level averaged (its end).
 AVERAGE_FRACTION = 0.4
 #: Largest difference between a level's two averaged halves, in volts per volt of the level's
@@ -91,7 +95,7 @@ class DcResult:
     duration_s: float
 
 
-def dc_test(sc, npl: Nameplate, model: dict) -> DcResult:
+def dc_test(sc, npl: Nameplate, model: dict, T2: float) -> DcResult:
     """Run the standstill DC test on scenario ``sc`` (module docstring).
 
     Parameters
@@ -103,12 +107,14 @@ def dc_test(sc, npl: Nameplate, model: dict) -> DcResult:
     model : dict
         The controller's model before the test (``[estimator]`` keys): the test's currents are
         the flux references divided by its ``M_H``.
+    T2 : float
+        The rotor time constant (the first test's), s: each level lasts :data:`DWELL_T2` of it.
 
     Returns
     -------
     DcResult
     """
-    dwell = DWELL_TAU * npl.tau_slip
+    dwell = DWELL_T2 * T2
     M = model["M_H"]
     points = []
     for k, f in enumerate(LEVELS_PU):

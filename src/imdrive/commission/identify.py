@@ -19,10 +19,11 @@ from pathlib import Path
 import numpy as np
 
 from imdrive.commission.ac import ac_test
-from imdrive.commission.base import check_commissionable, guess_model, nameplate
+from imdrive.commission.base import check_commissionable, guess_model, nameplate, switched_off
 from imdrive.commission.dc import dc_test
 from imdrive.commission.inertia import acceleration_test
 from imdrive.commission.noload import noload_test
+from imdrive.commission.rotor_time import rotor_time_test
 from imdrive.config.scenario import SECTIONS, Scenario
 
 #: The flux range over which the magnetising curve's accuracy is stated, per unit of rated.
@@ -50,6 +51,11 @@ class CommissioningResult:
         Wall time of the run.
     tests : dict
         Each test's result object (for the figures).
+    switched_off : list of str
+        What the input scenario has on that the tests ran without, one line each
+        (:func:`~imdrive.commission.base.switched_off`).
+    nameplate : dict
+        Where the rated current, speed and torque the tests used came from.
     """
 
     identified: dict
@@ -58,6 +64,8 @@ class CommissioningResult:
     durations_s: dict
     wall_s: float
     tests: dict = field(default_factory=dict)
+    switched_off: list = field(default_factory=list)
+    nameplate: dict = field(default_factory=dict)
 
     def summary(self) -> dict:
         """The ``summary.json`` content."""
@@ -67,6 +75,8 @@ class CommissioningResult:
             "relative_error": self.relative_error,
             "durations_s": self.durations_s,
             "wall_s": self.wall_s,
+            "switched_off": self.switched_off,
+            "nameplate": self.nameplate,
         }
 
 
@@ -76,18 +86,20 @@ def identify(sc: Scenario) -> CommissioningResult:
     check_commissionable(sc)
     npl = nameplate(sc)
     model = guess_model(npl)
-    dc = dc_test(sc, npl, model)
+    step = rotor_time_test(sc, npl, model)
+    T2 = step.T2_s
+    dc = dc_test(sc, npl, model, T2)
     table = (dc.i_A, dc.u_V)
-    nl = noload_test(sc, npl, dc.R1_ohm, table, model)
+    nl = noload_test(sc, npl, dc.R1_ohm, table, model, T2)
     Ll = model["Ll1_H"]
     for _ in range(2):  # the magnetising current depends (a little) on the leakage found
         _, I_m = nl.at_flux(npl.psi_rated_Wb, Ll)
-        ac = ac_test(sc, npl, dc.R1_ohm, nl.L1_lowest, I_m, table, model)
+        ac = ac_test(sc, npl, dc.R1_ohm, nl.L1_lowest, I_m, table, model, T2)
         Ll = ac.Ll_H
     M, _ = nl.at_flux(npl.psi_rated_Wb, Ll)
     L1 = M + Ll
     ident = {"R1_ohm": dc.R1_ohm, "R2_ohm": ac.R2_ohm, "Ll1_H": Ll, "Ll2_H": Ll, "M_H": M}
-    acc = acceleration_test(sc, npl, ident, L1 / ac.R2_ohm, sc.machine.rated_power_W, table)
+    acc = acceleration_test(sc, npl, ident, L1 / ac.R2_ohm, npl.power_W, table)
     psi, Lm = nl.magnetising_curve(Ll)
     identified = {
         "R1_ohm": dc.R1_ohm,
@@ -97,11 +109,13 @@ def identify(sc: Scenario) -> CommissioningResult:
         "Ll_H": Ll,
         "M_H": M,
         "J_kgm2": acc.J_kgm2,
+        "T2_step_s": T2,
         "magnetising": {"psi_Wb": psi.tolist(), "Lm_H": Lm.tolist()},
         "inverter_error": {"i_A": dc.i_A.tolist(), "u_V": dc.u_V.tolist()},
     }
     true = truth(sc, psi)
     durations = {
+        "rotor-time": step.duration_s,
         "dc": dc.duration_s,
         "no-load": nl.duration_s,
         "ac": ac.duration_s,
@@ -113,7 +127,14 @@ def identify(sc: Scenario) -> CommissioningResult:
         relative_error=relative_errors(identified, true, npl.psi_rated_Wb),
         durations_s=durations,
         wall_s=time.perf_counter() - t_wall,
-        tests={"dc": dc, "no-load": nl, "ac": ac, "acceleration": acc},
+        switched_off=switched_off(sc),
+        nameplate={
+            "I_rated_peak_A": npl.I_rated_A,
+            "speed_rpm": npl.speed_rpm,
+            "torque_Nm": npl.torque_Nm,
+            "sources": npl.sources,
+        },
+        tests={"rotor-time": step, "dc": dc, "no-load": nl, "ac": ac, "acceleration": acc},
     )
 
 
@@ -164,9 +185,11 @@ def relative_errors(ident: dict, true: dict, psi_rated: float) -> dict:
 
 def identified_scenario(sc: Scenario, res: CommissioningResult) -> dict:
     """The input scenario with its controller's model replaced by the identified one (TOML-
-    shaped): ``[estimator]`` R1, R2, leakages, M; the speed PI's gains from the identified J;
-    the inverter's error as the dead-time feed-forward's assumed dead time (when the scenario
-    compensates it) and, where the scenario has the section, ``[controller_model]``'s tables.
+    shaped, self-contained: the machine inlined, without ``preset`` or ``file``, so the file
+    runs wherever it is moved): ``[estimator]`` R1, R2, leakages, M; the speed PI's gains
+    from the identified J; the inverter's error as the dead-time feed-forward's assumed dead
+    time (when the scenario compensates it) and, where the scenario has the section,
+    ``[controller_model]``'s tables.
     """
     from imdrive.config.perunit import speed_bandwidth_Hz
     from imdrive.design.gains import default_speed_gains
@@ -174,6 +197,14 @@ def identified_scenario(sc: Scenario, res: CommissioningResult) -> dict:
     ident = res.identified
     d = sc.to_dict()
     d["name"] = f"{sc.name[:85]}-commissioned"
+    d["description"] = (
+        f"{sc.name}, its controller's model from `imdrive commission` (R1, R2, leakage, M, "
+        "J, magnetising curve, inverter error identified on this drive)"
+    )
+    # self-contained and movable: the machine inlined (every field is in the dict), with no
+    # preset name beside the keys that override it and no path to a machine file
+    d["machine"].pop("preset", None)
+    d["machine"].pop("file", None)
     est = d["estimator"]
     for key in ("R1_ohm", "R2_ohm", "M_H"):
         est[key] = ident[key]

@@ -24,8 +24,12 @@ near zero), so a table of the current's sign puts a part in quadrature into ``V`
 (``Ll1`` from the standstill AC test, :mod:`imdrive.commission.ac`; the curve is recomputed
 once it is known). ``L1`` of the controller is ``L1`` at the rated flux.
 
-Duration: a ramp of :data:`RAMP_TAU` = 60/w_slip (3.6 s on the Table IV machine), then
-:data:`DWELL_TAU` = 25/w_slip at each of the 10 levels (19 s in all, on that machine); the
+Duration: a ramp to the first level's frequency in the time a rotor of inertia constant
+:data:`~imdrive.commission.inertia.H_MAX_S` (the heaviest the acceleration test accepts) takes
+at :data:`RAMP_TORQUE_PU` x rated torque (4 s on the Table IV machine), then
+:data:`DWELL_T2` = 10 rotor time constants (measured by
+:mod:`~imdrive.commission.rotor_time`) at each of the 10 levels (14 s in all, on that
+machine); the
 no-load current, up to about 1.5 x the rated magnetising current at 1.2 x rated flux.
 
 What limits the accuracy: the dead time's loss in quadrature with the current (the
@@ -53,6 +57,7 @@ from imdrive.commission.base import (
     test_scenario,
     window,
 )
+from imdrive.commission.inertia import H_MAX_S
 
 #: Each level's frequency gives :data:`VOLTAGE_PU` of the inverter's largest voltage, within
 #: ``[FREQUENCY_PU, 1]`` x rated frequency: as high a voltage as the inverter allows, so its
@@ -65,11 +70,13 @@ CHANGE_FRACTION = 0.2
 #: The flux levels, per unit of rated rotor flux, in the order run (from the top: the ramp
 #: runs at rated flux).
 FLUX_PU = (1.2, 1.1, 1.0, 0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3)
-#: Ramp from standstill to the test frequency, in units of 1/w_slip.
-RAMP_TAU = 60.0
-#: Time at each level, in units of 1/w_slip; the last :data:`AVERAGE_FRACTION` is averaged
-#: (whole periods).
-DWELL_TAU = 25.0
+#: The accelerating torque the ramp from standstill asks of the heaviest rotor the
+#: acceleration test accepts, per unit of rated torque: the ramp lasts
+#: ``2 H_MAX_S (f/f_rated) / RAMP_TORQUE_PU``.
+RAMP_TORQUE_PU = 0.5
+#: Time at each level, in rotor time constants (measured); the last
+#: :data:`AVERAGE_FRACTION` is averaged (whole periods).
+DWELL_T2 = 10.0
 AVERAGE_FRACTION = 0.6
 #: Largest relative difference of L1 between the two halves of a level's window.
 SETTLED_TOL = 3e-2
@@ -132,7 +139,9 @@ class NoLoadResult:
         return float(self.L1_H[int(np.argmin(np.abs(self.I)))])
 
 
-def noload_test(sc, npl: Nameplate, R1: float, table: tuple, model: dict) -> NoLoadResult:
+def noload_test(
+    sc, npl: Nameplate, R1: float, table: tuple, model: dict, T2: float
+) -> NoLoadResult:
     """Run the rotating no-load test on scenario ``sc`` (module docstring).
 
     Parameters
@@ -148,9 +157,10 @@ def noload_test(sc, npl: Nameplate, R1: float, table: tuple, model: dict) -> NoL
         command by the dead-time feed-forward (so each level's flux is near its target).
     model : dict
         The controller's model (``[estimator]`` keys; unused by the open-loop voltage).
+    T2 : float
+        The rotor time constant (the first test's), s: each level lasts :data:`DWELL_T2` of it.
     """
-    tau = npl.tau_slip
-    ramp, dwell = RAMP_TAU * tau, DWELL_TAU * tau
+    dwell = DWELL_T2 * T2
     to_ll = math.sqrt(1.5)  # phase peak -> line-to-line rms
     boost = R1 * 0.3 * npl.I_rated_A  # the stator's drop at a typical magnetising current
     w_r = npl.w_rated
@@ -162,6 +172,7 @@ def noload_test(sc, npl: Nameplate, R1: float, table: tuple, model: dict) -> NoL
     V_lv = [
         x * npl.psi_rated_Wb * 2.0 * math.pi * f + boost for x, f in zip(FLUX_PU, f_lv, strict=True)
     ]
+    ramp = 2.0 * H_MAX_S * (f_lv[0] / npl.f_rated_Hz) / RAMP_TORQUE_PU
     if max(V_lv) > 0.95 * npl.v_max:
         k = int(np.argmax(V_lv))
         raise CommissioningFailed(
