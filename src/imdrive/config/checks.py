@@ -63,6 +63,7 @@ def drive_mode_given(data: dict) -> None:
         )
         warnings.warn(ConfigWarning("drive.mode", rule), stacklevel=4)
 
+
 def machine_defaults(sc) -> None:
     """Defaults that follow the machine, filled in (and derived again when the machine
     changes): the DC link from the rated voltage. An explicit DC link that cannot reach

@@ -42,8 +42,9 @@ class DriveSettings:
             '"open-loop" (the default): the machine on the sinusoidal voltage of [open_loop]; '
             "[control], [estimator], [compensator], [injection] and the estimators' sections "
             "are unused, so a file that sets any of them without a [drive] mode gets a "
-            'deprecation warning (it will be refused in a later release); "vector": field-oriented speed control ([control]) with its speed '
-            'feedback, estimator and compensator. Every vector preset sets "vector"'
+            'deprecation warning (it will be refused in a later release); "vector": '
+            "field-oriented speed control ([control]) with its speed feedback, estimator and "
+            'compensator. Every vector preset sets "vector"'
         ),
     ] = "open-loop"
 
