@@ -27,14 +27,20 @@ from imdrive.run.simulate import simulate
 from imdrive.studies.machines import scenarios
 
 
-def _half_speed_run(machine, ratio, t_end_s):
-    """The library grid's ``injection-robust`` run at half rated speed, no load, to ``t_end_s``."""
+#: The adaptive fuzzy law, which the tests of its decision structure pin (injection-robust
+#: runs the model-based law since round 4)
+ADAPTIVE = 'compensator.step_law="adaptive"'
+
+
+def _half_speed_run(machine, ratio, t_end_s, extra=()):
+    """The library grid's ``injection-robust`` run at half rated speed, no load, to ``t_end_s``
+    (``extra``: more overrides)."""
     scs, _ = scenarios(
         [machine], drives=["injection-robust"], speeds=[0.5], loads=[0.0], ratios=[ratio]
     )
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConfigWarning)
-        sc = scs[0].with_overrides([f"simulation.t_end_s={t_end_s}"])
+        sc = scs[0].with_overrides([f"simulation.t_end_s={t_end_s}", *extra])
     return sc, simulate(sc)
 
 
@@ -61,7 +67,8 @@ def test_adaptive_law_injection_period_is_an_even_number_of_control_periods(mach
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConfigWarning)
         sc = Scenario.read(
-            "injection-robust", [f'machine.preset="{machine}"', f"estimator.R2_ratio={ratio}"]
+            "injection-robust",
+            [f'machine.preset="{machine}"', f"estimator.R2_ratio={ratio}", ADAPTIVE],
         )
     r = resolve(sc)
     assert r.n_comp % 2 == 0
@@ -79,9 +86,9 @@ def test_adaptive_law_decides_every_half_injection_period(machine):
     scs, _ = scenarios(
         [machine], drives=["injection-robust"], speeds=[0.5], loads=[0.0], ratios=[1.2]
     )
-    T_inj = 1.0 / resolve(scs[0]).inj_f1
+    T_inj = 1.0 / resolve(scs[0].with_overrides([ADAPTIVE])).inj_f1
     t0 = scs[0].compensator.t_on_s + 3.0 * T_inj
-    sc, res = _half_speed_run(machine, 1.2, t0 + 6.5 * T_inj)
+    sc, res = _half_speed_run(machine, 1.2, t0 + 6.5 * T_inj, [ADAPTIVE])
     df = res.to_pandas()
     live = (df["comp_live_flag"] == 1.0).to_numpy()
     moved = np.diff(df["R2_hat_ohm"].to_numpy()) != 0.0
