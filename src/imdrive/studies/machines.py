@@ -33,7 +33,8 @@ injection frequency, hence its decisions, scale with ``1/T2``). Its verdict (:fu
 
 ``python -m imdrive.studies.machines OUT_CSV`` runs the grid (1008 drives) and writes
 the runs; ``python -m imdrive.studies.machines --markdown CSV`` prints the table of
-docs/machine-envelope.md, which a test re-renders from the stored CSV. :func:`ramp_diagnosis`
+docs/machine-envelope.md, which a test re-renders from the stored CSV; ``--drive NAME``
+measures one drive's rows of that CSV again (:func:`update_drive`). :func:`ramp_diagnosis`
 measures why the large machines lose control at rated speed (a table of the same page,
 ``python -m imdrive.studies.doctables --run machine-ramp-diagnosis``).
 """
@@ -543,11 +544,32 @@ def page_with_table(text: str, table_md: str) -> str:
     return text[:a] + "\n" + table_md + text[b:]
 
 
+def update_drive(drive: str) -> pd.DataFrame:
+    """Measure ``drive``'s rows of the docs' CSV again (the other drives' rows kept, in their
+    order), write it and refresh the page's table; returns the new rows. For a change that
+    touches one drive only (a preset's law), so the others need not run again."""
+    old = pd.read_csv(CSV)
+    new = measure(*scenarios(drives=(drive,)))
+    rows = []
+    for m in old["machine"].unique():
+        for d in old["drive"].unique():
+            src = new if d == drive else old
+            rows.append(src[(src["machine"] == m) & (src["drive"] == d)])
+    pd.concat(rows, ignore_index=True)[old.columns].to_csv(CSV, index=False, float_format="%.9g")
+    PAGE.write_text(page_with_table(PAGE.read_text(), markdown(pd.read_csv(CSV))))
+    return new
+
+
 def main(argv=None) -> int:
-    """``python -m imdrive.studies.machines OUT_CSV`` or ``--markdown CSV`` (docstring)."""
+    """``python -m imdrive.studies.machines OUT_CSV``, ``--markdown CSV`` or ``--drive NAME``
+    (docstring, :func:`update_drive`)."""
     argv = sys.argv[1:] if argv is None else argv
     if len(argv) == 2 and argv[0] == "--markdown":
         sys.stdout.write(markdown(pd.read_csv(argv[1])))
+        return 0
+    if len(argv) == 2 and argv[0] == "--drive":
+        new = update_drive(argv[1])
+        print(f"{len(new)} runs: {new['verdict'].value_counts().to_dict()}", file=sys.stderr)
         return 0
     if len(argv) != 1:
         print(__doc__.splitlines()[0], "\nusage: OUT_CSV | --markdown CSV", file=sys.stderr)
