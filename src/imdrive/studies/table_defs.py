@@ -293,6 +293,7 @@ register(
 
 from imdrive.studies import (  # noqa: E402, F401  (register theirs)
     compensator_tables,
+    r2_law_tables,
     robust_tables,
     stability_tables,
 )
