@@ -20,13 +20,10 @@ from imdrive.config.current_control import current_controller
 from imdrive.config.field_weakening import field_weakening_on
 from imdrive.config.perunit import Resolved, adc_range_A, sign_band_A
 from imdrive.config.profiles import Profile
-from imdrive.config.registry import ESTIMATOR_SETTINGS
 from imdrive.config.scaled import flux_injection_frequency_Hz, plant_thermal_resistances
 from imdrive.config.scenario import Scenario
 from imdrive.config.speed_gain import speed_gain_flux_scaling
 from imdrive.design.gains import default_current_gains, default_speed_gains
-from imdrive.errors import ConfigError
-from imdrive.fuzzy import fuzzy_table
 from imdrive.kernels import profiles as kp
 from imdrive.kernels.compensator import COMPENSATOR_PARAMS, COMPENSATOR_STATE
 from imdrive.kernels.engine import DRIVE_FOC, DRIVE_OPEN_LOOP, SAMPLE_STATE, SIM_PARAMS, DriveState
@@ -37,6 +34,12 @@ from imdrive.kernels.model import MODEL_STATE, MODEL_TABLE_POINTS
 from imdrive.kernels.records import new_records
 from imdrive.kernels.sensors import SENSOR_PARAMS
 from imdrive.run._profiles import profiles_to_arrays
+from imdrive.run.compensator_blocks import (  # noqa: F401  (re-exported: old paths)
+    compensator_fields,
+    fuzzy_lookup_table,
+    gives_flux_error,
+    headroom_rate_per_s,
+)
 
 RPM = 2.0 * math.pi / 60.0  # rad/s per rpm
 
@@ -288,199 +291,6 @@ def control_fields(sc: Scenario, D: Resolved, mh: dict, psi0: float) -> tuple[di
 def current_limit(sc: Scenario, D: Resolved) -> float:
     """The controller's current limit, A (:func:`imdrive.config.perunit.current_limit_A`)."""
     return D.current_limit_A
-
-
-def compensator_fields(sc: Scenario, D: Resolved) -> tuple[dict, dict]:
-    """``COMPENSATOR_PARAMS`` (fuzzy compensator, injection, gating, step law) and what to
-    report; gains, clamps and amplitude absolute or in per-unit of the machine
-    (:func:`imdrive.config.perunit.resolve`). The decision period ``D.n_comp`` holds whole
-    injection periods (checked by the scenario:
-    :func:`~imdrive.config.compensator.check_whole_injection_periods`)."""
-    comp = sc.compensator
-    inj = sc.injection
-    r = D
-    n_comp = D.n_comp
-    R2_min = r.R2_min
-    R2_max = r.R2_max
-    record = dict(
-        enabled=comp.enabled,
-        t_on=comp.t_on_s,
-        n=n_comp,
-        G_E=r.gain_E,
-        G_DE=r.gain_DE,
-        G_CR=r.G_CR,
-        R2_min=R2_min,
-        R2_max=R2_max,
-        demodulated=comp.input == "demodulated",
-        average=comp.average,
-        inj_amp=r.inj_amp,
-        inj_freq=r.inj_f1,
-        inj_lpf=inj.lowpass_rad_s,
-        inj_t_on=inj.t_on_s,
-        inj_hp_wc=sc.mras.wc_rad_s if inj.compensate_filter else 0.0,
-        slip_decouple=inj.decouple_slip,
-        cpl_wc=sc.mras.wc_rad_s,
-        cpl_wmin=2 * math.pi * sc.machine.rated_frequency_Hz * inj.decouple_slip_fmin_pu,
-        **_gating(sc, r),
-        **_thermal(sc, D),
-        **_kalman(sc, D),
-        det=comp.enabled and not gives_flux_error(sc.control.speed_feedback),
-        det_wc=sc.mras.wc_rad_s,
-    )
-    derived = {
-        "compensator_period_steps": n_comp,
-        "R2_hat_min_ohm": R2_min,
-        "R2_hat_max_ohm": R2_max,
-    }
-    return record, derived
-
-
-def headroom_rate_per_s(rate_per_s: float, gain_per_period: float, f_inj_Hz: float) -> float:
-    """The estimation headroom's integral gain in use, 1/s.
-
-    Its slow term acts on the peak voltage use of the last whole injection period, held over
-    the next one, so the flux factor ``k`` moves by the fraction ``rate T_inj (v_target -
-    v_peak)`` of itself per period (the voltage use is nearly proportional to ``k`` above base
-    speed, :func:`imdrive.kernels.compensator_range.headroom_weakening_input`) on a sample up
-    to a period old: a sampled integral loop whose gain per period must stay below one.
-    Table IV's 1 /s at 2 Hz is 0.5. The injection is set in per-unit of the rotor's
-    corner frequency, 0.07-0.22 Hz on the large machines of the library, where 1 /s was
-    4.5-14 per period: the flux cycled between rated and the field weakening's floor over tens of
-    seconds (R2_hat 17 % off at no load on Krause 2250 hp), and from one stale peak (the
-    load step's) it fell until the torque current saturated (Krause 500 hp, rated speed,
-    regenerating: control lost).
-
-    Parameters
-    ----------
-    rate_per_s : float
-        ``injection.headroom_rate_per_s``, 1/s.
-    gain_per_period : float
-        ``injection.headroom_gain_per_period``: the largest ``rate / f_inj``.
-    f_inj_Hz : float
-        The lowest injection frequency, Hz (its period is the longest the loop holds a sample).
-
-    Returns
-    -------
-    float
-        ``min(rate_per_s, gain_per_period f_inj_Hz)``, 1/s (with the defaults 1 /s and
-        0.6, the setting itself where the injection is at 1.67 Hz or faster).
-    """
-    return min(rate_per_s, gain_per_period * f_inj_Hz)
-
-
-def _gating(sc, r) -> dict:
-    """The compensator's gating, frequency-schedule and step-law parameters (off: zeros)."""
-    comp = sc.compensator
-    on = comp.gating if comp.gating is not None else comp.input == "demodulated"
-    out = {}
-    inj = sc.injection
-    headroom = inj.headroom if inj.headroom is not None else field_weakening_on(sc)
-    if headroom and r.inj_amp > 0.0:
-        if not inj.headroom_from < inj.headroom_to:
-            raise ConfigError("injection.headroom_from", "must be < injection.headroom_to")
-        out["inj_v_lo"] = inj.headroom_from
-        out["inj_v_hi"] = inj.headroom_to
-    if inj.headroom_voltage is not None and r.inj_amp > 0.0:
-        fw_v = sc.control.field_weakening_voltage
-        if not field_weakening_on(sc):
-            raise ConfigError("injection.headroom_voltage", "needs control.field_weakening = true")
-        if not inj.headroom_voltage <= inj.headroom_from:
-            raise ConfigError("injection.headroom_voltage", "must be <= injection.headroom_from")
-        out |= {
-            "inj_fw": True,
-            "inj_v_peak": inj.headroom_voltage,
-            "inj_fw_rate": headroom_rate_per_s(
-                inj.headroom_rate_per_s, inj.headroom_gain_per_period, r.inj_f1
-            ),
-            "fw_v": fw_v,
-            "fw_rate": sc.control.field_weakening_rate,
-        }
-    if comp.step_law == "adaptive":
-        dmax = comp.drift_max_ohm if comp.drift_max_ohm is not None else 3.0 * r.G_CR
-        out |= {
-            "fine": True,
-            "fine_gain": comp.fine_gain,
-            "drift_gain": comp.drift_gain,
-            "drift_max": dmax,
-            "drift_fmin": _drift_fmin(sc, r),
-            "damp": comp.overshoot_damping,
-            "drift_unwind": comp.drift_unwind_factor,
-            "drift_margin": comp.drift_shrink_margin,
-            "R2_tuned": r.R2_hat if comp.fine_gain_follows_R2 else 0.0,
-        }
-    if not (on and comp.enabled):
-        return out
-    f2 = r.inj_f2
-    band = r.gate_band
-    injecting = r.inj_amp > 0.0
-    return out | {
-        "gate": True,
-        "gate_dw": r.gate_speed_rpm * RPM,
-        "gate_diq": r.gate_iq_A,
-        "gate_v": comp.gate_voltage,
-        "gate_df": band if injecting else 0.0,
-        "gate_hold": float(comp.gate_hold_periods),
-        "inj_freq2": f2 if injecting and band > 0 else 0.0,
-        "inj_freq3": (r.inj_f3 if r.inj_f3 is not None and injecting and band > 0 else 0.0),
-    }
-
-
-def _thermal(sc, D: Resolved) -> dict:
-    """The rotor thermal model's parameters (off: none); its thermal resistance in per-unit of
-    the machine's rated rotor losses (:func:`~imdrive.config.perunit.rotor_thermal_resistance`).
-    """
-    comp = sc.compensator
-    if not (comp.enabled and comp.thermal_model):
-        return {}
-    return {
-        "th_on": True,
-        "th_tau": comp.thermal_time_constant_s,
-        "th_Rth": D.rotor_Rth,
-        "th_alpha": comp.thermal_alpha_per_K,
-    }
-
-
-def gives_flux_error(speed_feedback: str) -> bool:
-    """Whether the estimator ``speed_feedback`` runs hands the R2 detection a flux error
-    (the MRAS family; ``"measured"`` runs the MRAS beside); otherwise the detection forms its
-    own (:mod:`imdrive.kernels.flux_detector`)."""
-    if speed_feedback == "measured":
-        return True
-    cls = ESTIMATOR_SETTINGS.get(speed_feedback)
-    return cls is not None and bool(cls.estimator_flux_error)
-
-
-def _kalman(sc, D: Resolved) -> dict:
-    """The model-based law's parameters (``compensator.step_law = "kalman"``; off: none):
-    its noise levels relative to R2 (section ``[kalman]``), R̂2(0) and the decision period."""
-    if sc.compensator.step_law != "kalman":
-        return {}
-    k = sc.kalman
-    return {
-        "kf": True,
-        "kf_r": k.noise_pu,
-        "kf_q": k.drift_pu,
-        "kf_p0": k.prior_pu,
-        "kf_R2": D.R2_hat,
-        "kf_T": D.n_comp * sc.simulation.Ts_s,
-    }
-
-
-def _drift_fmin(sc, r) -> float:
-    """Stator frequency below which the adaptive law has no drift term, Hz (0: never): the
-    higher injection frequency, at least 1.75 times the MRAS filter's corner (its lag 30
-    degrees there; kernels/compensator.py, the adaptive law)."""
-    comp = sc.compensator
-    if comp.drift_min_freq_Hz is not None:
-        return comp.drift_min_freq_Hz
-    if r.inj_amp <= 0.0:
-        return 0.0
-    return max(r.inj_f1, r.inj_f2, 1.75 * sc.mras.wc_rad_s / (2.0 * math.pi))
-
-
-def fuzzy_lookup_table(sc: Scenario) -> np.ndarray:
-    """The compensator's 13 x 13 lookup table (``compensator.table``)."""
-    return fuzzy_table(sc.compensator.table).astype(np.float64)
 
 
 def _vf_profiles(sc: Scenario) -> tuple[Profile, Profile]:
