@@ -249,6 +249,36 @@ def plugin_rules(sc) -> None:
         object.__setattr__(sc, "plugins", PluginSettings(modules=tuple(modules), settings=tables))
 
 
+#: The ``[compensator]`` keys of the fuzzy laws (the table's scaling and step, the adaptive
+#: law's fine band and drift), which the model-based law (``step_law = "kalman"``) does not read.
+FUZZY_LAW_KEYS = (
+    "gain_E_per_Wb", "gain_DE_per_Wb", "gain_E_pu", "gain_DE_pu", "G_CR_ohm", "G_CR_pu", "table",
+    "fine_gain", "drift_gain", "overshoot_damping", "drift_min_freq_Hz", "drift_max_ohm",
+    "drift_unwind_factor", "drift_shrink_margin", "fine_gain_follows_R2",
+)  # fmt: skip
+
+
+def law_keys_unread(sc) -> None:
+    """A warning per key of the R2 law not selected, set away from its default: the fuzzy
+    laws' keys under ``step_law = "kalman"`` (the model-based law has no table, no output level
+    and no drift bound; ``[kalman]`` holds its settings), and ``[kalman]``'s under a fuzzy law.
+    """
+    comp = sc.compensator
+    kalman = comp.step_law == "kalman"
+    keys = FUZZY_LAW_KEYS if kalman else tuple(sc.kalman.__dataclass_fields__)
+    given, defaults = (comp, type(comp)()) if kalman else (sc.kalman, type(sc.kalman)())
+    for key in keys:
+        if getattr(given, key) != getattr(defaults, key):
+            why = (
+                'has no effect with step_law = "kalman": the model-based law reads its '
+                "settings from [kalman] (noise_pu, drift_pu, prior_pu)"
+                if kalman
+                else f'has no effect: compensator.step_law is "{comp.step_law}", not "kalman"'
+            )
+            field = f"compensator.{key}" if kalman else f"kalman.{key}"
+            warnings.warn(ConfigWarning(field, why), stacklevel=4)
+
+
 def compensator_rules(sc) -> None:
     """The R̂2 clamps in order, given or default (one given clamp against the other's
     default: ``R2_min_ohm`` above the default ``R2_max_ohm`` made R̂2 jump); the decision
@@ -280,4 +310,5 @@ def compensator_rules(sc) -> None:
             f"must be <= the machine's rated peak current {i_rated:.3g} A (a persistent "
             f"excitation is a small perturbation of the flux current; got {r.inj_amp:g} A)",
         )
+    law_keys_unread(sc)
     sc._per_unit_warnings(r)
