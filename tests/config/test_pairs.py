@@ -109,7 +109,8 @@ def test_a_member_at_its_default_is_cleared_without_a_note():
 
 def test_an_old_absolute_key_runs_on_a_per_unit_preset():
     """The keys of the last release on injection-robust (which states their per-unit twins;
-    G_CR_pu no longer: its model-based law has no table step, so G_CR_ohm adds no note)."""
+    G_CR_pu no longer: its model-based law has no table step, so G_CR_ohm has no effect and
+    says so)."""
     sc, notes = _read(
         "injection-robust",
         "mras.R1_rate_per_s=0.5",
@@ -125,6 +126,8 @@ def test_an_old_absolute_key_runs_on_a_per_unit_preset():
     assert notes == [
         "mras.R1_rate_per_s: replaces mras.R1_rate_pu = 0.02621 of the scenario underneath",
         "estimator.R2_ohm: replaces estimator.R2_ratio = 1.2 of the scenario underneath",
+        'compensator.G_CR_ohm: has no effect with step_law = "kalman": the model-based law '
+        "reads its settings from [kalman] (noise_pu, drift_pu, prior_pu)",
         "injection.amplitude_A: replaces injection.amplitude_pu = 0.075 of the scenario underneath",
     ]
     from imdrive.config.perunit import resolve
