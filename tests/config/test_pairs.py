@@ -126,9 +126,9 @@ def test_an_old_absolute_key_runs_on_a_per_unit_preset():
     assert notes == [
         "mras.R1_rate_per_s: replaces mras.R1_rate_pu = 0.02621 of the scenario underneath",
         "estimator.R2_ohm: replaces estimator.R2_ratio = 1.2 of the scenario underneath",
+        "injection.amplitude_A: replaces injection.amplitude_pu = 0.075 of the scenario underneath",
         'compensator.G_CR_ohm: has no effect with step_law = "kalman": the model-based law '
         "reads its settings from [kalman] (noise_pu, drift_pu, prior_pu)",
-        "injection.amplitude_A: replaces injection.amplitude_pu = 0.075 of the scenario underneath",
     ]
     from imdrive.config.perunit import resolve
 
