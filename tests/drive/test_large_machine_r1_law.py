@@ -29,7 +29,7 @@ from imdrive.studies.machines import scenarios
 
 #: The adaptive fuzzy law, which the tests of its decision structure pin (injection-robust
 #: runs the model-based law since round 4)
-ADAPTIVE = 'compensator.step_law="adaptive"'
+ADAPTIVE = 'compensator.step_law="adaptive"'  # (its structure does not depend on its gains)
 
 
 def _half_speed_run(machine, ratio, t_end_s, extra=()):

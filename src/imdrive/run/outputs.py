@@ -176,7 +176,10 @@ def markdown() -> str:
         "Names follow the glossary of docs/architecture.md (`_hat`: an estimate). A renamed"
         " column's old name still answers where a column is read by name"
         " (`SimulationResult.signals`, `res[name]`, `res.window(...)`, `res.plot([...])`), with a"
-        " `DeprecationWarning`, until 0.3; the files carry the new name only. The compensation"
+        " `DeprecationWarning`, until 0.3; the files carry the new name only (a script of your"
+        " own that reads `timeseries.csv`: `.rename(columns=imdrive.run.columns.RENAMED_COLUMNS)`"
+        " gives an old file the new names; `{new: old for old, new in RENAMED_COLUMNS.items()}`"
+        " gives a new file the old ones). The compensation"
         " metrics (`summary.json` `compensation`, `compensation_metrics`) were renamed the"
         " same way (`R2_est_final_ohm` -> `R2_hat_final_ohm`).",
         "",
