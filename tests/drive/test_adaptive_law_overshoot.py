@@ -22,7 +22,6 @@ from imdrive.errors import ConfigWarning
 from imdrive.run.simulate import simulate
 from imdrive.studies.machines import scenarios
 
-
 #: injection-robust's law and its keys before round 4 (it runs the model-based law since)
 ADAPTIVE = (
     'compensator.step_law="adaptive"',

@@ -26,7 +26,6 @@ from imdrive.errors import ConfigWarning
 from imdrive.run.simulate import simulate
 from imdrive.studies.machines import scenarios
 
-
 #: The adaptive fuzzy law, which the tests of its decision structure pin (injection-robust
 #: runs the model-based law since round 4)
 ADAPTIVE = 'compensator.step_law="adaptive"'  # (its structure does not depend on its gains)
