@@ -21,6 +21,7 @@ import warnings
 
 import numpy as np
 import pytest
+from data.ramp import ADAPTIVE_LAW
 
 from imdrive.errors import ConfigWarning
 from imdrive.run.simulate import simulate
@@ -28,7 +29,7 @@ from imdrive.studies.machines import scenarios
 
 #: The adaptive fuzzy law, which the tests of its decision structure pin (injection-robust
 #: runs the model-based law since round 4)
-ADAPTIVE = 'compensator.step_law="adaptive"'  # (its structure does not depend on its gains)
+ADAPTIVE = [f"{k}={v!r}".replace("'", '"') for k, v in ADAPTIVE_LAW.items()]
 
 
 def _half_speed_run(machine, ratio, t_end_s, extra=()):
@@ -67,7 +68,7 @@ def test_adaptive_law_injection_period_is_an_even_number_of_control_periods(mach
         warnings.simplefilter("ignore", ConfigWarning)
         sc = Scenario.read(
             "injection-robust",
-            [f'machine.preset="{machine}"', f"estimator.R2_ratio={ratio}", ADAPTIVE],
+            [f'machine.preset="{machine}"', f"estimator.R2_ratio={ratio}", *ADAPTIVE],
         )
     r = resolve(sc)
     assert r.n_comp % 2 == 0
@@ -85,9 +86,9 @@ def test_adaptive_law_decides_every_half_injection_period(machine):
     scs, _ = scenarios(
         [machine], drives=["injection-robust"], speeds=[0.5], loads=[0.0], ratios=[1.2]
     )
-    T_inj = 1.0 / resolve(scs[0].with_overrides([ADAPTIVE])).inj_f1
+    T_inj = 1.0 / resolve(scs[0].with_overrides(ADAPTIVE)).inj_f1
     t0 = scs[0].compensator.t_on_s + 3.0 * T_inj
-    sc, res = _half_speed_run(machine, 1.2, t0 + 6.5 * T_inj, [ADAPTIVE])
+    sc, res = _half_speed_run(machine, 1.2, t0 + 6.5 * T_inj, ADAPTIVE)
     df = res.to_pandas()
     live = (df["comp_live_flag"] == 1.0).to_numpy()
     moved = np.diff(df["R2_hat_ohm"].to_numpy()) != 0.0

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from data.ramp import ADAPTIVE_LAW
 
 from imdrive.config.rated import rated_point
 from imdrive.config.scenario import Scenario
@@ -28,7 +29,9 @@ WINDOW_S = 10.0
 
 
 def _scenario(machine: str, damping: bool) -> Scenario:
-    base = Scenario.read("injection-robust", [f'machine.preset="{machine}"'])
+    base = Scenario.read("injection-robust", [f'machine.preset="{machine}"']).with_overrides(
+        ADAPTIVE_LAW
+    )
     rp = rated_point(base.machine)
     n, T = 0.0116 * rp.speed_rpm, rp.torque_Nm
     return base.with_overrides(

@@ -24,6 +24,7 @@ import warnings
 
 import numpy as np
 import pytest
+from data.ramp import ADAPTIVE_LAW
 
 from imdrive import simulate_batch
 from imdrive.sweep.spec import parse_sweep, sweep_text
@@ -58,7 +59,8 @@ def _cell(machine: str, speed_pu: float, load_pu: float, extra: list[str]):
         "inverter": "ideal",
     }
     sc = sweep.scenario_for(tuple(want[a.name] for a in sweep.axes))
-    return sc.with_overrides(["simulation.log_every=1000", *extra])
+    law = [f"{k}={v!r}".replace("'", '"') for k, v in ADAPTIVE_LAW.items()]
+    return sc.with_overrides(["simulation.log_every=1000", *law, *extra])
 
 
 @pytest.fixture(scope="module")

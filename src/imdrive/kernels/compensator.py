@@ -183,7 +183,6 @@ COMPENSATOR_PARAMS = record_dtype(
         ("kf_R2", f8),  # R2_hat(0), ohm
         ("kf_T", f8),  # the decision period, s
         ("det", b1),  # the estimator gives no flux error: the detector's own (flux_detector.py)
-        ("det_wc", f8),  # its filter corner, rad/s
     ]
 )
 
@@ -230,11 +229,9 @@ COMPENSATOR_STATE = record_dtype(
         ("cpl_ws", f8),  # the slip command it uses, low-passed over T2_hat, rad/s
         ("damp_n", f8),  # overshoot damping: halvings of the table's steps in force
         ("big_sign", f8),  # and the sign of the last table-level step (0: none yet)
-        ("kf_init", b1),  # Kalman law: the prior is set
-        ("kf_P00", f8),  # its covariance: R2, ohm^2
+        ("kf_P00", f8),  # Kalman law: its covariance, R2, ohm^2 (0: the prior not yet set)
         ("kf_P01", f8),  # R2 and its rate, ohm^2/s
         ("kf_P11", f8),  # the rate, ohm^2/s^2
-        ("kf_sd", f8),  # the posterior standard deviation of R2 over R2_hat
         ("dt_lam_i", c16),  # flux detector: current model, Wb (stationary frame)
         ("dt_lam_v", c16),  # its filtered voltage model, Wb
         ("dt_lam_f", c16),  # its filtered current model, Wb

@@ -41,7 +41,7 @@ def detector_flux_error(p, s, m, inp, w_r_hat):
     Parameters
     ----------
     p, s : COMPENSATOR_PARAMS, COMPENSATOR_STATE records
-        ``p.det_wc``: the filter's corner, rad/s.
+        ``p.cpl_wc``: the filter's corner, rad/s.
     m : MODEL_STATE record
         The controller's model (``R1_hat``, ``R2_hat``, inductances).
     inp : EstimatorInput
@@ -55,7 +55,7 @@ def detector_flux_error(p, s, m, inp, w_r_hat):
     Ts = inp.Ts
     lam_old = s.dt_lam_i
     lam_new = current_model_step(lam_old, w_r_hat, m.R2_hat, L2, M, i0, i1, Ts)
-    g, k_in = lowpass_coefficients(p.det_wc, Ts)
+    g, k_in = lowpass_coefficients(p.cpl_wc, Ts)
     d_v = (L2 / M) * (Ts * (inp.v_ab - m.R1_hat * 0.5 * (i0 + i1)) - sigma_L1 * (i1 - i0))
     s.dt_lam_v = g * s.dt_lam_v + k_in * d_v
     s.dt_lam_f = g * s.dt_lam_f + k_in * (lam_new - lam_old)

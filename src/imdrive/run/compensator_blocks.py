@@ -54,7 +54,6 @@ def compensator_fields(sc: Scenario, D: Resolved) -> tuple[dict, dict]:
         **_gating(sc, r),
         **_thermal(sc, D),
         **_kalman(sc, D),
-        det_wc=sc.mras.wc_rad_s,
         det=comp.enabled and not gives_flux_error(sc.control.speed_feedback),
     )
     derived = {
