@@ -91,12 +91,13 @@ Store
 -----
 ``STORE/chunks/chunk-NNNNNN.parquet`` holds runs ``[N*chunk_size, (N+1)*chunk_size)``; each is
 written to a temporary name and renamed into place (atomic), then ``STORE/manifest.json``
-(sweep name, fingerprint of the resolved sweep, number of runs, chunk size, completed chunks) is
-rewritten the same way; every file is fsynced before its rename and its folder after. A
+(sweep name, fingerprint of the resolved sweep, number of runs, chunk size, completed chunks
+and the sha256 of each) is rewritten the same way; every file is fsynced before its rename and its folder after. A
 writer holds ``STORE/.lock`` (``flock``): a second process on the same store fails at once.
 ``--resume`` reads every chunk back and recomputes those missing or damaged (unreadable,
 other columns or column types, not exactly its runs, axis values that are not the
-sweep's), saying so, so an interrupted sweep loses at most the chunks in progress and
+sweep's, a sha256 other than the one recorded or none), saying so; the checksums are checked
+again before the table is assembled, so an interrupted sweep loses at most the chunks in progress and
 duplicates nothing; without it, a non-empty STORE is an error. At the
 end the chunks are read back, sorted by run and written as ``STORE/runs.parquet``; the
 figures go to ``STORE/figures/``; only then does the manifest say ``"complete": true``. A
