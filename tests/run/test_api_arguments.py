@@ -83,3 +83,56 @@ def test_a_window_longer_than_the_run_is_the_whole_run():
     res = simulate(sc)
     m_whole, m_huge = res.metrics(window_s=0.3), res.metrics(window_s=1e300)
     assert [m_huge[c] for c in cols] == [m_whole[c] for c in cols]
+
+
+def _plate():
+    from imdrive.analysis.nameplate import Nameplate
+
+    return Nameplate(2200, 400, 50, 4, 1436, 5.0, 0.79, 0.82)
+
+
+def _more_calls():
+    from imdrive.analysis.circuit_from_tests import circuit_from_tests
+    from imdrive.analysis.foc import foc_operating_point
+    from imdrive.analysis.nameplate import estimate_circuit
+    from imdrive.config.machine import machine_preset
+
+    m = machine_preset("paper-table-iv")
+    return {
+        "foc speed nan": (lambda r: foc_operating_point(m, math.nan, 0.0), "speed_rpm"),
+        "foc load None": (lambda r: foc_operating_point(m, 600.0, None), "load_Nm"),
+        "foc machine None": (lambda r: foc_operating_point(None, 600.0, 0.0), "machine"),
+        "estimate_circuit(None)": (lambda r: estimate_circuit(None), "plate"),
+        "estimate_circuit lee bogus": (
+            lambda r: estimate_circuit(_plate(), method="lee", bogus=1),
+            "bogus",
+        ),
+        "circuit_from_tests(None...)": (lambda r: circuit_from_tests(None, None, None), "no_load"),
+        "from_toml base_dir=5": (
+            lambda r: Scenario.from_toml('name = "x"', base_dir=5),
+            "base_dir",
+        ),
+        "save(None)": (lambda r: r.save(None), "out_dir"),
+        "to_csv('.')": (lambda r: r.to_csv("."), "path"),
+        "to_csv(None)": (lambda r: r.to_csv(None), "path"),
+    }
+
+
+@pytest.mark.parametrize("name", list(_more_calls()))
+def test_more_misuse_raises_config_error_naming_the_argument(res, name, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    call, field = _more_calls()[name]
+    with pytest.raises(ConfigError) as exc:
+        call(res)
+    assert exc.value.field == field
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_to_csv_still_writes_a_file_and_through_a_link(res, tmp_path):
+    target = tmp_path / "data.csv"
+    target.write_text("old")
+    link = tmp_path / "link.csv"
+    link.symlink_to(target)
+    res.to_csv(link)
+    assert link.is_symlink()
+    assert target.read_text().splitlines()[0] == ",".join(res.columns)

@@ -577,8 +577,8 @@ class SimulationResult:
         """
         from imdrive._io import replace_folder
 
-        out_dir = Path(out_dir)
         check_result_folder(out_dir, force)
+        out_dir = Path(out_dir)
         output = self.scenario.output
         wanted = {f.key: getattr(output, f.key) for f in output_formats()}
         if formats is not None:
