@@ -136,3 +136,25 @@ def test_to_csv_still_writes_a_file_and_through_a_link(res, tmp_path):
     res.to_csv(link)
     assert link.is_symlink()
     assert target.read_text().splitlines()[0] == ",".join(res.columns)
+
+
+def _deep_list(n: int = 5000) -> list:
+    top: list = []
+    node = top
+    for _ in range(n):
+        node.append([])
+        node = node[0]
+    return top
+
+
+@pytest.mark.parametrize("where", ["description", "control.current_kp", "plugins.modules"], ids=str)
+def test_a_value_nested_5000_deep_is_a_config_error(where):
+    *head, key = where.split(".")
+    data: dict = {}
+    node = data
+    for part in head:
+        node = node.setdefault(part, {})
+    node[key] = _deep_list()
+    with pytest.raises(ConfigError) as exc:
+        Scenario.from_dict(data)
+    assert exc.value.field.startswith(where) and len(str(exc.value)) < 200
