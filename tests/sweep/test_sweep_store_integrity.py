@@ -110,3 +110,26 @@ def test_a_manifest_that_is_not_one_is_refused_naming_the_file(store, text):
         run_sweep(parse_sweep(TINY), store, resume=True, **QUIET)
     assert exc.value.field == "--resume"
     assert str(p) in str(exc.value) and "\n" not in str(exc.value)
+
+
+@pytest.mark.slow  # a subprocess: 1.5 s or more on 2 cores
+def test_cli_resume_over_a_list_manifest_exits_2_naming_it(store, tmp_path):
+    import subprocess
+    import sys
+
+    f = tmp_path / "tiny.toml"
+    f.write_text(TINY)
+    (store / "manifest.json").write_text("[]")
+    proc = subprocess.run(
+        [sys.executable, "-m", "imdrive", "sweep", f, "--out", store, "--resume", "-q"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert proc.returncode == 2, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and "manifest.json" in lines[0]
+    assert (
+        not (store / "runs.parquet").exists()
+        or "complete" not in (store / "manifest.json").read_text()
+    )
