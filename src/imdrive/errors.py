@@ -135,5 +135,34 @@ def check_argument(value, types, name: str, what: str):
     return value
 
 
+def check_number(value, name: str, lo: float | None = None) -> float:
+    """``value`` as a float if it is a finite real number (``>= lo`` when given), else a
+    :class:`ConfigError` naming the argument: a NaN or infinite argument would otherwise come
+    back as a silent NaN result or an overflow deep inside.
+
+    Parameters
+    ----------
+    value : object
+        The argument.
+    name : str
+        The argument's name, e.g. ``"window_s"``.
+    lo : float, optional
+        The smallest value allowed.
+
+    Returns
+    -------
+    float
+        ``value``.
+    """
+    import math
+    import numbers
+
+    ok = isinstance(value, numbers.Real) and not isinstance(value, bool)
+    if not ok or not math.isfinite(value) or (lo is not None and value < lo):
+        rule = "a finite number" + (f" >= {lo:g}" if lo is not None else "")
+        raise ConfigError(name, f"must be {rule}, got {value!r}")
+    return float(value)
+
+
 def _tuple(types) -> tuple:
     return types if isinstance(types, tuple) else (types,)

@@ -250,7 +250,8 @@ def test_a_sweep_set_table_is_one_layer_on_its_base():
 
 
 def test_two_sweep_axes_over_both_members_are_refused():
-    with warnings.catch_warnings(), pytest.raises(ConfigError, match="not both"):
+    # refused when the axes are read (sweep/axes.py), naming both, before any scenario
+    with warnings.catch_warnings(), pytest.raises(ConfigError, match="twins of one quantity"):
         warnings.simplefilter("ignore", ConfigWarning)  # each axis alone on the base is fine
         parse_sweep(
             'base = "injection-fig5"\n[axes]\n"estimator.R2_ohm" = { values = [0.9] }\n'

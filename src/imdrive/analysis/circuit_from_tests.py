@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import fsolve
 
-from imdrive.errors import ConfigError
+from imdrive.errors import ConfigError, check_argument, check_number
 
 __all__ = ["LockedRotorTest", "NoLoadTest", "TestCircuit", "circuit_from_tests"]
 
@@ -142,6 +142,10 @@ def circuit_from_tests(
     ConfigError
         A measurement out of range or tests no single-cage circuit meets, naming it.
     """
+    check_argument(no_load, NoLoadTest, "no_load", "a NoLoadTest")
+    check_argument(locked_rotor, LockedRotorTest, "locked_rotor", "a LockedRotorTest")
+    R1_ohm = check_number(R1_ohm, "R1_ohm")
+    leakage_split = check_number(leakage_split, "leakage_split")
     fields = ("voltage_V", "current_A", "power_W", "frequency_Hz")
     _check(no_load, fields)
     _check(locked_rotor, fields)

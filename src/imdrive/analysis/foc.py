@@ -61,7 +61,7 @@ from scipy.optimize import brentq
 
 from imdrive.analysis.circuit import _RPM_PER_RAD_S, _scalar_or_array
 from imdrive.config.machine import MachineParams
-from imdrive.errors import ConfigError
+from imdrive.errors import ConfigError, check_argument, check_number
 
 __all__ = [
     "FOCOperatingPoint",
@@ -263,10 +263,15 @@ def foc_operating_point(
 
     With friction, ``T_e = load + B w_m`` is linear in ``T_e`` and is solved in closed form.
     """
-    k = float(R2_ratio)
-    if not (math.isfinite(k) and k > 0):
+    check_argument(machine, MachineParams, "machine", "a MachineParams (machine_preset(...))")
+    speed_rpm = check_number(speed_rpm, "speed_rpm")  # a NaN gave a NaN operating point
+    load_Nm = check_number(load_Nm, "load_Nm")
+    k = check_number(R2_ratio, "R2_ratio")
+    if not k > 0:
         raise ConfigError("R2_ratio", "must be finite and > 0")
-    psi_ref = machine.rated_flux_Wb if flux_ref_Wb is None else float(flux_ref_Wb)
+    psi_ref = (
+        machine.rated_flux_Wb if flux_ref_Wb is None else check_number(flux_ref_Wb, "flux_ref_Wb")
+    )
     if not (math.isfinite(psi_ref) and psi_ref > 0):
         raise ConfigError("flux_ref_Wb", "must be finite and > 0")
     n_p = machine.pole_pairs

@@ -89,7 +89,7 @@ from imdrive.analysis.nameplate_lee import (
 )
 from imdrive.config.machine import MachineParams
 from imdrive.config.validation import FLOAT_MAX_MAGNITUDE, FLOAT_MIN_MAGNITUDE
-from imdrive.errors import ConfigError
+from imdrive.errors import ConfigError, check_argument
 
 #: the bound of every nameplate magnitude: the scenario's (imdrive.config.validation)
 _MAGNITUDE = (FLOAT_MIN_MAGNITUDE, FLOAT_MAX_MAGNITUDE)
@@ -337,7 +337,13 @@ def estimate_circuit(
 
 
 def _estimate_circuit(plate, description, method, **options) -> NameplateFit:
+    check_argument(plate, Nameplate, "plate", "a Nameplate (imdrive.analysis.nameplate)")
+    check_argument(description, str, "description", "a str")
     if method == "lee":
+        allowed = ("core_loss_fraction", "mechanical_loss_fraction", "stray_loss_fraction")
+        extra = sorted(set(options) - set(allowed))
+        if extra:
+            raise ConfigError(extra[0], f"not an option of lee (it takes {', '.join(allowed)})")
         return estimate_circuit_lee(plate, description, **options)
     if method != "fit":
         raise ConfigError("method", f"must be one of {', '.join(METHODS)}, got {method!r}")

@@ -315,7 +315,7 @@ def import_plugins(modules) -> None:
     for i, spec in enumerate(modules or ()):
         where = f"plugins.modules[{i}]"
         if not isinstance(spec, str):
-            raise ConfigError(where, f"must be a string, got {spec!r}")
+            raise ConfigError(where, f"must be a string, got {type(spec).__name__}")
         if not spec.strip():
             raise ConfigError(where, "is empty: a module name or a .py file's path")
         if is_imported(spec):

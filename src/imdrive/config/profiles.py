@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 from pydantic_core import core_schema
 
-from imdrive.errors import ConfigError
+from imdrive.errors import ConfigError, check_number
 
 _NUMBER = {"type": "number"}
 
@@ -108,8 +108,13 @@ class Profile:
         -------
         Profile
             One breakpoint at t = 0 s.
+
+        Raises
+        ------
+        ConfigError
+            ``value`` is not a finite number (a NaN profile would drive a NaN run).
         """
-        return Profile(((0.0, float(value)),))
+        return Profile(((0.0, check_number(value, "value")),))
 
     def scaled(self, k: float) -> Profile:
         """The same profile with every value multiplied by ``k`` (unit conversion).
@@ -117,13 +122,14 @@ class Profile:
         Parameters
         ----------
         k : float
-            Factor, in (new unit)/(old unit), e.g. pi/30 for rpm -> rad/s.
+            Factor, in (new unit)/(old unit), e.g. pi/30 for rpm -> rad/s (finite).
 
         Returns
         -------
         Profile
             The scaled profile, same times.
         """
+        k = check_number(k, "k")
         return Profile(tuple((t, v * k) for t, v in self.points))
 
     def __call__(self, t):

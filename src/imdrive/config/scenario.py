@@ -19,6 +19,7 @@ constructors, ``dataclasses.replace``).
 from __future__ import annotations
 
 from dataclasses import replace
+from os import PathLike
 from pathlib import Path
 from typing import Annotated
 
@@ -449,6 +450,8 @@ class Scenario:
         _check_override_list(overrides)
         if not isinstance(text, str):
             raise ConfigError("text", f"must be the TOML text (a str), got {type(text).__name__}")
+        if base_dir is not None and not isinstance(base_dir, str | PathLike):
+            raise ConfigError("base_dir", f"must be a folder path, got {type(base_dir).__name__}")
         data = parse_toml(text, "scenario")
         resolve_machine_file(data, base_dir)
         resolve_plugin_paths(data, base_dir)

@@ -231,7 +231,12 @@ def _loc_path(prefix: str, loc) -> str:
 
 
 def _show(value) -> str:
-    text = repr(value)
+    try:
+        text = repr(value)
+    except RecursionError:  # a value nested thousands deep: reprlib stops at 6 levels
+        import reprlib
+
+        text = reprlib.repr(value)
     return text if len(text) <= 60 else text[:57] + "..."
 
 

@@ -66,7 +66,7 @@ from imdrive.kernels.batch import (
 from imdrive.kernels.engine import S_OK, DriveParams, DriveState, log_dtype
 from imdrive.kernels.estimators.registry import kernel_of_state
 from imdrive.kernels.profiles import N_PROF
-from imdrive.run.metrics import lost_control_check
+from imdrive.run.metrics import lost_control_check, window_periods
 from imdrive.run.status import STATUS_COLUMNS
 
 COLUMNS = (
@@ -215,7 +215,7 @@ def _stack(items, log_every: int, n_rows: int, window_s: float, parallel: bool):
     arrays = [a for _, _, a in items]
     n_steps = arrays[0].n_steps
     params, state = stack_drives(arrays)
-    n_win = np.array([int(round(window_s / a.Ts)) for a in arrays], dtype=np.int64)
+    n_win = np.array([window_periods(window_s, a.Ts, a.n_steps) for a in arrays], dtype=np.int64)
     lc = [lost_control_check(sc) for _, sc, _ in items]
     lc_bound = np.array([b for b, _ in lc])
     lc_n = np.array(

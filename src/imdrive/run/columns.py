@@ -238,6 +238,38 @@ def columns_from_log(
 _SUFFIXES = ("rad_s", "ohm", "rpm", "Nm", "Wb", "rad", "A", "V", "C", "s")
 
 
+def time_window(signals: dict, t0, t1=None) -> Columns:
+    """The columns restricted to ``t0 <= time_s <= t1`` (``t1`` default: the last row), the
+    bounds checked (:class:`~imdrive.errors.ConfigError` naming ``t0`` or ``t1``)."""
+    from imdrive.errors import ConfigError, check_number
+
+    t = signals["time_s"]
+    t0 = check_number(t0, "t0")
+    t1 = t[-1] if t1 is None else check_number(t1, "t1")
+    if t1 < t0:
+        raise ConfigError("t1", f"must be >= t0 (t0 = {t0:g} s, t1 = {t1:g} s)")
+    sel = (t >= t0) & (t <= t1)
+    return Columns((k, v[sel]) for k, v in signals.items())
+
+
+def window_mean(signals: dict, name, t0, t1=None) -> float:
+    """Mean of column ``name`` over ``t0 <= time_s <= t1``; a name no column has, or a window
+    holding no sample, is a :class:`~imdrive.errors.ConfigError`, never a NaN."""
+    from imdrive.errors import ConfigError
+
+    if not isinstance(name, str):
+        raise ConfigError("name", f"must be a column name (str), got {type(name).__name__}")
+    column = current_name(name, stacklevel=4)
+    if column not in signals:
+        raise ConfigError("name", f"no column {name!r} in this run (res.columns lists them)")
+    values = time_window(signals, t0, t1)[column]
+    if values.size == 0:
+        t = signals["time_s"]
+        span = f"{t[0]:g}..{t[-1]:g} s" if len(t) else "no sample"
+        raise ConfigError("t0", f"the window holds no sample (the run spans {span})")
+    return float(np.mean(values))
+
+
 def unit_of(column: str) -> str:
     """The unit a column's name ends with; ``"1"`` for a dimensionless column."""
     for u in _SUFFIXES:

@@ -80,9 +80,13 @@ def check_result_folder(folder, force: bool = False) -> None:
     current folder, under a file): the rule of every command
     (:func:`imdrive._io.output_folder_problem`).
     """
+    import os
+
     from imdrive._io import output_folder_problem
     from imdrive.errors import ConfigError
 
+    if not isinstance(folder, str | os.PathLike):
+        raise ConfigError("out_dir", f"must be a folder path, got {type(folder).__name__}")
     problem = output_folder_problem(folder, owns_result_file, force, "an imdrive result")
     if problem is not None:
         raise ConfigError("--out", problem)

@@ -73,6 +73,7 @@ import math
 import numpy as np
 
 from imdrive.config.perunit import lost_control_rpm
+from imdrive.errors import check_number
 from imdrive.kernels.batch import CONVERGENCE_BAND, METRICS
 from imdrive.run.columns import Metrics
 
@@ -134,6 +135,12 @@ def lost_control_time(time_s, speed_rpm, speed_ref_rpm, bound_rpm, duration_s) -
     return float(time_s[first[long[0]]]) if long.size else math.nan
 
 
+def window_periods(window_s: float, Ts: float, n_steps: int) -> int:
+    """Control periods in the steady-state window: ``round(window_s / Ts)``, at most the run's
+    ``n_steps`` (a window longer than the run is the whole run, however long it is given)."""
+    return int(round(min(window_s / Ts, n_steps)))
+
+
 def drive_metrics(res, window_s: float = DEFAULT_WINDOW_S) -> dict:
     """The batch table's row of one run (definitions in the module docstring).
 
@@ -153,6 +160,7 @@ def drive_metrics(res, window_s: float = DEFAULT_WINDOW_S) -> dict:
         ``status``, ``diverged``, ``diverged_at_s``, ``simulated_s`` and every name of
         :data:`METRICS`.
     """
+    window_s = check_number(window_s, "window_s", lo=0.0)  # a negative one: NaN means
     s = res.signals
     sc = res.scenario
     Ts = sc.simulation.Ts_s
@@ -171,7 +179,7 @@ def drive_metrics(res, window_s: float = DEFAULT_WINDOW_S) -> dict:
     speed_ref = s.get("speed_ref_rpm", zeros)
     speed_est = s.get("speed_est_rpm", zeros)
     R2_hat = s.get("R2_hat_ohm", s["R2_ohm"])
-    win = k >= max(n_steps - int(round(window_s / Ts)), 0)
+    win = k >= n_steps - window_periods(window_s, Ts, n_steps)
     rel = np.abs(R2_hat - s["R2_ohm"]) / s["R2_ohm"]
     bad = np.flatnonzero(~(rel <= CONVERGENCE_BAND))
     if not ok:
@@ -267,6 +275,8 @@ def compensation_metrics(
     naming glossary; the old keys still answer, with a ``DeprecationWarning``
     (:class:`~imdrive.run.columns.Metrics`).
     """
+    window_s = check_number(window_s, "window_s", lo=0.0)
+    tol = check_number(tol, "tol", lo=0.0)
     comp = res.scenario.compensator
     if not comp.enabled or res.scenario.drive.mode != "vector" or len(res.time_s) < 2:
         return None
@@ -302,6 +312,7 @@ def compensation_metrics(
 
 def steady_means(res, window_s: float = DEFAULT_WINDOW_S) -> dict:
     """Means over the last ``window_s`` of a vector-controlled run (the paper's experiments)."""
+    window_s = check_number(window_s, "window_s", lo=0.0)
     w = res.window(res.time_s[-1] - window_s)
     return {
         "e_d0_Wb": float(np.mean(w["e_d0_Wb"])),

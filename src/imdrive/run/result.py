@@ -30,6 +30,8 @@ from imdrive.run.columns import (  # noqa: F401  (re-exports)
     Columns,
     columns_from_log,
     current_name,
+    time_window,
+    window_mean,
 )
 from imdrive.run.files import (  # noqa: F401  (re-exports)
     NULL_NOTE,
@@ -352,9 +354,7 @@ class SimulationResult:
             Column name -> the values in the window, in the column's unit (a ``dict``; a
             renamed column's old name answers with a ``DeprecationWarning``).
         """
-        t = self.time_s
-        sel = (t >= t0) & (t <= (t1 if t1 is not None else t[-1]))
-        return Columns((k, v[sel]) for k, v in self.signals.items())
+        return time_window(self.signals, t0, t1)
 
     def mean(self, name: str, t0: float, t1: float | None = None) -> float:
         """Mean of a signal over a time window.
@@ -373,7 +373,7 @@ class SimulationResult:
         float
             The mean, in the column's unit.
         """
-        return float(np.mean(self.window(t0, t1)[current_name(name, stacklevel=3)]))
+        return window_mean(self.signals, name, t0, t1)
 
     # -- energy ------------------------------------------------------------------------------
     def energy_balance(self) -> dict[str, float]:
@@ -577,8 +577,8 @@ class SimulationResult:
         """
         from imdrive._io import replace_folder
 
-        out_dir = Path(out_dir)
         check_result_folder(out_dir, force)
+        out_dir = Path(out_dir)
         output = self.scenario.output
         wanted = {f.key: getattr(output, f.key) for f in output_formats()}
         if formats is not None:

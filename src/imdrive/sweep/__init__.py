@@ -90,18 +90,19 @@ parameters overflow (``status`` = -1, its message in ``error``); the others go o
 Store
 -----
 ``STORE/chunks/chunk-NNNNNN.parquet`` holds runs ``[N*chunk_size, (N+1)*chunk_size)``; each is
-written to a temporary name and renamed into place (atomic), then ``STORE/manifest.json``
-(sweep name, fingerprint of the resolved sweep, number of runs, chunk size, completed chunks) is
-rewritten the same way; every file is fsynced before its rename and its folder after. A
-writer holds ``STORE/.lock`` (``flock``): a second process on the same store fails at once.
-``--resume`` reads every chunk back and recomputes those missing or damaged (unreadable,
-other columns or column types, not exactly its runs, axis values that are not the
-sweep's), saying so, so an interrupted sweep loses at most the chunks in progress and
-duplicates nothing; without it, a non-empty STORE is an error. At the
-end the chunks are read back, sorted by run and written as ``STORE/runs.parquet``; the
-figures go to ``STORE/figures/``; only then does the manifest say ``"complete": true``. A
-run's results do not depend on which chunk, process or machine computed it, so a resumed or
-distributed sweep gives the same table as a local, uninterrupted one.
+written to a temporary name and renamed into place (atomic), then ``STORE/manifest.json`` (sweep
+name, fingerprint of the resolved sweep, number of runs, chunk size, completed chunks and the
+sha256 of each) is rewritten the same way; every file is fsynced before its rename and its
+folder after. A writer holds ``STORE/.lock`` (``flock``): a second process on the same store
+fails at once. ``--resume`` reads every chunk back and recomputes those missing or damaged
+(unreadable, other columns or column types, not exactly its runs, axis values that are not the
+sweep's, a sha256 other than the one recorded or none), saying so; the checksums are checked
+again before the table is assembled, so an interrupted sweep loses at most the chunks in
+progress and duplicates nothing; without it, a non-empty STORE is an error. At the end the
+chunks are read back, sorted by run and written as ``STORE/runs.parquet``; the figures go to
+``STORE/figures/``; only then does the manifest say ``"complete": true``. A run's results do not
+depend on which chunk, process or machine computed it, so a resumed or distributed sweep gives
+the same table as a local, uninterrupted one.
 
 Execution: locally (default) each chunk is one call of the batch engine over all cores. With
 ``--scheduler ADDRESS`` (needs ``pip install 'imdrive[dask]'``) every chunk is a task on that

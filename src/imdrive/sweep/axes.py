@@ -11,6 +11,7 @@ from dataclasses import fields, is_dataclass
 import numpy as np
 
 from imdrive.config.overrides import dotted, is_setting, key_path
+from imdrive.config.pairs import pair_of
 from imdrive.config.profiles import Profile
 from imdrive.config.scenario import Scenario
 from imdrive.errors import ConfigError
@@ -307,7 +308,21 @@ def _axes(
         axes_list.append(a)
     axes = tuple(axes_list)
     _check_disjoint(axes)
+    _check_scalar(axes)
     return axes
+
+
+def _check_scalar(axes: tuple[Axis, ...]) -> None:
+    """Refuse an axis whose values are tables or lists (a profile, a measured table, a module
+    list): such a value has no short label for the table and the figures; a set axis names
+    each one."""
+    for a in axes:
+        if a.kind != "sets" and any(isinstance(v, list | dict) for v in a.values):
+            raise ConfigError(
+                f"axes.{a.name}",
+                "values are tables or lists: sweep them as a set axis, one named table of "
+                "overrides per value ([axes.NAME] a = { KEY = ... }, b = { KEY = ... })",
+            )
 
 
 def _axis_keys(a: Axis) -> set[tuple[str, ...]]:
@@ -326,9 +341,18 @@ def _overlap(k1: tuple[str, ...], k2: tuple[str, ...]) -> bool:
     return k1[:n] == k2[:n]
 
 
+def _twins(k1: tuple[str, ...], k2: tuple[str, ...]) -> bool:
+    """Whether two keys are the absolute and per-unit members of one pair
+    (:data:`imdrive.config.pairs.PAIRS`): one quantity stated twice, so one would be cleared
+    or win over the other."""
+    pair = pair_of(dotted(k1))
+    return pair is not None and dotted(k2) in pair.twins(dotted(k1))
+
+
 def _check_disjoint(axes: tuple[Axis, ...]) -> None:
     """Refuse two axes that set the same key (a key-path or convenience axis and a set axis,
-    two set axes, or a table and a key inside it): one value would silently win, and rows
+    two set axes, or a table and a key inside it), or the absolute and per-unit twins of one
+    quantity (``estimator.R2_ohm`` and ``R2_ratio``): one value would silently win, and rows
     with different labels would be the same drive."""
     seen: list[tuple[Axis, set]] = []
     for a in axes:
@@ -341,5 +365,12 @@ def _check_disjoint(axes: tuple[Axis, ...]) -> None:
                     raise ConfigError(
                         f"axes.{a.name}",
                         f"sets {both}, as axis {b.name} does: two axes may not set the same key",
+                    )
+                twin = next((o for o in sorted(other) if _twins(k, o)), None)
+                if twin is not None:
+                    raise ConfigError(
+                        f"axes.{a.name}",
+                        f"sets {dotted(k)} / {dotted(twin)}, as axis {b.name} does: the "
+                        "absolute and per-unit twins of one quantity; sweep one of them",
                     )
         seen.append((a, keys))

@@ -7,14 +7,20 @@ chunks. :func:`open_store` checks that a non-empty folder is the same sweep befo
 it; a writer holds the store's lock (:class:`imdrive._io.FolderLock`) so two processes cannot
 both write one store. On resume :meth:`Store.verify_chunks` reads every chunk back: one that
 cannot be read (truncated, empty), has other columns, or does not hold exactly its runs (a
-foreign file) is removed and recomputed. :meth:`Store.consolidate` writes
+foreign file) is removed and recomputed, and so is one whose sha256 is not the one the
+manifest recorded when the chunk was written (a value edited inside it), or that has none.
+:meth:`Store.consolidate` checks the checksums again as it reads the chunks and writes
 ``STORE/runs.parquet``, every run exactly once, sorted; the manifest says ``"complete": true``
 only after the table and the figures are written.
 """
 
 from __future__ import annotations
 
+import hashlib
+import io
 import json
+import os
+import stat
 import time
 from pathlib import Path
 
@@ -41,10 +47,15 @@ class Store:
     """
 
     MANIFEST = "manifest.json"
+    #: the largest manifest read (one holds a few numbers per chunk: 10 M runs in chunks of 32
+    #: are about 30 MB)
+    MAX_MANIFEST_BYTES = 256 * 1024**2
 
     def __init__(self, root: Path):
         self.root = Path(root)
         self.chunks = self.root / "chunks"
+        #: chunk index -> sha256 of its file, as written (recorded in the manifest)
+        self.sha256: dict[int, str] = {}
 
     def chunk_path(self, j: int) -> Path:
         """The file of chunk ``j``.
@@ -90,9 +101,21 @@ class Store:
         if not p.is_file():
             return None
         try:
-            return json.loads(p.read_text())
-        except (OSError, ValueError) as exc:
+            st = os.stat(p)
+            if not stat.S_ISREG(st.st_mode):
+                raise ConfigError("--resume", f"{p}: not a regular file")
+            if st.st_size > self.MAX_MANIFEST_BYTES:
+                raise ConfigError("--resume", f"{p}: {st.st_size} bytes, more than a manifest")
+            man = json.loads(p.read_bytes().decode("utf-8"))
+        except RecursionError:
+            raise ConfigError("--resume", f"{p}: JSON nested too deeply to read") from None
+        except (OSError, ValueError) as exc:  # UnicodeDecodeError is a ValueError
             raise ConfigError("--resume", f"cannot read {p}: {exc}") from None
+        why = _manifest_fault(man)
+        if why is not None:
+            raise ConfigError("--resume", f"{p} is not a sweep manifest ({why})")
+        self.sha256 = {int(j): h for j, h in man.get("chunk_sha256", {}).items()}
+        return man
 
     def write_manifest(
         self, sweep: Sweep, chunk_size: int, started: float, complete: bool = False
@@ -119,6 +142,7 @@ class Store:
             "chunk_size": chunk_size,
             "n_chunks": sweep.n_chunks(chunk_size),
             "completed_chunks": done,
+            "chunk_sha256": {str(j): self.sha256[j] for j in done if j in self.sha256},
             "complete": complete and len(done) == sweep.n_chunks(chunk_size),
             "axes": [a.name for a in sweep.axes],
             "started": started,
@@ -147,16 +171,21 @@ class Store:
         df : pandas.DataFrame
             The chunk's table (:func:`~imdrive.sweep.run.run_chunk`).
         """
+        self.sha256.pop(j, None)
         with atomic_path(self.chunk_path(j)) as tmp:
             df.to_parquet(tmp, index=False)
+            digest = _sha256(tmp.read_bytes())
+        self.sha256[j] = digest
 
     def verify_chunks(self, sweep: Sweep, chunk_size: int) -> list[str]:
         """Check every chunk file; remove the damaged ones so they are recomputed.
 
         A chunk is good when it can be read, has the table's columns with their types (a
         chunk written now has: :func:`chunk_dtypes`), holds exactly the runs of its index,
-        each once, and each run's axis values are the sweep's for that run (bit for bit: a
-        value off the grid would put a wrong row in the table, or none in its heatmap).
+        each once, each run's axis values are the sweep's for that run (bit for bit: a
+        value off the grid would put a wrong row in the table, or none in its heatmap), and
+        its sha256 is the one the manifest recorded when it was written (a metric edited
+        inside it is found only so).
 
         Parameters
         ----------
@@ -181,16 +210,28 @@ class Store:
                 why = f"index beyond the sweep's {n_chunks} chunks"
             else:
                 try:
-                    df = pd.read_parquet(path)
+                    raw = path.read_bytes()
+                    df = pd.read_parquet(io.BytesIO(raw))
                 except Exception as exc:  # any unreadable file: pyarrow raises several kinds
                     why = f"unreadable ({type(exc).__name__}: {str(exc).splitlines()[0][:120]})"
                 else:
                     why = _chunk_fault(sweep, df, sweep.chunk_runs(j, chunk_size), dtypes)
                     if why is None:
+                        why = self._checksum_fault(j, raw)
+                    if why is None:
                         continue
+            self.sha256.pop(j, None)
             path.unlink(missing_ok=True)
             notes.append(f"chunk {j} ({path.name}): {why}; removed, it will be recomputed")
         return notes
+
+    def _checksum_fault(self, j: int, raw: bytes) -> str | None:
+        """Why chunk ``j``'s bytes are not the ones written, or None."""
+        if j not in self.sha256:
+            return "no sha256 in the manifest (written by an earlier version, or not recorded)"
+        if _sha256(raw) != self.sha256[j]:
+            return "its sha256 is not the one recorded when it was written (edited)"
+        return None
 
     def clean_partials(self) -> None:
         """Delete the temporary files of chunks and manifests that a killed sweep left."""
@@ -215,11 +256,21 @@ class Store:
         Raises
         ------
         EnvironmentFailure
-            The chunks do not hold every run exactly once.
+            The chunks do not hold every run exactly once, or one is not as it was written
+            (its sha256).
         """
         import pandas as pd
 
-        parts = [pd.read_parquet(self.chunk_path(j)) for j in range(sweep.n_chunks(chunk_size))]
+        parts = []
+        for j in range(sweep.n_chunks(chunk_size)):
+            raw = self.chunk_path(j).read_bytes()
+            why = self._checksum_fault(j, raw)
+            if why is not None:
+                raise EnvironmentFailure(
+                    f"{self.chunk_path(j)}: {why} while the sweep ran: resume with --resume "
+                    "to verify and recompute it"
+                )
+            parts.append(pd.read_parquet(io.BytesIO(raw)))
         df = pd.concat(parts, ignore_index=True).sort_values("run", kind="stable")
         df = df.reset_index(drop=True)
         if len(df) != sweep.n_runs or not np.array_equal(df["run"], np.arange(sweep.n_runs)):
@@ -257,6 +308,36 @@ def _chunk_fault(sweep: Sweep, df, runs: range, dtypes: dict) -> str | None:
         if not same:
             return f"its {axis.name!r} values are not the sweep's for runs {runs.start}.."
     return None
+
+
+def _sha256(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()
+
+
+def _manifest_fault(man) -> str | None:
+    """What makes the decoded ``man`` not a manifest :meth:`Store.write_manifest` writes, or
+    None: the fields resuming reads, with their types."""
+    if not isinstance(man, dict):
+        return f"a JSON {type(man).__name__}, not an object"
+    if not isinstance(man.get("fingerprint"), str):
+        return "no fingerprint"
+    size = man.get("chunk_size")
+    if isinstance(size, bool) or not isinstance(size, int) or size < 1:
+        return "chunk_size is not an integer >= 1"
+    started = man.get("started", 0.0)
+    if isinstance(started, bool) or not isinstance(started, int | float):
+        return "started is not a number"
+    sums = man.get("chunk_sha256", {})
+    ok = isinstance(sums, dict) and all(
+        isinstance(j, str)
+        and j.isascii()
+        and j.isdigit()
+        and isinstance(h, str)
+        and len(h) == 64
+        and all(c in "0123456789abcdef" for c in h)
+        for j, h in sums.items()
+    )
+    return None if ok else "chunk_sha256 is not a table of chunk index -> sha256"
 
 
 def chunk_dtypes(sweep: Sweep) -> dict:

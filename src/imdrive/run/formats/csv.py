@@ -17,11 +17,23 @@ def to_csv(res, path) -> None:
     res : SimulationResult
         The run.
     path : str or pathlib.Path
-        The file to write.
+        The file to write: a regular file or a link to one (written through), replaced
+        atomically; a folder, a device or a FIFO is refused (:func:`imdrive._io.file_path_problem`).
     """
+    import os
+
+    from imdrive._io import atomic_path, file_path_problem, real_file
+    from imdrive.errors import ConfigError
+
+    if not isinstance(path, str | os.PathLike):
+        raise ConfigError("path", f"must be a file path, got {type(path).__name__}")
+    problem = file_path_problem(path)
+    if problem is not None:
+        raise ConfigError("path", problem)
     names = res.columns
     data = np.column_stack([res.signals[n] for n in names])
-    np.savetxt(path, data, delimiter=",", header=",".join(names), comments="", fmt="%.9g")
+    with atomic_path(real_file(path)) as tmp:
+        np.savetxt(tmp, data, delimiter=",", header=",".join(names), comments="", fmt="%.9g")
 
 
 def _write(res, folder: Path) -> None:
