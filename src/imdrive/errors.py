@@ -147,7 +147,7 @@ def check_number(value, name: str, lo: float | None = None) -> float:
     name : str
         The argument's name, e.g. ``"window_s"``.
     lo : float, optional
-        The smallest value allowed.
+        The smallest value allowed, in the argument's own unit (s for ``window_s``).
 
     Returns
     -------
