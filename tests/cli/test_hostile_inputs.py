@@ -35,6 +35,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from data.sweeps import TINY
 
 import imdrive as im
 from imdrive.cli import main
@@ -359,19 +360,6 @@ def test_the_default_folder_name_is_made_safe(in_tmp, capsys, name):
 # ------------------------------------------------------------------------------------------
 # 8. resume with tampered chunks
 
-TINY = """
-name = "tiny"
-base = "sensorless"
-chunk_size = 2
-window_s = 0.002
-
-[set]
-simulation.t_end_s = 0.004
-
-[axes]
-R2_ratio = [0.8, 1.0, 1.2]
-load_Nm = [0.0, 2.0]
-"""
 
 TAMPER = {
     "axis value + 1e-12": lambda d: d.assign(R2_ratio=d["R2_ratio"] + 1e-12),

@@ -9,24 +9,11 @@ import json
 
 import pandas as pd
 import pytest
+from data.sweeps import TINY
 
 from imdrive.errors import ConfigError, EnvironmentFailure
 from imdrive.sweep import parse_sweep, run_sweep
 from imdrive.sweep.store import Store
-
-TINY = """
-name = "tiny"
-base = "sensorless"
-chunk_size = 2
-window_s = 0.002
-
-[set]
-simulation.t_end_s = 0.004
-
-[axes]
-R2_ratio = [0.8, 1.0, 1.2]
-load_Nm = [0.0, 2.0]
-"""
 
 QUIET = {"progress": False, "figures": False, "report": False}
 

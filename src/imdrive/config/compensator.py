@@ -8,6 +8,8 @@ from typing import Annotated, Literal
 
 from pydantic import model_validator
 
+from imdrive.config.r2_kalman import KalmanLawSettings  # noqa: F401  (the law registers)
+from imdrive.config.r2_laws import law_names
 from imdrive.config.validation import Bool, Float, Int, setting, settings
 from imdrive.errors import ConfigError
 
@@ -206,7 +208,7 @@ class CompensatorSettings:
         Int, setting("gating: decisions still skipped after a gated one", ge=0)
     ] = 1
     step_law: Annotated[
-        Literal["table", "adaptive", "kalman"],
+        Literal[law_names()],  # the fuzzy laws and every registered one (config/r2_laws.py)
         setting(
             '"table": R̂2 changes by G_CR_ohm × the table\'s level (the paper); "adaptive": '
             "inside the first threshold a continuous level fine_gain × (scaled E) and an "
