@@ -254,3 +254,63 @@ def test_the_low_frequency_note_names_what_held_there_unless_it_is_in_use():
     )
     note = low_frequency_note(afo, _row(afo, R2_hat_final_ohm=1.2 * afo.machine.R2_ohm), True)
     assert "near zero stator frequency" in note and "afo" not in note
+
+
+class _Held:
+    """A run's shape as :func:`held_shares` reads it: its scenario and logged signals."""
+
+    def __init__(self, t, flags, t_on=0.0):
+        import types
+
+        import numpy as np
+
+        self.scenario = types.SimpleNamespace(
+            compensator=types.SimpleNamespace(enabled=True, t_on_s=t_on)
+        )
+        self.signals = {"time_s": np.asarray(t, float), "comp_frozen_flags": np.asarray(flags)}
+
+
+def test_held_shares_count_each_cause_over_the_active_time():
+    from imdrive.run.metrics import held_shares
+
+    # 10 samples before t_on are not counted; of the 10 after: 3 band, 2 load step + settling,
+    # 1 voltage limit with its settling bit (which belongs to the limit)
+    t = [0.1 * k for k in range(20)]
+    flags = [1] * 10 + [8, 8, 8, 2, 16, 4 | 16, 0, 0, 0, 0]
+    shares = held_shares(_Held(t, flags, t_on=1.0 - 1e-9))
+    assert shares == pytest.approx(
+        {"stator frequency band": 30.0, "gated transient": 20.0, "voltage limit": 10.0}
+    )
+    assert list(shares) == ["stator frequency band", "gated transient", "voltage limit"]
+    assert held_shares(_Held(t, [0] * 20)) == {}
+
+
+def test_a_hold_above_ten_percent_is_stated_with_its_causes():
+    from imdrive.run.status import HELD_NOTE_PCT, held_note
+
+    assert held_note(HELD_NOTE_PCT, {"gated transient": 10.0}) is None
+    assert held_note(NAN, None) is None
+    note = held_note(23.4, {"stator frequency band": 18.2, "gated transient": 5.2})
+    assert note == (
+        "R2_hat held 23 % of the time since the compensator started: "
+        "stator frequency band 18 %, gated transient 5 %"
+    )
+
+
+@pytest.mark.slow
+def test_console_and_summary_state_a_long_hold(tmp_path, capsys):
+    # regenerating the rated torque at 85 rpm on Table IV: the steady state's stator frequency
+    # is near 0 Hz, where the gating holds R2_hat most of the time
+    out = tmp_path / "r"
+    code = main(["run", "injection-robust", "-q", "--out", str(out), "--format", "csv",
+                 "--set", "simulation.t_end_s=6",
+                 "--set", "control.speed_ref_rpm={initial=0, changes=[{at=0.5, to=85, over=1}]}",
+                 "--set", "load.torque_Nm={initial=0, changes=[{at=2.0, to=-12}]}"])  # fmt: skip
+    assert code == 0
+    v = json.loads((out / "summary.json").read_text())["verdict"]
+    assert v["R2_held_pct"] > 10.0
+    shares = v["R2_held_by_cause_pct"]
+    assert shares and max(shares.values()) <= v["R2_held_pct"] + 1e-9
+    assert sum(shares.values()) >= v["R2_held_pct"] - 1e-9  # every held sample has a cause
+    assert v["R2_held_note"].startswith(f"R2_hat held {v['R2_held_pct']:.0f} % of the time")
+    assert f"imdrive: {v['R2_held_note']}" in capsys.readouterr().err

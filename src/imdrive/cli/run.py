@@ -100,6 +100,8 @@ def _cmd_run(args) -> int:
             f"{open_loop_note(scenario)} -> {out}",
             file=sys.stderr,
         )
+    if s["verdict"].get("R2_held_note"):  # with -q too: a hold is part of the status
+        print(f"imdrive: {s['verdict']['R2_held_note']}", file=sys.stderr)
     if s["verdict"]["verdict"] != "ok":  # completed, but R2_hat or the speed is not right
         from imdrive.run.diagnosis import closing_line
 

@@ -262,6 +262,31 @@ def held_metrics(res) -> dict:
     }
 
 
+def held_shares(res) -> dict[str, float]:
+    """The share of time R̂2 was held for each cause, % of the samples from the compensator's
+    enable time (``t >= compensator.t_on_s``), by the groups of
+    :data:`imdrive.run.status.HELD_CAUSES` (a sample held for two causes counts in both; a
+    settling bit, 16, counts with the event it follows, as in
+    :func:`imdrive.run.status.held_reasons`). Empty without a compensator or when R̂2 was never
+    held."""
+    from imdrive.run.status import held_reasons
+
+    comp = res.scenario.compensator
+    s = res.signals
+    if not comp.enabled or "comp_frozen_flags" not in s:
+        return {}
+    active = s["time_s"] >= comp.t_on_s
+    flags = s["comp_frozen_flags"][active].astype(np.int64)
+    if not flags.size:
+        return {}
+    masks, counts = np.unique(flags[flags != 0], return_counts=True)
+    shares: dict[str, float] = {}
+    for mask, n in zip(masks, counts, strict=True):
+        for group in held_reasons(int(mask)):
+            shares[group] = shares.get(group, 0.0) + 100.0 * n / flags.size
+    return dict(sorted(shares.items(), key=lambda kv: -kv[1]))
+
+
 def compensation_metrics(
     res, tol: float = CONVERGENCE_BAND, window_s: float = DEFAULT_WINDOW_S
 ) -> dict | None:

@@ -110,7 +110,9 @@ SUMMARY_DOCS = {
     "`verdict_text` every "
     "cause in time order, `verdict_at_s`; the speed error in rated slips and its tolerance; "
     "the share of the compensator's time R2_hat was held, since when and why (voltage limit, "
-    "stator frequency band, gated transient); `R2_observable`: estimated at the end, or not "
+    "stator frequency band, gated transient), `R2_held_by_cause_pct` the share per cause, and "
+    "`R2_held_note`, the sentence the console prints whenever R2_hat was held more than 10 % "
+    "of the time; `R2_observable`: estimated at the end, or not "
     "observable here and why",
     "plugins": "each module of `[plugins] modules` -> the sha256 of its file (null: not "
     "readable); a rerun of this summary.json warns when a module has changed since",

@@ -47,6 +47,7 @@ from imdrive.run.metrics import (
     DEFAULT_WINDOW_S,
     compensation_metrics,
     drive_metrics,
+    held_shares,
     lost_control_check,
     lost_control_time,
 )
@@ -423,7 +424,7 @@ class SimulationResult:
     def verdict(self) -> dict:
         """This run's status: ``"ok"`` or why not (:func:`imdrive.run.status.run_status`)."""
         if "_verdict" not in self.__dict__:
-            self.__dict__["_verdict"] = run_status(self.metrics())
+            self.__dict__["_verdict"] = run_status(self.metrics(), held_shares(self))
         return dict(self.__dict__["_verdict"])
 
     def metrics(self, window_s: float = DEFAULT_WINDOW_S) -> dict:

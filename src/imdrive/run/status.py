@@ -339,7 +339,32 @@ def verdict(sc, row: dict) -> dict:
     return out
 
 
-def run_status(m: dict) -> dict:
+#: R̂2 held for more than this share of the time (%) since the compensator started: the
+#: console and ``summary.json`` say how long and why (issue 38: a hold the user cannot see is
+#: an R̂2 they cannot trust).
+HELD_NOTE_PCT = 10.0
+
+
+def held_note(held_pct: float, shares: dict[str, float] | None) -> str | None:
+    """``"R2_hat held 23 % of the time since the compensator started: stator frequency band
+    18 %, gated transient 5 %"`` when ``held_pct`` exceeds :data:`HELD_NOTE_PCT`, else None.
+
+    Parameters
+    ----------
+    held_pct : float
+        ``R2_held_pct`` of the run, %.
+    shares : dict of str to float, optional
+        :func:`imdrive.run.metrics.held_shares` of the run, % by cause.
+    """
+    if not _finite(held_pct) or held_pct <= HELD_NOTE_PCT:
+        return None
+    why = ", ".join(f"{g} {p:.0f} %" for g, p in (shares or {}).items())
+    return f"R2_hat held {held_pct:.0f} % of the time since the compensator started" + (
+        f": {why}" if why else ""
+    )
+
+
+def run_status(m: dict, shares: dict[str, float] | None = None) -> dict:
     """``summary.json``'s ``"verdict"`` from a run's metrics (:func:`drive_metrics`): the
     status columns, the R̂2 tolerance, how long and why R̂2 was held (the gating masks as
     their groups, :func:`held_reasons`; None without a compensator), and ``R2_observable``:
@@ -350,6 +375,9 @@ def run_status(m: dict) -> dict:
     ----------
     m : dict
         :func:`imdrive.run.metrics.drive_metrics` of the run.
+    shares : dict of str to float, optional
+        :func:`imdrive.run.metrics.held_shares` of the run: ``R2_held_by_cause_pct``, and the
+        ``R2_held_note`` (:func:`held_note`) names them.
 
     Returns
     -------
@@ -359,6 +387,8 @@ def run_status(m: dict) -> dict:
     got = {k: m[k] for k in (*STATUS_COLUMNS, "R2_held_pct", "R2_held_since_s")}
     for key in ("R2_held_causes", "R2_held_end_causes"):
         got[key] = held_reasons(m[key]) if _finite(m[key]) else None
+    got["R2_held_by_cause_pct"] = shares if _finite(m["R2_held_pct"]) else None
+    got["R2_held_note"] = held_note(m["R2_held_pct"], shares)
     got["R2_tolerance_pct"] = 100.0 * R2_TOLERANCE
     since = m["R2_held_since_s"]
     if not _finite(m["R2_held_pct"]):
