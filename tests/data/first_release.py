@@ -1,7 +1,7 @@
 """The injection presets' first-release tuning, for the tests that reproduce a finding with it.
 
 The injection presets (``injection-fig5``, ``-fig6``, their ``-150rpm`` twins) now carry the
-recommended mechanisms (adaptive step law, three frequencies, R1 estimation, field weakening
+recommended mechanisms (the model-based R2 law, three frequencies, R1 estimation, field weakening
 with the estimation headroom, the rotor thermal model, the slip decoupling of the detection,
 the MRAS's period-mean current).
 A test that shows what a mechanism fixes starts from the tuning the presets had before:
@@ -23,8 +23,11 @@ FIRST_RELEASE = {
     "injection.headroom_voltage": None,
     "injection.headroom_from": 0.85,
     "injection.headroom_to": 0.95,
-    "compensator.step_law": "table",
-    "compensator.fine_gain": 2.5,
+    "compensator.step_law": "table",  # the paper's table with the first release's scaling
+    "compensator.table": "paper",
+    "compensator.gain_E_per_Wb": 1000.0,
+    "compensator.gain_DE_per_Wb": 1000.0,
+    "compensator.G_CR_ohm": 0.02,
     # unset: half the 2 Hz injection, the 1 Hz the first release had as its default
     "compensator.gate_band_Hz": None,
     "compensator.gate_voltage": 0.97,

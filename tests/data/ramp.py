@@ -8,17 +8,6 @@ from imdrive import Scenario
 from imdrive.config.rated import rated_point
 from imdrive.sweep.model import available_torque_Nm
 
-#: injection-robust's R2 law before round 4, with its keys: the adaptive fuzzy law, which the
-#: whole-range mechanisms these tests pin were measured with (the preset runs the model-based
-#: law since; its own whole-range results are docs/envelope.md's)
-ADAPTIVE_LAW = {
-    "compensator.step_law": "adaptive",
-    "compensator.fine_gain": 1.0,
-    "compensator.gain_E_pu": 463.0,
-    "compensator.gain_DE_pu": 463.0,
-    "compensator.G_CR_pu": 0.0204,
-}
-
 #: The whole-rating envelope's switching bridge: 2 us of dead time compensated as 1.6 us
 BRIDGE = {
     "inverter.model": "switching",
@@ -31,7 +20,7 @@ BRIDGE = {
 def ramp_scenario(
     machine: str, speed_pu: float, overrides: dict, *, load_pu_available: float | None = None
 ) -> Scenario:
-    """``injection-robust`` on ``machine`` with the adaptive law (:data:`ADAPTIVE_LAW`): the
+    """``injection-robust`` on ``machine`` (its model-based R2 law): the
     speed reference ramped from 0.5 s over 3 s to ``speed_pu`` x the rated speed, injection
     and compensator from 5 s, then ``overrides``;
     with ``load_pu_available`` a load step at 4 s to that fraction of the torque the machine
@@ -47,7 +36,6 @@ def ramp_scenario(
             "injection.t_on_s": 5.0,
             "compensator.t_on_s": 5.0,
         }
-        | ADAPTIVE_LAW
         | overrides
     )
     if load_pu_available is None:

@@ -42,9 +42,9 @@ def test_injection_compensator_converges(name):
     r2 = res["R2_hat_ohm"]
     t = res.time_s
     start = m["R2_hat_initial_ohm"]
-    # direction: every decision moves R2_hat towards R2 until it is within 2 %. The presets'
-    # adaptive law (two decisions per window) then overshoots by up to 2.8 % (measured on the
-    # fig6 presets) before it settles; the table law of the first release never passed 2 %.
+    # direction: every decision moves R2_hat towards R2 until it is within 2 %. A law may then
+    # overshoot by up to 2.8 % (the adaptive law of earlier releases did, on the fig6 presets)
+    # before it settles; the table law of the first release never passed 2 %.
     # Steps below 0.1 mohm are the thermal model's modelled heating while a decision is held.
     active = r2[t >= 4.0]
     err = np.abs(active / R2 - 1)

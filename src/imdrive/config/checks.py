@@ -249,19 +249,17 @@ def plugin_rules(sc) -> None:
         object.__setattr__(sc, "plugins", PluginSettings(modules=tuple(modules), settings=tables))
 
 
-#: The ``[compensator]`` keys of the fuzzy laws (the table's scaling and step, the adaptive
-#: law's fine band and drift), which the model-based law (``step_law = "kalman"``) does not read.
+#: The ``[compensator]`` keys of the paper's fuzzy law (the table's scaling and step), which
+#: the model-based law (``step_law = "kalman"``) does not read.
 FUZZY_LAW_KEYS = (
     "gain_E_per_Wb", "gain_DE_per_Wb", "gain_E_pu", "gain_DE_pu", "G_CR_ohm", "G_CR_pu", "table",
-    "fine_gain", "drift_gain", "overshoot_damping", "drift_min_freq_Hz", "drift_max_ohm",
-    "drift_unwind_factor", "drift_shrink_margin", "fine_gain_follows_R2",
 )  # fmt: skip
 
 
 def law_keys_unread(sc) -> None:
     """A warning per key of the R2 law not selected, set away from its default: the fuzzy
-    laws' keys under ``step_law = "kalman"`` (the model-based law has no table, no output level
-    and no drift bound; ``[kalman]`` holds its settings), and ``[kalman]``'s under a fuzzy law.
+    law's keys under ``step_law = "kalman"`` (the model-based law has no table and no output
+    level; ``[kalman]`` holds its settings), and ``[kalman]``'s under the fuzzy law.
     """
     comp = sc.compensator
     kalman = comp.step_law == "kalman"

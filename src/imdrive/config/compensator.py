@@ -8,6 +8,7 @@ from typing import Annotated, Literal
 
 from pydantic import model_validator
 
+from imdrive.config.deprecated_keys import deprecated_key, deprecated_value
 from imdrive.config.r2_kalman import KalmanLawSettings  # noqa: F401  (the law registers)
 from imdrive.config.r2_laws import law_names
 from imdrive.config.validation import Bool, Float, Int, setting, settings
@@ -208,83 +209,14 @@ class CompensatorSettings:
         Int, setting("gating: decisions still skipped after a gated one", ge=0)
     ] = 1
     step_law: Annotated[
-        Literal[law_names()],  # the fuzzy laws and every registered one (config/r2_laws.py)
+        Literal[law_names()],  # the paper's table and every registered law (config/r2_laws.py)
         setting(
-            '"table": R̂2 changes by G_CR_ohm × the table\'s level (the paper); "adaptive": '
-            "inside the first threshold a continuous level fine_gain × (scaled E) and an "
-            "integrated drift rate, for fine and ramp-following adaptation "
-            '(kernels/compensator.py); "kalman": the detected error over its analytic '
-            "sensitivity, filtered by a Kalman filter on R2 and its drift rate (section "
-            "[kalman], kernels/r2_kalman.py); the table's gains, the fine band and the drift "
-            "keys then have no effect"
+            '"table": R̂2 changes by G_CR_ohm × the table\'s level (the paper); "kalman": the '
+            "detected error over its analytic sensitivity, filtered by a Kalman filter on R2 "
+            "and its drift rate (section [kalman], kernels/r2_kalman.py); the table's gains "
+            'then have no effect. "adaptive" (deprecated) runs as "kalman"'
         ),
     ] = "table"
-    fine_gain: Annotated[
-        Float,
-        setting(
-            'step_law = "adaptive": level per unit of scaled E inside the first threshold', gt=0.0
-        ),
-    ] = 2.5
-    drift_gain: Annotated[
-        Float,
-        setting(
-            'step_law = "adaptive": share of each fine step added to the drift rate (0: none)',
-            ge=0.0,
-        ),
-    ] = 0.3
-    overshoot_damping: Annotated[
-        Bool,
-        setting(
-            'step_law = "adaptive": a table-level step of the sign opposite to the last one '
-            "halves the table's steps that follow (to a quarter at most), one of the same sign "
-            "doubles them back (kernels/step_damping.py)"
-        ),
-    ] = True
-    drift_min_freq_Hz: Annotated[
-        Float | None,
-        setting(
-            'step_law = "adaptive" with gating: the drift term is integrated only where the '
-            "mean stator frequency is above this, and reset below it (kernels/compensator.py)",
-            "Hz",
-            ge=0.0,
-            default_doc="the higher injection frequency, at least 1.75 x the MRAS filter's corner "
-            "mras.wc_rad_s/2π (0 without injection)",
-        ),
-    ] = None
-    drift_max_ohm: Annotated[
-        Float | None,
-        setting(
-            'step_law = "adaptive": bound of the drift rate, per decision period',
-            "ohm",
-            ge=0.0,
-            default_doc="3 × the resolved G_CR_ohm",
-        ),
-    ] = None
-    drift_unwind_factor: Annotated[
-        Float,
-        setting(
-            'step_law = "adaptive": the drift gain\'s multiple while the detected error grows '
-            "against the drift (a ramp of R2 that stopped; kernels/drift_rate.py)",
-            ge=1.0,
-        ),
-    ] = 4.0
-    drift_shrink_margin: Annotated[
-        Float,
-        setting(
-            'step_law = "adaptive": the share of itself the detected error must shrink by in a '
-            "decision for the drift not to be integrated towards it (the proportional step "
-            "closing an error, not a ramp's lag; kernels/drift_rate.py)",
-            ge=0.0,
-        ),
-    ] = 0.05
-    fine_gain_follows_R2: Annotated[
-        Bool,
-        setting(
-            'step_law = "adaptive": the fine step keeps its loop gain as R̂2 moves from R̂2(0): '
-            "times R̂2/R̂2(0) and the injection's in-phase sensitivity at R̂2(0) over that at "
-            "R̂2 (kernels/sensitivity.py, fine_loop_gain_ratio)"
-        ),
-    ] = True
 
     thermal_model: Annotated[
         Bool,
@@ -585,3 +517,35 @@ def check_whole_injection_periods(
                 f"the compensator period ({T:g} s, {n_comp} control periods) must hold a whole "
                 f"number of periods of {key} = {f:g} Hz (got {cycles:g})",
             )
+
+
+#: The adaptive step law's keys (removed in 0.2, :mod:`imdrive.kernels.compensator`): what
+#: each patched, and what the model-based law does instead.
+_ADAPTIVE_LAW = {
+    "fine_gain": "the fine band's level per unit of scaled E; the Kalman law's gain (its "
+    "measurement noise [kalman] noise_pu against R2's uncertainty) sets the step",
+    "drift_gain": "the share of a fine step integrated into a drift rate; the Kalman law's "
+    "second state is R2's drift rate ([kalman] drift_pu)",
+    "overshoot_damping": "halving the table's steps after a reversal; the Kalman gain falls as "
+    "the measurements agree",
+    "drift_min_freq_Hz": "the stator frequency below which the drift rate was reset; the Kalman "
+    "law weighs every accepted window by its noise instead",
+    "drift_max_ohm": "the drift rate's bound; the Kalman law's drift rate is bounded by its "
+    "noise model ([kalman] drift_pu)",
+    "drift_unwind_factor": "how fast the drift unwound after a ramp stopped; the Kalman law's "
+    "innovation unwinds it",
+    "drift_shrink_margin": "the shrink of the error that stopped the drift's integration; the "
+    "Kalman law has no integrator to wind up",
+    "fine_gain_follows_R2": "the fine step's gain kept as R̂2 moved; the Kalman law divides each "
+    "window by its sensitivity at the R̂2 in use",
+}
+for _key, _why in _ADAPTIVE_LAW.items():
+    deprecated_key("compensator", _key, _why + ' (step_law = "adaptive" was removed)')
+deprecated_value(
+    "compensator",
+    "step_law",
+    "adaptive",
+    "kalman",
+    "the model-based law gives the adaptive law's step size, ramp following and damping from "
+    "one filter, and did at least as well on every envelope (docs/envelope.md)",
+)

@@ -174,7 +174,7 @@ def injection_frequency_Hz(inj, machine, Ts: float, even: bool) -> float:
     ``R2 / (2 pi L2)`` (Kubota & Matsuse, IEEE Trans. Ind. Appl. 30(5), 1994: the R2
     information in the flux's answer is the same at a fixed multiple of the corner, not at a
     fixed frequency), moved to a whole number of control periods ``Ts`` (an even number for
-    the adaptive law's half-period decisions, ``even``) unless it is one already: exactly
+    half-period decisions, ``even``) unless it is one already: exactly
     2 Hz on Table IV.
 
     Parameters

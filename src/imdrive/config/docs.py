@@ -21,6 +21,7 @@ from pathlib import Path
 
 import annotated_types
 
+from imdrive.config import deprecated_keys
 from imdrive.config.estimators import package_sections
 from imdrive.config.machine import machine_preset, machine_presets
 from imdrive.config.pairs import PAIRS
@@ -297,6 +298,7 @@ def markdown() -> str:
             )
         out += _table(f"`[{table.dotted}]`", intro, members, machine)
     out += _pairs_section()
+    out += deprecated_keys.markdown_lines()
     out.append(_OUTRO)
     return "\n".join(out).rstrip("\n") + "\n"
 

@@ -20,6 +20,7 @@ from typing import Any
 
 from pydantic.fields import FieldInfo
 
+from imdrive.config.deprecated_keys import is_deprecated
 from imdrive.config.profiles import Profile
 from imdrive.errors import ConfigError
 
@@ -204,7 +205,7 @@ def _schema_allows(path: list[str]) -> bool:
     """
     if len(path) == 4 and tuple(path[:2]) == ("plugins", "settings"):
         return True
-    return tuple(path) in setting_paths()
+    return tuple(path) in setting_paths() or is_deprecated(path)
 
 
 def is_setting(parts) -> bool:

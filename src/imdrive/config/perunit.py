@@ -154,10 +154,8 @@ class Resolved:
 
 def _whole_periods(f: float, Ts: float, multiple: int = 1) -> float:
     """``f`` moved to the nearest frequency whose period is a whole number of ``Ts``, that
-    number a multiple of ``multiple`` (2 for the adaptive step law, which decides every half
-    period: :func:`imdrive.kernels.compensator.compensator_step` falls back to whole-period
-    decisions on an odd number, which halved the loop's rate on Krause 50 hp, 500 hp and
-    2250 hp, whose per-unit injection periods came out odd)."""
+    number a multiple of ``multiple`` (2 was for the adaptive step law's half-period decisions,
+    removed in 0.2)."""
     n = max(multiple * round(1.0 / (f * Ts * multiple)), multiple)
     return 1.0 / (n * Ts)
 
@@ -226,16 +224,14 @@ def _resolve(sc) -> Resolved:
         L2_hat = (est.Ll2_H if est.Ll2_H is not None else m.Ll2_H) + M
         f_corner = R2 / (2.0 * math.pi * L2_hat)
         Ts = sc.simulation.Ts_s
-        f1 = _whole_periods(
-            inj.frequency_pu * f_corner, Ts, 2 if comp.step_law == "adaptive" else 1
-        )
+        f1 = _whole_periods(inj.frequency_pu * f_corner, Ts)
         # the others: whole multiples of the first's period where they are whole multiples
         f2 = f1 * (inj.frequency2_pu / inj.frequency_pu if inj.frequency2_pu else 2.0)
         f3 = None if inj.frequency3_pu is None else f1 * inj.frequency3_pu / inj.frequency_pu
     else:
         from imdrive.config.compensator_gains import injection_frequency_Hz
 
-        f1 = injection_frequency_Hz(inj, m, sc.simulation.Ts_s, comp.step_law == "adaptive")
+        f1 = injection_frequency_Hz(inj, m, sc.simulation.Ts_s, False)
         f2 = inj.frequency2_Hz if inj.frequency2_Hz is not None else 2.0 * f1
         f3 = inj.frequency3_Hz
     from imdrive.config.compensator_gains import compensator_gains

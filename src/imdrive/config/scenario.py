@@ -43,6 +43,7 @@ from imdrive.config.control import (  # noqa: F401  (NonNegativeProfile: re-expo
     OpenLoopSettings,
 )
 from imdrive.config.controller_model import ControllerModelSettings
+from imdrive.config.deprecated_keys import drop_deprecated
 from imdrive.config.estimators import (
     ESTIMATOR_SETTINGS,
     AfoSettings,
@@ -420,6 +421,7 @@ class Scenario:
         """
         if not isinstance(data, dict):
             raise ConfigError("scenario", "must be a table")
+        data = drop_deprecated(data)  # keys of earlier releases: a warning, no effect
         with allowing_plugins(allow_plugins):
             scenario = validate(cls, data)
         drive_mode_given(data)  # after each section's rules: [control] without [drive]

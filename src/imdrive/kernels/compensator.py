@@ -37,61 +37,11 @@ of induction motor with rotor resistance adaptation", IEEE Trans. Ind. Appl. 30(
 This project's part is feeding its demodulated flux error to the paper's fuzzy table, the
 gating below and the measurements.
 
-Adaptive step law (``p.fine``, this project's)
-----------------------------------------------
-The published law changes R2_hat by whole multiples of ``G_CR``: with the injection presets'
-20 mohm (2.5 % of R2) and the dead zone ``|G_E E| <= 0.25`` the final error is quantised to
-about +-0.7 %, and a drifting R2 is followed only once the error has grown into the levels
-that give a step as large as the drift per period (a +30 % ramp over 5 s, 24.5 mohm per 0.5 s
-period, lagged by 8 %). With ``p.fine`` the update is a second-order tracking loop:
-
-* outside the first threshold (``|x| >= 1``, ``x = G_E E``) the table's level, as published
-  (coarse steps, the paper's behaviour for large errors);
-* inside it, a continuous level ``CR = fine_gain x`` replaces the table's 0 or +-1: the step
-  is proportional to the detected error, so there is no dead zone and no quantisation. At the
-  presets' scaling ``x`` was measured at 0.14-0.2 per % of R2 error (150 and 1000 rpm, 3
-  and 12 N m), so the default ``fine_gain = 2.5`` moves R2_hat by 0.7-1 times the error per
-  whole-period window (half of that per half-period decision, the window below);
-* a drift rate ``r`` (ohm per period) integrates the fine steps,
-  ``r <- clip(r + drift_gain G_CR CR, +-drift_max)``, and is added to every update:
-  ``R2_hat <- R2_hat + G_CR CR + r``. A ramp of R2 (heating) is then followed with zero
-  steady lag (a type-2 loop, as a phase-locked loop follows a frequency ramp). It is
-  integrated only inside the fine band, so the large initial steps do not wind it up, and it
-  is not applied while the gating freezes R2_hat.
-* the drift is not integrated *towards* the error while the error shrinks (``x`` and the
-  change ``DE`` of the input of opposite signs and ``x`` of the drift's sign): that is the
-  proportional step closing an initial error, not a ramp of R2, and integrating it wound the
-  drift up by ``drift_gain`` times the whole fine band's travel, which only an equal area of
-  overshoot unwound (a type-2 loop's step response; its damping ``~ sqrt(p / drift_gain) / 2``
-  falls with the loop's gain per decision ``p``, 0.1-0.3 here). Measured from
-  R2_hat(0) = 0.7 R2 on the 2.2 kW Aalto machine at half speed and rated torque: the drift
-  reached 1.1 % of R2 per decision at the crossing and R2_hat went on to +2.6 % (before the
-  run's end, +2.1 %); without integrating while the error shrinks it approaches from below
-  and ends -0.2 %. A ramp still winds the drift up (the error grows until the drift follows
-  it), and the drift is always unwound where it pushes against the error; a shrink of less
-  than ``p.drift_margin`` of the error per decision is a ramp's lag, not a closing, and a
-  drift against a growing error (a ramp that stopped) unwinds ``p.drift_unwind`` times
-  faster (:mod:`imdrive.kernels.drift_rate`);
-* the fine step keeps its loop gain as R2_hat moves away from ``R2_hat(0)`` (``p.R2_tuned``),
-  where ``G_CR`` and the injection frequency were resolved
-  (:func:`~imdrive.kernels.sensitivity.fine_loop_gain_ratio`).
-* below the stator frequency ``p.drift_fmin`` (period mean, with the gating on; default the
-  higher injection frequency, and at least 1.75 times the MRAS filter's corner
-  ``wc/2 pi``, above which that filter lags by less than 30 degrees) the drift term is reset
-  and not integrated: there the type-2 loop limit-cycled (measured at 50 rpm, 6 N m,
-  R2_hat(0) = 0.8 R2: R2_hat swinging +-7 % with a 3 s period, where the type-1 loop
-  converges to 0.7 %; at 0.1 x rated speed regenerating at the rated torque from 0.8 R2, a
-  swing with a 10 s period at 3.2 Hz on Table IV and Krause 3 hp and at 2.5 Hz on Krause
-  50 hp, 1.3 and 1.05 times the corner, above the higher injection frequency of 2.7 and
-  1.5 Hz). The speed and slip respond to an R2_hat change through the speed loop and the
-  MRAS's filtered voltage model more slowly there, and the second integrator took the phase
-  margin. A heating ramp is then followed with a lag, not zero;
-* decisions every half compensator period, each on the mean over the last whole period
-  (a sliding window of two half-period sums, still whole injection periods): a measurement
-  window of 0.5 s alone lets R2 move 3 % (the ramp above) before its error is seen. The
-  load gating then compares each half period's mean iq* with the same half one period
-  earlier, so the injection's own iq* ripple does not trip it. The drift rate is then per
-  half period.
+The adaptive step law of earlier releases (``step_law = "adaptive"``: a fine band, an
+integrated drift rate bounded, unwound and reset at low frequency, overshoot damping,
+half-period decisions) was removed in 0.2: the model-based law (``p.kf``) gives its step
+size, ramp following and damping from one filter, and did at least as well on every envelope
+(docs/envelope.md, docs/machine-envelope.md).
 
 Gating and injection-frequency scheduling (``p.gate``): :mod:`imdrive.kernels.gating`.
 """
@@ -108,7 +58,6 @@ from imdrive.kernels.detection import (  # noqa: F401  (MAX_HP_CORRECTION: old p
     compensated_product,
     slip_coupling,
 )
-from imdrive.kernels.drift_rate import drift_update
 from imdrive.kernels.fuzzy import lookup
 from imdrive.kernels.gating import (  # noqa: F401  (compensator_gate_sample: old path)
     _gate_decide,
@@ -117,12 +66,9 @@ from imdrive.kernels.gating import (  # noqa: F401  (compensator_gate_sample: ol
 from imdrive.kernels.r2_kalman import kalman_decision, kalman_hold
 from imdrive.kernels.records import b1, c16, f8, record_dtype
 from imdrive.kernels.sensitivity import (  # noqa: F401  (in_phase_sensitivity: old path)
-    fine_loop_gain_ratio,
     in_phase_sensitivity,
-    injection_sensitivity_ratio,
     saturation_sensitivity_ratio,
 )
-from imdrive.kernels.step_damping import table_step_factor
 
 #: The quantiser's first threshold on the scaled E (level 1 starts here; Table III's axes).
 THRESHOLD_1 = 1.0
@@ -151,14 +97,9 @@ COMPENSATOR_PARAMS = record_dtype(
         ("gate_df", f8),  # blind band half-width around the injection frequency, Hz
         ("gate_hold", f8),  # decisions skipped after a gating event
         ("inj_freq2", f8),  # the alternative injection frequency, Hz (0: none)
-        ("fine", b1),  # adaptive step law: fine level and drift term
-        ("fine_gain", f8),  # fine level per unit of scaled E inside the first threshold
-        ("drift_gain", f8),  # share of each fine step added to the drift rate
-        ("drift_max", f8),  # bound of the drift rate, ohm per compensator period
         ("inj_v_lo", f8),  # injection headroom: voltage use where the amplitude starts to fall
         ("inj_v_hi", f8),  # and where it reaches zero (0: no back-off)
         ("inj_hp_wc", f8),  # MRAS filter cut-off the detection compensates, rad/s (0: plain)
-        ("drift_fmin", f8),  # adaptive law: drift integrated only above this |f_e|, Hz (gated)
         ("inj_freq3", f8),  # a third injection frequency for the schedule, Hz (0: two only)
         ("inj_fw", b1),  # estimation headroom: the field weakening leaves the injection room
         ("inj_v_peak", f8),  # peak voltage use per injection period it holds while injecting
@@ -172,10 +113,6 @@ COMPENSATOR_PARAMS = record_dtype(
         ("slip_decouple", b1),  # detection: remove the slip's coupling of e_q0 into e_d0
         ("cpl_wc", f8),  # the MRAS filter cut-off that decoupling undoes, rad/s (0: none)
         ("cpl_wmin", f8),  # decoupling from this |w_e| (full at twice it), rad/s (0: always)
-        ("damp", b1),  # adaptive law: overshoot damping of the table's steps (step_damping.py)
-        ("drift_unwind", f8),  # adaptive law: drift gain's multiple against a growing error
-        ("drift_margin", f8),  # and the shrink of the error that counts as closing it
-        ("R2_tuned", f8),  # adaptive law: R2_hat its fine gain is tuned at, ohm (0: fixed gain)
         ("kf", b1),  # the Kalman law (r2_kalman.py) instead of the table's levels
         ("kf_r", f8),  # its measurement noise, relative to R2_hat, per decision
         ("kf_q", f8),  # its drift-rate noise, relative to kf_R2, 1/s per sqrt(s)
@@ -205,11 +142,7 @@ COMPENSATOR_STATE = record_dtype(
         ("g_cnt", f8),  # samples in the sums
         ("g_hold", f8),  # decisions still to skip
         ("frozen", f8),  # why the last decision was skipped (bit mask; 0: updated)
-        ("drift", f8),  # adaptive step law: R2 drift rate, ohm per compensator period
-        ("acc_prev", f8),  # adaptive step law: sum of the input over the last half period, Wb
-        ("halves", f8),  # half periods in the sliding window since the last reset (0, 1, 2)
-        ("g_iq_prev2", f8),  # mean iq* of the half period before the previous one, A
-        ("g_iq_known2", b1),  # g_iq_prev2 holds a value
+        ("drift", f8),  # Kalman law: R2's drift rate, ohm/s
         ("inj_back", f8),  # injection headroom: 1 - the amplitude factor in use
         ("v_peak", f8),  # highest voltage use in the present injection period
         ("g_we", f8),  # sum of the controller's stator frequency over the period, rad/s
@@ -217,18 +150,14 @@ COMPENSATOR_STATE = record_dtype(
         ("inj_f_prev", f8),  # frequency in use at the last decision, Hz (three-frequency mode)
         ("v_peak_last", f8),  # peak voltage use over the last whole injection period (0: none)
         ("inj_scale", f8),  # estimation headroom: the amplitude's scale with the flux (0: 1)
-        ("g_err_half", f8),  # adaptive step law: speed-error sum of the last half period
-        ("g_cnt_half", f8),  # and its samples
         ("live", b1),  # the last decision updated R2_hat from the detected error
         ("th_rise", f8),  # thermal model: rotor temperature above ambient, K
         ("th_R2_cold", f8),  # thermal model: R2 at ambient, calibrated (0: not yet), ohm
-        ("th_n", f8),  # thermal model: fine decisions averaged into th_R2_cold so far
+        ("th_n", f8),  # thermal model: decisions averaged into th_R2_cold so far
         ("inj_running", b1),  # the injection has started
-        ("inj_new", b1),  # it started since the last decision (adaptive law: a settling period)
+        ("inj_new", b1),  # it started since the last decision (Kalman law: a settling period)
         ("cpl_d", f8),  # the part of e_d0 the slip couples in from e_q0, Wb
         ("cpl_ws", f8),  # the slip command it uses, low-passed over T2_hat, rad/s
-        ("damp_n", f8),  # overshoot damping: halvings of the table's steps in force
-        ("big_sign", f8),  # and the sign of the last table-level step (0: none yet)
         ("kf_P00", f8),  # Kalman law: its covariance, R2, ohm^2 (0: the prior not yet set)
         ("kf_P01", f8),  # R2 and its rate, ohm^2/s
         ("kf_P11", f8),  # the rate, ohm^2/s^2
@@ -324,31 +253,9 @@ def compensator_update(p, s, m, table, E):
         # the same loop gain at every flux level: the amplitude follows the flux factor
         E /= max(s.inj_scale, 0.1)
         DE /= max(s.inj_scale, 0.1)
-    if p.fine and p.demodulated and p.inj_freq > 0.0:
-        # the same loop gain at every injection frequency of the schedule
-        k = injection_sensitivity_ratio(p, s, m)
-        E *= k
-        DE *= k
     x = p.G_E * E
     cr = lookup(table, x, p.G_DE * DE)
     dr = p.G_CR * cr
-    if p.fine:
-        if p.gate and s.fe_mean < p.drift_fmin:
-            # low stator frequency: no drift term (a type-1 loop); see the module docstring
-            s.drift = 0.0
-        if abs(x) < THRESHOLD_1:  # inside the table's first threshold: a continuous level
-            cr = p.fine_gain * x * fine_loop_gain_ratio(p, m)
-            dr = p.G_CR * cr
-            if not (p.gate and s.fe_mean < p.drift_fmin):
-                drift_update(p, s, x, p.G_E * DE, dr)
-        elif p.damp:
-            dr *= table_step_factor(s, cr)
-        if abs(x) >= THRESHOLD_1 and x * s.drift < 0.0:
-            # a large error against the drift: the drift is wrong (it was not integrated out
-            # here and kept walking R2_hat away while the table's level was 0 — measured at
-            # 600 rpm, 12 N m, R2_hat(0) = 1.2 R2: -9.5 % after 10 s)
-            s.drift = 0.0
-        dr += s.drift
     r2 = m.R2_hat + dr
     m.R2_hat = min(max(r2, p.R2_min), p.R2_max)
     s.cr = cr
@@ -369,9 +276,6 @@ def compensator_step(p, s, m, table, e_d0, t, k, w_e=0.0):
     n = max(int(p.n), 1)
     x = s.demod if p.demodulated else e_d0  # the input: e_d0 (paper) or demodulated
     s.acc += x
-    if p.fine and n % 2 == 0:
-        _compensator_step_sliding(p, s, m, table, k, n, w_e)
-        return
     if k % n != 0:
         return
     if p.average and (s.started or p.kf):  # (the Kalman law: always the window's mean)
@@ -389,34 +293,6 @@ def compensator_step(p, s, m, table, e_d0, t, k, w_e=0.0):
                 kalman_hold(p, s, m, p.kf_T)
             return
     compensator_update(p, s, m, table, E)
-
-
-@njit(cache=True)
-def _compensator_step_sliding(p, s, m, table, k, n, w_e):
-    """The adaptive step law's decisions: every half period, on the mean of the input over the
-    last whole period (two half-period sums), so a drift is seen half a period sooner. A
-    decision needs both halves since the start or the last freeze."""
-    h = n // 2
-    if k % h != 0:
-        return
-    acc = s.acc
-    s.acc = 0.0
-    full = s.halves >= 1.0
-    E = (s.acc_prev + acc) / n
-    s.acc_prev = acc
-    s.halves = min(s.halves + 1.0, 2.0)
-    if p.gate:
-        flags = _gate_decide(p, s, w_e)
-        s.frozen = float(flags)
-        if flags != 0:
-            s.started = False
-            s.halves = 0.0  # the window restarts after a frozen half
-            s.live = False
-            return
-    if full:
-        compensator_update(p, s, m, table, E)
-    else:
-        s.live = False
 
 
 @njit(cache=True)

@@ -48,9 +48,10 @@ frequency in use while it is at least ``p.gate_df`` from ``|f_e|`` and otherwise
 lowest of the three that is, so that *both* side bands stay ``p.gate_df`` away from DC: with
 two frequencies an operating point midway between them (``|f_e|`` = 3 Hz for 2 and 4 Hz)
 has a side band at 1 Hz whichever is used, and R2_hat ended 4 % off there (150 rpm,
--12 N m). As the flux response falls with the frequency, the adaptive law scales its input
-by :func:`injection_sensitivity_ratio`. The envelope sweep's share of converged cells with
-2, 4 and 6 Hz and a 1.5 Hz band is generated in docs/envelope.md.
+-12 N m). As the flux response falls with the frequency, the Kalman law divides its input
+by the sensitivity at the frequency in use (:mod:`imdrive.kernels.r2_kalman`). The envelope
+sweep's share of converged cells with 2, 4 and 6 Hz and a 1.5 Hz band is generated in
+docs/envelope.md.
 """
 
 from __future__ import annotations
@@ -120,24 +121,10 @@ def _gate_decide(p, s, w_e):
     flags = int(s.g_flags)
     if s.g_cnt > 0.0:
         err, cnt = s.g_err, s.g_cnt
-        if p.fine:
-            # half periods: the speed error's mean over the whole period that ends (both
-            # halves), so the injection's own speed ripple averages out as the docstring says
-            # (over a half period it did not: at 3400 rpm and 0.4 of the rated flux, +-7 rpm
-            # of ripple held the compensator frozen)
-            err += s.g_err_half
-            cnt += s.g_cnt_half
-            s.g_err_half = s.g_err
-            s.g_cnt_half = s.g_cnt
         if abs(err / cnt) > p.gate_dw:
             flags |= 1
         iq = s.g_iq / s.g_cnt
-        if p.fine:  # half periods: compare with the same half of the previous period
-            if s.g_iq_known2 and abs(iq - s.g_iq_prev2) > p.gate_diq:
-                flags |= 2
-            s.g_iq_prev2 = s.g_iq_prev
-            s.g_iq_known2 = s.g_iq_known
-        elif s.g_iq_known and abs(iq - s.g_iq_prev) > p.gate_diq:
+        if s.g_iq_known and abs(iq - s.g_iq_prev) > p.gate_diq:
             flags |= 2
         s.g_iq_prev = iq
         s.g_iq_known = True
@@ -164,7 +151,7 @@ def _gate_decide(p, s, w_e):
             flags |= 8
     if s.inj_back > 0.5:  # the injection backed off (voltage headroom, field weakening)
         flags |= 32
-    if (p.fine or p.kf) and s.inj_new:
+    if p.kf and s.inj_new:
         # the injection started in this period: its first windows held a fraction of a period
         # and the flux's start-up transient (measured on injection-fig6: the first two
         # decisions stepped R2_hat 0.5 % the wrong way); settle as after a frequency switch

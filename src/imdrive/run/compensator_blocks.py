@@ -1,6 +1,6 @@
 """The R2 compensator's records from the scenario: the injection, the detection (its own flux
 error for an estimator that gives none), the gating and schedule, the step law (the fuzzy
-table's, the adaptive law's or the model-based one's) and the rotor thermal model. Called by
+table's or the model-based one's) and the rotor thermal model. Called by
 :func:`imdrive.run.blocks.drive_records`; the rest of the drive's blocks are there.
 """
 
@@ -98,7 +98,7 @@ def headroom_rate_per_s(rate_per_s: float, gain_per_period: float, f_inj_Hz: flo
 
 
 def _gating(sc, r) -> dict:
-    """The compensator's gating, frequency-schedule and step-law parameters (off: zeros)."""
+    """The compensator's gating and frequency-schedule parameters (off: zeros)."""
     comp = sc.compensator
     on = comp.gating if comp.gating is not None else comp.input == "demodulated"
     out = {}
@@ -123,19 +123,6 @@ def _gating(sc, r) -> dict:
             ),
             "fw_v": fw_v,
             "fw_rate": sc.control.field_weakening_rate,
-        }
-    if comp.step_law == "adaptive":
-        dmax = comp.drift_max_ohm if comp.drift_max_ohm is not None else 3.0 * r.G_CR
-        out |= {
-            "fine": True,
-            "fine_gain": comp.fine_gain,
-            "drift_gain": comp.drift_gain,
-            "drift_max": dmax,
-            "drift_fmin": _drift_fmin(sc, r),
-            "damp": comp.overshoot_damping,
-            "drift_unwind": comp.drift_unwind_factor,
-            "drift_margin": comp.drift_shrink_margin,
-            "R2_tuned": r.R2_hat if comp.fine_gain_follows_R2 else 0.0,
         }
     if not (on and comp.enabled):
         return out
@@ -193,18 +180,6 @@ def _kalman(sc, D: Resolved) -> dict:
         "kf_R2": D.R2_hat,
         "kf_T": D.n_comp * sc.simulation.Ts_s,
     }
-
-
-def _drift_fmin(sc, r) -> float:
-    """Stator frequency below which the adaptive law has no drift term, Hz (0: never): the
-    higher injection frequency, at least 1.75 times the MRAS filter's corner (its lag 30
-    degrees there; kernels/compensator.py, the adaptive law)."""
-    comp = sc.compensator
-    if comp.drift_min_freq_Hz is not None:
-        return comp.drift_min_freq_Hz
-    if r.inj_amp <= 0.0:
-        return 0.0
-    return max(r.inj_f1, r.inj_f2, 1.75 * sc.mras.wc_rad_s / (2.0 * math.pi))
 
 
 def fuzzy_lookup_table(sc: Scenario) -> np.ndarray:

@@ -1,4 +1,4 @@
-"""The three compensators within 50-1400 rpm and the adaptive law's gains, for
+"""The three compensators within 50-1400 rpm, for
 ``docs/envelope.md`` ("Within 50–1400 rpm: the three compensators"), measured here and rendered
 by :mod:`imdrive.studies.doctables` (``python -m imdrive.studies.doctables --run NAME``).
 
@@ -11,11 +11,8 @@ by :mod:`imdrive.studies.doctables` (``python -m imdrive.studies.doctables --run
 * :func:`measure_off_grid` runs the injection variant at points off the sweep's grid
   (:data:`OFF_GRID`), with the uncompensated drive there for the stable region;
   :func:`render_off_grid`.
-* :func:`measure_adaptive_gains` runs the sweep's injection variant with each pair of
-  :data:`GAINS` (``compensator.fine_gain``, ``compensator.drift_gain``) in the four
-  :data:`GAIN_CASES`: a +30 % R2 ramp within 5 s at 150 and 1000 rpm (the largest R̂2 lag and
-  the final error), and two points off the sweep's grid (R̂2's peak-to-peak over the last 3 s
-  and the final error); :func:`render_adaptive_gains`.
+
+The adaptive law's gain table (``adaptive-gains``) went with that law in 0.2.
 """
 
 from __future__ import annotations
@@ -245,97 +242,6 @@ def render_misses(df: pd.DataFrame) -> list[str]:
     return [line.replace("| -", "| −") for line in out]
 
 
-# ---------------------------------------------------------------------------------------------
-# the adaptive law's gains
-
-#: (fine_gain, drift_gain) pairs, the injection variant's first
-GAINS = ((1.0, 0.3), (1.5, 0.45), (1.75, 0.4), (2.0, 0.3), (1.5, 0.6), (2.5, 0.3))
-#: name -> (speed rpm, load N m, R̂2(0)/R2, R2 ramp?): the ramps start exact and R2 rises
-#: +30 % from 8 to 13 s (19 s runs); the points off the grid start from 0.85 R2 and run 20 s
-#: after the compensator starts, so the last 3 s show a limit cycle, not the convergence
-GAIN_CASES = {
-    "ramp at 150 rpm": (150.0, 12.0, 1.0, True),
-    "ramp at 1000 rpm": (1000.0, 12.0, 1.0, True),
-    "45 rpm, 7 N m": (45.0, 7.0, 0.85, False),
-    "650 rpm, 11 N m": (650.0, 11.0, 0.85, False),
-}
-RAMP_FROM_S = 8.0
-POINT_END_S = 24.0
-LAST_S = 3.0
-
-
-def _gain_scenario(case: str, fine: float, drift: float):
-    """The ``envelope`` sweep's injection variant in ``case`` with the gains ``fine``,
-    ``drift`` (R̂1/R1 = 1)."""
-    from imdrive.sweep import load_sweep
-
-    speed, load, r2, ramp = GAIN_CASES[case]
-    ov = [f"compensator.fine_gain={fine}", f"compensator.drift_gain={drift}"]
-    if ramp:
-        ov += [
-            f"plant.R2_scale={{initial=1,changes=[{{at={RAMP_FROM_S},to=1.3,over=5}}]}}",
-            "simulation.t_end_s=19",
-        ]
-    else:
-        ov.append(f"simulation.t_end_s={POINT_END_S}")
-    sc = load_sweep(SWEEP).scenario_for((speed, load, r2, 1.0, "injection"))
-    return sc.with_overrides(ov)
-
-
-def measure_adaptive_gains() -> pd.DataFrame:
-    """One row per gain pair and case: ``fine_gain``, ``drift_gain``, ``case``,
-    ``lost_control`` (or diverged), ``largest_lag_pct`` (the ramps: the largest |R̂2/R2 − 1|
-    from the ramp's start), ``R2_ptp_pct`` (the other points: R̂2/R2's peak-to-peak over the
-    last 3 s) and ``R2_error_final_pct`` (at the end), all in %."""
-    from imdrive.run.batch import simulate_batch
-
-    runs = [(f, d, case) for f, d in GAINS for case in GAIN_CASES]
-    batch = simulate_batch(
-        [_gain_scenario(case, f, d) for f, d, case in runs], logs=True, log_every=10
-    )
-    rows = []
-    lost = _flag(batch.metrics["lost_control"]) | _flag(batch.metrics["diverged"])
-    for (fine, drift, case), res, bad in zip(runs, batch.results, lost, strict=True):
-        t = res["time_s"]
-        rel = 100.0 * (res["R2_hat_ohm"] / res["R2_ohm"] - 1.0)
-        ramp = GAIN_CASES[case][3]
-        row = {"fine_gain": fine, "drift_gain": drift, "case": case}
-        row["lost_control"] = bool(bad)
-        row["largest_lag_pct"] = float(np.abs(rel[t >= RAMP_FROM_S]).max()) if ramp else np.nan
-        row["R2_ptp_pct"] = np.nan if ramp else float(np.ptp(rel[t > t[-1] - LAST_S]))
-        row["R2_error_final_pct"] = float(rel[-1])
-        rows.append(row)
-    return pd.DataFrame(rows).round(4)
-
-
-def render_adaptive_gains(df: pd.DataFrame) -> list[str]:
-    """One row per gain pair, one column per case: ``lag, final`` for the ramps,
-    ``peak-to-peak, final`` for the points off the grid."""
-    from imdrive.config.compensator import CompensatorSettings
-    from imdrive.sweep import load_sweep
-
-    variant = load_sweep(SWEEP).scenario_for((150.0, 0.0, 1.0, 1.0, "injection")).compensator
-    law = CompensatorSettings()
-    cases = list(dict.fromkeys(df["case"]))
-    out = ["| fine_gain, drift_gain | " + " | ".join(cases) + " |", "|---|" + "---|" * len(cases)]
-    for (fine, drift), g in df.groupby(["fine_gain", "drift_gain"], sort=False):
-        label = f"{fine:g}, {drift:g}"
-        if (fine, drift) == (variant.fine_gain, variant.drift_gain):
-            label += " (the injection variant)"
-        elif (fine, drift) == (law.fine_gain, law.drift_gain):
-            label += " (the law's defaults)"
-        cells = []
-        for case in cases:
-            r = g[g["case"] == case].iloc[0]
-            first = r["largest_lag_pct"] if GAIN_CASES[case][3] else r["R2_ptp_pct"]
-            final = r.R2_error_final_pct
-            final = "0.00" if round(final, 2) == 0 else _minus(f"{final:+.2f}")
-            cell = f"{first:.2f} %, {final} %"
-            cells.append(cell + (" (lost control)" if r["lost_control"] else ""))
-        out.append(f"| {label} | " + " | ".join(cells) + " |")
-    return out
-
-
 register(
     DocTable(
         "envelope-compensators",
@@ -362,14 +268,5 @@ register(
         "data/envelope_off_grid.csv",
         render_off_grid,
         measure_off_grid,
-    )
-)
-register(
-    DocTable(
-        "adaptive-gains",
-        "envelope.md",
-        "data/adaptive_gains.csv",
-        render_adaptive_gains,
-        measure_adaptive_gains,
     )
 )

@@ -2,13 +2,15 @@
 field weakening"), measured on the injection presets and rendered by
 :mod:`imdrive.studies.doctables` (``python -m imdrive.studies.doctables --run NAME``).
 
-* :func:`measure_step_laws`: the published table against ``compensator.step_law =
-  "adaptive"``: from R̂2(0) = 1.2 and 0.8 R2 on the four injection presets (time to 2 %, final
+* :func:`measure_step_laws`: the published table (the injection presets' scaling until 0.2:
+  E and DE by 1000/Wb, 20 mohm per level) against the presets' model-based law
+  (``compensator.step_law = "kalman"``): from R̂2(0) = 1.2 and 0.8 R2 on the four injection
+  presets (time to 2 %, final
   R̂2 error, speed error at the end), and a +30 % R2 ramp within 5 s after convergence at 150
   and 1000 rpm (largest R̂2 lag after 6 s);
 * :func:`measure_R1_estimation`: at 150 rpm, rated load, R̂1 = 0.9 R1 fixed against estimated
   (``mras.R1_rate_per_s = 0.3``), and the thermal model (R1, R2 +13-15 % in 40 s, R̂1 and R̂2
-  starting exact) without and with it; the adaptive step law in every run.
+  starting exact) without and with it; the Kalman law in every run.
 """
 
 from __future__ import annotations
@@ -20,8 +22,17 @@ from imdrive.config.scenario import Scenario
 from imdrive.studies.doctable import DocTable, register
 
 PRESETS = ("injection-fig5", "injection-fig5-150rpm", "injection-fig6", "injection-fig6-150rpm")
-LAWS = {"published table": (), "adaptive": ('compensator.step_law="adaptive"',)}
-R1_ON = ('compensator.step_law="adaptive"', "mras.R1_rate_per_s=0.3")
+LAWS = {
+    "published table": (
+        'compensator.step_law="table"',
+        'compensator.table="paper"',
+        "compensator.gain_E_per_Wb=1000",
+        "compensator.gain_DE_per_Wb=1000",
+        "compensator.G_CR_ohm=0.02",
+    ),
+    "Kalman": (),
+}
+R1_ON = ("mras.R1_rate_per_s=0.3",)
 
 
 def _ramp(preset: str, extra=()) -> Scenario:
@@ -131,7 +142,7 @@ def _thermal(extra) -> Scenario:
 
 
 def measure_R1_estimation() -> pd.DataFrame:
-    """One row per variant (``R1 fixed`` with the adaptive law, ``R1 estimated``): final
+    """One row per variant (``R1 fixed``, ``R1 estimated``; the Kalman law in both): final
     R̂1/R1, R̂2 error and speed error (R̂1 = 0.9 R1, 16 s), and the largest speed error of the
     0.5 s means after 8 s under the thermal model."""
     from imdrive.run.batch import simulate_batch
@@ -139,7 +150,7 @@ def measure_R1_estimation() -> pd.DataFrame:
 
     R1 = Scenario.read("injection-fig5-150rpm").machine.R1_ohm
     variants = {
-        "R̂1 = 0.9 R1, fixed": ('compensator.step_law="adaptive"',),
+        "R̂1 = 0.9 R1, fixed": (),
         "with R1 estimation": R1_ON,
     }
     scs = []
