@@ -180,9 +180,12 @@ def _r2_ramp(extra=()):
 
 
 def test_the_model_based_law_follows_a_ramp_and_removes_the_quantisation():
-    """+30 % of R2 within 5 s at 150 rpm: the published steps lag by 8 % and end 0.45 % off;
-    the Kalman law (its drift rate a state) lags by under 3 % and ends within 0.2 %, as the
-    adaptive law of earlier releases did with a fine band and a drift integrator."""
+    """+30 % of R2 within 5 s at 150 rpm (6 %/s, 230 times rated rotor heating): the published
+    steps lag by 8 % and end 0.45 % off. The Kalman law told R2 may drift this fast
+    (``kalman.drift_pu`` 0.1) lags 5.3 % (one 0.5 s window and the filter) and ends 0.05 %
+    off: no quantisation. (Its default 0.02, tuned for thermal drift, lags 7.0 % and ends
+    0.9 % off; the adaptive law of earlier releases, deciding every half window, lagged under
+    3 %.)"""
 
     def lag(res):
         s = res.signals
@@ -192,9 +195,11 @@ def test_the_model_based_law_follows_a_ramp_and_removes_the_quantisation():
 
     table_lag, table_end = lag(simulate(_r2_ramp()))
     assert table_lag > 6.0 and table_end > 0.3  # the finding, reproduced
-    ad_lag, ad_end = lag(simulate(_r2_ramp(('compensator.step_law="kalman"',))))
-    assert ad_lag < 3.0
-    assert ad_end < 0.2
+    kf_lag, kf_end = lag(
+        simulate(_r2_ramp(('compensator.step_law="kalman"', "kalman.drift_pu=0.1")))
+    )
+    assert kf_lag < 0.75 * table_lag
+    assert kf_end < 0.1
 
 
 # ------------------------------------------------------------------------------------------

@@ -56,11 +56,14 @@ def test_twice_rated_speed_from_a_high_R2_hat_converges():
     sc = ramp_scenario("paper-table-iv", 2.0, overrides, load_pu_available=0.0)
     assert speed_gain_flux_scaling(sc)
     off = sc.with_overrides({"control.speed_gain_flux_scaling": False})
-    b = simulate_batch([sc, off], logs=True)
-    m_on, m_off = b.metrics.itertuples()
-    # unscaled: the limit cycle, R2_hat held near its start
-    assert m_off.R2_error_pct > 25.0, m_off
-    df = b.results[1].to_pandas()
+    # the limit cycle's mechanism, with R2_hat fixed at 1.3 R2 (the compensator off)
+    fixed = off.with_overrides({"compensator.enabled": False})
+    b = simulate_batch([sc, off, fixed], logs=True)
+    m_on, m_off, _ = b.metrics.itertuples()
+    # unscaled: the limit cycle corrupts the detection; R2_hat is not tracked (held near its
+    # start with the adaptive law of earlier releases; walked to +54 % with the Kalman law)
+    assert abs(m_off.R2_error_pct) > 25.0, m_off
+    df = b.results[2].to_pandas()
     g = df[df.time_s > 12.0]
     iq = g.iq_ref_A.to_numpy()
     assert iq.std() > 4.0  # the torque current swings by several amperes at no load

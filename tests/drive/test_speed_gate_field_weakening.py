@@ -70,9 +70,11 @@ def _scenario(machine: str):
 @pytest.mark.slow
 @pytest.mark.parametrize("machine", ["paper-table-iv", "krause-3hp"])
 def test_r2_converges_at_twice_rated_speed_and_full_load(machine):
-    """17 s after the compensator's start, from R̂2(0) = 0.7 R2: within 2 % (measured -0.6 %
-    on both), held less than a third of the time (18 and 15 %). The unweighted gate: -6.8 %,
-    held 68 and 66 % of the time."""
+    """17 s after the compensator's start, from R̂2(0) = 0.7 R2: within 2 %, and held well
+    under the unweighted gate's share (-6.8 %, held 68 and 66 % of the time). The Kalman law
+    decides on whole injection periods and settles two of them after a frequency switch: held
+    35 % on Krause 3 hp (the adaptive law's half-period decisions held 15-18 %; the cost is in
+    CHANGELOG.md)."""
     row = next(simulate_batch([_scenario(machine)]).metrics.itertuples())
     assert abs(row.R2_error_pct) < 2.0
-    assert row.R2_held_pct < 33.0
+    assert row.R2_held_pct < 40.0
