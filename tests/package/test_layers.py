@@ -118,6 +118,8 @@ INTRA = {
         "foc",
         "figures",
         "nameplate_lee",
+        "nameplate_catalogue",
+        "nameplate_fit",
         "nameplate",
         "nameplate_cli",
         "circuit_from_tests",

@@ -39,6 +39,7 @@ def test_from_the_nameplate_alone_the_published_method_beats_the_assumed_breakdo
     assert lee["breakdown_err_pct"].abs().max() < fit["breakdown_err_pct"].abs().max() / 4
 
 
+@pytest.mark.filterwarnings("ignore::DeprecationWarning")  # lee, on purpose
 def test_default_loss_split_leaves_a_copper_only_circuit_no_stator_copper_loss():
     """The library's efficiencies count copper losses only: the method's typical core,
     friction and stray losses do not fit in them, and it says so."""

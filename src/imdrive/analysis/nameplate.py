@@ -4,82 +4,41 @@ A motor's nameplate gives rated power ``P``, line voltage ``V``, frequency ``f``
 speed ``n``, line current ``I``, power factor ``cos phi`` and efficiency ``eta``; a NEMA
 nameplate adds the design letter (the leakage split) and the code letter (locked-rotor kVA
 per hp); a catalogue adds the breakdown torque ratio ``T_bd / T_n`` and the starting current
-ratio ``I_st / I_n``. Two methods estimate the single-cage T-circuit (``R1``, ``R2``, ``X1``,
-``X2``, ``X_M``) that imdrive's plant model simulates:
+ratio ``I_st / I_n``. :func:`estimate_circuit` estimates the single-cage T-circuit (``R1``,
+``R2``, ``X1``, ``X2``, ``X_M``) that imdrive's plant model simulates:
 
-``method="lee"`` (recommended: :func:`estimate_circuit_lee`)
-    The published nameplate-only iterative method of K. Lee, S. Frank, P. K. Sen,
-    L. Gentile Polese, M. Alahmad, C. Waters, "Estimation of induction motor equivalent
-    circuit parameters from nameplate data", Proc. North American Power Symposium (NAPS),
-    2012, doi:10.1109/NAPS.2012.6336384 (equations and citation check in
-    :mod:`imdrive.analysis.nameplate_lee`). It splits the losses by typical fractions (core,
-    friction and windage, stray load), so ``R1`` is a stator copper resistance, and takes the
-    leakage from the locked-rotor current (code letter, or a catalogue's ``I_st / I_n``). Its
-    core-loss resistance is dropped (the plant has no iron-loss branch), and the plant carries
-    no friction or stray loss: loaded to rated torque, the plant turns a little faster and
-    draws a little less current than the nameplate says, by the fractions of loss it does not
-    carry (reported as ``rated_torque`` and ``rated_current`` residuals). On the library's
-    machines, from the nameplate and its code letter alone, it reproduces the published
-    circuits' breakdown torque within the bound docs/nameplate.md states
-    (:mod:`imdrive.studies.nameplate_check`).
+``method="catalogue"`` (the one to use: :func:`estimate_circuit_catalogue`)
+    Uses every figure given (equations and sources in
+    :mod:`imdrive.analysis.nameplate_catalogue`): the efficiency through a loss split (core,
+    friction and windage, stray load), so that ``R1`` is the stator's copper resistance; the
+    rated point's power factor; the leakage from the breakdown torque when the catalogue gives
+    it, else from the starting current, else from the NEMA code letter (G assumed, and said
+    so). The plant carries no iron, friction or stray loss: loaded to rated torque it turns a
+    little faster and draws a little less current than the nameplate, by the losses it does
+    not carry (``rated_torque`` and ``rated_current`` residuals). Checked on published
+    textbook circuits with their losses (:mod:`imdrive.studies.nameplate_published`).
 
-``method="fit"`` (:func:`estimate_circuit`'s default, kept for existing uses)
-    ``R1`` from the rated point's power balance, then a least-squares fit of ``R2``,
-    ``X1 + X2`` and ``X_M`` to the rated point's impedance and the breakdown torque (equations
-    below): the formulation of the *manufacturer-data* methods, which fit the circuit to a
-    catalogue's rated point and torque figures (J. Pedra, F. Córcoles, "Estimation of induction
-    motor double-cage model parameters from manufacturer data", IEEE Trans. Energy Conversion
-    19(2), 2004; M. H. Haque, "Determination of NEMA design induction motor parameters from
-    manufacturer data", IEEE Trans. Energy Conversion 23(4), 2008; authors, titles and
-    journals as cited in the literature, the papers' equations not re-checked here: the
-    equations and the lumping of every loss into ``R1`` are this module's). It meets a given
-    breakdown torque exactly; without one (nor a starting current) it assumes
-    :data:`DEFAULT_BREAKDOWN_RATIO` and says so, which on the library's machines puts the
-    breakdown torque up to 50 % off.
+``method="lee"`` (deprecated: :func:`estimate_circuit_lee`)
+    The nameplate-only method of K. Lee, S. Frank, P. K. Sen et al., NAPS 2012
+    (:mod:`imdrive.analysis.nameplate_lee`): the same loss split, the leakage from the
+    locked-rotor current only (a breakdown torque is refused), the magnetising branch
+    neglected at standstill.
 
-Equations of ``method="fit"`` (per phase, star equivalent, rms; ``s_n = 1 - n / n_sync``)::
-
-    Z_n   = V_ph / I_n (cos phi + j sin phi)                 rated-point input impedance
-    P_in  = 3 V_ph I_n cos phi,  P_ag = P / (1 - s_n)        (T_n = P / w_m, P_ag = T_n w_s)
-    R1    = (P_in - P_ag) / (3 I_n^2)                        every loss but the rotor's
-    Z(s)  = R1 + j X1 + (j X_M || (R2 / s + j X2)) = Z_n      at s = s_n     (2 equations)
-    T_bd(R1, R2, X1, X2, X_M) = (T_bd / T_n) T_n              Thevenin closed form (1 equation)
-    |Z(1)| = V_ph / I_st                                      if the starting current is given
-
-with ``X1 = k (X1 + X2)``. The unknowns ``R2``, ``X1 + X2``, ``X_M`` (and ``k`` when the
-starting current is also given) are found by least squares on the logarithms (exact when the
-data are consistent: the residuals are reported).
-
-Assumptions of ``method="fit"`` (the circuit is imdrive's plant model: no iron-loss branch,
-no saturation, no deep-bar or double-cage effect):
-
-* every loss other than the rotor copper loss (stator copper, iron, friction and windage,
-  stray load) is lumped into ``R1``, so that the circuit's input power at the rated point is
-  the electrical ``3 V_ph I_n cos phi``; ``R1`` is then larger than a measured stator
-  resistance (by the iron, mechanical and stray losses over ``3 I^2``). The efficiency this
-  implies, ``P / (sqrt 3 V I cos phi)``, is the nameplate's when the nameplate is
-  consistent; the difference (rounding on a real plate) is reported as the ``efficiency``
-  residual, and rated torque, current and power factor are met exactly whatever it is;
-* the rotor copper loss is ``s P_ag`` (no mechanical loss between air gap and shaft);
-* ``X1 / (X1 + X2) = k``: 0.5 for NEMA design A and D and wound rotors, 0.4 for design B,
-  0.3 for design C (IEEE Std 112); the default 0.5;
-* a single-cage circuit cannot reproduce both the rated point and the starting point of a
-  deep-bar rotor: when both the breakdown torque and the starting current are given the fit
-  frees ``k`` (kept within 0.05-0.95), and a residual remains if the data need a double
-  cage;
-* without a breakdown torque ratio (nor a starting current) the ratio is assumed
-  (:data:`DEFAULT_BREAKDOWN_RATIO`), and the result says so.
+``method="fit"`` (deprecated; the default of ``estimate_circuit`` when no method is named)
+    A least-squares fit to the rated point and the breakdown torque that lumps every loss
+    into ``R1`` (:mod:`imdrive.analysis.nameplate_fit`): it meets the rated current exactly,
+    with an ``R1`` up to 2.5 times the stator's.
 """
 
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 
-import numpy as np
-from scipy.optimize import least_squares
-
 from imdrive.analysis.circuit import equivalent_circuit
+from imdrive.analysis.nameplate_catalogue import catalogue_circuit
+from imdrive.analysis.nameplate_fit import DEFAULT_BREAKDOWN_RATIO, fit_circuit
 from imdrive.analysis.nameplate_lee import (
     CORE_LOSS_FRACTION,
     MECHANICAL_LOSS_FRACTION,
@@ -89,7 +48,7 @@ from imdrive.analysis.nameplate_lee import (
 )
 from imdrive.config.machine import MachineParams
 from imdrive.config.validation import FLOAT_MAX_MAGNITUDE, FLOAT_MIN_MAGNITUDE
-from imdrive.errors import ConfigError, check_argument
+from imdrive.errors import ConfigError, ConfigWarning, check_argument
 
 #: the bound of every nameplate magnitude: the scenario's (imdrive.config.validation)
 _MAGNITUDE = (FLOAT_MIN_MAGNITUDE, FLOAT_MAX_MAGNITUDE)
@@ -104,20 +63,25 @@ __all__ = [
     "Nameplate",
     "NameplateFit",
     "estimate_circuit",
+    "estimate_circuit_catalogue",
     "estimate_circuit_lee",
 ]
 
-#: The estimation methods of :func:`estimate_circuit` (module docstring).
-METHODS = ("lee", "fit")
+#: The estimation methods of :func:`estimate_circuit` (module docstring); all but the first
+#: are deprecated (a DeprecationWarning names it).
+METHODS = ("catalogue", "lee", "fit")
 
-#: NEMA code letter assumed by ``method="lee"`` when neither it nor the starting current is
-#: given: G (5.6-6.3 kVA/hp, a locked-rotor current of about 6 times rated on a typical
-#: design B machine). An assumption, reported as such.
+#: Rated slip outside this range is suspicious (a ConfigWarning): large motors run at a few
+#: tenths of a per cent, small ones at up to about 10 %.
+SLIP_RANGE = (0.002, 0.10)
+
+#: The options of the methods that split the losses (their loss fractions).
+_LOSS_OPTIONS = ("core_loss_fraction", "mechanical_loss_fraction", "stray_loss_fraction")
+
+#: NEMA code letter assumed by ``method="catalogue"`` and ``"lee"`` when the data give no
+#: other leakage figure: G (5.6-6.3 kVA/hp, a locked-rotor current of about 6 times rated on
+#: a typical design B machine). An assumption, reported as such.
 DEFAULT_CODE_LETTER = "G"
-
-#: Breakdown torque over rated torque assumed when neither it nor the starting current is given
-#: (a typical NEMA design B / IEC design N value; catalogues print the machine's own).
-DEFAULT_BREAKDOWN_RATIO = 2.5
 
 #: X1 / (X1 + X2) by NEMA design letter (IEEE Std 112).
 LEAKAGE_SPLIT = {"A": 0.5, "B": 0.4, "C": 0.3, "D": 0.5, "wound": 0.5}
@@ -196,10 +160,17 @@ class Nameplate:
             v = getattr(self, name)
             if not (isinstance(v, int | float) and math.isfinite(v) and 0.01 <= v < 1):
                 raise ConfigError(name, f"must be at least 0.01 and below 1, got {v!r}")
-        for name, hi in (("breakdown_torque_ratio", 20.0), ("starting_current_ratio", 50.0)):
+        for name, hi, what in (
+            ("breakdown_torque_ratio", 20.0, "a breakdown torque at or below the rated torque"),
+            ("starting_current_ratio", 50.0, "a starting current at or below the rated current"),
+        ):
             v = getattr(self, name)
             if v is not None and not (isinstance(v, int | float) and 1 < v <= hi):
-                raise ConfigError(name, f"must be > 1 and <= {hi:g} (finite), got {v!r}")
+                raise ConfigError(
+                    name, f"must be > 1 and <= {hi:g} (finite), got {v!r} ({what} "
+                    "contradicts the rating)" if isinstance(v, int | float) and v <= 1 else
+                    f"must be > 1 and <= {hi:g} (finite), got {v!r}",
+                )  # fmt: skip
         if self.J_kgm2 is not None and not (
             isinstance(self.J_kgm2, int | float)
             and math.isfinite(self.J_kgm2)
@@ -216,6 +187,14 @@ class Nameplate:
                 f"{self.power_W:.4g} W contradicts sqrt(3) V I cos phi eta = {implied:.4g} W "
                 "(more than a factor of 3 apart): check the power, voltage, current, power "
                 "factor and efficiency",
+            )
+        electric = math.sqrt(3.0) * self.voltage_V * self.current_A * self.power_factor
+        if not electric > self.power_W:
+            raise ConfigError(
+                "current_A, power_factor",
+                f"sqrt(3) V I cos phi = {electric:.5g} W of input is not above the rated output "
+                f"{self.power_W:.5g} W (an efficiency of 1 or more): check the current, power "
+                "factor and power",
             )
         if not 0.05 <= self.leakage_split <= 0.95:
             raise ConfigError("leakage_split", "must be within 0.05-0.95")
@@ -277,22 +256,8 @@ class NameplateFit:
     details: dict = field(default_factory=dict)
 
 
-def _impedance(R1, R2, X1, X2, XM, s):
-    Z2 = R2 / s + 1j * X2
-    return R1 + 1j * X1 + 1j * XM * Z2 / (Z2 + 1j * XM)
-
-
-def _breakdown_torque(R1, X1, X2, XM, V_ph, w_s):
-    """Maximum torque of the circuit (Thevenin form, rms phase voltage), N m."""
-    den = R1 + 1j * (X1 + XM)
-    V_th = V_ph * 1j * XM / den
-    Z_th = 1j * XM * (R1 + 1j * X1) / den
-    root = math.hypot(Z_th.real, Z_th.imag + X2)
-    return 3.0 * abs(V_th) ** 2 / (2.0 * w_s * (Z_th.real + root))
-
-
 def estimate_circuit(
-    plate: Nameplate, description: str = "", method: str = "fit", **options
+    plate: Nameplate, description: str = "", method: str | None = None, **options
 ) -> NameplateFit:
     """Estimate the T-equivalent circuit from nameplate and catalogue data.
 
@@ -302,30 +267,47 @@ def estimate_circuit(
         The data.
     description : str
         Text for the machine's ``description``.
-    method : {"fit", "lee"}
-        ``"fit"``: the least-squares fit (module docstring; the default, as before);
-        ``"lee"``: the published nameplate-only method, :func:`estimate_circuit_lee`
-        (recommended).
+    method : {"catalogue", "lee", "fit"} or None
+        ``"catalogue"``: every figure given, R1 the stator's
+        (:func:`estimate_circuit_catalogue`; the one to use). ``"lee"`` and ``"fit"`` are
+        deprecated (a DeprecationWarning names the replacement). None: ``"fit"``, as before,
+        with a DeprecationWarning (the default becomes ``"catalogue"`` in imdrive 0.3).
     **options
-        ``method="lee"``: the loss fractions of :func:`estimate_circuit_lee`.
+        ``"catalogue"`` and ``"lee"``: the loss fractions ``core_loss_fraction``,
+        ``mechanical_loss_fraction``, ``stray_loss_fraction``.
 
     Returns
     -------
     NameplateFit
-        The machine (validated :class:`~imdrive.config.machine.MachineParams`), the fit's
-        relative residuals and the assumptions made.
+        The machine (validated :class:`~imdrive.config.machine.MachineParams`), the
+        residuals and the assumptions made.
 
     Raises
     ------
     ConfigError
-        Data no single-cage circuit can meet (naming the quantity).
+        Data no single-cage circuit can meet (naming the quantities).
+
+    Warns
+    -----
+    ConfigWarning
+        A rated slip outside :data:`SLIP_RANGE`.
+    DeprecationWarning
+        ``method`` ``"lee"``, ``"fit"`` or not given.
 
     Notes
     -----
     The methods and their assumptions are in the module docstring.
     """
+    if method is None or method in ("lee", "fit"):
+        what = "no method (the default fit)" if method is None else f"method={method!r}"
+        warnings.warn(
+            f"estimate_circuit with {what} is deprecated: use method='catalogue' (every "
+            "catalogue figure, R1 the stator's; the default from imdrive 0.3)",
+            DeprecationWarning,
+            stacklevel=2,
+        )
     try:
-        return _estimate_circuit(plate, description, method, **options)
+        return _estimate_circuit(plate, description, method or "fit", **options)
     except (ArithmeticError, ValueError) as exc:  # extreme data overflow in the estimate
         if isinstance(exc, ConfigError):
             raise
@@ -339,86 +321,36 @@ def estimate_circuit(
 def _estimate_circuit(plate, description, method, **options) -> NameplateFit:
     check_argument(plate, Nameplate, "plate", "a Nameplate (imdrive.analysis.nameplate)")
     check_argument(description, str, "description", "a str")
-    if method == "lee":
-        allowed = ("core_loss_fraction", "mechanical_loss_fraction", "stray_loss_fraction")
-        extra = sorted(set(options) - set(allowed))
-        if extra:
-            raise ConfigError(extra[0], f"not an option of lee (it takes {', '.join(allowed)})")
-        return estimate_circuit_lee(plate, description, **options)
-    if method != "fit":
+    if method not in METHODS:
         raise ConfigError("method", f"must be one of {', '.join(METHODS)}, got {method!r}")
+    _warn_suspicious(plate)
+    if method in ("catalogue", "lee"):
+        extra = sorted(set(options) - set(_LOSS_OPTIONS))
+        if extra:
+            raise ConfigError(
+                extra[0], f"not an option of {method} (it takes {', '.join(_LOSS_OPTIONS)})"
+            )
+        estimate = estimate_circuit_catalogue if method == "catalogue" else estimate_circuit_lee
+        return estimate(plate, description, **options)
     if options:
         raise ConfigError("method", f"fit takes no options, got {', '.join(options)}")
-    p = plate
-    V_ph = p.voltage_V / math.sqrt(3.0)
-    w_e = 2.0 * math.pi * p.frequency_Hz
-    w_s = w_e / (p.poles / 2)  # synchronous mechanical speed, rad/s
-    s_n = p.slip
-    T_n = p.torque_Nm
-    sin_phi = math.sqrt(1.0 - p.power_factor**2)
-    Z_abs = V_ph / p.current_A
-    Z_n = Z_abs * complex(p.power_factor, sin_phi)
-    P_in = 3.0 * V_ph * p.current_A * p.power_factor
-    P_ag = T_n * w_s
-    R1 = (P_in - P_ag) / (3.0 * p.current_A**2)
-    if not R1 > 0:
-        raise ConfigError(
-            "power_factor",
-            f"sqrt(3) V I cos phi = {P_in:.5g} W is not above the air-gap power P / (1 - s) = "
-            f"{P_ag:.5g} W (current or power factor too low for the power)",
+    circuit, residuals, assumed = fit_circuit(plate)
+    machine = _machine(plate, *circuit, description, assumed)
+    return NameplateFit(machine=machine, residuals=residuals, assumed=tuple(assumed))
+
+
+def _warn_suspicious(p: Nameplate) -> None:
+    """A :class:`~imdrive.errors.ConfigWarning` for a rated slip outside :data:`SLIP_RANGE`."""
+    lo, hi = SLIP_RANGE
+    if not lo <= p.slip <= hi:
+        warnings.warn(
+            ConfigWarning(
+                "speed_rpm",
+                f"rated slip {100 * p.slip:.3g} % is outside the usual {100 * lo:g}-"
+                f"{100 * hi:g} %: check the speed (and the poles and frequency)",
+            ),
+            stacklevel=4,
         )
-
-    assumed = []
-    ratio = p.breakdown_torque_ratio
-    if ratio is None and p.starting_current_ratio is None:
-        ratio = DEFAULT_BREAKDOWN_RATIO
-        assumed.append(f"breakdown torque ratio {DEFAULT_BREAKDOWN_RATIO:g} (not given)")
-    free_split = ratio is not None and p.starting_current_ratio is not None
-
-    def unpack(x):
-        R2, Xl, XM = np.exp(x[:3])
-        k = p.leakage_split
-        if free_split:
-            k = 0.05 + 0.9 / (1.0 + math.exp(-x[3]))
-        return R2, k * Xl, (1.0 - k) * Xl, XM
-
-    def residuals(x):
-        R2, X1, X2, XM = unpack(x)
-        Z = _impedance(R1, R2, X1, X2, XM, s_n)
-        out = [(Z.real - Z_n.real) / Z_abs, (Z.imag - Z_n.imag) / Z_abs]
-        if ratio is not None:
-            out.append(_breakdown_torque(R1, X1, X2, XM, V_ph, w_s) / (ratio * T_n) - 1.0)
-        if p.starting_current_ratio is not None:
-            I_st = V_ph / abs(_impedance(R1, R2, X1, X2, XM, 1.0))
-            out.append(I_st / (p.starting_current_ratio * p.current_A) - 1.0)
-        return np.array(out)
-
-    # start: rotor branch ~ R2/s resistive, magnetising current ~ 0.9 of the reactive current
-    x0 = [
-        math.log(s_n * (Z_n.real - R1)),
-        math.log(0.15 * Z_abs),
-        math.log(V_ph / (0.9 * p.current_A * max(sin_phi, 0.1))),
-    ]
-    if free_split:
-        x0.append(math.log((p.leakage_split - 0.05) / (0.95 - p.leakage_split)))
-    best = None
-    for scale in (0.15, 0.05, 0.4):  # a few starts for the leakage: the fit is not convex
-        x0[1] = math.log(scale * Z_abs)
-        sol = least_squares(residuals, x0, method="lm" if not free_split else "trf", xtol=1e-15)
-        if best is None or sol.cost < best.cost:
-            best = sol
-    R2, X1, X2, XM = unpack(best.x)
-    r = residuals(best.x)
-    names = ["rated_R", "rated_X"]
-    if ratio is not None:
-        names.append("breakdown_torque")
-    if p.starting_current_ratio is not None:
-        names.append("starting_current")
-    fit = dict(zip(names, (float(v) for v in r), strict=True))
-    fit["efficiency"] = p.power_W / P_in / p.efficiency - 1.0  # implied over given
-
-    machine = _machine(p, R1, R2, X1, X2, XM, description, assumed)
-    return NameplateFit(machine=machine, residuals=fit, assumed=tuple(assumed))
 
 
 def _machine(p: Nameplate, R1, R2, X1, X2, XM, description: str, assumed: list) -> MachineParams:
@@ -500,15 +432,8 @@ def estimate_circuit_lee(
     p = plate
     assumed = []
     if p.breakdown_torque_ratio is not None:
-        assumed.append("breakdown torque ratio not used (method fit uses it)")
-    if p.starting_current_ratio is not None:
-        I_lr = p.starting_current_ratio * p.current_A
-    else:
-        letter = p.code_letter
-        if letter is None:
-            letter = DEFAULT_CODE_LETTER
-            assumed.append(f"NEMA code letter {DEFAULT_CODE_LETTER} (not given)")
-        I_lr = locked_rotor_current_A(letter, p.power_W, p.voltage_V)
+        assumed.append("breakdown torque ratio not used (method catalogue uses it)")
+    I_lr = _locked_rotor_A(p, assumed)
     c = lee_circuit(
         p.power_W,
         p.voltage_V,
@@ -534,3 +459,88 @@ def estimate_circuit_lee(
         **{f"{k}_W": v for k, v in c.losses_W.items()},
     )
     return NameplateFit(machine, residuals, tuple(assumed), method="lee", details=details)
+
+
+def _locked_rotor_A(p: Nameplate, assumed: list) -> float:
+    """The locked-rotor current, A rms: the catalogue's ``I_st / I_n``, else the code letter's,
+    else :data:`DEFAULT_CODE_LETTER`'s (appended to ``assumed``)."""
+    if p.starting_current_ratio is not None:
+        return p.starting_current_ratio * p.current_A
+    letter = p.code_letter
+    if letter is None:
+        letter = DEFAULT_CODE_LETTER
+        assumed.append(f"NEMA code letter {DEFAULT_CODE_LETTER} (not given)")
+    return locked_rotor_current_A(letter, p.power_W, p.voltage_V)
+
+
+def estimate_circuit_catalogue(
+    plate: Nameplate,
+    description: str = "",
+    core_loss_fraction: float | None = None,
+    mechanical_loss_fraction: float | None = None,
+    stray_loss_fraction: float | None = None,
+) -> NameplateFit:
+    """Estimate the plant's T-circuit from every figure of a catalogue.
+
+    Parameters
+    ----------
+    plate : Nameplate
+        The data: the rated point (power, voltage, frequency, poles, speed, power factor,
+        efficiency), the design letter's leakage split, and the breakdown torque ratio
+        (sets the leakage when given), else the starting current ratio, else the NEMA code
+        letter (else :data:`DEFAULT_CODE_LETTER`, assumed and said so).
+    description : str
+        Text for the machine's ``description``.
+    core_loss_fraction, mechanical_loss_fraction : float or None
+        Core and friction-and-windage loss over the total loss ``P / eta - P``; None: 0.12
+        and 0.14 (Lee et al.'s typical shares). Where the losses are known (a test report),
+        give their shares.
+    stray_loss_fraction : float or None
+        Stray-load loss over ``P``; None: IEEE Std 112's assumed value by rating.
+
+    Returns
+    -------
+    NameplateFit
+        The machine; as residuals the circuit's relative error at the rated slip and
+        voltage against the nameplate, ``rated_torque`` (the friction and stray losses the
+        plant does not carry) and ``rated_current`` (the core-loss current it does not draw,
+        and a nameplate current other than ``P / (sqrt 3 V eta cos phi)``), and when the
+        breakdown torque set the leakage and a starting current is given, the circuit's
+        ``starting_current`` against it (a deep-bar rotor's is larger than a single cage's);
+        ``details`` holds the loss split, ``leakage_from`` and the circuit's breakdown torque
+        and starting current.
+
+    Raises
+    ------
+    ConfigError
+        Data no circuit meets, naming the fields
+        (:func:`~imdrive.analysis.nameplate_catalogue.catalogue_circuit`).
+
+    Notes
+    -----
+    Equations and sources in :mod:`imdrive.analysis.nameplate_catalogue`.
+    """
+    p, assumed = plate, []
+    given_bd = p.breakdown_torque_ratio is not None
+    I_lr = None if given_bd else _locked_rotor_A(p, assumed)
+    c = catalogue_circuit(
+        p.power_W, p.voltage_V, p.frequency_Hz, p.poles, p.slip, p.efficiency,
+        p.power_factor, p.breakdown_torque_ratio, I_lr, p.leakage_split,
+        core_loss_fraction, mechanical_loss_fraction, stray_loss_fraction,
+    )  # fmt: skip
+    machine = _machine(p, c.R1, c.R2, c.X1, c.X2, c.XM, description, assumed)
+    ss = equivalent_circuit(machine, p.voltage_V, p.frequency_Hz, p.slip)
+    residuals = {
+        "rated_torque": float(ss.torque_Nm / p.torque_Nm - 1.0),
+        "rated_current": float(ss.I1_rms_A / p.current_A - 1.0),
+    }
+    if given_bd and p.starting_current_ratio is not None:
+        I_st = p.starting_current_ratio * p.current_A
+        residuals["starting_current"] = c.starting_current_A / I_st - 1.0
+    details = dict(
+        leakage_from=c.leakage_from,
+        breakdown_torque_Nm=c.breakdown_torque_Nm,
+        starting_current_A=c.starting_current_A,
+        **{f"{k}_W": v for k, v in c.losses_W.items()},
+    )
+    return NameplateFit(machine, residuals, tuple(assumed), method="catalogue", details=details)

@@ -4,9 +4,10 @@ write the machine as a TOML file for ``[machine] file = "..."``."""
 from __future__ import annotations
 
 import sys
+import warnings
 
 from imdrive.analysis.nameplate import LEAKAGE_SPLIT, Nameplate, NameplateFit, estimate_circuit
-from imdrive.errors import ConfigError
+from imdrive.errors import ConfigError, ConfigWarning
 
 __all__ = ["machine_from_nameplate_command", "machine_toml"]
 
@@ -28,9 +29,16 @@ FLAGS = {
     "mechanical_loss_fraction": "--mechanical-loss-fraction",
     "stray_loss_fraction": "--stray-loss-fraction",
     "locked_rotor_current": "--code-letter / --starting-current-ratio",
+    "starting_current": "--starting-current-ratio (or --code-letter)",
 }
 
 _METHOD_NOTES = {
+    "catalogue": (
+        "single-cage T-circuit from every catalogue figure (imdrive.analysis.nameplate, "
+        "method catalogue): losses split after Lee, Frank, Sen et al. (NAPS 2012) so that R1 "
+        "is the stator's, the leakage from the breakdown torque when given, else from the "
+        "starting current or code letter; the plant has no iron, friction or stray loss"
+    ),
     "fit": (
         "single-cage T-circuit fitted to the rated point and breakdown torque "
         "(imdrive.analysis.nameplate, method fit; Pedra & Corcoles 2004, Haque 2008); R1 lumps "
@@ -91,13 +99,23 @@ def machine_toml(fit: NameplateFit, plate: Nameplate) -> str:
 
 
 def _method(args) -> str:
-    """``--method``, or by default ``lee`` unless a breakdown ratio is given (``fit``)."""
-    method = getattr(args, "method", None)
-    if method is None:
-        return "fit" if args.breakdown_ratio is not None else "lee"
+    """``--method``, by default ``catalogue``; ``lee`` and ``fit`` warn that they are
+    deprecated."""
+    method = getattr(args, "method", None) or "catalogue"
     if method == "lee" and args.breakdown_ratio is not None:
         raise ConfigError(
-            "--breakdown-ratio", "method lee does not use a breakdown ratio: use --method fit"
+            "--breakdown-ratio",
+            "method lee does not use a breakdown ratio: use --method catalogue (the default)",
+        )
+    if method != "catalogue":
+        what = {"lee": "takes no breakdown torque", "fit": "puts every loss into R1"}[method]
+        warnings.warn(
+            ConfigWarning(
+                "--method",
+                f"{method} is deprecated ({what}): use --method catalogue (the default), "
+                "which uses every catalogue figure and keeps R1 the stator's",
+            ),
+            stacklevel=2,
         )
     return method
 
@@ -134,12 +152,19 @@ def machine_from_nameplate_command(args) -> int:
     method = _method(args)
     options = _lee_options(args)
     if method == "fit" and options:
-        raise ConfigError(FLAGS[next(iter(options))], "only method lee takes loss fractions")
+        raise ConfigError(
+            FLAGS[next(iter(options))], "only methods catalogue and lee take loss fractions"
+        )
     try:
         plate = _plate_from_args(args)
-        fit = estimate_circuit(plate, args.description or "", method, **options)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            fit = estimate_circuit(plate, args.description or "", method, **options)
     except ConfigError as exc:
-        raise ConfigError(FLAGS.get(exc.field, exc.field), exc.rule) from None
+        raise ConfigError(_flags(exc.field), exc.rule) from None
+    for w in caught:  # a nameplate field's warning names its flag; DeprecationWarning: above
+        if isinstance(w.message, ConfigWarning):
+            warnings.warn(ConfigWarning(_flags(w.message.field), w.message.rule), stacklevel=2)
     text = machine_toml(fit, plate)
     print(f"imdrive: note: method {method}", file=sys.stderr)
     for what in fit.assumed:
@@ -155,10 +180,30 @@ def machine_from_nameplate_command(args) -> int:
     return 0
 
 
+def _flags(fields: str) -> str:
+    """The flags of a comma-separated list of Nameplate fields (others kept as they are)."""
+    return ", ".join(FLAGS.get(f, f) for f in fields.split(", "))
+
+
 def _notes(fit: NameplateFit) -> None:
     """One line on stderr for each way the estimate misses the data."""
     r = fit.residuals
-    if fit.method == "lee":
+    if fit.method == "catalogue":
+        d = fit.details
+        print(
+            f"imdrive: note: leakage from the {d['leakage_from']}; the circuit's breakdown "
+            f"torque {d['breakdown_torque_Nm']:.4g} N m and starting current "
+            f"{d['starting_current_A']:.4g} A at rated voltage",
+            file=sys.stderr,
+        )
+        if "starting_current" in r:
+            print(
+                f"imdrive: note: its starting current is {100 * r['starting_current']:+.1f} % "
+                "off the catalogue's (a deep-bar or double-cage rotor starts with less "
+                "leakage than it runs with: the breakdown torque sets the running leakage)",
+                file=sys.stderr,
+            )
+    if fit.method in ("catalogue", "lee"):
         print(
             f"imdrive: note: at rated speed the circuit gives {100 * r['rated_torque']:+.1f} % "
             f"torque and {100 * r['rated_current']:+.1f} % current against the nameplate (the "

@@ -62,6 +62,7 @@ __all__ = [
     "code_letter_of",
     "lee_circuit",
     "locked_rotor_current_A",
+    "loss_split",
     "stray_loss_fraction",
 ]
 
@@ -244,9 +245,7 @@ def lee_circuit(
     """
     V = voltage_V / math.sqrt(3.0)
     f_stray = stray_loss_fraction(power_W) if stray_fraction is None else stray_fraction
-    L = _loss_split(
-        power_W, slip, efficiency, core_loss_fraction, mechanical_loss_fraction, f_stray
-    )
+    L = loss_split(power_W, slip, efficiency, core_loss_fraction, mechanical_loss_fraction, f_stray)
     tan_phi = math.sqrt(1.0 - power_factor**2) / power_factor
     I1 = complex(L["P_in"], -L["P_in"] * tan_phi) / (3.0 * V)  # per phase
     R1 = L["P_scl"] / 3.0 / abs(I1) ** 2
@@ -274,8 +273,42 @@ def lee_circuit(
     )
 
 
-def _loss_split(power_W, slip, efficiency, f_core, f_mech, f_stray) -> dict:
-    """The machine's input, losses and air-gap power, W (module docstring's first block)."""
+def loss_split(
+    power_W: float,
+    slip: float,
+    efficiency: float,
+    f_core: float | None = None,
+    f_mech: float | None = None,
+    f_stray: float | None = None,
+) -> dict:
+    """The machine's input, losses and air-gap power, W (module docstring's first block).
+
+    Parameters
+    ----------
+    power_W : float
+        Rated output, W.
+    slip, efficiency : float
+        At rated load, dimensionless.
+    f_core, f_mech : float or None
+        Core and friction-and-windage loss over the total loss ``P / eta - P``; None:
+        :data:`CORE_LOSS_FRACTION`, :data:`MECHANICAL_LOSS_FRACTION`.
+    f_stray : float or None
+        Stray-load loss over ``P``; None: :func:`stray_loss_fraction`.
+
+    Returns
+    -------
+    dict
+        ``P_in``, ``P_core``, ``P_mech``, ``P_stray``, ``P_scl`` (stator copper), ``P_rcl``
+        (rotor copper), ``P_ag`` (air gap), W.
+
+    Raises
+    ------
+    ConfigError
+        A fraction outside 0-1, or losses that leave no stator copper loss (``efficiency``).
+    """
+    f_core = CORE_LOSS_FRACTION if f_core is None else f_core
+    f_mech = MECHANICAL_LOSS_FRACTION if f_mech is None else f_mech
+    f_stray = stray_loss_fraction(power_W) if f_stray is None else f_stray
     for name, v in (
         ("core_loss_fraction", f_core),
         ("mechanical_loss_fraction", f_mech),

@@ -28,7 +28,7 @@ def add_parser(sub) -> None:
             "--starting-current-ratio 6 --out my-motor.toml",
             "imdrive machine-from-nameplate --power-kw 2.2 --voltage 400 --frequency 50 "
             "--poles 4 --speed 1436 --current 5 --pf 0.79 --efficiency 0.82 "
-            "--breakdown-ratio 2.9 --out my-motor.toml",
+            "--breakdown-ratio 2.9 --starting-current-ratio 7 --out my-motor.toml",
         ),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
@@ -53,20 +53,21 @@ def add_parser(sub) -> None:
     )
     mn.add_argument(
         "--method",
-        choices=("lee", "fit"),
-        help="lee: the published nameplate-only method of Lee, Frank, Sen et al. (NAPS 2012; "
-        "recommended); fit: least squares on the rated point and breakdown torque; default "
-        "lee, or fit when --breakdown-ratio is given",
+        choices=("catalogue", "lee", "fit"),
+        help="catalogue (the default): every figure given, R1 the stator's, the leakage from "
+        "the breakdown torque when given, else from the starting current or code letter; lee "
+        "(deprecated): the nameplate-only method of Lee, Frank, Sen et al. (NAPS 2012); fit "
+        "(deprecated): least squares with every loss in R1",
     )
     mn.add_argument(
         "--code-letter",
-        help="NEMA code letter (locked-rotor kVA/hp), for method lee without "
+        help="NEMA code letter (locked-rotor kVA/hp), used without --breakdown-ratio and "
         "--starting-current-ratio (default: G assumed)",
     )
     for flag, text in (
-        ("--core-loss-fraction", "core loss / total loss (method lee; default 0.12)"),
-        ("--mechanical-loss-fraction", "friction and windage / total loss (lee; default 0.14)"),
-        ("--stray-loss-fraction", "stray-load loss / rated power (lee; default IEEE Std 112's)"),
+        ("--core-loss-fraction", "core loss / total loss (default 0.12)"),
+        ("--mechanical-loss-fraction", "friction and windage / total loss (default 0.14)"),
+        ("--stray-loss-fraction", "stray-load loss / rated power (default IEEE Std 112's)"),
     ):
         mn.add_argument(flag, type=float, help=text)
     mn.add_argument("--J", type=float, help="rotor inertia, kg m^2 (default: H = 0.5 s)")

@@ -55,9 +55,11 @@ imdrive machine-from-nameplate --power-kw 2.2 --voltage 400 --frequency 50 --pol
     --out my-motor.toml
 ```
 
-The recommended method is the published nameplate-only method of Lee, Frank, Sen et al.
-(`--method lee`, the default unless a breakdown ratio is given); the methods, their sources,
-assumptions and their check on this library are in [nameplate.md](nameplate.md).
+Its method (`--method catalogue`, the default) uses every figure given: the efficiency through
+a loss split that keeps R1 the stator's, and the leakage from the breakdown torque when the
+catalogue gives it (else the starting current or the code letter). Its equations, sources,
+assumptions and its check on seven published textbook circuits with their losses are in
+[nameplate.md](nameplate.md); `--method lee` and `--method fit` are deprecated.
 
 **Rated point.** A nameplate field left out (`rated_speed_rpm`, `rated_torque_Nm`,
 `rated_current_rms_A`, `rated_power_factor`, `rated_efficiency`) is derived from the circuit

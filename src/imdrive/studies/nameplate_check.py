@@ -104,6 +104,7 @@ def check_machine(name: str, method: str, data: str) -> dict:
     """
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConfigWarning)
+        warnings.simplefilter("ignore", DeprecationWarning)  # lee and fit, compared on purpose
         m = machine_preset(name)
         rp = rated_point(m)
         plate = library_nameplate(m, data)

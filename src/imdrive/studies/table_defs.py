@@ -237,6 +237,29 @@ register(
 )
 
 
+def _nameplate_published(df) -> list[str]:
+    from imdrive.studies.nameplate_published import markdown
+
+    return markdown(df)
+
+
+def _measure_nameplate_published():
+    from imdrive.studies.nameplate_published import run
+
+    return run()
+
+
+register(
+    DocTable(
+        "nameplate-published",
+        "nameplate.md",
+        "data/nameplate_published.csv",
+        _nameplate_published,
+        _measure_nameplate_published,
+    )
+)
+
+
 # ---------------------------------------------------------------------------------------------
 # docs/machine-envelope.md: why the large machines lose control at rated speed
 
