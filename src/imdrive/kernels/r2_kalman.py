@@ -43,7 +43,7 @@ thermal model). The measurement's variance holds, besides ``noise_pu``, a share
 error only roughly (0.6-1.9 times, measured), so a first window 30 % off moves R2_hat by
 about half of what it reads, not all of it. What it costs: from R2_hat(0) = 0.7 R2 at half
 speed and rated torque on the Aalto machine R2_hat overshoots by 4.1 % before it settles
-within 0.5 % (tests/drive/test_adaptive_law_overshoot.py; the adaptive law: under 1 %).
+within 0.5 % (tests/drive/test_r2_law_overshoot.py; the adaptive law: under 1 %).
 """
 
 from __future__ import annotations

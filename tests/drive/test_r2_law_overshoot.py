@@ -1,0 +1,38 @@
+"""The model-based R2 law closes a large initial R2 error with a bounded overshoot.
+
+From R2_hat(0) = 0.7 R2 the first windows read a large negative error up to 1.9 times its
+linear prediction (kernels/r2_kalman.py, ``GAIN_UNCERTAINTY``), so R2_hat overshoots before it
+settles: measured +4.1 % on the 2.2 kW Aalto machine at half speed and rated torque. The
+adaptive law of earlier releases kept under 1 % there; the Kalman law that replaced it is held
+to 5 % and to the same settling, within 0.5 % at the end (the adaptive law's first version
+peaked at +2.6 % and ended +2.1 % on both points).
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+from imdrive.errors import ConfigWarning
+from imdrive.run.simulate import simulate
+from imdrive.studies.machines import scenarios
+
+#: The largest excursion above R2 the law keeps to, %
+OVERSHOOT_PCT = 5.0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("machine", "speed_pu"), [("aalto-2.2kw", 0.5), ("paper-table-iv", 0.1)])
+def test_bounded_overshoot_from_0_7_R2(machine, speed_pu):
+    (sc,), _ = scenarios([machine], ["injection-robust"], [speed_pu], [1.0], [0.7])
+    assert sc.compensator.step_law == "kalman"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConfigWarning)
+        res = simulate(sc.with_overrides(["simulation.log_every=100"]))
+    assert res.status == 0
+    err = 100.0 * (np.asarray(res["R2_hat_ohm"]) / np.asarray(res["R2_ohm"]) - 1.0)
+    assert err[0] == pytest.approx(-30.0, abs=0.01)
+    assert err.max() < OVERSHOOT_PCT
+    assert abs(err[-1]) < 0.5
