@@ -202,8 +202,12 @@ def prune(root: Path | None = None, keep: int = KEEP) -> list[Path]:
     groups: dict[str, list[Path]] = {}
     removed = []
     for p in root.iterdir() if root.is_dir() else ():
-        if p.name.startswith(("module-keys-", "warm-")) and p.suffix in (".json", ".done"):
-            groups.setdefault(p.name.split("-")[0], []).append(p)  # memo files, warm-up stamps
+        if p.name.startswith(("module-keys-", "warm-", "plotly-")) and p.suffix in (
+            ".json",
+            ".done",
+            ".b64",
+        ):  # memo files, warm-up stamps, the report's compressed plotly.js
+            groups.setdefault(p.name.split("-")[0], []).append(p)
             continue
         if not p.is_dir():
             continue
