@@ -7,7 +7,6 @@ module re-exports their names.
 
 from __future__ import annotations
 
-import functools
 import math
 import platform
 from dataclasses import dataclass, field
@@ -69,25 +68,18 @@ def _estimator_units(scenario) -> dict:
     return dict(estimator_of(scenario).log_units)
 
 
-@functools.cache
-def _versions() -> tuple[tuple[str, str], ...]:
-    """Read once per process: each ``importlib.metadata.version`` parses a METADATA file."""
+def package_versions() -> dict[str, str]:
     from importlib.metadata import version
 
     import imdrive
 
-    return (
-        ("imdrive", imdrive.__version__),
-        ("python", platform.python_version()),
-        ("numpy", np.__version__),
-        ("scipy", version("scipy")),
-        ("numba", version("numba")),
-    )
-
-
-def package_versions() -> dict[str, str]:
-    """The versions of imdrive, Python, numpy, scipy and numba (``summary.json``)."""
-    return dict(_versions())
+    return {
+        "imdrive": imdrive.__version__,
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "scipy": version("scipy"),
+        "numba": version("numba"),
+    }
 
 
 @dataclass
