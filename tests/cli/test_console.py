@@ -68,6 +68,8 @@ def test_slow_speed_loop_is_named_as_the_likely_cause(tmp_path):
     # where to look: the files the folder holds, in the order to open them
     assert line.endswith(f"look at res.plot() around t = {res.lost_control_at_s:.3g} s")
     assert "look at res.plot() around" in closing_line(res, tmp_path)  # nothing written there
+    (tmp_path / "timeseries.csv").write_text("x")  # no plot written: the data
+    assert f"look at timeseries.csv in {tmp_path} around" in closing_line(res, tmp_path)
     for name in ("report.html", "speed.png"):
         (tmp_path / name).write_text("x")
     assert f"look at speed.png and report.html in {tmp_path} around" in closing_line(res, tmp_path)

@@ -148,14 +148,20 @@ def _verdict(res) -> dict | None:
         return None
 
 
+#: where to look when a run's folder holds none of the plots: its data, the first found
+DATA_FILES = ("timeseries.csv", "timeseries.parquet", "timeseries.mat", "summary.json")
+
+
 def _where(out, files: tuple[str, ...]) -> str:
     """Those of ``files`` that the folder ``out`` holds, ``"a, b and c in OUT"`` (the PNG
-    figures are written only when asked); ``"res.plot()"`` without a folder or with none."""
+    figures are written only when asked), else its time series (:data:`DATA_FILES`);
+    ``"res.plot()"`` without a folder or with none of them."""
     if out is None:
         return "res.plot()"
     from pathlib import Path
 
     there = [f for f in files if (Path(out) / f).is_file()]
+    there = there or [f for f in DATA_FILES if (Path(out) / f).is_file()][:1]
     if not there:
         return "res.plot()"
     names = there[0] if len(there) == 1 else f"{', '.join(there[:-1])} and {there[-1]}"
