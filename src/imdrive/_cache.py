@@ -165,13 +165,24 @@ def cache_root() -> Path:
     else:
         xdg = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
         root = Path(xdg) / "imdrive"
+    root = _writable(root)
+    root.mkdir(parents=True, exist_ok=True)  # removed since it was probed (a test's folder)
+    return root
+
+
+@functools.cache
+def _writable(root: Path) -> Path:
+    """``root`` if a file can be created in it, else the system temporary folder's ``imdrive``.
+
+    Probed once per process and folder: every kernel function asks for its folder while it is
+    decorated (209 of them), and a probe creates and removes a file.
+    """
     try:
         root.mkdir(parents=True, exist_ok=True)
         with tempfile.TemporaryFile(dir=root):
             pass
     except OSError:
         root = Path(tempfile.gettempdir()) / "imdrive"
-        root.mkdir(parents=True, exist_ok=True)
     return root
 
 
@@ -191,8 +202,12 @@ def prune(root: Path | None = None, keep: int = KEEP) -> list[Path]:
     groups: dict[str, list[Path]] = {}
     removed = []
     for p in root.iterdir() if root.is_dir() else ():
-        if p.name.startswith(("module-keys-", "warm-")) and p.suffix in (".json", ".done"):
-            groups.setdefault(p.name.split("-")[0], []).append(p)  # memo files, warm-up stamps
+        if p.name.startswith(("module-keys-", "warm-", "plotly-")) and p.suffix in (
+            ".json",
+            ".done",
+            ".b64",
+        ):  # memo files, warm-up stamps, the report's compressed plotly.js
+            groups.setdefault(p.name.split("-")[0], []).append(p)
             continue
         if not p.is_dir():
             continue
@@ -211,6 +226,7 @@ def prune(root: Path | None = None, keep: int = KEEP) -> list[Path]:
     return removed
 
 
+@functools.cache
 def _claimed(py_file: str) -> str | None:
     """The kernel module defined by ``py_file``, if it is one of this package's."""
     try:

@@ -53,10 +53,11 @@ def test_low_speed_loss_names_the_estimator_and_where_to_look(tmp_path, capsys):
     assert line.startswith("imdrive: error: lost control at t = 2.3")
     assert "more than 158 rpm from its reference" in line
     assert "first: the speed estimate left the actual speed" in line
-    assert "look at speed.png" in line and str(tmp_path / "r") in line
+    # the PNG figures are written when asked: the line names the report the run wrote
+    assert f"look at report.html in {tmp_path / 'r'} around t = 2.3" in line
 
 
-def test_slow_speed_loop_is_named_as_the_likely_cause():
+def test_slow_speed_loop_is_named_as_the_likely_cause(tmp_path):
     res = im.simulate(
         im.Scenario.read("sensorless", ["control.speed_bandwidth_Hz=0.3", "simulation.t_end_s=4"])
     )
@@ -64,6 +65,14 @@ def test_slow_speed_loop_is_named_as_the_likely_cause():
     line = closing_line(res)
     assert "first: the speed left its reference" in line
     assert "likely cause: the speed loop (control.speed_bandwidth_Hz = 0.3 Hz)" in line
+    # where to look: the files the folder holds, in the order to open them
+    assert line.endswith(f"look at res.plot() around t = {res.lost_control_at_s:.3g} s")
+    assert "look at res.plot() around" in closing_line(res, tmp_path)  # nothing written there
+    (tmp_path / "timeseries.csv").write_text("x")  # no plot written: the data
+    assert f"look at timeseries.csv in {tmp_path} around" in closing_line(res, tmp_path)
+    for name in ("report.html", "speed.png"):
+        (tmp_path / name).write_text("x")
+    assert f"look at speed.png and report.html in {tmp_path} around" in closing_line(res, tmp_path)
 
 
 def test_ramp_beyond_the_current_limit_is_named():

@@ -192,3 +192,17 @@ def test_memory_per_drive_is_linear_and_under_1kB():
         del res
     per_drive = (peaks[800] - peaks[400]) / 400
     assert per_drive < 1024, per_drive
+
+
+def test_the_batch_runs_the_engine_compiled_for_run():
+    """The batch kernels call the engine with ``simulate()``'s argument types: the constants
+    of their call (``i = 0``, ``log_every = 1``) reached it as numba literals, a signature of
+    its own, and the first batch after a warm ``imdrive run`` compiled the whole engine again."""
+    from imdrive.kernels.engine import run_drive
+
+    sc = Scenario.read("sensorless", ["simulation.t_end_s=0.01"])
+    simulate(sc)
+    before = set(run_drive.signatures)
+    for parallel in (False, True):
+        assert (simulate_batch([sc, sc], parallel=parallel).metrics["status"] == S_OK).all()
+    assert set(run_drive.signatures) == before  # nothing compiled (or loaded) for the batch

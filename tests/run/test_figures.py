@@ -63,6 +63,13 @@ def _all_figures(fig5, injection):
     return figs
 
 
+@pytest.fixture(scope="module")
+def all_figures(fig5, injection):
+    """:func:`_all_figures`, drawn once for the tests that only read their labels and legends
+    (drawing them is 20-30 s on a loaded machine)."""
+    return _all_figures(fig5, injection)
+
+
 def _zoom_axes(fig):
     return next(ax for ax in fig.axes if ax.get_ylabel().startswith("flux error, zoom"))
 
@@ -138,8 +145,8 @@ def _labels(figs):
 
 
 @pytest.mark.slow
-def test_one_unit_per_quantity_across_the_figures(fig5, injection):
-    figs = _all_figures(fig5, injection)
+def test_one_unit_per_quantity_across_the_figures(all_figures):
+    figs = all_figures
     seen: dict[str, list] = {}
     for ax, axis, label in _labels(figs):
         m = UNIT.search(label)
@@ -164,9 +171,9 @@ COLUMN_NAME = re.compile(r"^[a-zA-Z0-9]+(_[a-zA-Z0-9]+)*_(rpm|Nm|A|Wb|ohm|V|C|ra
 
 
 @pytest.mark.slow
-def test_legends_say_what_a_signal_is(fig5, injection):
+def test_legends_say_what_a_signal_is(all_figures):
     entries = set()
-    for fig in _all_figures(fig5, injection):
+    for fig in all_figures:
         for ax in fig.axes:
             leg = ax.get_legend()
             if leg is not None:

@@ -156,7 +156,7 @@ def test_summary_and_console_say_why_a_completed_run_is_not_ok(tmp_path, capsys)
     assert 0.15 < v["speed_error_pu_slip"] < 0.25
     line = capsys.readouterr().err.strip().splitlines()[-1]
     assert line.startswith("imdrive: status: R2_hat off by +20 % (compensator off)")
-    assert str(out) in line
+    assert line.endswith(f"look at timeseries.csv in {out} around t = 4 s")  # what it wrote
 
 
 def test_R2_hat_on_its_clamp_is_named(sc):

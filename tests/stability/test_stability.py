@@ -292,3 +292,16 @@ def test_the_default_drive_is_unstable_in_regeneration_only_next_to_zero_stator_
     sch = stability_map(sc.with_overrides(["mras.regeneration_angle_deg=0"]), speeds, torques)
     bad = sch[(sch.status == "ok") & ~sch.stable]
     assert len(bad) >= 20 and stator_Hz(bad).min() < -1.0  # 24, down to -2.2 Hz
+
+
+def test_the_map_runs_the_engine_compiled_for_run():
+    """The stability kernels call the engine with ``simulate()``'s argument types: a constant
+    argument reached it as a numba literal (``Literal[int](1)``), a signature of its own, and
+    the first map after a warm ``imdrive run`` compiled the whole engine three more times."""
+    from imdrive.run.simulate import simulate
+
+    simulate(Scenario.read("sensorless", ["simulation.t_end_s=0.01"]))
+    before = set(run_drive.signatures)
+    df = stability_map(Scenario.read("sensorless"), [500.0], [6.0])
+    assert list(df["status"]) == ["ok"]
+    assert set(run_drive.signatures) == before  # nothing compiled (or loaded) for the map

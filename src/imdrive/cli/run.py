@@ -121,15 +121,18 @@ def add_parser(sub) -> None:
         "run",
         help="run a preset or scenario file",
         description="Run one drive: a built-in preset by name, a scenario TOML file, or a "
-        "run's summary.json (to run it again). Writes timeseries.csv, summary.json, PNG figures "
-        "and report.html (interactive; open it in a browser) into out/PRESET, or out/FILE for a "
-        "file named FILE.toml, unless --out says otherwise. Exit codes: imdrive --help.",
+        "run's summary.json (to run it again). Writes timeseries.csv, summary.json and "
+        "report.html (interactive plots; open it in a browser), and the PNG figures when asked "
+        "(--format csv,report,figures or [output] figures = true), into out/PRESET, or "
+        "out/FILE for a file named FILE.toml, unless --out says otherwise. Exit codes: "
+        "imdrive --help.",
         epilog=_examples(
             "imdrive run sensorless",
             "imdrive run sensorless --set simulation.t_end_s=2 --set load.torque_Nm=6",
             "imdrive run my.toml --out results/my-run",
             "imdrive run out/sensorless/summary.json",
             "imdrive run sensorless --format parquet,mat,report",
+            "imdrive run sensorless --format csv,report,figures",
         ),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )

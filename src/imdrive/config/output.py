@@ -11,7 +11,13 @@ from imdrive.config.validation import Bool, setting, settings
 class OutputSettings:
     """What ``imdrive run`` writes besides summary.json (``[output]``)."""
 
-    figures: Annotated[Bool, setting("write the PNG figures")] = True
+    figures: Annotated[
+        Bool,
+        setting(
+            "write the PNG figures: speed.png, torque.png, currents.png, ... (report.html has "
+            "the same plots, interactive; drawing the PNGs took half of a warm run)"
+        ),
+    ] = False
     csv: Annotated[
         Bool,
         setting(

@@ -288,7 +288,13 @@ def run_one(P, S, i, n_steps, n_win, log_out, log_every, metrics, scratch, lc_bo
     while True:
         steps = min(chunk, n_steps - k0)
         final = k0 + steps == n_steps
-        status, ke = run_drive(P, S, i, steps, scratch, 1, k0, final)
+        # the engine with simulate()'s argument types: a constant here (i = 0 from
+        # one_drive, log_every = 1) reached it as a numba literal, a signature of its own,
+        # and every first batch compiled the whole engine again instead of loading run's
+        status, ke = run_drive(
+            P, S, np.int64(i), np.int64(steps), scratch, np.int64(1), np.int64(k0),
+            np.bool_(final), None,
+        )  # fmt: skip
         ok = status == S_OK
         rows = ke + 1 if (ok and final) else ke
         accumulate(scratch, rows, k0, k_win0, acc_arr, lc_bound, lc_n, t_on)

@@ -123,6 +123,21 @@ def unpack_state(z, S, i):
 
 
 @njit(cache=True)
+def _engine(P, S, i, n_steps, k0):
+    """``run_drive`` for ``n_steps`` periods of drive ``i`` from period ``k0``, nothing logged,
+    with the argument types of ``simulate()``'s call (int64, bool, ``rec`` None).
+
+    A constant argument written in the call would reach the engine as a numba literal
+    (``Literal[int](1)``): a signature of its own, and the whole engine compiled again for the
+    stability map (once per such call, three of them), instead of loaded from ``run``'s.
+    """
+    return run_drive(
+        P, S, i, np.int64(n_steps), np.empty(0, dtype=LOG), np.int64(0), np.int64(k0),
+        np.bool_(False), None,
+    )  # fmt: skip
+
+
+@njit(cache=True)
 def rotated_map(P, S, i, z, zout, th1, th2):
     """One control period of drive ``i`` from reduced state ``z``; reduced result in ``zout``.
 
@@ -132,7 +147,7 @@ def rotated_map(P, S, i, z, zout, th1, th2):
     x = S.plant[i]
     x.theta1 = th1
     x.theta2 = th2
-    status, _ = run_drive(P, S, i, 1, np.empty(0, dtype=LOG), 0, 0, False)
+    status, _ = _engine(P, S, i, 1, 0)
     pack_state(S, i, zout)
     return status
 
@@ -278,7 +293,7 @@ def propagate(P, S, i, z, n_steps, th1, th2, zout):
     x = S.plant[i]
     x.theta1 = th1
     x.theta2 = th2
-    status, _ = run_drive(P, S, i, n_steps, np.empty(0, dtype=LOG), 0, 0, False)
+    status, _ = _engine(P, S, i, n_steps, 0)
     pack_state(S, i, zout)
     return status
 
@@ -306,7 +321,7 @@ def step_check(P, S, Z0, Z1, TH, n_steps, n_win, peaks, status):
             peaks[i, w] = np.nan
         st = S_OK
         for k in range(n_steps):
-            st, _ = run_drive(P, S, i, 1, np.empty(0, dtype=LOG), 0, k, False)
+            st, _ = _engine(P, S, i, 1, k)
             if st != S_OK:
                 break
             pack_state(S, i, z)

@@ -148,6 +148,26 @@ def _verdict(res) -> dict | None:
         return None
 
 
+#: where to look when a run's folder holds none of the plots: its data, the first found
+DATA_FILES = ("timeseries.csv", "timeseries.parquet", "timeseries.mat", "summary.json")
+
+
+def _where(out, files: tuple[str, ...]) -> str:
+    """Those of ``files`` that the folder ``out`` holds, ``"a, b and c in OUT"`` (the PNG
+    figures are written only when asked), else its time series (:data:`DATA_FILES`);
+    ``"res.plot()"`` without a folder or with none of them."""
+    if out is None:
+        return "res.plot()"
+    from pathlib import Path
+
+    there = [f for f in files if (Path(out) / f).is_file()]
+    there = there or [f for f in DATA_FILES if (Path(out) / f).is_file()][:1]
+    if not there:
+        return "res.plot()"
+    names = there[0] if len(there) == 1 else f"{', '.join(there[:-1])} and {there[-1]}"
+    return f"{names} in {out}"
+
+
 def closing_line(res, out=None) -> str | None:
     """The console's last line for a run that diverged or lost control, or None.
 
@@ -172,10 +192,9 @@ def closing_line(res, out=None) -> str | None:
     if not (lost or diverged):
         if v is None or v["verdict"] == "ok":
             return None
-        where = "estimator.png, speed.png and report.html" if out is not None else "res.plot()"
-        loc = f" in {out}" if out is not None else ""
+        where = _where(out, ("estimator.png", "speed.png", "report.html"))
         t0 = v["verdict_at_s"]
-        return f"{v['verdict_text']}; look at {where}{loc} around t = {t0:.3g} s"
+        return f"{v['verdict_text']}; look at {where} around t = {t0:.3g} s"
     earlier = None
     if v is not None and v["verdict"] in ("frozen", "held"):
         earlier = v["verdict_text"].split("; ")[0]
@@ -196,7 +215,6 @@ def closing_line(res, out=None) -> str | None:
         parts = [res.divergence_message]
     if earlier:
         parts[0] = f"{earlier}, then {parts[0]}"
-    where = "speed.png, estimator.png and report.html" if out is not None else "res.plot()"
-    loc = f" in {out}" if out is not None else ""
-    parts.append(f"look at {where}{loc} around t = {t0:.3g} s")
+    where = _where(out, ("speed.png", "estimator.png", "report.html"))
+    parts.append(f"look at {where} around t = {t0:.3g} s")
     return "; ".join(parts)
