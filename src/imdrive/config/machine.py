@@ -433,13 +433,10 @@ def machine_file_values(file, preset: str = "paper-table-iv") -> dict:
     """
     if not isinstance(file, str) or not file:
         raise ConfigError("machine.file", f"must be a non-empty string (a path), got {file!r}")
-    path = Path(file)
-    if not path.is_file():
-        raise ConfigError("machine.file", f"no such file: {file}")
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigError("machine.file", f"cannot read {file}: {exc}") from None
+    from imdrive.config.presets import MAX_TOML_BYTES
+    from imdrive.config.user_files import read_user_text
+
+    text = read_user_text(file, "machine.file", MAX_TOML_BYTES, "machine file")
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

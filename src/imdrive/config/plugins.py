@@ -273,12 +273,18 @@ def import_plugin(spec: str, where: str = "plugins.modules") -> None:
     """
     try:
         if _is_path(spec):
+            from imdrive.config.user_files import path_form_problem, user_file_problem
+
+            problem = path_form_problem(spec)
+            if problem is not None:
+                raise ConfigError(where, problem)
             path = Path(spec).expanduser().resolve()
             name = _module_name(path)
             if name in sys.modules:
                 return
-            if not path.is_file():
-                raise ConfigError(where, f"no such file: {spec}")
+            problem = user_file_problem(path, "Python file")
+            if problem is not None:
+                raise ConfigError(where, problem)
             mod_spec = importlib.util.spec_from_file_location(name, path)
             module = importlib.util.module_from_spec(mod_spec)
             sys.modules[name] = module

@@ -8,8 +8,6 @@ one is refused the same way everywhere.
 from __future__ import annotations
 
 import json
-import os
-import stat
 import warnings
 from pathlib import Path
 
@@ -39,16 +37,10 @@ def read_summary_json(path, field: str = "scenario") -> dict:
     dict
         The whole summary.
     """
+    from imdrive.config.user_files import read_user_file
+
+    raw = read_user_file(path, field, MAX_SUMMARY_BYTES, "summary.json")
     path = Path(path)
-    try:
-        st = os.stat(path)
-        if not stat.S_ISREG(st.st_mode):
-            raise ConfigError(field, f"{path}: not a regular file")
-        if st.st_size > MAX_SUMMARY_BYTES:
-            raise ConfigError(field, f"{path}: {st.st_size} bytes, more than a summary.json holds")
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise ConfigError(field, f"cannot read {path}: {exc.strerror or exc}") from None
     try:
         data = json.loads(raw.decode("utf-8"))
     except UnicodeDecodeError:
