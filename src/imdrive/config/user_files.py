@@ -20,6 +20,8 @@ read_user_file, read_user_text
     A user's file, read whole and bounded, or one ConfigError.
 lexists
     Whether anything is at a path, False for one the system cannot look up.
+strange_keys, redact
+    What of a file's keys is foreign, and an error's text without the file's values.
 is_path_error
     Whether an OSError is about a path's form or existence (the user's to fix).
 
@@ -253,6 +255,69 @@ def lexists(path) -> bool:
     except (OSError, ValueError, TypeError):
         return False
     return True
+
+
+def strange_keys(keys, known) -> tuple[list[str], int]:
+    """The keys of a file that are not among ``known``: those that look like a misspelt known
+    key (difflib ratio >= 0.8: the user's typo, safe to name) and the count of the others.
+
+    A file whose keys are mostly not imdrive's is not an imdrive file (a credentials file, a
+    colleague's configuration of something else): its key names and values are its owner's,
+    and an error message must not print them (issue 40, class 15).
+
+    Parameters
+    ----------
+    keys : iterable of str
+        The file's keys.
+    known : collection of str
+        The keys an imdrive file of that kind may hold.
+
+    Returns
+    -------
+    typos : list of str
+        Unknown keys close to a known one.
+    n_foreign : int
+        How many unknown keys are close to none.
+    """
+    import difflib
+
+    typos, n_foreign = [], 0
+    for key in keys:
+        if key in known:
+            continue
+        if difflib.get_close_matches(str(key), list(known), n=1, cutoff=0.8):
+            typos.append(key)
+        else:
+            n_foreign += 1
+    return typos, n_foreign
+
+
+def redact(text: str, values) -> str:
+    """``text`` with every string among ``values`` (a file's values) replaced by
+    ``<the file's value>``: a rule may say what is wrong, never what the file holds."""
+    strings = sorted(
+        {v for v in _strings(values) if v.strip()}, key=len, reverse=True
+    )  # longest first, so that a value inside another is not half replaced
+    import re
+
+    for v in strings:
+        text = text.replace(repr(v), "<the file's value>")
+        if len(v) >= 4:  # a shorter one would take letters out of the rule's own words
+            text = re.sub(rf"(?<!\w){re.escape(v)}(?!\w)", "<the file's value>", text)
+    return text
+
+
+def _strings(value, depth: int = 0):
+    if depth > 8:
+        return
+    if isinstance(value, str):
+        yield value
+    elif isinstance(value, dict):
+        for v in value.values():
+            yield from _strings(v, depth + 1)
+    elif isinstance(value, list | tuple):
+        for v in value:
+            yield from _strings(v, depth + 1)
 
 
 def is_path_error(exc: BaseException) -> bool:

@@ -436,7 +436,7 @@ def _summary_rows(summary: dict) -> list[tuple[str, object]]:
     return flatten(keep)
 
 
-def run_report(res, max_points: int = MAX_POINTS) -> str:
+def run_report(res, max_points: int = MAX_POINTS, folder=None) -> str:
     """The interactive report of a run, as HTML text.
 
     Parameters
@@ -445,6 +445,9 @@ def run_report(res, max_points: int = MAX_POINTS) -> str:
         The run.
     max_points : int
         Points per trace at most (:func:`minmax_decimate`).
+    folder : str or os.PathLike, optional
+        Where the page is written: the scenario's file paths are shown relative to it
+        (:func:`~imdrive.config.summary_file.portable_summary`), never absolute.
 
     Returns
     -------
@@ -453,8 +456,12 @@ def run_report(res, max_points: int = MAX_POINTS) -> str:
         and its demodulation, R̂2 against R2, voltages, flux), the summary and the scenario as
         tables.
     """
+    from imdrive.config.summary_file import portable_summary
+
     sc = res.scenario
     summary = res.summary()
+    if folder is not None:
+        summary = portable_summary(summary, folder)
     fig, arrays, b = _run_figure(res, max_points)
     notes = [html.escape(sc.description)] if sc.description else []
     st = f"simulated {res.end_time_s:g} s in {res.wall_time_s:.3g} s wall"
@@ -490,5 +497,5 @@ def run_report(res, max_points: int = MAX_POINTS) -> str:
 def write_run_report(res, path, max_points: int = MAX_POINTS) -> Path:
     """Write :func:`run_report` to ``path`` (UTF-8); return the path."""
     path = Path(path)
-    path.write_text(run_report(res, max_points), encoding="utf-8")
+    path.write_text(run_report(res, max_points, path.parent), encoding="utf-8")
     return path
