@@ -495,7 +495,19 @@ def run_report(res, max_points: int = MAX_POINTS, folder=None) -> str:
 
 
 def write_run_report(res, path, max_points: int = MAX_POINTS) -> Path:
-    """Write :func:`run_report` to ``path`` (UTF-8); return the path."""
+    """Write :func:`run_report` to ``path`` (UTF-8; checked and replaced atomically,
+    :func:`imdrive._io.output_file`); return the path."""
+    import os
+
+    from imdrive._io import output_file
+    from imdrive.errors import ConfigError
+
+    def refuse(problem):
+        return ConfigError("path", problem)
+
+    if not isinstance(path, str | os.PathLike):
+        raise refuse(f"must be a file path, got {type(path).__name__}")
     path = Path(path)
-    path.write_text(run_report(res, max_points, path.parent), encoding="utf-8")
+    with output_file(path, refuse) as tmp:
+        tmp.write_text(run_report(res, max_points, path.parent), encoding="utf-8")
     return path
