@@ -340,6 +340,8 @@ def machine_preset(name: str = "paper-table-iv", **overrides) -> MachineParams:
     MachineParams
         The validated parameter set.
     """
+    if not isinstance(name, str):  # a list or a table would be an unhashable key below
+        raise ConfigError("name", f"must be a preset name (a str), got {type(name).__name__}")
     known = {f.name for f in fields(MachineParams)}
     for k in overrides:
         if k not in known:
