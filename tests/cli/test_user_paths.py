@@ -59,6 +59,10 @@ def _hostile(tmp: Path, kind: str, suffix: str) -> str:
         return str(p)
     if kind == "nul-byte":
         return str(tmp / ("nul\0" + suffix))
+    if kind == "loop":
+        p = tmp / ("loop" + suffix)
+        p.symlink_to(p)  # a plug-in's path resolved with Path.resolve raised RuntimeError
+        return str(p)
     raise AssertionError(kind)
 
 
@@ -72,6 +76,7 @@ KINDS = (
     "socket",
     "folder",
     "nul-byte",
+    "loop",
 )
 
 
