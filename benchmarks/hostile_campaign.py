@@ -243,9 +243,11 @@ def surface_writers(rng, tmp, n, base_set, tally):
             out = make_path(work, kind)
         before = sorted(str(p) for p in work.rglob("*"))
         outcome, detail = run_cli(writers[name](out))
-        if outcome == "correct":
+        if name == "machine-from-nameplate" and kind == "file" and outcome == "correct":
+            pass  # --out FILE names a file to write: a regular one is replaced, as asked
+        elif outcome == "correct":
             outcome, detail = "failure", f"wrote at a {kind} ({detail})"
-        elif sorted(str(p) for p in work.rglob("*")) != before:
+        elif outcome != "correct" and sorted(str(p) for p in work.rglob("*")) != before:
             outcome, detail = "failure", "refused but changed the folder"
         tally.add("writers", outcome, detail, (name, kind))
         shutil.rmtree(work, ignore_errors=True)

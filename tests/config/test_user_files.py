@@ -29,6 +29,7 @@ from imdrive.errors import ConfigError
         ("/".join(["b" * 200] * 25), "longer than 4096 bytes"),
         ("\udcff", None),  # a surrogate-escaped byte: a name Linux holds
         (5, "must be a path"),
+        (b"motor.toml", "got bytes"),
     ],
 )
 def test_path_form(text, expected):

@@ -79,8 +79,8 @@ def path_form_problem(path) -> str | None:
         text = os.fspath(path)
     except TypeError:
         return f"must be a path (a string), got {type(path).__name__}"
-    if isinstance(text, bytes):
-        text = os.fsdecode(text)
+    if isinstance(text, bytes):  # os takes them, pathlib and imdrive's messages do not
+        return "must be a path (a string), got bytes"
     if not text.strip():
         return "is empty: give a path"
     if "\0" in text:
