@@ -32,6 +32,7 @@ from __future__ import annotations
 import argparse
 import collections
 import json
+import os
 import random
 import shutil
 import socket
@@ -477,7 +478,9 @@ def main(argv=None) -> int:
     rng = random.Random(args.seed)
     tally = Tally()
     t0 = time.perf_counter()
+    here = os.getcwd()
     with tempfile.TemporaryDirectory(prefix="imdrive-campaign-") as root:
+        os.chdir(root)  # what an accepted relative path writes (res.save("x")) lands here
         for name, (fn, count) in SURFACES.items():
             if name not in only:
                 continue
@@ -485,6 +488,7 @@ def main(argv=None) -> int:
             fn(rng, Path(root) / name, max(1, round(count * args.scale)), base_set, tally)
             print(f"# {name}: {sum(tally.counts[name].values())} inputs in "
                   f"{time.perf_counter() - t:.0f} s", file=sys.stderr, flush=True)  # fmt: skip
+        os.chdir(here)
     print(f"# {time.perf_counter() - t0:.0f} s in all", file=sys.stderr)
     return 1 if tally.report() else 0
 

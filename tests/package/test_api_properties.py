@@ -92,8 +92,11 @@ def test_the_list_names_every_function(res):
 
 
 @pytest.mark.parametrize("name", NAMES)
-def test_hostile_arguments_give_a_value_or_a_config_error(res, tmp_path_factory, name):
+def test_hostile_arguments_give_a_value_or_a_config_error(res, tmp_path_factory, monkeypatch, name):
     fn, n = _functions(res)[name]
+    # a relative name that is a valid folder (res.save("x")) is written here, not in the
+    # repository the tests run from
+    monkeypatch.chdir(tmp_path_factory.mktemp("cwd"))
 
     @hypothesis.settings(
         max_examples=EXAMPLES,
