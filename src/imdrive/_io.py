@@ -19,9 +19,10 @@ replace_folder
     staging folder in its place: the old folder's files are all gone, the new ones all there.
 remove_partials
     Delete what killed writers left behind (temporary files and staging folders).
-file_path_problem, real_file
-    The rule for every single file a command writes: a regular file or a link to one (written
-    through), never a folder, a device node, a FIFO or a socket.
+file_path_problem, real_file, output_file
+    The rule for every single file a command or function writes: a regular file or a link to
+    one (written through), never a folder, a device node, a FIFO or a socket; ``output_file``
+    checks it and writes atomically, the one writer of every single file at a user's path.
 output_folder_problem
     The one rule for every folder a command writes: not the current folder or a parent, not
     under a file, a symbolic link kept (written through), other files refused unless forced.
@@ -399,6 +400,8 @@ def file_path_problem(path) -> str | None:
     text = os.fspath(path)
     if not str(text).strip():
         return "is empty: name the file to write"
+    if "\0" in str(text):
+        return f"{str(text)[:60]!r} holds a NUL byte, which no path may"
     path = Path(text)
     if path.name in ("", ".", "..") or str(text).endswith(("/", os.sep)):
         return f"{path} is a folder: name the file to write"
@@ -438,6 +441,38 @@ def file_path_problem(path) -> str | None:
     except (OSError, ValueError) as exc:  # a NUL byte, a loop of links, a name too long
         return f"{path} is not a usable path ({getattr(exc, 'strerror', None) or exc})"
     return None
+
+
+@contextmanager
+def output_file(path, refuse=ValueError) -> Iterator[Path]:
+    """The one writer of a single file at a path a user gave: checked, then atomic.
+
+    ``path`` is checked by :func:`file_path_problem` before anything is written (a folder, a
+    device node, a FIFO, a socket, a link to nothing, a path under a file or one too long is
+    refused with ``refuse(problem)``); a symbolic link is written through
+    (:func:`real_file`); the file is written under a temporary name beside it and renamed
+    (:func:`atomic_path`), so a failed or killed writer leaves the old file as it was.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file to write.
+    refuse : callable
+        ``refuse(problem) -> Exception`` raised for a refused path (the caller's own error
+        class, e.g. ``lambda p: ConfigError("path", p)``); default :class:`ValueError`.
+
+    Yields
+    ------
+    pathlib.Path
+        Where to write (the target's suffix kept, for writers that pick a format from it).
+    """
+    if not isinstance(path, str | os.PathLike):
+        raise refuse(f"must be a file path, got {type(path).__name__}")
+    problem = file_path_problem(path)
+    if problem is not None:
+        raise refuse(problem)
+    with atomic_path(real_file(path)) as tmp:
+        yield tmp
 
 
 def real_file(path) -> Path:

@@ -171,9 +171,12 @@ def machine_from_nameplate_command(args) -> int:
         print(f"imdrive: note: assumed {what}", file=sys.stderr)
     _notes(fit)
     if out is not None:
-        from imdrive._io import atomic_write_text
+        from imdrive._io import output_file
 
-        atomic_write_text(out, text)  # a temporary file renamed in the target's folder
+        # the same check again (the path may have changed during the estimate), then a
+        # temporary file renamed in the target's folder
+        with output_file(args.out, lambda problem: ConfigError("--out", problem)) as tmp:
+            tmp.write_text(text, encoding="utf-8")
         print(f"imdrive: wrote {args.out}", file=sys.stderr)
     else:
         sys.stdout.write(text)

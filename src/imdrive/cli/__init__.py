@@ -10,17 +10,19 @@ Exit codes
 2 (``EXIT_BAD_INPUT``)
     Bad input (an unknown preset, key or type, a value that breaks a rule, a derived quantity
     that overflows, an unsafe name, a sweep above ``--max-runs``, an ``--out`` folder that
-    holds other files): one line ``imdrive: error: field: rule`` on stderr, nothing written.
+    holds other files, a path the user gave that the system cannot use: too long, through a
+    file, missing, a special file where a file is read): one line
+    ``imdrive: error: field: rule`` on stderr, nothing written.
 3 (``EXIT_LOST_CONTROL``)
     A physical outcome: the run completed but lost control of the speed (it stayed more than
     ``simulation.lost_control_rpm`` from its reference for ``simulation.lost_control_s``: a
     runaway, a sustained limit cycle). Results written, marked ``"lost_control": true``.
 4 (``EXIT_ENVIRONMENT``)
-    The environment failed: an I/O error, a full disk, a permission, memory, a path longer
-    than the file system allows at write time, a dask cluster that lost its workers or
-    scheduler, a sweep store locked by another process. One line naming the cause, no
-    traceback; what was already written stays and looks incomplete (no summary.json, a sweep
-    manifest without ``"complete": true``; ``--resume`` continues a sweep).
+    The environment failed: an I/O error, a full disk, a permission, memory, a dask cluster
+    that lost its workers or scheduler, a sweep store locked by another process. One line
+    naming the cause, no traceback; what was already written stays and looks incomplete (no
+    summary.json, a sweep manifest without ``"complete": true``; ``--resume`` continues a
+    sweep).
 5 (``EXIT_INTERNAL``)
     An unexpected error (a bug): one line; set ``IMDRIVE_DEBUG=1`` for the traceback.
 6 (``EXIT_NOT_IDENTIFIED``)
@@ -219,6 +221,11 @@ def _main(argv: list[str] | None) -> int:
     except MemoryError:
         return _fail("out of memory (a smaller sweep, chunk or log_every?)", EXIT_ENVIRONMENT)
     except OSError as exc:
+        from imdrive.config.user_files import users_path_error
+
+        mine = users_path_error(exc, sys.argv[1:] if argv is None else argv)
+        if mine is not None:  # the form of a path the user gave: theirs to fix
+            return _fail(mine, EXIT_BAD_INPUT)
         return _fail(describe_os_error(exc), EXIT_ENVIRONMENT)
     except KeyboardInterrupt:
         print("imdrive: interrupted", file=sys.stderr)

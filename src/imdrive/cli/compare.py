@@ -17,10 +17,10 @@ def _cmd_compare(args) -> int:
     from imdrive.run.compare import compare
 
     signals = [s.strip() for s in args.signals.split(",") if s.strip()] if args.signals else None
-    cmp = compare(args.runs, signals=signals)
-    out = output_folder(
+    out = output_folder(  # checked before the runs are read: the one rule of every writer
         args.out, "compare", owns=_owns_compare_file, force=args.force, what="a comparison"
     )
+    cmp = compare(args.runs, signals=signals)
     paths = cmp.save(out)
     from imdrive.config.plugins import looked_past
 

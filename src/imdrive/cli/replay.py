@@ -11,25 +11,32 @@ from imdrive.cli._common import EXIT_OK, _examples, output_folder
 
 def _default_name(recording: str) -> str:
     """``out/replay-NAME``: the run folder's name, or the recording file's stem."""
+    from imdrive.config.user_files import user_folder_problem
+
     p = Path(recording)
-    return p.name if p.is_dir() else p.stem
+    return p.name if user_folder_problem(p) is None else p.stem
 
 
 def _cmd_replay(args) -> int:
     from imdrive.run.recording_read import open_recording
     from imdrive.run.replay import REPLAY_FILES, replay
 
+    # --out checked first (a default one is named after the recording, checked next), then
     # the file opened and its time checked before anything is written; every other rule is
     # checked as it streams, into a staging folder that a refusal removes
+    def folder():
+        return output_folder(
+            args.out,
+            _default_name(args.recording),
+            "replay-",
+            owns=lambda n: n in REPLAY_FILES,
+            force=args.force,
+            what="an imdrive replay",
+        )
+
+    out = folder() if args.out is not None else None
     rec = open_recording(args.recording, args.map)
-    out = output_folder(
-        args.out,
-        _default_name(args.recording),
-        "replay-",
-        owns=lambda n: n in REPLAY_FILES,
-        force=args.force,
-        what="an imdrive replay",
-    )
+    out = out if out is not None else folder()
     res = replay(
         rec,
         args.scenario,

@@ -65,6 +65,7 @@ def _cmd_sweep(args) -> int:
         sweep,
         out,
         scheduler=args.scheduler,
+        connect_timeout_s=args.connect_timeout,
         resume=args.resume,
         chunk_size=args.chunk_size,
         figures=not args.no_figures,
@@ -113,6 +114,13 @@ def add_parser(sub) -> None:
     sw.add_argument("sweep", nargs="?", metavar="SWEEP_OR_FILE")
     sw.add_argument("--out", metavar="STORE", help="store folder (default out/sweep-NAME)")
     sw.add_argument("--scheduler", metavar="ADDRESS", help="dask.distributed scheduler address")
+    sw.add_argument(
+        "--connect-timeout",
+        type=float,
+        default=10.0,
+        metavar="S",
+        help="seconds the scheduler has to answer and greet (default 10)",
+    )
     sw.add_argument("--resume", action="store_true", help="continue an interrupted sweep")
     sw.add_argument("--chunk-size", type=int, metavar="N", help="runs per chunk (default 32)")
     sw.add_argument("--no-figures", action="store_true", help="skip the heatmap PNGs")

@@ -250,6 +250,7 @@ def write_outputs(sc: Scenario, res: CommissioningResult, out) -> None:
     """
     from imdrive._io import replace_folder
     from imdrive.commission.figures import save_figures
+    from imdrive.config.summary_file import portable_scenario, portable_summary
     from imdrive.config.toml_writer import dumps
 
     data = identified_scenario(sc, res)
@@ -258,6 +259,8 @@ def write_outputs(sc: Scenario, res: CommissioningResult, out) -> None:
     summary["controller_model_keys"] = "controller_model" in SECTIONS
     summary["scenario"] = sc.to_dict()
     with replace_folder(Path(out)) as staging:
+        summary = portable_summary(summary, staging)  # staging: beside the folder
+        data = portable_scenario(data, staging)
         save_figures(res, staging)
         (staging / "summary.json").write_text(json.dumps(summary, indent=2, default=float))
         (staging / "identified.toml").write_text(dumps(data))

@@ -340,6 +340,8 @@ def machine_preset(name: str = "paper-table-iv", **overrides) -> MachineParams:
     MachineParams
         The validated parameter set.
     """
+    if not isinstance(name, str):  # a list or a table would be an unhashable key below
+        raise ConfigError("name", f"must be a preset name (a str), got {type(name).__name__}")
     known = {f.name for f in fields(MachineParams)}
     for k in overrides:
         if k not in known:
@@ -433,20 +435,18 @@ def machine_file_values(file, preset: str = "paper-table-iv") -> dict:
     """
     if not isinstance(file, str) or not file:
         raise ConfigError("machine.file", f"must be a non-empty string (a path), got {file!r}")
-    path = Path(file)
-    if not path.is_file():
-        raise ConfigError("machine.file", f"no such file: {file}")
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigError("machine.file", f"cannot read {file}: {exc}") from None
+    from imdrive.config.presets import MAX_TOML_BYTES
+    from imdrive.config.user_files import read_user_text, redact, strange_keys
+
+    text = read_user_text(file, "machine.file", MAX_TOML_BYTES, "machine file")
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError("machine.file", f"{file} is not valid TOML: {exc}") from None
     except RecursionError:
         raise ConfigError("machine.file", f"{file}: TOML nested too deeply to read") from None
-    if "machine" in data:
+    has_table = "machine" in data
+    if has_table:
         extra = sorted(set(data) - {"machine"})
         if extra or not isinstance(data["machine"], dict):
             raise ConfigError(
@@ -455,19 +455,30 @@ def machine_file_values(file, preset: str = "paper-table-iv") -> dict:
                 f"(found {extra[0] if extra else 'machine = a value'})",
             )
         data = data["machine"]
-    known = {f.name for f in fields(MachineParams)} - {"file"}
-    for key in data:
-        if key not in known | {"preset", *METADATA_KEYS}:
-            raise ConfigError(f"machine.{key}", f"unknown key (in machine.file {file})")
+    settings_ = {f.name for f in fields(MachineParams)} - {"file"}
+    known = settings_ | {"preset", *METADATA_KEYS}
+    unknown = [k for k in data if k not in known]
+    typos, n_foreign = strange_keys(unknown, known)
+    if n_foreign and not has_table and not set(data) & settings_:
+        # no [machine] table, no machine setting: not a machine file (a credentials file, a
+        # colleague's configuration of something else); neither its keys nor values printed
+        raise ConfigError(
+            "machine.file",
+            f"{file} is not an imdrive machine file: none of its {len(data)} keys is a machine "
+            "setting (it holds MachineParams fields such as R1_ohm, at its top level or under "
+            "[machine])",
+        )
+    if unknown:
+        raise ConfigError(f"machine.{unknown[0]}", f"unknown key (in machine.file {file})")
     values = {k: v for k, v in data.items() if k not in METADATA_KEYS}
     base = values.pop("preset", preset)
-    if not isinstance(base, str):
-        raise ConfigError("machine.preset", f"must be a string, got {base!r} (in {file})")
-    values = preset_table(base) | values
     try:
+        if not isinstance(base, str):
+            raise ConfigError("machine.preset", "must be a string")
+        values = preset_table(base) | values
         MachineParams(**values)
-    except ConfigError as exc:
-        raise ConfigError(exc.field, f"{exc.rule} (in machine.file {file})") from None
+    except ConfigError as exc:  # the rule, without the file's text values
+        raise ConfigError(exc.field, f"{redact(exc.rule, data)} (in machine.file {file})") from None
     return values
 
 

@@ -230,6 +230,8 @@ def parse_toml(text: str, field: str, what: str = "") -> dict:
         Where the text comes from, for the message (a file name), or ``""``.
     """
     where = f" in {what}" if what else ""
+    if not isinstance(text, str):  # parse_sweep(None), from_toml(b"...")
+        raise ConfigError(field, f"must be TOML text (a str), got {type(text).__name__}")
     try:
         return tomllib.loads(text.removeprefix("\ufeff"))
     except tomllib.TOMLDecodeError as exc:

@@ -149,6 +149,15 @@ def _module_name(path: Path) -> str:
     return "imdrive_plugin_" + hashlib.sha256(str(path).encode()).hexdigest()[:12]
 
 
+def _file_of(spec: str) -> Path | None:
+    """A path-like module's file, its links resolved; None where it cannot be (a loop of
+    links, a name too long, a NUL byte), which :meth:`pathlib.Path.resolve` raises for."""
+    try:
+        return Path(spec).expanduser().resolve()
+    except (OSError, RuntimeError, ValueError):
+        return None
+
+
 def is_imported(spec: str) -> bool:
     """Whether the module ``spec`` is already imported in this process (no code would run).
 
@@ -162,7 +171,8 @@ def is_imported(spec: str) -> bool:
     bool
     """
     if _is_path(spec):
-        return _module_name(Path(spec).expanduser().resolve()) in sys.modules
+        path = _file_of(spec)
+        return path is not None and _module_name(path) in sys.modules
     return spec in sys.modules
 
 
@@ -197,7 +207,7 @@ def module_file(spec: str) -> Path | None:
     """The file of module ``spec``, found without running any code (``None``: not found
     without importing, e.g. a sub-module of a package not yet imported)."""
     if _is_path(spec):
-        return Path(spec).expanduser().resolve()
+        return _file_of(spec)
     mod = sys.modules.get(spec)
     if mod is not None:
         f = getattr(mod, "__file__", None)
@@ -273,12 +283,20 @@ def import_plugin(spec: str, where: str = "plugins.modules") -> None:
     """
     try:
         if _is_path(spec):
-            path = Path(spec).expanduser().resolve()
+            from imdrive.config.user_files import path_form_problem, user_file_problem
+
+            problem = path_form_problem(spec)
+            if problem is not None:
+                raise ConfigError(where, problem)
+            path = _file_of(spec)
+            if path is None:
+                raise ConfigError(where, user_file_problem(spec, "Python file") or "not a file")
             name = _module_name(path)
             if name in sys.modules:
                 return
-            if not path.is_file():
-                raise ConfigError(where, f"no such file: {spec}")
+            problem = user_file_problem(path, "Python file")
+            if problem is not None:
+                raise ConfigError(where, problem)
             mod_spec = importlib.util.spec_from_file_location(name, path)
             module = importlib.util.module_from_spec(mod_spec)
             sys.modules[name] = module

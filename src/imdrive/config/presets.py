@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import os
 from importlib import resources
-from pathlib import Path
 
 from imdrive.errors import ConfigError
+
+#: The largest scenario or machine file read (B): a hand-written TOML is a few kB.
+MAX_TOML_BYTES = 16 * 1024**2
 
 
 def preset_names() -> list[str]:
@@ -25,16 +28,19 @@ def scenario_text(preset_or_path: str) -> str:
     """Text of a preset by name, else of the file at that path."""
     if preset_or_path in preset_names():
         return preset_text(preset_or_path)
-    p = Path(preset_or_path)
-    try:
-        is_file = p.is_file()
-    except (OSError, ValueError) as exc:  # a name too long, a NUL byte: not a usable path
-        raise ConfigError("scenario", f"not a usable file path: {exc}") from None
-    if is_file:
-        try:
-            return p.read_text(encoding="utf-8-sig")  # a byte-order mark is not part of TOML
-        except (OSError, UnicodeDecodeError) as exc:
-            raise ConfigError("scenario", f"cannot read {p}: {exc}") from None
-    raise ConfigError(
-        "scenario", f"{preset_or_path!r} is neither a preset (see 'imdrive presets') nor a file"
-    )
+    from imdrive.config.user_files import path_form_problem, read_user_text
+
+    problem = path_form_problem(preset_or_path)
+    if problem is not None:  # a name too long, a NUL byte: not a usable path
+        raise ConfigError("scenario", f"not a usable file path: {problem}")
+    if not os.path.lexists(preset_or_path):
+        raise ConfigError(
+            "scenario",
+            f"{_short(preset_or_path)!r} is neither a preset (see 'imdrive presets') nor a file",
+        )
+    return read_user_text(preset_or_path, "scenario", MAX_TOML_BYTES, "scenario file")
+
+
+def _short(text) -> str:
+    text = str(text)
+    return text if len(text) <= 120 else f"{text[:60]}... ({len(text)} characters)"

@@ -19,6 +19,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from imdrive.config.summary_file import read_summary_json
+from imdrive.config.user_files import lexists, user_file_problem, user_folder_problem
 from imdrive.errors import ConfigError
 
 #: the default panels: (quantity, columns); a panel is drawn when a run has one of its columns
@@ -94,11 +95,12 @@ def load_run(folder, label: str | None = None) -> Run:
 
     if not isinstance(folder, str | os.PathLike):
         raise ConfigError("run", f"must be a result folder's path, got {type(folder).__name__}")
+    problem = user_folder_problem(folder)
+    if problem is not None:
+        raise ConfigError("run", problem)
     folder = Path(folder)
     summary_path = folder / "summary.json"
-    if not summary_path.is_file():
-        if summary_path.exists() or summary_path.is_symlink():
-            raise ConfigError("run", f"{summary_path}: not a regular file")
+    if not lexists(summary_path):
         raise ConfigError("run", f"{folder}: no summary.json (not a result folder)")
     summary = read_summary_json(summary_path, "run")
     if is_replay_summary(summary):
@@ -113,19 +115,20 @@ def load_run(folder, label: str | None = None) -> Run:
     table = None
     for name, reader in (("timeseries.parquet", pd.read_parquet), ("timeseries.csv", pd.read_csv)):
         path = folder / name
-        if path.is_file():
-            _check_size(path)
-            try:
-                table = reader(path)
-            except (MemoryError, KeyboardInterrupt):
-                raise
-            except Exception as exc:  # pandas' and pyarrow's many errors: not a table
-                raise ConfigError(
-                    "run", f"{path}: cannot be read as a table ({_one_line(exc)})"
-                ) from None
-            break
-        if path.exists() or path.is_symlink():
-            raise ConfigError("run", f"{path}: not a regular file")
+        if not lexists(path):
+            continue
+        problem = user_file_problem(path, "table")
+        if problem is not None:
+            raise ConfigError("run", problem)
+        _check_size(path)
+        try:
+            table = reader(path)
+        except (MemoryError, KeyboardInterrupt):
+            raise
+        except Exception as exc:  # pandas' and pyarrow's many errors: not a table
+            why = _one_line(exc)
+            raise ConfigError("run", f"{path}: cannot be read as a table ({why})") from None
+        break
     if table is None:
         raise ConfigError(
             "run", f"{folder}: no timeseries.csv or .parquet (run it with output.csv = true)"
@@ -158,8 +161,11 @@ def load_replay(folder, label: str | None = None, summary: dict | None = None) -
     if summary is None:
         summary = read_summary_json(folder / "summary.json", "run")
     path = folder / "timeseries.parquet"
-    if not path.is_file():
+    if not lexists(path):
         raise ConfigError("run", f"{folder}: a replay without its timeseries.parquet")
+    problem = user_file_problem(path, "table")
+    if problem is not None:
+        raise ConfigError("run", problem)
     _check_size(path)
     try:
         table = pd.read_parquet(path)
@@ -394,7 +400,7 @@ def _replay_folder(folder) -> bool:
     if not isinstance(folder, str | os.PathLike):
         return False
     p = Path(folder) / "summary.json"
-    if not p.is_file():
+    if user_file_problem(p) is not None:
         return False
     try:
         return is_replay_summary(read_summary_json(p, "run"))

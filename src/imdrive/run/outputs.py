@@ -82,7 +82,9 @@ COLUMN_DOCS = {
 }
 
 SUMMARY_DOCS = {
-    "scenario": "the scenario as run, every default filled in (a valid scenario file's content)",
+    "scenario": "the scenario as run, every default filled in (a valid scenario file's "
+    "content); no absolute path: a machine file's values are inlined (`file` null), a plug-in "
+    "module's path is relative to the result folder",
     "derived": "quantities derived from it: gains, limits, rated values, compensator period",
     "resolved": "the value each unset scenario-dependent setting took (field weakening, "
     "current controller, speed-gain scaling, MRAS type, the compensator's machine-scaled "
@@ -114,8 +116,9 @@ SUMMARY_DOCS = {
     "`R2_held_note`, the sentence the console prints whenever R2_hat was held more than 10 % "
     "of the time; `R2_observable`: estimated at the end, or not "
     "observable here and why",
-    "plugins": "each module of `[plugins] modules` -> the sha256 of its file (null: not "
-    "readable); a rerun of this summary.json warns when a module has changed since",
+    "plugins": "each module of `[plugins] modules` (a file's path relative to the result "
+    "folder) -> the sha256 of its file (null: not readable); a rerun of this summary.json warns "
+    "when a module has changed since",
 }
 
 

@@ -125,6 +125,7 @@ def write_recording(res, folder) -> None:
     import pyarrow as pa
     import pyarrow.parquet as pq
 
+    from imdrive.config.summary_file import portable_scenario
     from imdrive.config.toml_writer import dumps
 
     if getattr(res, "recording", None) is None:
@@ -140,7 +141,9 @@ def write_recording(res, folder) -> None:
     pq.write_table(
         table.replace_schema_metadata(meta), str(folder / "recording.parquet"), compression="zstd"
     )
-    (folder / "recording.toml").write_text(dumps(recording_meta(res)))
+    about = recording_meta(res)
+    about["scenario"] = portable_scenario(about["scenario"], folder)  # no absolute paths
+    (folder / "recording.toml").write_text(dumps(about))
 
 
 # --- reading a recording back ---------------------------------------------------------------

@@ -348,11 +348,18 @@ def read_map(path) -> RecordingMap:
         return path
     if isinstance(path, dict):
         return parse_map(path)
+    from imdrive.config.presets import MAX_TOML_BYTES
+    from imdrive.config.user_files import lexists, path_form_problem, read_user_text
+
+    problem = path_form_problem(path)
+    if problem is not None:
+        raise ConfigError("--map", problem)
     p = Path(path)
-    if not p.is_file():
+    if not lexists(p):
         raise ConfigError("--map", f"{p}: no such mapping file")
+    text = read_user_text(p, "--map", MAX_TOML_BYTES, "mapping file")
     try:
-        data = tomllib.loads(p.read_text())
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        data = tomllib.loads(text)
+    except (tomllib.TOMLDecodeError, RecursionError) as exc:
         raise ConfigError(str(p), f"is not valid TOML ({exc})") from None
     return parse_map(data, str(p))

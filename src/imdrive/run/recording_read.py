@@ -35,11 +35,19 @@ FORMATS = {".parquet": "parquet", ".pq": "parquet", ".csv": "csv", ".mat": "mat"
 
 def data_file(path) -> Path:
     """The data file of ``path``: itself, or a run folder's ``recording.parquet``."""
+    from imdrive.config.user_files import lexists, path_form_problem, user_file_problem
+
+    problem = path_form_problem(path)
+    if problem is not None:
+        raise ConfigError("recording", problem)
     p = Path(path)
-    if p.is_dir():
-        p = p / "recording.parquet"
-    if not p.is_file():
+    if user_file_problem(p) is not None and lexists(p / "recording.parquet"):
+        p = p / "recording.parquet"  # a run folder
+    if not lexists(p):
         raise ConfigError(str(path), "no such recording (a recording.parquet or its run folder)")
+    problem = user_file_problem(p, "recording")
+    if problem is not None:
+        raise ConfigError("recording", problem)
     return p
 
 
@@ -345,15 +353,18 @@ def open_recording(path, mapping=None) -> RecordingFile:
     """
     import tomllib
 
+    from imdrive.config.presets import MAX_TOML_BYTES
+    from imdrive.config.user_files import lexists, read_user_text
     from imdrive.run.recording_map import read_map
 
     p = data_file(path)
     mp = None if mapping is None else read_map(mapping)
     f = RecordingFile(p, mp)
     toml = p.with_suffix(".toml")
-    if mp is None and toml.is_file():
+    if mp is None and lexists(toml):
+        text = read_user_text(toml, str(toml), MAX_TOML_BYTES, "recording.toml")
         try:
-            f.meta = tomllib.loads(toml.read_text())
-        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+            f.meta = tomllib.loads(text)
+        except (tomllib.TOMLDecodeError, RecursionError) as exc:
             raise ConfigError(str(toml), f"is not valid TOML ({exc})") from None
     return f

@@ -150,10 +150,11 @@ class _Writer:
 
 def _finish(folder: Path, res: ReplayResult) -> None:
     """``summary.json``, ``replay.png`` and ``report.html`` into ``folder``."""
+    from imdrive.config.summary_file import portable_summary
     from imdrive.run.files import summary_json
     from imdrive.run.replay_report import write_figure, write_report
 
-    (folder / "summary.json").write_text(summary_json(res.summary))
+    (folder / "summary.json").write_text(summary_json(portable_summary(res.summary, folder)))
     if not res.plot:
         res.plot = dict(res.signals)
     write_figure(res, folder / "replay.png")

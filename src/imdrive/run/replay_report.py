@@ -58,10 +58,13 @@ def replay_figure(res):
 
 
 def write_figure(res, path) -> Path:
-    """Write :func:`replay_figure` as a PNG."""
-    path = Path(path)
-    replay_figure(res).savefig(path, dpi=110)
-    return path
+    """Write :func:`replay_figure` as a PNG (checked, atomic: :func:`imdrive._io.output_file`)."""
+    from imdrive._io import output_file
+    from imdrive.errors import ConfigError
+
+    with output_file(path, lambda problem: ConfigError("path", problem)) as tmp:
+        replay_figure(res).savefig(tmp, dpi=110, format="png")
+    return Path(path)
 
 
 def report(res) -> str:
@@ -140,7 +143,10 @@ def report(res) -> str:
 
 
 def write_report(res, path) -> Path:
-    """Write :func:`report` to ``path`` (UTF-8)."""
-    path = Path(path)
-    path.write_text(report(res), encoding="utf-8")
-    return path
+    """Write :func:`report` to ``path`` (UTF-8; :func:`~imdrive._io.output_file`)."""
+    from imdrive._io import output_file
+    from imdrive.errors import ConfigError
+
+    with output_file(path, lambda problem: ConfigError("path", problem)) as tmp:
+        tmp.write_text(report(res), encoding="utf-8")
+    return Path(path)

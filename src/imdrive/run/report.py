@@ -460,7 +460,7 @@ def _summary_rows(summary: dict) -> list[tuple[str, object]]:
     return flatten(keep)
 
 
-def run_report(res, max_points: int = MAX_POINTS) -> str:
+def run_report(res, max_points: int = MAX_POINTS, folder=None) -> str:
     """The interactive report of a run, as HTML text.
 
     Parameters
@@ -469,6 +469,9 @@ def run_report(res, max_points: int = MAX_POINTS) -> str:
         The run.
     max_points : int
         Points per trace at most (:func:`minmax_decimate`).
+    folder : str or os.PathLike, optional
+        Where the page is written: the scenario's file paths are shown relative to it
+        (:func:`~imdrive.config.summary_file.portable_summary`), never absolute.
 
     Returns
     -------
@@ -477,8 +480,12 @@ def run_report(res, max_points: int = MAX_POINTS) -> str:
         and its demodulation, R̂2 against R2, voltages, flux), the summary and the scenario as
         tables.
     """
+    from imdrive.config.summary_file import portable_summary
+
     sc = res.scenario
     summary = res.summary()
+    if folder is not None:
+        summary = portable_summary(summary, folder)
     fig, arrays, b = _run_figure(res, max_points)
     notes = [html.escape(sc.description)] if sc.description else []
     st = f"simulated {res.end_time_s:g} s in {res.wall_time_s:.3g} s wall"
@@ -512,7 +519,19 @@ def run_report(res, max_points: int = MAX_POINTS) -> str:
 
 
 def write_run_report(res, path, max_points: int = MAX_POINTS) -> Path:
-    """Write :func:`run_report` to ``path`` (UTF-8); return the path."""
+    """Write :func:`run_report` to ``path`` (UTF-8; checked and replaced atomically,
+    :func:`imdrive._io.output_file`); return the path."""
+    import os
+
+    from imdrive._io import output_file
+    from imdrive.errors import ConfigError
+
+    def refuse(problem):
+        return ConfigError("path", problem)
+
+    if not isinstance(path, str | os.PathLike):
+        raise refuse(f"must be a file path, got {type(path).__name__}")
     path = Path(path)
-    path.write_text(run_report(res, max_points), encoding="utf-8")
+    with output_file(path, refuse) as tmp:
+        tmp.write_text(run_report(res, max_points, path.parent), encoding="utf-8")
     return path

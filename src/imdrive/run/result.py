@@ -577,6 +577,7 @@ class SimulationResult:
             (nothing written).
         """
         from imdrive._io import replace_folder
+        from imdrive.config.summary_file import portable_summary
 
         check_result_folder(out_dir, force)
         out_dir = Path(out_dir)
@@ -591,7 +592,8 @@ class SimulationResult:
             for fmt in output_formats():  # every registered format its [output] key turns on
                 if wanted[fmt.key]:
                     fmt.write(self, staging)
-            (staging / "summary.json").write_text(summary_json(self.summary()))
+            summary = portable_summary(self.summary(), staging)  # staging: beside out_dir
+            (staging / "summary.json").write_text(summary_json(summary))
             names = sorted(p.name for p in staging.iterdir())
         return [out_dir / n for n in names if n != "summary.json"] + [out_dir / "summary.json"]
 

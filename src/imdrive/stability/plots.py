@@ -69,13 +69,29 @@ def map_figure(df, title: str = "", clip: float = 20.0):
 
 
 def plot_map(df, path: Path, title: str = "", clip: float = 20.0) -> Path:
-    """Write :func:`map_figure` as ``path`` (PNG); returns the path."""
-    path = Path(path)
-    map_figure(df, title, clip).savefig(path)
-    return path
+    """Write :func:`map_figure` as ``path`` (PNG; checked, atomic:
+    :func:`imdrive._io.output_file`); returns the path."""
+    with _output_file(path) as tmp:  # the path checked before the figure is drawn
+        map_figure(df, title, clip).savefig(tmp, format="png")
+    return Path(path)
+
+
+def _output_file(path):
+    from imdrive._io import output_file
+    from imdrive.errors import ConfigError
+
+    return output_file(path, lambda problem: ConfigError("path", problem))
 
 
 def plot_overlay(frames: dict, path: Path, title: str = "") -> Path:
+    """Write :func:`overlay_figure` as ``path`` (PNG; checked, atomic:
+    :func:`imdrive._io.output_file`); returns the path."""
+    with _output_file(path) as tmp:  # the path checked before the figure is drawn
+        overlay_figure(frames, title).savefig(tmp, format="png")
+    return Path(path)
+
+
+def overlay_figure(frames: dict, title: str = ""):
     """Stable-region boundaries of several maps (label -> table) over speed x torque."""
     from matplotlib import colormaps
     from matplotlib.lines import Line2D
@@ -99,6 +115,4 @@ def plot_overlay(frames: dict, path: Path, title: str = "") -> Path:
     ax.set_ylabel("speed reference, rpm")
     ax.legend(handles=handles, title="unstable or no steady state (shaded)", fontsize=8)
     ax.set_title(title or "boundary of the stable region")
-    path = Path(path)
-    fig.savefig(path)
-    return path
+    return fig

@@ -108,8 +108,9 @@ Execution: locally (default) each chunk is one call of the batch engine over all
 ``--scheduler ADDRESS`` (needs ``pip install 'imdrive[dask]'``) every chunk is a task on that
 dask.distributed cluster (``Client(ADDRESS)``), run on one worker thread without the GIL; the
 workers return the chunk's table and this process writes the store. The address is checked
-first (its form, its protocol, for TCP a port that answers within 5 s): a bad one is bad input
-at once.
+first (:mod:`imdrive.sweep.scheduler`: its form, its protocol, for TCP a dask scheduler's
+greeting within ``--connect-timeout``, 10 s by default): a port that is not a scheduler (an
+HTTP server, silence, garbage) is bad input, one line, before any client is made.
 
 Modules
 -------
@@ -120,6 +121,8 @@ imdrive.sweep.store
     The Parquet store and resuming.
 imdrive.sweep.run
     :func:`run_sweep`: local or dask execution, with a progress bar.
+imdrive.sweep.scheduler
+    Connecting to a dask scheduler: the address, its greeting, the client.
 imdrive.sweep.figures
     The heatmaps.
 imdrive.cli

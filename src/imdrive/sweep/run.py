@@ -22,6 +22,11 @@ from pathlib import Path
 from imdrive._progress import Progress, _isatty
 from imdrive.errors import ConfigError, EnvironmentFailure, check_argument
 from imdrive.sweep.figures import save_heatmaps
+from imdrive.sweep.scheduler import (  # noqa: F401  (check_scheduler_address: old path)
+    CONNECT_TIMEOUT_S,
+    check_scheduler_address,
+    connect,
+)
 from imdrive.sweep.spec import Sweep, _int
 from imdrive.sweep.store import lock_store, open_store
 
@@ -89,6 +94,7 @@ def run_sweep(
     client=None,
     report: bool = True,
     notice=None,
+    connect_timeout_s: float = CONNECT_TIMEOUT_S,
 ):
     """Run ``sweep`` into the store ``out``.
 
@@ -116,6 +122,8 @@ def run_sweep(
         Write ``report.html``, the interactive heatmaps (:mod:`imdrive.sweep.report`).
     notice : callable, optional
         Receives that line and one per repaired chunk (default: printed on stderr).
+    connect_timeout_s : float
+        Seconds ``scheduler`` has to answer and greet as a dask scheduler (s); default 10.
 
     Returns
     -------
@@ -136,7 +144,7 @@ def run_sweep(
 
     store, cs, started = open_store(sweep, out, resume, chunk_size)
     if client is None and scheduler is not None:
-        client = _connect(scheduler)
+        client = connect(scheduler, connect_timeout_s)
         own_client = True
     else:
         own_client = False
@@ -236,73 +244,3 @@ def _from_dask(exc: BaseException) -> bool:
     return mod.split(".")[0] in ("distributed", "dask", "tornado", "asyncio") or isinstance(
         exc, TimeoutError
     )
-
-
-#: Seconds to wait for a scheduler's port to answer before the client is made.
-PROBE_TIMEOUT_S = 5.0
-
-
-def check_scheduler_address(address) -> tuple[str, str]:
-    """``(scheme, location)`` of a dask scheduler address, refused at once when it cannot be
-    one, and for TCP and TLS when nothing answers on its port.
-
-    A ``dask.distributed.Client`` made with a malformed address raises, then its finaliser
-    waits 20 s to close a connection that never was and prints a traceback; an address whose
-    port does not answer costs the client's whole timeout. Both are settled here first.
-
-    Parameters
-    ----------
-    address : str
-        ``tcp://host:port``, ``host:port``, ``tls://...``, ``inproc://...``, ...
-
-    Raises
-    ------
-    ConfigError
-        On ``--scheduler``, naming the problem.
-    """
-    import socket
-
-    from distributed.comm.addressing import parse_address, parse_host_port
-    from distributed.comm.registry import backends
-
-    if not isinstance(address, str) or not address.strip():
-        raise ConfigError("--scheduler", "must be a scheduler address such as tcp://host:8786")
-    bad = next((c for c in address if c.isspace() or not c.isprintable()), None)
-    if bad is not None:
-        raise ConfigError("--scheduler", f"{address[:60]!r} is not an address (it holds {bad!r})")
-    try:
-        scheme, loc = parse_address(address, strict=False)
-    except ValueError as exc:
-        raise ConfigError("--scheduler", f"{address!r} is not an address: {exc}") from None
-    if scheme not in backends:
-        raise ConfigError(
-            "--scheduler", f"unknown protocol {scheme!r} in {address!r} (known: {sorted(backends)})"
-        )
-    if scheme in ("tcp", "tls"):
-        try:
-            host, port = parse_host_port(loc)
-        except ValueError as exc:
-            raise ConfigError("--scheduler", f"{address!r} is not an address: {exc}") from None
-        if not host or port is None or not 0 < int(port) < 65536:
-            raise ConfigError("--scheduler", f"{address!r} needs a host and a port 1-65535")
-        try:
-            socket.create_connection((host, int(port)), timeout=PROBE_TIMEOUT_S).close()
-        except OSError as exc:
-            raise ConfigError(
-                "--scheduler", f"cannot connect to {address}: {exc.strerror or exc}"
-            ) from None
-    return scheme, loc
-
-
-def _connect(address: str):
-    try:
-        from dask.distributed import Client
-    except ImportError:
-        raise ConfigError(
-            "--scheduler", "needs dask.distributed: pip install 'imdrive[dask]'"
-        ) from None
-    check_scheduler_address(address)
-    try:
-        return Client(address, timeout="10s", set_as_default=False)
-    except (OSError, TimeoutError, ValueError) as exc:
-        raise ConfigError("--scheduler", f"cannot connect to {address}: {exc}") from None

@@ -108,15 +108,20 @@ def sweep_text(ref: str) -> tuple[str, Path | None]:
     """
     if ref in sweep_names():
         return resources.files("imdrive.sweep").joinpath(f"presets/{ref}.toml").read_text(), None
-    p = Path(ref)
-    if p.is_file():
-        try:
-            return p.read_text(encoding="utf-8-sig"), p.resolve().parent
-        except (OSError, UnicodeDecodeError) as exc:
-            raise ConfigError("sweep", f"cannot read {p}: {exc}") from None
-    raise ConfigError(
-        "sweep", f"{ref!r} is neither a built-in sweep ({', '.join(sweep_names())}) nor a file"
-    )
+    import os
+
+    from imdrive.config.presets import MAX_TOML_BYTES
+    from imdrive.config.user_files import path_form_problem, read_user_text
+
+    problem = path_form_problem(ref)
+    if problem is not None:
+        raise ConfigError("sweep", f"not a usable file path: {problem}")
+    if not os.path.lexists(ref):
+        raise ConfigError(
+            "sweep",
+            f"{ref[:60]!r} is neither a built-in sweep ({', '.join(sweep_names())}) nor a file",
+        )
+    return read_user_text(ref, "sweep", MAX_TOML_BYTES, "sweep file"), Path(ref).resolve().parent
 
 
 def parse_sweep(
@@ -216,7 +221,9 @@ def _base_data(data: dict, folder: Path | None) -> dict:
     base_ref = data["base"]
     if not isinstance(base_ref, str):
         raise ConfigError("base", "must be a string")
-    if folder is not None and not Path(base_ref).is_absolute() and (folder / base_ref).is_file():
+    from imdrive.config.user_files import lexists
+
+    if folder is not None and not Path(base_ref).is_absolute() and lexists(folder / base_ref):
         base_ref = str(folder / base_ref)
     try:
         base_data = parse_toml(scenario_text(base_ref), "base", base_ref)

@@ -20,19 +20,12 @@ def to_csv(res, path) -> None:
         The file to write: a regular file or a link to one (written through), replaced
         atomically; a folder, a device or a FIFO is refused (:func:`imdrive._io.file_path_problem`).
     """
-    import os
-
-    from imdrive._io import atomic_path, file_path_problem, real_file
+    from imdrive._io import output_file
     from imdrive.errors import ConfigError
 
-    if not isinstance(path, str | os.PathLike):
-        raise ConfigError("path", f"must be a file path, got {type(path).__name__}")
-    problem = file_path_problem(path)
-    if problem is not None:
-        raise ConfigError("path", problem)
-    names = res.columns
-    data = np.column_stack([res.signals[n] for n in names])
-    with atomic_path(real_file(path)) as tmp:
+    with output_file(path, lambda problem: ConfigError("path", problem)) as tmp:
+        names = res.columns  # the path checked first: nothing is computed for a refused one
+        data = np.column_stack([res.signals[n] for n in names])
         np.savetxt(tmp, data, delimiter=",", header=",".join(names), comments="", fmt="%.9g")
 
 

@@ -21,7 +21,7 @@ def to_mat(res, path) -> Path:
     res : SimulationResult
         The run.
     path : str or pathlib.Path
-        The file to write.
+        The file to write: checked and replaced atomically (:func:`imdrive._io.output_file`).
 
     Returns
     -------
@@ -30,9 +30,13 @@ def to_mat(res, path) -> Path:
     """
     from scipy.io import savemat
 
-    data = {name: np.asarray(v, dtype=np.float64).reshape(-1, 1) for name, v in res.signals.items()}
-    data["units"] = {name: unit_of(name) for name in res.signals}
-    savemat(str(path), data, do_compression=True, oned_as="column")
+    from imdrive._io import output_file
+    from imdrive.errors import ConfigError
+
+    with output_file(path, lambda problem: ConfigError("path", problem)) as tmp:
+        data = {n: np.asarray(v, dtype=np.float64).reshape(-1, 1) for n, v in res.signals.items()}
+        data["units"] = {name: unit_of(name) for name in res.signals}
+        savemat(str(tmp), data, do_compression=True, oned_as="column")
     return Path(path)
 
 

@@ -20,7 +20,7 @@ def to_parquet(res, path) -> Path:
     res : SimulationResult
         The run.
     path : str or pathlib.Path
-        The file to write.
+        The file to write: checked and replaced atomically (:func:`imdrive._io.output_file`).
 
     Returns
     -------
@@ -30,11 +30,15 @@ def to_parquet(res, path) -> Path:
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    table = pa.table({name: np.asarray(v) for name, v in res.signals.items()})
-    meta = dict(table.schema.metadata or {})
-    meta[b"imdrive.units"] = json.dumps({n: unit_of(n) for n in res.signals}).encode()
-    # zstd: ~10 % smaller than the default snappy and reads faster (float noise compresses little)
-    pq.write_table(table.replace_schema_metadata(meta), str(path), compression="zstd")
+    from imdrive._io import output_file
+    from imdrive.errors import ConfigError
+
+    with output_file(path, lambda problem: ConfigError("path", problem)) as tmp:
+        table = pa.table({name: np.asarray(v) for name, v in res.signals.items()})
+        meta = dict(table.schema.metadata or {})
+        meta[b"imdrive.units"] = json.dumps({n: unit_of(n) for n in res.signals}).encode()
+        # zstd: ~10 % smaller than snappy and reads faster (float noise compresses little)
+        pq.write_table(table.replace_schema_metadata(meta), str(tmp), compression="zstd")
     return Path(path)
 
 
