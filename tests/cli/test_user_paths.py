@@ -180,9 +180,8 @@ def test_a_long_name_the_os_refuses_after_the_readers_is_still_bad_input(tmp_pat
         raise OSError(errno.ENAMETOOLONG, "File name too long", given)
 
     parser = build_parser()
-    monkeypatch.setattr(
-        "imdrive.cli.build_parser", lambda: _with_func(parser, "show", boom), raising=True
-    )
+    # main() takes its parser from the per-process cache (imdrive.cli._parser)
+    monkeypatch.setattr("imdrive.cli._parser", lambda: _with_func(parser, "show", boom))
     rc, err = _main("show", given)
     assert rc == 2, err
     assert "a name longer than the file system allows" in err
@@ -197,7 +196,7 @@ def test_an_environment_error_on_the_users_path_stays_exit_4(tmp_path, monkeypat
         raise OSError(errno.ENOSPC, "No space left on device", given + "/summary.json")
 
     parser = build_parser()
-    monkeypatch.setattr("imdrive.cli.build_parser", lambda: _with_func(parser, "show", full))
+    monkeypatch.setattr("imdrive.cli._parser", lambda: _with_func(parser, "show", full))
     rc, err = _main("show", given)
     assert rc == 4, err
     assert "ENOSPC" in err

@@ -90,3 +90,19 @@ def check_result_folder(folder, force: bool = False) -> None:
     problem = output_folder_problem(folder, owns_result_file, force, "an imdrive result")
     if problem is not None:
         raise ConfigError("--out", problem)
+
+
+def package_versions() -> dict[str, str]:
+    """The versions a result's ``summary.json`` records: imdrive, Python, numpy, scipy, numba."""
+    import platform
+    from importlib.metadata import version
+
+    import imdrive
+
+    return {
+        "imdrive": imdrive.__version__,
+        "python": platform.python_version(),
+        "numpy": version("numpy"),
+        "scipy": version("scipy"),
+        "numba": version("numba"),
+    }

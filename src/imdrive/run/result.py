@@ -8,7 +8,6 @@ module re-exports their names.
 from __future__ import annotations
 
 import math
-import platform
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -39,6 +38,7 @@ from imdrive.run.files import (  # noqa: F401  (re-exports)
     _finite_or_null,
     check_result_folder,
     is_result_folder,
+    package_versions,
     summary_json,
 )
 from imdrive.run.formats import formats_wanted, output_formats
@@ -67,20 +67,6 @@ def _estimator_units(scenario) -> dict:
     from imdrive.run.estimators import estimator_of
 
     return dict(estimator_of(scenario).log_units)
-
-
-def package_versions() -> dict[str, str]:
-    from importlib.metadata import version
-
-    import imdrive
-
-    return {
-        "imdrive": imdrive.__version__,
-        "python": platform.python_version(),
-        "numpy": np.__version__,
-        "scipy": version("scipy"),
-        "numba": version("numba"),
-    }
 
 
 @dataclass
