@@ -130,6 +130,20 @@ def describe_path_error(exc: OSError, path) -> str:
     return f"cannot read {p}: {exc.strerror or exc}"
 
 
+def _stat_mode(path) -> int | str:
+    """``path``'s ``st_mode``, or one line saying why it has none (its form, or the OSError of
+    reaching it)."""
+    problem = path_form_problem(path)
+    if problem is not None:
+        return problem
+    try:
+        return os.stat(path).st_mode
+    except OSError as exc:
+        return describe_path_error(exc, path)
+    except ValueError as exc:  # an embedded NUL on some platforms
+        return f"{_short(path)} is not a usable path ({exc})"
+
+
 def user_file_problem(path, what: str = "file") -> str | None:
     """What makes ``path`` not a regular file to read, or None.
 
@@ -145,15 +159,9 @@ def user_file_problem(path, what: str = "file") -> str | None:
     str or None
         One line naming the path.
     """
-    problem = path_form_problem(path)
-    if problem is not None:
-        return problem
-    try:
-        mode = os.stat(path).st_mode
-    except OSError as exc:
-        return describe_path_error(exc, path)
-    except ValueError as exc:  # an embedded NUL on some platforms
-        return f"{_short(path)} is not a usable path ({exc})"
+    mode = _stat_mode(path)
+    if isinstance(mode, str):
+        return mode
     if not stat.S_ISREG(mode):
         return f"{_short(path)} is {_kind(mode)}, not a regular file ({what})"
     return None
@@ -161,15 +169,9 @@ def user_file_problem(path, what: str = "file") -> str | None:
 
 def user_folder_problem(path) -> str | None:
     """What makes ``path`` not an existing folder to read, or None."""
-    problem = path_form_problem(path)
-    if problem is not None:
-        return problem
-    try:
-        mode = os.stat(path).st_mode
-    except OSError as exc:
-        return describe_path_error(exc, path)
-    except ValueError as exc:
-        return f"{_short(path)} is not a usable path ({exc})"
+    mode = _stat_mode(path)
+    if isinstance(mode, str):
+        return mode
     if stat.S_ISREG(mode):
         return f"{_short(path)} is a file, not a folder"
     if not stat.S_ISDIR(mode):
