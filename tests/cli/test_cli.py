@@ -318,7 +318,7 @@ def test_scenario_path_is_a_folder(tmp_path):
     folder.mkdir()
     out = tmp_path / "out"
     proc = _imdrive("run", folder, "--out", out, cwd=tmp_path)
-    _assert_bad_input(proc, out, "scenario", "neither a preset")
+    _assert_bad_input(proc, out, "scenario", "is a folder, not a regular file")
 
 
 @pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
