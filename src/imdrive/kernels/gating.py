@@ -17,7 +17,7 @@ the period that ends
   step or removal;
 * ``4`` the voltage reached ``p.gate_v`` times the inverter's limit ``Vdc/sqrt 3``;
 * ``8`` the injection frequency was switched (the flux response to the new sinusoid settles),
-  or, with the adaptive or the Kalman law, the injection started;
+  or, with the Kalman law, the injection started;
 * ``16`` within ``p.gate_hold`` periods after any of the above (the flux and the MRAS settle);
 * ``32`` the injection's amplitude was backed off below half (voltage headroom, field
   weakening: :func:`imdrive.kernels.compensator_range.injection_headroom`); a smaller
