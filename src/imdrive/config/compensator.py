@@ -547,5 +547,6 @@ deprecated_value(
     "adaptive",
     "kalman",
     "the model-based law gives the adaptive law's step size, ramp following and damping from "
-    "one filter, and did at least as well on every envelope (docs/envelope.md)",
+    "one filter (the envelope sweep: 263 of 267 cells within goal against 259, off the grid "
+    "78 of 80 against 80; what it costs: CHANGELOG.md, docs/envelope.md)",
 )

@@ -40,8 +40,8 @@ gating below and the measurements.
 The adaptive step law of earlier releases (``step_law = "adaptive"``: a fine band, an
 integrated drift rate bounded, unwound and reset at low frequency, overshoot damping,
 half-period decisions) was removed in 0.2: the model-based law (``p.kf``) gives its step
-size, ramp following and damping from one filter, and did at least as well on every envelope
-(docs/envelope.md, docs/machine-envelope.md).
+size, ramp following and damping from one filter (the envelope sweep: 263 of 267 cells within
+goal against 259, off the grid 78 of 80 against 80; docs/envelope.md).
 
 Gating and injection-frequency scheduling (``p.gate``): :mod:`imdrive.kernels.gating`.
 """
