@@ -15,7 +15,16 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from data.hostile import TEXTS, WRITERS, commands, flags, make_path, positionals, run_cli
+from data.hostile import (
+    TEXTS,
+    WRITERS,
+    bounded_property,
+    commands,
+    flags,
+    make_path,
+    positionals,
+    run_cli,
+)
 
 hypothesis = pytest.importorskip("hypothesis")
 st = pytest.importorskip("hypothesis.strategies")
@@ -62,12 +71,7 @@ def _argv(draw, command: str, tmp: Path) -> list[str]:
 def test_hostile_flags_give_a_documented_outcome(tmp_path_factory, monkeypatch, command):
     monkeypatch.chdir(tmp_path_factory.mktemp("cwd"))  # nothing accepted lands in the checkout
 
-    @hypothesis.settings(
-        max_examples=EXAMPLES,
-        deadline=None,
-        derandomize=True,
-        suppress_health_check=list(hypothesis.HealthCheck),
-    )
+    @bounded_property(EXAMPLES)
     @hypothesis.given(data=st.data())
     def check(data):
         tmp = tmp_path_factory.mktemp(command)

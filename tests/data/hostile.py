@@ -189,3 +189,17 @@ def call_api(fn, *args, bound_s: float = 60.0, **kwargs) -> tuple[str, str]:
     if isinstance(value, float) and math.isnan(value):
         return "failure", "a silent NaN"
     return "correct", type(value).__name__
+
+
+def bounded_property(examples: int):
+    """The property tests' hypothesis settings: ``examples`` drawn in a fixed order (CI stays
+    within its time and a failure repeats), no deadline (a drive may compile), no health
+    checks (hostile values are slow and filtered on purpose)."""
+    import hypothesis
+
+    return hypothesis.settings(
+        max_examples=examples,
+        deadline=None,
+        derandomize=True,
+        suppress_health_check=list(hypothesis.HealthCheck),
+    )

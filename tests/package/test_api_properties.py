@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 
 import pytest
-from data.hostile import call_api, make_path
+from data.hostile import bounded_property, call_api, make_path
 
 hypothesis = pytest.importorskip("hypothesis")
 st = pytest.importorskip("hypothesis.strategies")
@@ -98,12 +98,7 @@ def test_hostile_arguments_give_a_value_or_a_config_error(res, tmp_path_factory,
     # repository the tests run from
     monkeypatch.chdir(tmp_path_factory.mktemp("cwd"))
 
-    @hypothesis.settings(
-        max_examples=EXAMPLES,
-        deadline=None,
-        derandomize=True,
-        suppress_health_check=list(hypothesis.HealthCheck),
-    )
+    @bounded_property(EXAMPLES)
     @hypothesis.given(data=st.data())
     def check(data):
         tmp = tmp_path_factory.mktemp("api")
