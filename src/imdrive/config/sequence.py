@@ -304,9 +304,10 @@ def limit_ramps(speed: Profile, load: Profile, lim) -> tuple[Profile, tuple[Limi
     notes = []
     open_note = None
     for k, ((ta, ua), (tb, ub)) in enumerate(zip(pts, pts[1:], strict=False)):
-        if tb == ta:  # a step: passed through
-            r = ub
-            out.append((tb, ub))
+        if tb == ta:  # a step: passed through (a repeated breakpoint: nothing)
+            if ub != ua:
+                r = ub
+                out.append((tb, ub))
             continue
         s = (ub - ua) / (tb - ta)
         a = rates[k] if math.isfinite(rates[k]) else _hold_rate(lim, ub, load, ta, tb)

@@ -398,18 +398,18 @@ def _with_R1_ratio(sc: _Draft, ratio: float) -> None:
 
 
 def _with_speed(sc: _Draft, rpm: float) -> None:
-    ctl = sc.control
-    if ctl.speed_ref_pu is not None:  # a per-unit base stays per-unit (it follows the machine)
-        _with_speed_pu(sc, rpm / _rated(sc).speed_rpm)
-        return
-    sc.set(control=replace(ctl, speed_ref_rpm=_with_final(ctl.speed_ref_rpm, rpm)))
+    # in rpm: the base's profile (per-unit or not) in rpm, ending at this speed
+    from imdrive.config.profile_units import stated_speed_ref_rpm
+
+    profile = _with_final(stated_speed_ref_rpm(sc), rpm)
+    sc.set(control=replace(sc.control, speed_ref_rpm=profile, speed_ref_pu=None))
 
 
 def _with_load(sc: _Draft, torque: float) -> None:
-    if sc.load.torque_pu is not None:
-        _with_load_pu(sc, torque / _rated(sc).torque_Nm)
-        return
-    sc.set(load=replace(sc.load, torque_Nm=_with_final(sc.load.torque_Nm, torque)))
+    from imdrive.config.profile_units import stated_load_Nm
+
+    profile = _with_final(stated_load_Nm(sc), torque)
+    sc.set(load=replace(sc.load, torque_Nm=profile, torque_pu=None))
 
 
 def _rated(sc):
