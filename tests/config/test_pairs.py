@@ -12,6 +12,7 @@ import pytest
 from imdrive.cli import main
 from imdrive.config.overrides import scenario_keys
 from imdrive.config.pairs import PAIRS, pair_of, set_layer
+from imdrive.config.profiles import Profile
 from imdrive.config.scenario import Scenario
 from imdrive.errors import ConfigError, ConfigWarning
 from imdrive.sweep.spec import parse_sweep
@@ -45,9 +46,10 @@ def test_every_declared_pair_is_an_absolute_and_a_per_unit_key_of_one_section(pa
         assert _unit(u) is None, f"{u} has a unit: not per-unit"
         assert _PU.search(u) or u == "smo_mras.speed_error_pu"
         # a member with a default of None is unset by default; the others default to a number
+        # (a profile: the constant profile 0)
         for k in (a, u):
             d = KEYS[k].default
-            assert d is None or isinstance(d, int | float), (k, d)
+            assert d is None or isinstance(d, int | float) or d == Profile.constant(0.0), (k, d)
     assert pair.both in ("error", "per_unit", "absolute")
 
 
@@ -55,7 +57,8 @@ def test_each_key_is_in_one_pair_only():
     keys = [k for p in PAIRS for k in p.keys]
     assert len(keys) == len(set(keys))
     assert all(pair_of(k) is not None for k in keys)
-    assert pair_of("control.speed_ref_rpm") is None
+    assert pair_of("control.speed_ref_rpm").per_unit == ("control.speed_ref_pu",)
+    assert pair_of("control.current_limit_A") is None
 
 
 def test_every_per_unit_key_with_an_absolute_twin_is_declared():
@@ -89,6 +92,14 @@ def test_setting_one_member_clears_the_other_with_a_note(pair, direction):
     for k in old:
         *sec, name = k.split(".")  # a section may be nested (plant.thermal)
         _table(data, sec)[name] = 123.0  # not a default of any member
+    if pair.quiet:  # a profile is restated whole: cleared without a note
+        with warnings.catch_warnings(record=True) as seen:
+            warnings.simplefilter("always")
+            set_layer(data, [(tuple(new[0].split(".")), 7.0)])
+        assert not seen
+        *sec, name = new[0].split(".")
+        assert _table(data, sec) == {name: 7.0}
+        return
     with pytest.warns(ConfigWarning) as seen:
         set_layer(data, [(tuple(new[0].split(".")), 7.0)])
     *sec, name = new[0].split(".")

@@ -74,27 +74,41 @@ def test_lost_control_duration_stays_absolute():
     assert m.J_kgm2 * rp.speed_rpm * math.pi / 30.0 / rp.torque_Nm > 7.0
 
 
-def test_preset_times_too_short_for_the_machine_are_warned_of():
+def test_preset_times_too_short_for_the_machine_are_warned_of_without_the_sequencing():
     import warnings
 
     from imdrive.errors import ConfigWarning
 
+    # the drive premagnetises and limits its ramps by itself (config/sequence.py): no warning
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ConfigWarning)
+        for name in ("paper-table-iv", "krause-50hp", "aalto-2.2kw", "krause-2250hp"):
+            _with_machine(name)
+        Scenario.read("sensorless", ["machine.J_kgm2=0.5"])
+    off = ["control.premagnetise_T2=1", "control.ramp_torque_limit=false"]
     with warnings.catch_warnings():
         warnings.simplefilter("error", ConfigWarning)
         for name in ("paper-table-iv", "krause-50hp", "aalto-2.2kw"):  # 3 T2 <= 0.5 s
-            Scenario.read("sensorless", [f"machine.preset={name}"])
+            _with_machine(name, off)
     with pytest.warns(ConfigWarning, match=r"before the rotor is magnetised.* 4\.8 s"):
-        Scenario.read("sensorless", ["machine.preset=krause-2250hp"])  # T2 = 1.6 s
+        _with_machine("krause-2250hp", off)  # T2 = 1.6 s
     with pytest.warns(ConfigWarning, match=r"asks more than the rated torque .* 1\.68 s"):
-        Scenario.read("sensorless", ["machine.preset=geyer-3.3kv"])  # J w / T = 1.0 s per 596 rpm
+        _with_machine("geyer-3.3kv", off)  # J w / T = 1.0 s per 596 rpm
     with pytest.warns(ConfigWarning, match="give it at least 4.22 s"):
-        Scenario.read("sensorless", ["machine.J_kgm2=0.5"])  # 0 -> 1000 rpm in 1 s needs 52 N m
+        Scenario.read("sensorless", ["machine.J_kgm2=0.5", *off])  # 0 -> 1000 rpm in 1 s: 52 N m
     # times too short for Table IV as well are the scenario's own choice: no warning
     ramp = "control.speed_ref_rpm={initial=0,changes=[{at=0.05,to=1000,over=0.3}]}"
     with warnings.catch_warnings():
         warnings.simplefilter("error", ConfigWarning)
-        Scenario.read("sensorless", [ramp])
-        Scenario.read("sensorless", [ramp, "machine.preset=krause-2250hp"])
+        Scenario.read("sensorless", [ramp, *off])
+        Scenario.read("sensorless", [ramp, "machine.preset=krause-2250hp", *off])
+
+
+def _with_machine(name, extra=()):
+    """The sensorless preset on machine ``name``, its profiles in rpm and N m as they were."""
+    rpm = "control.speed_ref_rpm={initial=0,changes=[{at=0.5,to=1000,over=1.0}]}"
+    load = "load.torque_Nm={initial=0,changes=[{at=2.0,to=12}]}"
+    return Scenario.read("vector-sensored", [f"machine.preset={name}", rpm, load, *extra])
 
 
 @pytest.mark.parametrize("name", sorted(machine_presets()))

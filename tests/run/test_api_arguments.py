@@ -72,6 +72,7 @@ def test_a_window_longer_than_the_run_is_the_whole_run():
         [
             "simulation.t_end_s=0.3",
             "control.speed_ref_rpm={initial=0, changes=[{at=0.0, to=600, over=0.2}]}",
+            "control.premagnetise_T2=0",  # the ramp from t = 0, as written: the run is 0.3 s
         ],
     )
     cols = ["speed_error_rpm", "speed_ripple_rpm", "torque_mean_Nm"]

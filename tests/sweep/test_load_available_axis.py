@@ -7,6 +7,7 @@ from __future__ import annotations
 import pytest
 
 from imdrive.analysis.circuit import breakdown
+from imdrive.config.profile_units import stated_load_Nm, stated_speed_ref_rpm
 from imdrive.config.rated import rated_point
 from imdrive.sweep.spec import parse_sweep
 
@@ -26,8 +27,8 @@ def test_available_torque_is_rated_then_constant_power_and_carried_by_the_circui
     rp = rated_point(m)
     for k, x in enumerate(speeds):
         sc = sw.scenario(k)
-        assert sc.control.speed_ref_rpm.points[-1][1] == pytest.approx(x * rp.speed_rpm)
-        T = sc.load.torque_Nm.points[-1][1]
+        assert stated_speed_ref_rpm(sc).points[-1][1] == pytest.approx(x * rp.speed_rpm)
+        T = stated_load_Nm(sc).points[-1][1]
         if abs(x) <= 1.0:
             assert T == pytest.approx(rp.torque_Nm, rel=1e-12)
             continue
@@ -43,5 +44,5 @@ def test_available_torque_is_rated_then_constant_power_and_carried_by_the_circui
 
 def test_available_load_scales_and_keeps_the_sign():
     sw = _sweep("paper-table-iv", (2.0,), (-1.0, -0.5, 0.5))
-    T = [sw.scenario(k).load.torque_Nm.points[-1][1] for k in range(3)]
+    T = [stated_load_Nm(sw.scenario(k)).points[-1][1] for k in range(3)]
     assert T[0] == pytest.approx(-2 * T[2]) and T[1] == pytest.approx(-T[2])

@@ -10,7 +10,7 @@ from imdrive.errors import ConfigError
 from imdrive.sweep.spec import parse_sweep
 
 SWEEP = """
-base = "sensorless"
+base = "paper-fig5"  # its profiles in rpm and N m
 [set]
 "simulation.t_end_s" = 3.0
 "load.torque_Nm.changes[0].at" = 2.5
@@ -26,7 +26,7 @@ def test_axis_over_one_profile_element_builds_what_set_builds():
     for k, rpm in enumerate((300.0, 600.0)):
         got = sw.scenario(k)
         want = Scenario.read(
-            "sensorless",
+            "paper-fig5",
             [
                 "simulation.t_end_s=3.0",
                 "load.torque_Nm.changes[0].at=2.5",

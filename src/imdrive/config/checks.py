@@ -152,15 +152,20 @@ MAGNETISE_T2 = 3.0
 
 
 def profile_time_notes(sc) -> list[tuple[str, str]]:
-    """The times of a field-oriented drive's speed reference checked against the machine.
+    """The times of a field-oriented drive's speed reference checked against the machine,
+    where the drive's own sequencing (:mod:`imdrive.config.sequence`) is switched off.
 
-    A preset's profile times are absolute seconds; they suit a machine when
+    A profile's times are absolute seconds; they suit a machine when
 
     * the speed reference first moves after :data:`MAGNETISE_T2` rotor time constants
-      ``T2 = L2 / R2`` (the rotor flux at 95 % of its reference);
+      ``T2 = L2 / R2`` (the rotor flux at 95 % of its reference): the drive premagnetises that
+      long by itself (``control.premagnetise_T2``), so this is checked only when the scenario
+      shortens its premagnetisation;
     * no ramp asks more than the rated torque for the acceleration alone:
       ``J |dw/dt| <= T_rated``, i.e. a ramp from 0 to rated speed lasts at least the
-      mechanical time constant ``J w_rated / T_rated``.
+      mechanical time constant ``J w_rated / T_rated``: the drive follows a ramp too steep for
+      its torque limit at the limit (``control.ramp_torque_limit``), so this is checked only
+      when that is off.
 
     Table IV's presets meet both (first move at 0.5 s >= 3 T2 = 0.26 s; 0 -> 1000 rpm in 1 s
     asks 7.2 N m of the 12 N m rated torque). A scenario whose times would suit Table IV but
@@ -169,7 +174,10 @@ def profile_time_notes(sc) -> list[tuple[str, str]]:
     choice (a deliberately fast test) and pass silently.
     """
     m = sc.machine
+    ctl = sc.control
     if sc.drive.mode != "vector":
+        return []
+    if ctl.premagnetise_T2 >= MAGNETISE_T2 and ctl.ramp_torque_limit:
         return []
     from imdrive.config.machine import machine_preset
 
@@ -183,20 +191,30 @@ def profile_time_notes(sc) -> list[tuple[str, str]]:
 
 def profile_time_notes_for(sc, m) -> list[tuple[str, str]]:
     """The notes of :func:`profile_time_notes` for machine ``m`` (whatever ``sc``'s)."""
+    from imdrive.config.profile_units import stated_speed_ref_rpm
+
     out = []
-    pts = sc.control.speed_ref_rpm.points
+    try:
+        pts = stated_speed_ref_rpm(sc).points
+    except ConfigError:  # a per-unit profile on a machine without a rated point
+        return out
+    key = "control.speed_ref_pu" if sc.control.speed_ref_pu is not None else "control.speed_ref_rpm"
     T2 = m.L2_H / m.R2_ohm
     starts = [t0 for (t0, v0), (_, v1) in zip(pts, pts[1:], strict=False) if v1 != v0]
-    if starts:
+    if starts and sc.control.premagnetise_T2 < MAGNETISE_T2:
         t_first = starts[0]
         if t_first < MAGNETISE_T2 * T2:
             out.append(
                 (
-                    "control.speed_ref_rpm",
+                    key,
                     f"moves at t = {t_first:g} s, before the rotor is magnetised: 3 rotor time "
-                    f"constants of this machine are {MAGNETISE_T2 * T2:.3g} s",
+                    f"constants of this machine are {MAGNETISE_T2 * T2:.3g} s "
+                    f"(control.premagnetise_T2 = {sc.control.premagnetise_T2:g} shortens the "
+                    "drive's own premagnetisation)",
                 )
             )
+    if sc.control.ramp_torque_limit:
+        return out
     from imdrive.config.machine import rated_point
 
     try:
@@ -210,10 +228,11 @@ def profile_time_notes_for(sc, m) -> list[tuple[str, str]]:
         if t1 > t0 and need > t1 - t0:
             out.append(
                 (
-                    "control.speed_ref_rpm",
+                    key,
                     f"the ramp {v0:g} -> {v1:g} rpm over {t1 - t0:g} s asks more than the rated "
                     f"torque {T_rated:.3g} N m to accelerate J = {m.J_kgm2:g} kg m^2: give it "
-                    f"at least {need:.3g} s",
+                    f"at least {need:.3g} s (control.ramp_torque_limit = false: the drive does "
+                    "not limit it)",
                 )
             )
             break

@@ -97,6 +97,36 @@ class ControlSettings:
         ),
     ] = "measured"
     speed_ref_rpm: Annotated[Profile, setting("speed reference", "rpm")] = C(0.0)
+    speed_ref_pu: Annotated[
+        Profile | None,
+        setting(
+            "speed reference in per-unit of the machine's rated speed (its nameplate's, "
+            "config/rated.py), times in s: the same profile on every machine "
+            "(config/sequence.py); the per-unit twin of speed_ref_rpm",
+            default_doc="unset: speed_ref_rpm",
+        ),
+    ] = None
+    premagnetise_T2: Annotated[
+        Float,
+        setting(
+            "the drive builds the rotor flux at standstill for this many rotor time constants "
+            "of its model, T̂2 = L̂2/R̂2(0), before it releases the speed reference (95 % of the "
+            "flux at 3): a speed reference that moves earlier is delayed with the load and the "
+            "run's end (config/sequence.py); 0: released at once",
+            ge=0.0,
+            le=20.0,
+        ),
+    ] = 3.0
+    ramp_torque_limit: Annotated[
+        Bool,
+        setting(
+            "a speed ramp steeper than the drive's torque limit allows (the current limit at "
+            "the reference flux, less the load, over J; above the rated speed at constant "
+            "power and below the breakdown torque) is followed at 0.9 of that acceleration, as "
+            "a drive's ramp generator does, and the run says so (config/sequence.py); steps are "
+            "left as given"
+        ),
+    ] = True
     flux_ref_Wb: Annotated[
         PositiveProfile | None,
         setting(

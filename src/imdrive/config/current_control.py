@@ -49,6 +49,8 @@ def current_controller(sc) -> str:
         return ctl.current_controller
     if not field_weakening_on(sc) or rated_point_or_none(sc.machine) is None:
         return "pi"
-    w_e = sc.machine.pole_pairs * ctl.speed_ref_rpm.peak * math.pi / 30.0
+    from imdrive.config.profile_units import stated_speed_ref_rpm
+
+    w_e = sc.machine.pole_pairs * stated_speed_ref_rpm(sc).peak * math.pi / 30.0
     a_c = 2.0 * math.pi * ctl.current_bandwidth_Hz
     return "imc" if w_e > IMC_FROM_PU_OF_BANDWIDTH * a_c else "pi"

@@ -92,7 +92,7 @@ def field_weakening_needed(sc) -> bool:
     Parameters
     ----------
     sc : Scenario
-        The scenario (``drive.mode``, ``control.speed_ref_rpm``, ``inverter.v_max_V``).
+        The scenario (``drive.mode``, ``control.speed_ref_rpm`` or ``_pu``, ``inverter.v_max_V``).
 
     Returns
     -------
@@ -101,6 +101,8 @@ def field_weakening_needed(sc) -> bool:
     """
     if sc.drive.mode != "vector":
         return False
-    needed = rated_torque_voltage_V(sc, sc.control.speed_ref_rpm.peak)
+    from imdrive.config.profile_units import stated_speed_ref_rpm
+
+    needed = rated_torque_voltage_V(sc, stated_speed_ref_rpm(sc).peak)
     v_max = sc.inverter.v_max_V
     return bool(needed > sc.control.field_weakening_voltage * v_max)

@@ -94,4 +94,6 @@ def mras_type2_for_field_weakening(sc) -> bool:
     rp = _rated_point_or_none(sc.machine)
     if rp is None:
         return False
-    return sc.control.speed_ref_rpm.peak > MRAS_TYPE2_ABOVE_PU * rp.speed_rpm
+    from imdrive.config.profile_units import stated_speed_ref_rpm
+
+    return stated_speed_ref_rpm(sc).peak > MRAS_TYPE2_ABOVE_PU * rp.speed_rpm

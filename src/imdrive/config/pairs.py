@@ -27,6 +27,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 from imdrive.config.overrides import dotted, parse_override, scenario_keys, set_path
+from imdrive.config.profiles import Profile, parse_profile
 from imdrive.errors import ConfigError, ConfigWarning
 
 __all__ = ["PAIRS", "Pair", "apply_overrides", "check_pairs", "pair_of", "set_layer"]
@@ -50,12 +51,16 @@ class Pair:
         Both set in one layer: ``"error"`` refuses it; ``"per_unit"`` / ``"absolute"`` names
         the member the run then uses, as documented before the pairs were declared
         (deprecated: a warning says so).
+    quiet : bool
+        An override of one member clears the other without a warning: a profile, which an
+        override restates whole (the speed reference, the load).
     """
 
     absolute: tuple[str, ...]
     per_unit: tuple[str, ...]
     base: str
     both: Literal["error", "per_unit", "absolute"] = "error"
+    quiet: bool = False
 
     @property
     def keys(self) -> tuple[str, ...]:
@@ -66,13 +71,15 @@ class Pair:
         return self.per_unit if key in self.absolute else self.absolute
 
 
-def _pair(absolute: str, per_unit: str, base: str, both: str = "error") -> Pair:
-    return Pair((absolute,), (per_unit,), base, both)
+def _pair(absolute: str, per_unit: str, base: str, both: str = "error", quiet=False) -> Pair:
+    return Pair((absolute,), (per_unit,), base, both, quiet)
 
 
 _IN_F = "injection.frequency"
 #: Every absolute / per-unit pair of the scenario file.
 PAIRS: tuple[Pair, ...] = (
+    _pair("control.speed_ref_rpm", "control.speed_ref_pu", "the machine's rated speed", quiet=True),
+    _pair("load.torque_Nm", "load.torque_pu", "the machine's rated torque", quiet=True),
     _pair("estimator.R1_ohm", "estimator.R1_ratio", "the plant's R1"),
     _pair("estimator.R2_ohm", "estimator.R2_ratio", "the plant's R2"),
     _pair("estimator.M_H", "estimator.M_ratio", "the plant's M"),
@@ -151,7 +158,13 @@ def _default(key: str):
 def _is_set(key: str, value) -> bool:
     """Whether ``value`` states ``key``: given and not its default (an absolute key whose
     default is a number, ``mras.R1_rate_per_s = 0``, is unset at that number)."""
-    return value is not None and value != _default(key)
+    default = _default(key)
+    if value is not None and isinstance(default, Profile) and not isinstance(value, Profile):
+        try:  # a profile as the file writes it (0, a table): compared as a profile
+            value = parse_profile(key, value)
+        except ConfigError:
+            return True
+    return value is not None and value != default
 
 
 def _section(data: dict, key: str) -> tuple[dict | None, str]:
@@ -201,6 +214,7 @@ def set_layer(data: dict, items, where: str = "the overrides") -> None:
     here = {k for k, _ in keys}
     machine_before = _machine_of(data)
     for (parts, value), (key, _) in zip(items, keys, strict=True):
+        _check_element_of_twin(data, parts)
         set_path(data, parts, value)
         pair = pair_of(key)
         if pair is None or value is None:
@@ -210,12 +224,34 @@ def set_layer(data: dict, items, where: str = "the overrides") -> None:
             if twin in here or node is None or name not in node:
                 continue
             old = node.pop(name)
-            if _is_set(twin, old):
+            if _is_set(twin, old) and not pair.quiet:
                 warnings.warn(
                     ConfigWarning(key, f"replaces {twin} = {old!r} of the scenario underneath"),
                     stacklevel=2,
                 )
     _warn_machine_replaced(data, machine_before, here)
+
+
+def _check_element_of_twin(data: dict, parts: tuple) -> None:
+    """An element of a profile (``control.speed_ref_rpm.changes[0].to``) whose scenario states
+    the profile by its twin of the other unit (``control.speed_ref_pu``): one line naming the
+    twin's element to set instead (a per-unit preset's profile is not converted to rpm)."""
+    if len(parts) < 3:
+        return
+    key = dotted(parts[:2])
+    pair = pair_of(key)
+    node, name = _section(data, key)
+    if pair is None or node is None or name in node:
+        return
+    for twin in pair.twins(key):
+        t_node, t_name = _section(data, twin)
+        if t_node is not None and isinstance(t_node.get(t_name), dict):
+            rest = dotted(parts[2:]).replace(".[", "[")
+            raise ConfigError(
+                dotted(parts),
+                f"the scenario states this profile as {twin} (per-unit of {pair.base}): set "
+                f"{twin}.{rest}, or the whole {key}",
+            )
 
 
 def _machine_of(data: dict) -> tuple:

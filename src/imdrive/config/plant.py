@@ -216,6 +216,14 @@ class LoadSettings:
     """Load torque ``T_L = torque_Nm(t) + viscous_Nms ω + fan_Nms2 ω |ω|`` (``[load]``)."""
 
     torque_Nm: Annotated[Profile, setting("time-dependent load torque", "N m")] = C(0.0)
+    torque_pu: Annotated[
+        Profile | None,
+        setting(
+            "time-dependent load torque in per-unit of the machine's rated torque "
+            "(config/rated.py), times in s (config/sequence.py); the per-unit twin of torque_Nm",
+            default_doc="unset: torque_Nm",
+        ),
+    ] = None
     viscous_Nms: Annotated[
         Float,
         setting(

@@ -44,6 +44,7 @@ BATCH_METRICS = record_dtype(
         ("R2_held_since_s", f8),
         ("R2_held_end_causes", f8),
         ("R2_error_window_pct", f8),
+        ("torque_limited_s", f8),
     ]
 )
 METRICS = BATCH_METRICS.names
@@ -68,6 +69,8 @@ ACCUMULATOR = record_dtype(
         ("held_start", i8),  # first sample of the present held stretch (-1: updating)
         ("held_run_causes", i8),  # OR of the masks over the present held stretch
         ("r2_peak", f8),  # signed relative R2 error of largest magnitude in the window
+        ("lc_prev_speed", f8),  # the previous sample's speed, rad/s (NaN: none)
+        ("n_limited", i8),  # samples out of the band while following at the torque limit
     ]
 )
 
@@ -97,12 +100,24 @@ def new_accumulator():
     a.speed_max = -np.inf
     a.lc_start = -1
     a.lc_at = -1
+    a.lc_prev_speed = np.nan
     a.held_start = -1
     return acc
 
 
+@njit(cache=True, inline="always")
+def at_torque_limit(speed, speed_prev, speed_ref, id_ref, iq_ref, i_max):
+    """Whether a sample follows its speed reference at the torque limit: the torque current
+    at the current limit left by the flux current (``|iq*| >= 0.999 sqrt(I_max² - id*²)``),
+    pushing towards the reference, and the speed moving towards it since the last sample
+    (a stall or a runaway does not). Speeds in any one unit; currents A."""
+    e = speed_ref - speed
+    iq_max = math.sqrt(max(i_max * i_max - id_ref * id_ref, 0.0))
+    return abs(iq_ref) >= 0.999 * iq_max and iq_ref * e > 0.0 and (speed - speed_prev) * e > 0.0
+
+
 @njit(cache=True)
-def accumulate(log, n_rows, k_first, k_win0, acc_arr, lc_bound=0.0, lc_n=0, t_on=np.inf):
+def accumulate(log, n_rows, k_first, k_win0, acc_arr, lc_bound=0.0, lc_n=0, t_on=np.inf, i_max=0.0):
     """Fold full-rate log rows ``0 .. n_rows-1`` (samples ``k_first ...``) into ``acc_arr[0]``.
 
     R2_hat held (samples with ``time >= t_on``, the compensator's enable time; ``inf``: no
@@ -111,20 +126,32 @@ def accumulate(log, n_rows, k_first, k_win0, acc_arr, lc_bound=0.0, lc_n=0, t_on
 
     Loss of control (``lc_bound > 0``, rad/s): a departure is a run of consecutive samples
     with ``|speed - speed_ref| > lc_bound``; the first that lasts ``lc_n`` periods or more
-    (last sample minus first) sets ``acc.lc_at`` to its first sample.
+    (last sample minus first) sets ``acc.lc_at`` to its first sample. A sample following
+    its reference at the torque limit (:func:`at_torque_limit`, with ``i_max > 0``) is not
+    out of the band; ``acc.n_limited`` counts it.
     """
     acc = acc_arr[0]
     for r in range(n_rows):
         row = log[r]
         k = k_first + r
         if lc_bound > 0.0 and acc.lc_at < 0:
-            if abs(row.speed - row.speed_ref) > lc_bound:
+            if (
+                abs(row.speed - row.speed_ref) > lc_bound
+                and i_max > 0.0
+                and at_torque_limit(
+                    row.speed, acc.lc_prev_speed, row.speed_ref, row.id_ref, row.iq_ref, i_max
+                )
+            ):
+                acc.n_limited += 1
+                acc.lc_start = -1
+            elif abs(row.speed - row.speed_ref) > lc_bound:
                 if acc.lc_start < 0:
                     acc.lc_start = k
                 if k - acc.lc_start >= lc_n:
                     acc.lc_at = acc.lc_start
             else:
                 acc.lc_start = -1
+        acc.lc_prev_speed = row.speed
         if row.time >= t_on:
             acc.n_active += 1
             fl = int(row.comp_frozen)
@@ -192,6 +219,7 @@ def summarize(acc, last, n_valid, ok, Ts, out):
     out.final_speed_ref_rpm = last.speed_ref * _INV_RPM
     out.final_speed_est_rpm = last.speed_est * _INV_RPM
     out.lost_control_at_s = acc.lc_at * Ts if acc.lc_at >= 0 else nan
+    out.torque_limited_s = acc.n_limited * Ts
     if acc.n_active > 0:
         out.R2_held_pct = 100.0 * acc.n_held / acc.n_active
         out.R2_held_causes = float(acc.held_causes)
@@ -284,6 +312,7 @@ def run_one(P, S, i, n_steps, n_win, log_out, log_every, metrics, scratch, lc_bo
     Ts = P.sim[i].Ts
     k_win0 = max(n_steps - n_win, 0)
     t_on = P.comp[i].t_on if P.comp[i].enabled else np.inf
+    i_max = P.control[i].i_max  # torque-limited following is not a loss of control
     k0 = 0
     while True:
         steps = min(chunk, n_steps - k0)
@@ -297,7 +326,7 @@ def run_one(P, S, i, n_steps, n_win, log_out, log_every, metrics, scratch, lc_bo
         )  # fmt: skip
         ok = status == S_OK
         rows = ke + 1 if (ok and final) else ke
-        accumulate(scratch, rows, k0, k_win0, acc_arr, lc_bound, lc_n, t_on)
+        accumulate(scratch, rows, k0, k_win0, acc_arr, lc_bound, lc_n, t_on, i_max)
         for r in range(rows):
             k = k0 + r
             if k % log_every == 0 and k // log_every < log_out.shape[0]:

@@ -66,7 +66,7 @@ from imdrive.kernels.batch import (
 from imdrive.kernels.engine import S_OK, DriveParams, DriveState, log_dtype
 from imdrive.kernels.estimators.registry import kernel_of_state
 from imdrive.kernels.profiles import N_PROF
-from imdrive.run.metrics import lost_control_check, window_periods
+from imdrive.run.metrics import lost_control_check, steady_window_periods
 from imdrive.run.status import STATUS_COLUMNS
 
 COLUMNS = (
@@ -215,7 +215,10 @@ def _stack(items, log_every: int, n_rows: int, window_s: float, parallel: bool):
     arrays = [a for _, _, a in items]
     n_steps = arrays[0].n_steps
     params, state = stack_drives(arrays)
-    n_win = np.array([window_periods(window_s, a.Ts, a.n_steps) for a in arrays], dtype=np.int64)
+    n_win = np.array(
+        [steady_window_periods(sc, window_s, a.Ts, a.n_steps) for _, sc, a in items],
+        dtype=np.int64,
+    )
     lc = [lost_control_check(sc) for _, sc, _ in items]
     lc_bound = np.array([b for b, _ in lc])
     lc_n = np.array(
@@ -315,11 +318,12 @@ def _run_block(block, offset, logs, log_every, window_s, parallel, errors):
                     a.derived,
                 )
     # the block's status as columns at once: a dict per drive kept to the end would cost ~0.6 kB
-    v_blk = _status_columns(_verdicts(block, m_blk, s_blk, k_blk, ts_blk, e_blk, r1_blk))
+    v = _verdicts(block, m_blk, s_blk, k_blk, ts_blk, e_blk, r1_blk, window_s)
+    v_blk = _status_columns(v)
     return m_blk, s_blk, k_blk, ts_blk, e_blk, v_blk, res_blk, kernel_wall
 
 
-def _verdicts(block, m_blk, s_blk, k_blk, ts_blk, e_blk, r1_blk) -> list[dict]:
+def _verdicts(block, m_blk, s_blk, k_blk, ts_blk, e_blk, r1_blk, window_s=0.5) -> list[dict]:
     """The status columns (:func:`imdrive.run.status.verdict`) of each drive of a block
     (``r1_blk``: the standstill R1 identification's outcome, ``R1_id_status``, NaN without)."""
     from imdrive.run.status import verdict
@@ -334,6 +338,7 @@ def _verdicts(block, m_blk, s_blk, k_blk, ts_blk, e_blk, r1_blk) -> list[dict]:
             diverged_at_s=simulated,
             error=e_blk[i],
             R1_id_status=float(r1_blk[i]),
+            window_s=window_s,
         )
         if s_blk[i] == S_FAILED:
             out.append(

@@ -22,6 +22,7 @@ from imdrive.config.perunit import Resolved, adc_range_A, sign_band_A
 from imdrive.config.profiles import Profile
 from imdrive.config.scaled import flux_injection_frequency_Hz, plant_thermal_resistances
 from imdrive.config.scenario import Scenario
+from imdrive.config.sequence import sequence
 from imdrive.config.speed_gain import speed_gain_flux_scaling
 from imdrive.design.gains import default_current_gains, default_speed_gains
 from imdrive.kernels import profiles as kp
@@ -308,8 +309,9 @@ def profile_list(sc: Scenario, D: Resolved | None = None) -> list[Profile]:
     ``D``: the scenario's resolved per-unit values, when known (for the rated flux)."""
     v_amp, freq = _vf_profiles(sc)
     profiles = [Profile.constant(0.0)] * kp.N_PROF
-    profiles[kp.PR_SPEED_REF] = sc.control.speed_ref_rpm.scaled(RPM)
-    profiles[kp.PR_LOAD] = sc.load.torque_Nm
+    seq = sequence(sc)  # per-unit resolved, premagnetised, ramps at the torque limit
+    profiles[kp.PR_SPEED_REF] = seq.speed_ref_rpm.scaled(RPM)
+    profiles[kp.PR_LOAD] = seq.load_Nm
     profiles[kp.PR_R1_SCALE] = sc.plant.R1_scale
     profiles[kp.PR_R2_SCALE] = sc.plant.R2_scale
     profiles[kp.PR_V_AMP] = v_amp

@@ -16,6 +16,7 @@ import numpy as np
 
 from imdrive.config.perunit import resolve
 from imdrive.config.scenario import Scenario
+from imdrive.config.sequence import sequence
 from imdrive.errors import ConfigError
 from imdrive.kernels.engine import DriveParams, DriveState, log_dtype
 from imdrive.run import blocks
@@ -29,12 +30,13 @@ def check_log_size(sc: Scenario, log: np.dtype | None = None, n_steps: int | Non
     """Refuse a scenario whose log would not fit in :data:`MAX_LOG_BYTES`.
 
     ``log`` is the drive's log dtype (default: that of the scenario's estimator), ``n_steps``
-    its number of control periods (default: ``simulation.n_steps``).
+    its number of control periods (default: the run's, the premagnetisation's delay included,
+    :func:`imdrive.config.sequence.sequence`).
     """
     sim = sc.simulation
     if log is None:
         log = log_dtype(estimator_of(sc).kernel)
-    n_steps = sim.n_steps if n_steps is None else n_steps
+    n_steps = sequence(sc).n_steps(sim.Ts_s) if n_steps is None else n_steps
     log_bytes = (n_steps // sim.log_every + 1) * log.itemsize
     if log_bytes > MAX_LOG_BYTES:
         raise ConfigError(
@@ -210,7 +212,7 @@ def _build_arrays(sc: Scenario) -> DriveArrays:
     """Every block's records from its own builder (:mod:`imdrive.run.blocks`)."""
     est = estimator_of(sc)  # once: its kernel gives the log, its settings the gains and units
     log = log_dtype(est.kernel)
-    n_steps = sc.simulation.n_steps
+    n_steps = sequence(sc).n_steps(sc.simulation.Ts_s)  # the premagnetisation's delay too
     check_log_size(sc, log, n_steps)
     D = resolve(sc)  # every machine-dependent value, once
     m = sc.machine

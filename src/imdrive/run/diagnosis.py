@@ -25,6 +25,7 @@ import math
 import numpy as np
 
 from imdrive.config.perunit import lost_control_rpm, speed_bandwidth_Hz
+from imdrive.config.sequence import sequence
 
 
 def load_step_dip_rpm(J: float, k_t: float, kp: float, ki: float, step_Nm: float) -> float:
@@ -69,7 +70,7 @@ def _steepest_ramp_rad_s2(profile) -> float:
 
 
 def _largest_load_step(scenario) -> float:
-    values = [v for _, v in scenario.load.torque_Nm.points]
+    values = [v for _, v in sequence(scenario).load_Nm.points]
     steps = np.abs(np.diff(values)) if len(values) > 1 else np.zeros(1)
     return float(max(steps.max(initial=0.0), abs(values[0]) if values else 0.0))
 
@@ -89,8 +90,9 @@ def tuning_hint(res) -> str | None:
     if i_max and psi:  # the ramp's acceleration torque against what the current limit allows
         i_d = psi / (sc.machine.M_H or 1.0)
         t_max = k_t * math.sqrt(max(i_max**2 - i_d**2, 0.0))
-        loads = [abs(v) for _, v in sc.load.torque_Nm.points]
-        need = J * _steepest_ramp_rad_s2(sc.control.speed_ref_rpm) + max(loads, default=0.0)
+        seq = sequence(sc)
+        loads = [abs(v) for _, v in seq.load_Nm.points]
+        need = J * _steepest_ramp_rad_s2(seq.speed_ref_rpm) + max(loads, default=0.0)
         if need > t_max:
             return (
                 f"likely cause: the speed ramp asks for {need:.3g} N m (J = {J:g} kg m2 "

@@ -17,7 +17,9 @@ All are computed from the full-rate samples ``k = 0 ... K`` (``K = n_steps`` for
 mechanical, in rpm; ``speed`` is the plant's, ``speed_ref`` the reference (0 in open loop),
 ``speed_est`` the MRAS estimate (0 in open loop, the measured-speed drives also run the MRAS).
 The *window* is the samples ``k >= n_steps - round(window_s / Ts)`` (the last ``window_s``
-seconds, both ends included; the whole run if ``window_s >= t_end``).
+seconds, both ends included; the whole run if ``window_s >= t_end``), cut to start where the
+last change of the speed reference or the load has settled (:func:`settled_at_s`) when at
+least a fifth of it is left (:func:`steady_window_periods`; the status says when it was not).
 
 ``speed_error_rpm``      mean of ``speed - speed_ref`` over the window
 ``speed_est_error_rpm``  mean of ``speed_est - speed`` over the window
@@ -39,6 +41,13 @@ seconds, both ends included; the whole run if ``window_s >= t_end``).
                          its first); NaN if there is none. Checked only in vector control with
                          a free speed (not ``plant.speed_mode = "imposed"``) and a bound > 0.
                          Also on the samples of a diverged run before the divergence.
+                         A sample that follows its reference at the torque limit (the torque
+                         current at the current limit, pushing towards the reference, the
+                         speed moving towards it: :func:`torque_limited`) is not out of the
+                         band: a ramp or step the machine cannot follow faster is not a loss
+                         of control
+``torque_limited_s``     how long the speed was out of that band while following at the
+                         torque limit (before any loss of control), s
 ``lost_control``         ``lost_control_at_s`` is not NaN (a boolean column)
 ``R1_id_status``         the standstill R1 identification's last outcome (``mras.R1_standstill``,
                          the log column ``R1_id_status_code`` at the last sample): 0 no
@@ -73,11 +82,15 @@ import math
 import numpy as np
 
 from imdrive.config.perunit import lost_control_rpm
+from imdrive.config.sequence import (
+    DEFAULT_WINDOW_S,
+    MIN_SETTLED_SHARE,
+    sequence,
+    settled_at_s,
+)
 from imdrive.errors import check_number
 from imdrive.kernels.batch import CONVERGENCE_BAND, METRICS
 from imdrive.run.columns import Metrics
-
-DEFAULT_WINDOW_S = 0.5
 
 __all__ = [
     "CONVERGENCE_BAND",
@@ -86,8 +99,10 @@ __all__ = [
     "compensation_metrics",
     "drive_metrics",
     "lost_control_check",
+    "lost_control_at",
     "lost_control_rule",
     "lost_control_time",
+    "torque_limited",
     "steady_means",
 ]
 
@@ -119,12 +134,55 @@ def lost_control_rule(scenario) -> str:
     )
 
 
-def lost_control_time(time_s, speed_rpm, speed_ref_rpm, bound_rpm, duration_s) -> float:
+def torque_limited(s: dict, i_max_A: float) -> np.ndarray:
+    """Which logged samples follow their speed reference at the torque limit, a boolean array:
+    :func:`imdrive.kernels.batch.at_torque_limit` on the signals ``s`` (``speed_rpm``,
+    ``speed_ref_rpm``, ``id_ref_A``, ``iq_ref_A``; all False without them)."""
+    n = len(s["time_s"])
+    if i_max_A <= 0.0 or not {"speed_ref_rpm", "id_ref_A", "iq_ref_A"} <= set(s):
+        return np.zeros(n, dtype=bool)
+    w, ref = np.asarray(s["speed_rpm"]), np.asarray(s["speed_ref_rpm"])
+    e = ref - w
+    prev = np.concatenate(([np.nan], w[:-1]))
+    i_d, i_q = np.asarray(s["id_ref_A"]), np.asarray(s["iq_ref_A"])
+    iq_max = np.sqrt(np.maximum(i_max_A * i_max_A - i_d * i_d, 0.0))
+    with np.errstate(invalid="ignore"):
+        return (np.abs(i_q) >= 0.999 * iq_max) & (i_q * e > 0.0) & ((w - prev) * e > 0.0)
+
+
+def lost_control_at(res) -> tuple[float, float]:
+    """``(lost_control_at_s, torque_limited_s)`` of a run: its first loss of control (NaN if
+    none) and how long it followed its speed reference at the torque limit, out of the band,
+    s (:func:`lost_control_time` with :func:`torque_limited`)."""
+    sc, s = res.scenario, res.signals
+    bound, duration = lost_control_check(sc)
+    if "speed_ref_rpm" not in s or bound == 0.0:
+        return math.nan, 0.0
+    from imdrive.config.perunit import resolve
+
+    limited = torque_limited(s, resolve(sc).current_limit_A)
+    args = (s["time_s"], s["speed_rpm"], s["speed_ref_rpm"], bound * 30.0 / math.pi)
+    out = np.abs(s["speed_rpm"] - s["speed_ref_rpm"]) > args[3]
+    t_lc = lost_control_time(*args, duration, limited)
+    t = np.asarray(s["time_s"])
+    k = np.flatnonzero(out & limited)
+    if math.isfinite(t_lc):
+        k = k[t[k] < t_lc]  # as the batch kernel counts: until the loss of control
+    dt = t[1] - t[0] if len(t) > 1 else sc.simulation.Ts_s
+    return t_lc, float(len(k) * dt)
+
+
+def lost_control_time(
+    time_s, speed_rpm, speed_ref_rpm, bound_rpm, duration_s, limited=None
+) -> float:
     """Start of the first departure of ``speed`` from ``speed_ref`` by more than ``bound_rpm``
-    lasting ``duration_s`` or longer, s (NaN if none; see the module docstring)."""
+    lasting ``duration_s`` or longer, s (NaN if none; see the module docstring); a sample of
+    ``limited`` (boolean, :func:`torque_limited`) is not out of the band."""
     if bound_rpm <= 0.0 or len(time_s) == 0:
         return math.nan
     out = np.abs(np.asarray(speed_rpm) - np.asarray(speed_ref_rpm)) > bound_rpm
+    if limited is not None:
+        out &= ~np.asarray(limited, dtype=bool)
     if not out.any():
         return math.nan
     # runs of consecutive out-of-band samples: their first and last indices
@@ -133,6 +191,18 @@ def lost_control_time(time_s, speed_rpm, speed_ref_rpm, bound_rpm, duration_s) -
     last = np.flatnonzero(d == -1) - 1
     long = np.flatnonzero(time_s[last] - time_s[first] >= duration_s - 1e-12)
     return float(time_s[first[long[0]]]) if long.size else math.nan
+
+
+def steady_window_periods(sc, window_s: float, Ts: float, n_steps: int) -> int:
+    """Control periods in the steady-state window of scenario ``sc``: the last ``window_s``
+    (:func:`window_periods`), cut to start where the last transient has settled
+    (:func:`settled_at_s`) when at least :data:`MIN_SETTLED_SHARE` of it is left; else whole
+    (and :func:`imdrive.run.status.verdict` says the run had not settled)."""
+    n = window_periods(window_s, Ts, n_steps)
+    left = n_steps - int(math.ceil(settled_at_s(sc) / Ts - 1e-9))
+    if left < n and left >= MIN_SETTLED_SHARE * n:
+        return left
+    return n
 
 
 def window_periods(window_s: float, Ts: float, n_steps: int) -> int:
@@ -164,7 +234,7 @@ def drive_metrics(res, window_s: float = DEFAULT_WINDOW_S) -> dict:
     s = res.signals
     sc = res.scenario
     Ts = sc.simulation.Ts_s
-    n_steps = sc.simulation.n_steps
+    n_steps = sequence(sc).n_steps(Ts)
     k = np.rint(s["time_s"] / Ts).astype(np.int64)
     ok = not res.diverged
     nan = math.nan
@@ -179,7 +249,7 @@ def drive_metrics(res, window_s: float = DEFAULT_WINDOW_S) -> dict:
     speed_ref = s.get("speed_ref_rpm", zeros)
     speed_est = s.get("speed_est_rpm", zeros)
     R2_hat = s.get("R2_hat_ohm", s["R2_ohm"])
-    win = k >= n_steps - window_periods(window_s, Ts, n_steps)
+    win = k >= n_steps - steady_window_periods(sc, window_s, Ts, n_steps)
     rel = np.abs(R2_hat - s["R2_ohm"]) / s["R2_ohm"]
     bad = np.flatnonzero(~(rel <= CONVERGENCE_BAND))
     if not ok:
@@ -212,14 +282,14 @@ def drive_metrics(res, window_s: float = DEFAULT_WINDOW_S) -> dict:
     )
     # the standstill R1 identification's last outcome (0 none, 1 identified, 2 could not)
     out["R1_id_status"] = float(s["R1_id_status_code"][-1]) if "R1_id_status_code" in s else nan
-    bound, duration = lost_control_check(sc)
-    t_lc = lost_control_time(s["time_s"], speed, speed_ref, bound * 30.0 / math.pi, duration)
+    t_lc, t_limited = lost_control_at(res)
     out["lost_control"] = not math.isnan(t_lc)
     out["lost_control_at_s"] = t_lc
+    out["torque_limited_s"] = t_limited
     out.update(held_metrics(res))
     from imdrive.run.status import verdict
 
-    out.update(verdict(sc, out))
+    out.update(verdict(sc, out | {"window_s": window_s}))
     return out
 
 

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from imdrive.config.sequence import sequence
 from imdrive.run.columns import current_name
 from imdrive.run.export import unit_of
 
@@ -207,7 +208,8 @@ def steady_start(res) -> float:
     t_end = float(res.time_s[-1])
     if "R2_hat_ohm" in res.signals and sc.compensator.enabled and sc.compensator.t_on_s < t_end:
         return float(sc.compensator.t_on_s)
-    last = max(sc.control.speed_ref_rpm.points[-1][0], sc.load.torque_Nm.points[-1][0])
+    seq = sequence(sc)
+    last = max(seq.speed_ref_rpm.points[-1][0], seq.load_Nm.points[-1][0])
     return min(max(last + 1.0, 0.5 * t_end), 0.9 * t_end)
 
 

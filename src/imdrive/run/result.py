@@ -48,8 +48,7 @@ from imdrive.run.metrics import (
     compensation_metrics,
     drive_metrics,
     held_shares,
-    lost_control_check,
-    lost_control_time,
+    lost_control_at,
 )
 from imdrive.run.status import run_status
 
@@ -218,13 +217,7 @@ class SimulationResult:
         """Start of the first departure of the actual speed from its reference by more than
         ``simulation.lost_control_rpm`` that lasted ``simulation.lost_control_s`` or longer, s
         (NaN if none; on the logged samples, see :func:`imdrive.run.metrics.drive_metrics`)."""
-        if "speed_ref_rpm" not in self.signals:
-            return math.nan
-        bound, duration = lost_control_check(self.scenario)
-        s = self.signals
-        return lost_control_time(
-            s["time_s"], s["speed_rpm"], s["speed_ref_rpm"], bound * 30.0 / math.pi, duration
-        )
+        return lost_control_at(self)[0]
 
     @property
     def lost_control(self) -> bool:

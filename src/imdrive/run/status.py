@@ -61,6 +61,12 @@ from __future__ import annotations
 import math
 
 from imdrive.config.perunit import rated_slip_rpm, resolve, speed_tolerance_rpm
+from imdrive.config.sequence import (
+    DEFAULT_WINDOW_S,
+    MIN_SETTLED_SHARE,
+    sequence,
+    settled_at_s,
+)
 from imdrive.kernels.batch import CONVERGENCE_BAND
 
 #: R̂2 within this fraction of the plant's R2 at the end: the convergence band of the metrics
@@ -130,9 +136,10 @@ def low_frequency_note(sc, row: dict, lost: bool) -> str:
     from imdrive.analysis.foc import foc_operating_point
 
     try:
-        n = sc.control.speed_ref_rpm.final
+        seq = sequence(sc)
+        n = seq.speed_ref_rpm.final
         w = n * math.pi / 30.0
-        load = sc.load.torque_Nm.final + sc.load.viscous_Nms * w + sc.load.fan_Nms2 * w * abs(w)
+        load = seq.load_Nm.final + sc.load.viscous_Nms * w + sc.load.fan_Nms2 * w * abs(w)
         r2_hat = row.get("R2_hat_final_ohm", math.nan)
         r2 = row.get("R2_final_ohm", math.nan)
         r2_hat = float(r2_hat) if _finite(r2_hat) else resolve(sc).R2_hat
@@ -231,6 +238,42 @@ def _at_clamp(sc, r2_end) -> str:
     return ""
 
 
+def sequence_notes(sc, row: dict, t_end: float) -> str:
+    """What the drive's sequencing did, for ``verdict_text`` (``""`` when nothing): the
+    premagnetisation's delay of the duty cycle, the ramps followed at the torque limit
+    (:mod:`imdrive.config.sequence`), how long the speed followed its reference at the torque
+    limit out of the loss-of-control band (``torque_limited_s``, when at least a tenth of
+    ``simulation.lost_control_s``), and a final window that
+    begins before the last transient had settled (:func:`imdrive.config.sequence.settled_at_s`,
+    ``window_s`` of ``row``, default 0.5 s)."""
+    if sc.drive.mode != "vector":
+        return ""
+    seq = sequence(sc)
+    out = ""
+    if seq.delay_s > 0.0:
+        out += (
+            f"; premagnetised for {seq.premagnetise_s:.3g} s (control.premagnetise_T2 = "
+            f"{sc.control.premagnetise_T2:g} rotor time constants): the profiles start "
+            f"{seq.delay_s:.3g} s later"
+        )
+    out += "".join(f"; {r.text()}" for r in seq.limited)
+    limited = row.get("torque_limited_s", math.nan)
+    if _finite(limited) and float(limited) >= 0.1 * sc.simulation.lost_control_s:
+        out += (
+            f"; the speed followed its reference at the torque limit for {float(limited):.3g} s "
+            "(not a loss of control)"
+        )
+    window = row.get("window_s", DEFAULT_WINDOW_S)
+    settled = settled_at_s(sc)
+    if t_end - settled < MIN_SETTLED_SHARE * min(window, t_end):
+        out += (
+            f"; not settled: the last change of the speed reference or load settles at about "
+            f"t = {settled:.3g} s, the final window reads t = {max(t_end - window, 0.0):.3g} "
+            f"to {t_end:.3g} s (lengthen simulation.t_end_s)"
+        )
+    return out
+
+
 def verdict(sc, row: dict) -> dict:
     """The status columns of one run (module docstring).
 
@@ -323,6 +366,7 @@ def verdict(sc, row: dict) -> dict:
         )
     events.sort(key=lambda e: e[0])
     r1_note = {2: f"; {R1_NOT_IDENTIFIED}", 3: f"; {R1_ONE_LEVEL}"}.get(row.get("R1_id_status"), "")
+    r1_note += sequence_notes(sc, row, t_end)
     if events:
         out["verdict"] = events[0][1]
         out["verdict_ok"] = False

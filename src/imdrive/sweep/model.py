@@ -398,25 +398,40 @@ def _with_R1_ratio(sc: _Draft, ratio: float) -> None:
 
 
 def _with_speed(sc: _Draft, rpm: float) -> None:
-    profile = _with_final(sc.control.speed_ref_rpm, rpm)
-    sc.set(control=replace(sc.control, speed_ref_rpm=profile))
+    # in rpm: the base's profile (per-unit or not) in rpm, ending at this speed
+    from imdrive.config.profile_units import stated_speed_ref_rpm
+
+    profile = _with_final(stated_speed_ref_rpm(sc), rpm)
+    sc.set(control=replace(sc.control, speed_ref_rpm=profile, speed_ref_pu=None))
 
 
 def _with_load(sc: _Draft, torque: float) -> None:
-    sc.set(load=replace(sc.load, torque_Nm=_with_final(sc.load.torque_Nm, torque)))
+    from imdrive.config.profile_units import stated_load_Nm
+
+    profile = _with_final(stated_load_Nm(sc), torque)
+    sc.set(load=replace(sc.load, torque_Nm=profile, torque_pu=None))
+
+
+def _rated(sc):
+    from imdrive.config.rated import rated_point
+
+    return rated_point(sc.machine)
 
 
 def _with_speed_pu(sc: _Draft, pu: float) -> None:
     # in per-unit of the run's machine's rated speed (config/rated.py), so it follows the machine
-    from imdrive.config.rated import rated_point
-
-    _with_speed(sc, pu * rated_point(sc.machine).speed_rpm)
+    ctl = sc.control
+    if ctl.speed_ref_pu is None:
+        _with_speed(sc, pu * _rated(sc).speed_rpm)
+        return
+    sc.set(control=replace(ctl, speed_ref_pu=_with_final(ctl.speed_ref_pu, pu)))
 
 
 def _with_load_pu(sc: _Draft, pu: float) -> None:
-    from imdrive.config.rated import rated_point
-
-    _with_load(sc, pu * rated_point(sc.machine).torque_Nm)
+    if sc.load.torque_pu is None:
+        _with_load(sc, pu * _rated(sc).torque_Nm)
+        return
+    sc.set(load=replace(sc.load, torque_pu=_with_final(sc.load.torque_pu, pu)))
 
 
 def available_torque_Nm(sc: Scenario) -> float:
@@ -431,7 +446,9 @@ def available_torque_Nm(sc: Scenario) -> float:
     from imdrive.config.rated import rated_point
 
     rp = rated_point(sc.machine)
-    x = abs(sc.control.speed_ref_rpm.points[-1][1]) / rp.speed_rpm
+    from imdrive.config.profile_units import stated_speed_ref_rpm
+
+    x = abs(stated_speed_ref_rpm(sc).points[-1][1]) / rp.speed_rpm
     if x <= 1.0:
         return rp.torque_Nm
     return min(rp.torque_Nm / x, rp.breakdown_torque_Nm / (x * x))
