@@ -5,7 +5,9 @@ A magnetisation shorter than the flux build-up the drive measures (four rotor ti
 and a window) left R1_hat as it was (status 2): on Krause's 50 hp machine in the machine
 envelope (ramp at four T2) R1_hat stayed 10 % off and R2 with it at 5-10 % of the rated speed
 regenerating. With the wait the speed reference stays at zero until the window has half a
-T2_hat, and R1 is identified; ``R1_standstill_hold_T2 = 0`` restores the old start.
+T2_hat, and R1 is identified; ``R1_standstill_hold_T2 = 0`` with ``control.premagnetise_T2 =
+0`` (the drive's own premagnetisation, 3 T2_hat, which the wait extends: config/sequence.py)
+restores the old start.
 """
 
 from __future__ import annotations
@@ -34,6 +36,8 @@ def _start(machine, magnetise_T2, hold=None):
     ]
     if hold is not None:
         ov.append(f"mras.R1_standstill_hold_T2={hold}")
+    if hold == 0.0:  # nor the premagnetisation: the start is the one asked for
+        ov.append("control.premagnetise_T2=0")
     sc = base.with_overrides([f'machine.preset="{machine}"', *ov])
     res = simulate(sc)
     t, ref = res["time_s"], res["speed_ref_rpm"]

@@ -14,7 +14,10 @@ from imdrive.run.simulate import simulate
 def _standstill(machine, r2_ratio, magnetise_s, r1_ratio=0.9):
     """R1_hat/R1 and the status when the speed reference leaves zero at ``magnetise_s``, the
     start not waiting for the window (``mras.R1_standstill_hold_T2 = 0``;
-    test_r1_standstill_wait.py has the wait)."""
+    test_r1_standstill_wait.py has the wait) nor premagnetising longer by itself
+    (``control.premagnetise_T2 = 0``), with no load (the preset's is per-unit of the
+    machine: its rated load at 2 s pulled Geyer's 3.3 kV machine away from standstill before
+    its 5 T2 were over; 12 N m on every machine before)."""
     sc = Scenario.read(
         "sensorless",
         [
@@ -22,6 +25,8 @@ def _standstill(machine, r2_ratio, magnetise_s, r1_ratio=0.9):
             "mras.R1_standstill=true",
             "mras.R1_standstill_levels=1",
             "mras.R1_standstill_hold_T2=0",
+            "control.premagnetise_T2=0",
+            "load.torque_Nm=0",
             f"estimator.R1_ratio={r1_ratio}",
             f"estimator.R2_ratio={r2_ratio}",
             f"control.speed_ref_rpm={{initial=0,changes=[{{at={magnetise_s},to=300,over=1}}]}}",
@@ -128,6 +133,8 @@ def test_a_run_that_could_not_identify_says_so_in_its_status():
             "mras.R1_standstill=true",
             "mras.R1_standstill_levels=1",
             "mras.R1_standstill_hold_T2=0",  # the start does not wait for the window
+            "control.premagnetise_T2=0",  # nor for 3 T2_hat (0.26 s)
+            "load.torque_Nm=0",  # the preset's load step at t_end: its settling is not the point
             "control.speed_ref_rpm={initial=0,changes=[{at=0.2,to=300,over=1}]}",
             "simulation.t_end_s=2.0",
         ],

@@ -201,15 +201,20 @@ def test_scenario(sc: Scenario, test: str, t_end: float, **sections) -> Scenario
 
     Every non-ideality of ``sc`` stays (inverter model, dead time, drops, delay, sensors,
     saturation, thermal model). The machine is uncoupled from its load (no load torque), the
-    compensator, injection, field weakening and dead-time compensation are off unless the
-    test sets them, the controller's model is the constant one (no ``[controller_model]``
-    tables: they are what commissioning identifies), the log keeps every period.
+    drive does not sequence (no premagnetisation, no torque-limited ramp: the test's profiles
+    are followed as given), the compensator, injection, field weakening and dead-time
+    compensation are off unless the test sets them, the controller's model is the constant
+    one (no ``[controller_model]`` tables: they are what commissioning identifies), the log
+    keeps every period.
     ``sections``: ``{section: {key: value}}`` applied last.
     """
     d = sc.to_dict()
     d["name"] = f"{sc.name[:80]}-commission-{test}"
     d["controller_model"] = {}  # uncommissioned: a scenario already commissioned starts over
-    d["load"].update(torque_Nm=0.0, viscous_Nms=0.0, fan_Nms2=0.0)
+    # the test's own duty cycle: no load, and neither profile's per-unit twin (it would take
+    # the place of the test's speed_ref_rpm and torque_Nm: the sensorless preset's rated
+    # load step landed in the no-load test)
+    d["load"].update(torque_Nm=0.0, torque_pu=None, viscous_Nms=0.0, fan_Nms2=0.0)
     # R2 tracking and its signals: every key at its default (off), so that no setting of the
     # user's (injection.frequency_pu, headroom_voltage, ...) changes what a test imposes
     d["compensator"] = {}
@@ -225,6 +230,13 @@ def test_scenario(sc: Scenario, test: str, t_end: float, **sections) -> Scenario
         current_kp=None,
         current_ki=None,
         flux_ref_Wb=None,
+        speed_ref_rpm=0.0,
+        speed_ref_pu=None,
+        # a test's timeline is its own: not premagnetised by the drive (each test waits for
+        # its build-up in the rotor time constants it measured, not the guessed model's), no
+        # ramp followed at a torque limit (the acceleration test sets its own current limit)
+        premagnetise_T2=0.0,
+        ramp_torque_limit=False,
     )
     for key in ("R1_ratio", "R2_ratio", "M_ratio"):
         d["estimator"][key] = None

@@ -19,9 +19,17 @@ drive does:
    the run's end (``simulation.t_end_s`` counts the duty cycle: the run lasts
    ``t_end_s + delay_s``). On Table IV (T2 = 87 ms) the presets' 0.5 s of magnetisation is
    5.7 T2 and nothing moves; on Krause 2250 hp (T2 = 1.6 s) the duty cycle starts 4.3 s later.
-   With the standstill R1 identification (``mras.R1_standstill``) the premagnetisation lasts
-   at least as long as the test (:data:`R1_TEST_T2_PER_LEVEL` per current level).
    A reference that starts away from zero (a running start) is not delayed.
+   With the standstill R1 identification (``mras.R1_standstill``) the premagnetisation *is*
+   the test's standstill: the test measures the flux build-up and takes its window while
+   the drive magnetises, and when the build-up the drive measures is not over by the end of
+   the premagnetisation the drive keeps magnetising until the test has its window (at most
+   ``mras.R1_standstill_hold_T2``), the whole duty cycle, speed reference and load, waiting
+   for it (:func:`imdrive.kernels.stages.profiles`, ``t_hold``). That end is measured, not
+   guessed: a fixed 4 T̂2 per current level was 1.7 T2 too long per level from R̂2(0) =
+   0.6 R2 and short from R̂2(0) > R2, where the kernel held the speed reference alone and a
+   load step stated after its start overtook it (Krause 2250 hp: the drive at standstill
+   pulled to -300 rpm). This time is not added to the run's end.
 2. **Torque-limited ramps** (``control.ramp_torque_limit``). A ramp of the speed reference
    steeper than the machine can follow at the drive's torque limit is followed at
    :data:`RAMP_TORQUE_SHARE` of the acceleration that limit leaves over the load,
@@ -195,7 +203,7 @@ def _sequence(sc) -> Sequence:
 
     D = resolve(sc)
     T2_hat = (D.Ll2_hat + D.M_hat) / D.R2_hat
-    t_mag = max(sc.control.premagnetise_T2, _standstill_test_T2(sc)) * T2_hat
+    t_mag = sc.control.premagnetise_T2 * T2_hat  # the R1 test extends it in the kernel
     first = first_move_s(speed)
     delay = 0.0
     if first is not None and speed.points[0][1] == 0.0 and first < t_mag:
@@ -205,25 +213,6 @@ def _sequence(sc) -> Sequence:
     if sc.control.ramp_torque_limit:
         speed, limited = limit_ramps(speed, load, _TorqueLimit(sc, D))
     return Sequence(speed, load, t_mag, delay, t_end + delay, limited)
-
-
-#: rotor time constants T̂2 one level of the standstill R1 identification takes from the start:
-#: the measured flux build-up (about 3.5) and its window of half a T̂2
-#: (kernels/estimators/mras_standstill.py)
-R1_TEST_T2_PER_LEVEL = 4.0
-
-
-def _standstill_test_T2(sc) -> float:
-    """How long the standstill R1 identification (``mras.R1_standstill``) keeps the drive at
-    standstill, in T̂2: :data:`R1_TEST_T2_PER_LEVEL` per current level, 0 without it. The
-    speed reference waits for it in the kernel (``mras.R1_standstill_hold_T2``) but the load
-    does not, so the premagnetisation covers it: on Krause 2250 hp the test held the ramp past
-    the load step, which then hit the drive at standstill and pulled it to -300 rpm."""
-    if not sc.mras.R1_standstill or sc.control.speed_feedback != "mras":
-        return 0.0
-    from imdrive.config.r1_standstill import r1_standstill_levels
-
-    return R1_TEST_T2_PER_LEVEL * r1_standstill_levels(sc)
 
 
 class _TorqueLimit:

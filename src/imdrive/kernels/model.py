@@ -35,7 +35,7 @@ MODEL_STATE = record_dtype(
         # the standstill test at two current levels (kernels/estimators/mras_standstill.py)
         ("dc_boost", f8),  # it asks for the flux reference times 1 + this
         ("dc_busy", b1),  # it holds the speed reference at zero
-        ("t_hold", f8),  # the time the speed profile was held, s
+        ("t_hold", f8),  # the time the duty cycle (speed reference, load) was held, s
         ("dc_hold_max", f8),  # and the longest it may be, s
         ("u0_id", f8),  # the inverter's residual it identified along its current, V
         ("i_id", f8),  # at this current, A

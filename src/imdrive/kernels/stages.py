@@ -165,15 +165,17 @@ NO_ESTIMATE = Estimate(0.0, 0j, 0.0, 0.0, 0.0, False, 0.0, 0.0)
 @njit(cache=True, inline="always")
 def profiles(pp, pt, pv, pn, t, foc, mdl, Ts):
     """The profiles the drive reads at ``t`` (the stages after it read no profile array): the
-    references of field-oriented control, or the open-loop voltage. The speed reference's
-    profile runs ``mdl.t_hold`` late: the time a standstill test held it at zero
-    (``mdl.dc_busy``, :func:`imdrive.kernels.estimators.mras_standstill.r1_two_levels`)."""
+    references of field-oriented control, or the open-loop voltage. The duty cycle, the speed
+    reference's profile and the load's, runs ``mdl.t_hold`` late: the time the standstill R1
+    test extended the premagnetisation (``mdl.dc_busy``,
+    :func:`imdrive.kernels.estimators.mras_standstill.mras_r1_standstill`), so that a load
+    step stated after the speed reference's start still comes after it (held alone, the
+    reference was overtaken by the load, which hit the drive at standstill)."""
     w_imposed = 0.0
     if pp.speed_imposed:
         w_imposed = profile_at(pt, pv, pn, PR_SPEED_IMPOSED, t)
     R1_base = pp.R1 * profile_at(pt, pv, pn, PR_R1_SCALE, t)
     R2_base = pp.R2 * profile_at(pt, pv, pn, PR_R2_SCALE, t)
-    T_L0 = profile_at(pt, pv, pn, PR_LOAD, t)
     w_ref = 0.0
     psi_ref = 0.0
     v_amp = 0.0
@@ -187,6 +189,7 @@ def profiles(pp, pt, pv, pn, t, foc, mdl, Ts):
     else:
         v_amp = profile_at(pt, pv, pn, PR_V_AMP, t)
         f_Hz = profile_at(pt, pv, pn, PR_FREQ, t)
+    T_L0 = profile_at(pt, pv, pn, PR_LOAD, t - mdl.t_hold)  # t_hold is 0 in open loop
     return Profiles(w_imposed, R1_base, R2_base, T_L0, w_ref, psi_ref, v_amp, f_Hz)
 
 
