@@ -43,9 +43,10 @@ least a fifth of it is left (:func:`steady_window_periods`; the status says when
                          Also on the samples of a diverged run before the divergence.
                          A sample that follows its reference at the torque limit (the torque
                          current at the current limit, pushing towards the reference, the
-                         speed moving towards it: :func:`torque_limited`) is not out of the
-                         band: a ramp or step the machine cannot follow faster is not a loss
-                         of control
+                         speed moving towards it: :func:`torque_limited`) is not counted in a
+                         departure's length (a ramp or step the machine cannot follow faster
+                         is not a loss of control), nor does it end the departure (a drive
+                         out of control swings back at the limit too)
 ``torque_limited_s``     how long the speed was out of that band while following at the
                          torque limit (before any loss of control), s
 ``lost_control``         ``lost_control_at_s`` is not NaN (a boolean column)
@@ -176,21 +177,35 @@ def lost_control_time(
     time_s, speed_rpm, speed_ref_rpm, bound_rpm, duration_s, limited=None
 ) -> float:
     """Start of the first departure of ``speed`` from ``speed_ref`` by more than ``bound_rpm``
-    lasting ``duration_s`` or longer, s (NaN if none; see the module docstring); a sample of
-    ``limited`` (boolean, :func:`torque_limited`) is not out of the band."""
+    lasting ``duration_s`` or longer, s (NaN if none; see the module docstring). In a
+    departure where the speed only heads for its reference (a lag: it never falls back from
+    its closest approach by ``bound_rpm``), the samples of ``limited`` (boolean,
+    :func:`torque_limited`) are not counted in its length (the sample spacing each); in any
+    other (a stall, a runaway, a swing out of control) every sample counts, as
+    :func:`imdrive.kernels.batch.accumulate` counts them."""
     if bound_rpm <= 0.0 or len(time_s) == 0:
         return math.nan
-    out = np.abs(np.asarray(speed_rpm) - np.asarray(speed_ref_rpm)) > bound_rpm
-    if limited is not None:
-        out &= ~np.asarray(limited, dtype=bool)
+    t = np.asarray(time_s)
+    w = np.asarray(speed_rpm)
+    e = np.asarray(speed_ref_rpm) - w
+    out = np.abs(e) > bound_rpm
     if not out.any():
         return math.nan
     # runs of consecutive out-of-band samples: their first and last indices
     d = np.diff(np.concatenate(([0], out.astype(np.int8), [0])))
     first = np.flatnonzero(d == 1)
     last = np.flatnonzero(d == -1) - 1
-    long = np.flatnonzero(time_s[last] - time_s[first] >= duration_s - 1e-12)
-    return float(time_s[first[long[0]]]) if long.size else math.nan
+    for a, b in zip(first, last, strict=True):
+        length = t[b] - t[a]
+        if length < duration_s - 1e-12:
+            continue
+        if limited is not None and len(t) > 1:
+            toward = np.sign(e[a]) * w[a : b + 1]  # the speed towards the reference
+            if np.all(np.maximum.accumulate(toward) - toward <= bound_rpm):  # a lag
+                length -= np.count_nonzero(limited[a : b + 1]) * (t[1] - t[0])
+        if length >= duration_s - 1e-12:
+            return float(t[a])
+    return math.nan
 
 
 def steady_window_periods(sc, window_s: float, Ts: float, n_steps: int) -> int:
