@@ -11,8 +11,12 @@ It has no flux error for the R2 compensator (returns ``0j``). Open loop in the s
 adaptation loop to tune, but it inherits the voltage model's weakness at low stator
 frequency (the 1/(s + wc) filter's phase and gain error below ``wc``). Measured on the paper's
 machine (sensorless preset, 3 s ramps): within 2 rpm at 800-1200 rpm, 0-12 N m; at 400 rpm
-and no load the speed loop limit-cycles (estimate 150-200 rpm off for seconds). An example
-of the plug-in mechanism, not a recommended estimator.
+and no load the speed loop limit-cycles (estimate 150-200 rpm off for seconds). At a
+magnetised standstill ``v = R1 i`` and the filter forgets the flux within ``1/wc`` (0.2 s), so
+a steep ramp started after the drive's premagnetisation finds no flux angle to differentiate
+(0 -> 800 rpm in 0.5 s after 0.26 s at standstill: the estimate 1626 rpm off, control lost;
+started with the flux build-up: 44 rpm off at most). An example of the plug-in mechanism,
+not a recommended estimator.
 """
 
 from __future__ import annotations

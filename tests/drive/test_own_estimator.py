@@ -82,6 +82,13 @@ def test_batch_of_100_drives_follows_the_detuning_law_and_matches_single_runs():
                 f"control.speed_ref_rpm={{points=[[0, 0], [0.5, {s}]]}}",
                 "load.torque_Nm={points=[[0, 0], [1.0, 0], [1.01, 12]]}",
                 "simulation.t_end_s=2",
+                # the ramp starts with the flux build-up, as it did before the drive
+                # premagnetised (3 T2_hat, 0.27-0.33 s): the example's voltage model forgets
+                # the flux at a magnetised standstill (tests/data/own_estimator.py's
+                # docstring), and the steep ramps (600-1200 rpm in 0.5 s) started from there
+                # lost control on 9 of the 100 drives (the error's slope over R2_hat was -198
+                # rpm in a row, the law's 73)
+                "control.premagnetise_T2=0",
             ]
         )
         for s in speeds

@@ -16,8 +16,9 @@ rotor is magnetised (:func:`ramp_start_s`: four rotor time constants, at least 0
 presets' start; the compensator and the injection start as much later) over
 ``max(1 s, 2 tau_m)`` (``tau_m = J w_rated / T_rated``, the time the rated torque takes to
 reach the rated speed, so the ramp needs at most half the rated torque), the load steps 0.5 s
-after the ramp (later by the standstill R1 test's wait where the drive runs it,
-:func:`standstill_wait_s`), and the run ends ``T_END_S - 2 s`` later, stretched by
+after the ramp (a drive that runs the standstill R1 test holds both until the test has its
+window, and its run ends that much later: :func:`standstill_wait_s`), and the run ends
+``T_END_S - 2 s`` later, stretched by
 ``T2 / T2_TableIV`` for a machine whose rotor is slower than Table IV's (the R2 detection's
 injection frequency, hence its decisions, scale with ``1/T2``). Its verdict (:func:`verdict`):
 
@@ -106,17 +107,20 @@ RAMP_START_MIN_S = 0.5
 
 #: The one-level standstill R1 test holds the start (kernels/estimators/mras_standstill.py) until
 #: its window has half a T2_hat(0), the window opening up to a block (a quarter T2_hat(0)) after
-#: the grid's ramp start: the load step and the end of a drive that runs the test come this many
-#: T2_hat(0) later, so the load still steps 0.5 s after the ramp (measured: the start moved
-#: 0.11 s on Krause 50 hp and 0.56 s on Krause 2250 hp from 0.8 R2, whose rated regenerating
-#: step then came before the ramp's end and lost control for a second)
+#: the grid's ramp start (measured: the start moved 0.11 s on Krause 50 hp and 0.56 s on Krause
+#: 2250 hp from 0.8 R2). The drive holds its whole duty cycle, the load step too, that long
+#: (kernels/stages.py, ``t_hold``), not the run's end: a drive that runs the test ends this many
+#: T2_hat(0) later, so its final window still follows the load step as long
 STANDSTILL_WAIT_T2_HAT = 0.75
 
 
 def standstill_wait_s(sc, R2_ratio: float) -> float:
-    """How much later the load steps in a run of drive ``sc`` from ``R2_hat(0) = R2_ratio R2``
-    than :func:`timeline` says, s: :data:`STANDSTILL_WAIT_T2_HAT` times ``T2_hat(0) = T2 /
-    R2_ratio`` where the drive identifies R1 at standstill (``mras.R1_standstill``), else 0."""
+    """How much later a run of drive ``sc`` from ``R2_hat(0) = R2_ratio R2`` ends than
+    :func:`timeline` says, s: :data:`STANDSTILL_WAIT_T2_HAT` times ``T2_hat(0) = T2 /
+    R2_ratio`` where the drive identifies R1 at standstill (``mras.R1_standstill``), else 0.
+    (Until the drive held its load with its speed reference, the grid stepped the load this
+    much later too: the rated regenerating step on Krause 2250 hp had come before the ramp's
+    end and lost control for a second.)"""
     if not sc.mras.R1_standstill:
         return 0.0
     return STANDSTILL_WAIT_T2_HAT * rotor_time_constant_s(sc.machine) / R2_ratio
@@ -198,8 +202,7 @@ def scenarios(machines=None, drives=DRIVES, speeds=SPEEDS_PU, loads=LOADS_PU, ra
                         ov = [
                             f"control.speed_ref_rpm={{initial=0, changes=[{{at={start}, "
                             f"to={n}, over={ramp}}}]}}",
-                            f"load.torque_Nm={{initial=0, changes=[{{at={load_at + wait}, "
-                            f"to={T}}}]}}",
+                            f"load.torque_Nm={{initial=0, changes=[{{at={load_at}, to={T}}}]}}",
                             f"simulation.t_end_s={t_end + wait}",
                             f"estimator.R2_ohm={r * base.machine.R2_ohm}",
                         ]
