@@ -426,6 +426,7 @@ def _diagnosis_scenario(name, feedback, stretch, start, tracking):
     base = scs[0]
     rp = rated_point(base.machine)
     ramp = stretch * timeline(base.machine)[0]
+    start_given = start
     start = ramp_start_s(base.machine) if start is None else start
     ov = [  # the MRAS's ramp lag alone: the field weakening would hide the voltage limit
         "control.field_weakening=false",
@@ -436,6 +437,8 @@ def _diagnosis_scenario(name, feedback, stretch, start, tracking):
     ]
     if tracking is not None:
         ov.append(f"mras.acceleration_tracking={str(tracking).lower()}")
+    if start_given is not None:  # that start, not the drive's premagnetisation (3 T2_hat)
+        ov.append("control.premagnetise_T2=0")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConfigWarning)
         return base.with_overrides(ov), rp, ramp, start
@@ -448,7 +451,8 @@ def ramp_diagnosis(runs=DIAGNOSIS_RUNS) -> pd.DataFrame:
     The grid's run at rated speed, no load, ``R2_hat(0) = R2`` (no detuning), up to 3 s after
     the ramp, with the MRAS (type 1 or type 2, ``mras.acceleration_tracking``) or the
     measured speed as feedback, the ramp as in the grid or stretched, starting as in the grid
-    (:func:`ramp_start_s`) or at a given time.
+    (:func:`ramp_start_s`) or at a given time (the drive's premagnetisation off: the time is
+    the start).
 
     Parameters
     ----------
