@@ -112,7 +112,8 @@ class ControlSettings:
             "the drive builds the rotor flux at standstill for this many rotor time constants "
             "of its model, T̂2 = L̂2/R̂2(0), before it releases the speed reference (95 % of the "
             "flux at 3): a speed reference that moves earlier is delayed with the load and the "
-            "run's end (config/sequence.py); 0: released at once",
+            "run's end (config/sequence.py); with mras.R1_standstill it lasts until the "
+            "standstill test has its window too; 0: released at once",
             ge=0.0,
             le=20.0,
         ),

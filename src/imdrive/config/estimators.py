@@ -453,7 +453,7 @@ class MrasSettings:
             "R1_standstill at 1 current level (R̂1 holds the dead-time compensation's residual "
             "voltage / |i|) or 2 (R̂1 = Δu/Δi, Holtz & Quan 2002; the residual starts the "
             "compensation's scale): the flux current at R1_standstill_first_level of its "
-            "reference, then at it; the speed reference waits for the test at most "
+            "reference, then at it; the duty cycle waits for the test at most "
             "R1_standstill_hold_T2 (kernels/estimators/mras_standstill.py)",
             ge=1,
             le=2,

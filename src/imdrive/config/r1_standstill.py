@@ -3,7 +3,7 @@
 
 Two levels separate R1 from the residual the controller's inverter-error compensation leaves
 (and start the compensation's online scale from it), at the cost of 3-4.5 rotor time
-constants more magnetisation, which the speed reference waits for. A controller that believes
+constants more magnetisation, which the duty cycle waits for. A controller that believes
 its inverter ideal (no dead-time compensation, no inverter-error table) has neither a
 residual to separate nor a scale to start: one level there, so the ideal drive keeps its
 timeline.
@@ -19,9 +19,10 @@ from imdrive.config.validation import Float, setting
 StandstillHold = Annotated[
     Float,
     setting(
-        "longest wait of the first start for the standstill test (two levels: the test; "
-        "one level: its window of half a T̂2 after the measured flux build-up), per unit "
-        "of T̂2(0); 0: the speed reference does not wait",
+        "longest the first start's premagnetisation is extended for the standstill test "
+        "(two levels: the test; one level: its window of half a T̂2 after the measured flux "
+        "build-up), per unit of T̂2(0); the duty cycle, speed reference and load, waits "
+        "(config/sequence.py); 0: it does not wait",
         ge=0.0,
     ),
 ]
