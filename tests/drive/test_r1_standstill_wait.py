@@ -64,3 +64,33 @@ def test_a_long_enough_magnetisation_does_not_wait(machine):
     _, status, moved_T2 = _start(machine, 6.0)
     assert status == 1
     assert moved_T2 == pytest.approx(6.0, abs=0.01)
+
+
+def test_the_load_waits_with_the_speed_reference():
+    """The test's wait extends the premagnetisation for the whole duty cycle: a load step
+    stated 0.2 s after the speed reference's start still comes 0.2 s after it (the kernel
+    held the reference alone, and a load step stated after the start could overtake it and
+    hit the drive at standstill: Krause 2250 hp pulled to -300 rpm)."""
+    base = Scenario.read("sensorless", ['machine.preset="paper-table-iv"'])
+    T2 = base.machine.T2_s
+    t0 = 3.0 * T2
+    sc = base.with_overrides(
+        [
+            "mras.R1_standstill=true",
+            "mras.R1_standstill_levels=1",
+            "estimator.R1_ratio=0.9",
+            "estimator.R2_ratio=0.8",
+            f"control.speed_ref_rpm={{initial=0,changes=[{{at={t0},to=100,over=1}}]}}",
+            f"load.torque_Nm={{initial=0,changes=[{{at={t0 + 0.2},to=2}}]}}",
+            f"simulation.t_end_s={t0 + 1.0}",
+            "simulation.log_every=1",
+        ]
+    )
+    premagnetised = 3.0 * T2 / 0.8  # control.premagnetise_T2 = 3 of T2_hat = T2 / 0.8
+    res = simulate(sc)
+    t = res["time_s"]
+    moved = t[res["speed_ref_rpm"] > 0.0][0]
+    loaded = t[res["load_torque_Nm"] > 0.0][0]
+    assert res["R1_id_status_code"][-1] == 1
+    assert moved > premagnetised + 0.5 * T2  # the test extended the premagnetisation
+    assert loaded - moved == pytest.approx(0.2, abs=2.5 * sc.simulation.Ts_s)
