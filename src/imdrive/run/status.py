@@ -250,11 +250,15 @@ def sequence_notes(sc, row: dict, t_end: float) -> str:
         return ""
     seq = sequence(sc)
     out = ""
+    # the standstill R1 test extends the premagnetisation until its window (the kernel's
+    # t_hold, config/sequence.py): the note says so rather than a length it cannot know
+    test = sc.mras.R1_standstill and sc.control.speed_feedback == "mras"
     if seq.delay_s > 0.0:
         out += (
-            f"; premagnetised for {seq.premagnetise_s:.3g} s (control.premagnetise_T2 = "
-            f"{sc.control.premagnetise_T2:g} rotor time constants): the profiles start "
-            f"{seq.delay_s:.3g} s later"
+            f"; premagnetised for {'at least ' if test else ''}{seq.premagnetise_s:.3g} s "
+            f"(control.premagnetise_T2 = {sc.control.premagnetise_T2:g} rotor time constants"
+            f"{', and until the standstill R1 test had its window' if test else ''}): the "
+            f"profiles start {'at least ' if test else ''}{seq.delay_s:.3g} s later"
         )
     out += "".join(f"; {r.text()}" for r in seq.limited)
     limited = row.get("torque_limited_s", math.nan)
