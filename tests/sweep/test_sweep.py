@@ -185,7 +185,12 @@ def test_local_sweep_table_matches_single_runs(local_run):
     # a row is the run's single simulation
     row = df.iloc[10]
     res = simulate(sweep.scenario(10))
-    w = res.window(0.3)
+    # the sweep's window, the last 0.1 s of the run (t >= 0.3 s while the run ended at
+    # t_end_s = 0.4 s; the premagnetisation's delay ends it at 0.5684 s: the mean over
+    # t >= 0.3 s was -36.34 rpm, the row's -33.25, the last 0.1 s logged -33.21)
+    from imdrive.config.sequence import sequence
+
+    w = res.window(sequence(res.scenario).t_end_s - 0.1)
     # the run's end, not its last logged row: the premagnetisation (3 T2_hat = 0.218 s against
     # the profile's 0.05 s) delays the duty cycle and the end by 0.1684 s, so the run's
     # 5684 periods end 4 periods after the last row logged every 10 (768.04 rpm there, the
