@@ -10,14 +10,17 @@ rest again) are written again and again, time continued, until the file has ``--
 magnetised, so the estimators see a nearly continuous recording; the join is not exact (the
 load and the flux are not bit for bit the same), which matters nothing for time and memory.
 The file is written a row group at a time (``pyarrow.parquet.ParquetWriter``), all columns of
-``recording.parquet``.
+``recording.parquet``, encoded as imdrive writes it
+(:func:`imdrive.run.recording.parquet_options`).
 
 The measurement: ``imdrive replay FILE --scenario sensorless --estimators ... --out DIR -q``
 in a child process (after one warm-up run that compiles or loads the estimators from the
 numba cache), ``--repeat`` times; wall time of the command, the replay's own elapsed time
-and real-time factor (``summary.json``), and the child's peak resident memory
-(``resource.getrusage(RUSAGE_CHILDREN).ru_maxrss``, each run in a fresh child so the peak is
-its own).
+and real-time factor (``summary.json``), each estimator's CPU time (its kernel's thread
+time), the child's CPU time (user + system, all its threads: the work an idle machine would
+spread over its cores) and its peak resident memory
+(``resource.getrusage(RUSAGE_CHILDREN)``, each run in a fresh child so the figures are its
+own).
 
 Usage::
 
@@ -56,6 +59,7 @@ def make_file(path: Path, rows: int, csv: bool) -> float:
     import pyarrow.parquet as pq
 
     import imdrive as im
+    from imdrive.run.recording import parquet_options
     from imdrive.run.simulate import simulate
 
     t0 = time.perf_counter()
@@ -81,7 +85,8 @@ def make_file(path: Path, rows: int, csv: bool) -> float:
             writer.write_table(table)
         else:
             if writer is None:
-                writer = pq.ParquetWriter(str(path), table.schema, compression="zstd")
+                opts = parquet_options(table.schema)  # as imdrive writes recording.parquet
+                writer = pq.ParquetWriter(str(path), table.schema, **opts)
             writer.write_table(table, row_group_size=1 << 18)
         done += n
     writer.close()
@@ -94,23 +99,27 @@ def replay_once(path: Path, estimators: str, out: Path) -> dict:
         "import resource, subprocess, sys, time; t0 = time.perf_counter(); "
         "rc = subprocess.call(sys.argv[1:]); "
         "print(time.perf_counter() - t0, "
-        "resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss, rc)"
+        "resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss, rc, "
+        "resource.getrusage(resource.RUSAGE_CHILDREN).ru_utime "
+        "+ resource.getrusage(resource.RUSAGE_CHILDREN).ru_stime)"
     )
     cmd = [sys.executable, "-m", "imdrive", "replay", str(path), "--scenario", "sensorless"]
     cmd += ["--estimators", estimators, "--out", str(out), "--force", "-q"]
     line = subprocess.run(
         [sys.executable, "-c", code, *cmd], capture_output=True, text=True, check=True
     ).stdout.split()
-    wall, rss_kb, rc = float(line[0]), int(line[1]), int(line[2])
+    wall, rss_kb, rc, cpu = float(line[0]), int(line[1]), int(line[2]), float(line[3])
     if rc != 0:
         raise SystemExit(f"imdrive replay failed (exit {rc})")
     summary = json.loads((out / "summary.json").read_text())
     return {
         "wall_s": wall,
+        "process_cpu_s": cpu,
         "peak_rss_MiB": rss_kb / 1024.0,
         "elapsed_s": summary["elapsed_s"],
         "real_time_factor": summary["real_time_factor"],
         "estimators_s": summary["wall_time_s"],
+        **{f"cpu_{name}_s": cpu for name, cpu in summary.get("estimators_cpu_s", {}).items()},
         "rows": summary["rows_replayed"],
     }
 
@@ -136,10 +145,13 @@ def main() -> None:
         runs = [replay_once(path, args.estimators, out) for _ in range(args.repeat)]
     r = runs[0]
     print(f"{r['rows']} rows ({r['rows'] * 1e-4:g} s of drive), estimators {args.estimators}:")
+    cpu = [(k, "s") for k in r if k.startswith("cpu_")]
     for key, unit in (
         ("wall_s", "s"),
+        ("process_cpu_s", "s"),
         ("elapsed_s", "s"),
         ("estimators_s", "s"),
+        *cpu,
         ("real_time_factor", "x"),
         ("peak_rss_MiB", "MiB"),
     ):

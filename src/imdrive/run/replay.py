@@ -219,7 +219,8 @@ class _Estimator:
         self.diverged_at = None
         self.errors = _Errors()
         self.R2_end = None
-        self.wall = 0.0
+        self.wall = 0.0  # s, its kernel's wall time (in a thread: waits for a core count)
+        self.cpu = 0.0  # s, its kernel's CPU time
         w, R2 = np.zeros(0), np.zeros(0)  # compile (or load from the cache) before timing
         none = np.zeros(0, REPLAY_ROW)
         replay_estimator(a.params.est, self.mdl, self.est, none, Ts, model_given, w, R2)
@@ -234,11 +235,12 @@ class _Estimator:
             return np.full(n, np.nan), np.full(n, np.nan)
         w = np.empty(n)
         R2 = np.empty(n)
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.thread_time()
         status, k_end = replay_estimator(
             self.a.params.est, self.mdl, self.est, rows, self.Ts, self.model_given, w, R2
         )
         self.wall += time.perf_counter() - t0
+        self.cpu += time.thread_time() - c0
         w[k_end:] = np.nan
         R2[k_end:] = np.nan
         n_ok = k_end if status == R_OK else k_end - 1
@@ -385,7 +387,8 @@ def replay(
             "context_defaulted": sink.defaulted,
             "model": "the recorded controller's writes" if model_given else "the scenario's",
             "R2_law": "none: R2_hat as the recorded controller wrote it, or the estimator's own",
-            "wall_time_s": sum(e.wall for e in ests),
+            "wall_time_s": sum(e.wall for e in ests),  # in parallel: may exceed elapsed_s
+            "estimators_cpu_s": {e.name: e.cpu for e in ests},
             "elapsed_s": elapsed,
             "real_time_factor": sink.done * Ts / elapsed if elapsed > 0 else None,
             "estimators": {e.name: e.summary() for e in ests},
