@@ -30,7 +30,7 @@ from imdrive.run.recording_columns import COLUMNS, PERIOD_TOLERANCE, REQUIRED
 UNUSED = ("i_a_meas_A", "i_b_meas_A", "i_c_meas_A", "vdc_meas_V", "speed_est_rpm")
 
 #: rows per chunk: a few MB per column, and numba's per-call cost negligible
-CHUNK_ROWS = 1 << 18
+CHUNK_ROWS = 1 << 17
 
 FORMATS = {".parquet": "parquet", ".pq": "parquet", ".csv": "csv", ".mat": "mat"}
 

@@ -23,6 +23,7 @@ where :func:`imdrive.kernels.replay.replay_estimator` writes the recorded R2_hat
 
 from __future__ import annotations
 
+import collections
 import contextlib
 import math
 import os
@@ -400,18 +401,30 @@ def replay(
 
 
 class _Sink:
-    """Where the replayed chunks go: every estimator run over them (in parallel threads), the
-    estimates written (``timeseries.parquet`` in ``staging``, by a thread of its own) or kept
-    in memory, every ``stride``-th row kept for the figures. A context manager: on leaving
-    it the writer has finished, error or not (before a refusal removes the staging folder)."""
+    """Where the replayed chunks go: every estimator run over them, each in a thread of its
+    own, the estimates written (``timeseries.parquet`` in ``staging``, by a thread of its
+    own) or kept in memory, every ``stride``-th row kept for the figures.
+
+    The estimators are not held at a barrier after each chunk: a chunk's rows are handed to
+    every estimator's thread (which takes its chunks in order, its records carried on) and
+    collected, in order, once every estimator is done with it, while up to :attr:`DEPTH`
+    later chunks are under way; a fast estimator runs ahead instead of waiting for the slow
+    one. A context manager: on leaving it every thread has finished, error or not (before a
+    refusal removes the staging folder)."""
+
+    #: chunks handed to the estimators and not yet collected, at most
+    DEPTH = 2
 
     def __init__(self, ests, sample0, staging, stride: int):
         self.ests = ests
         self.prev = _prev_row(sample0)
-        self.rows = None  # the REPLAY_ROW buffer, reused from chunk to chunk
+        self.free: list[np.ndarray] = []  # REPLAY_ROW buffers of collected chunks, reused
+        self.pending: collections.deque = collections.deque()
         self.writer = EstimateWriter(staging) if staging is not None else None
-        workers = min(len(ests), os.cpu_count() or 1)
-        self.pool = ThreadPoolExecutor(workers, "imdrive-replay") if workers > 1 else None
+        parallel = len(ests) > 1 and (os.cpu_count() or 1) > 1
+        self.threads = (
+            [ThreadPoolExecutor(1, f"imdrive-replay-{e.name}") for e in ests] if parallel else None
+        )
         self.memory: dict[str, list] = {}
         self.kept: dict[str, list] = {}
         self.stride = stride
@@ -422,29 +435,45 @@ class _Sink:
         return self
 
     def __exit__(self, *exc) -> None:
-        if self.pool is not None:
-            self.pool.shutdown(wait=True)
-        if self.writer is not None:
-            writer, self.writer = self.writer, None
+        try:
             if exc[0] is None:
-                writer.close()
-            else:
-                with contextlib.suppress(Exception):  # the error that got here is the one
+                while self.pending:
+                    self._collect()
+        finally:
+            for t in self.threads or ():
+                t.shutdown(wait=True, cancel_futures=True)
+            if self.writer is not None:
+                writer, self.writer = self.writer, None
+                if exc[0] is None:
                     writer.close()
+                else:
+                    with contextlib.suppress(Exception):  # the error that got here is the one
+                        writer.close()
 
     def emit(self, cols: dict) -> None:
         if not cols or len(cols["time_s"]) == 0:
             return
-        rows, _, self.defaulted = replay_rows(cols, self.prev, self.rows)
-        if self.rows is None or len(self.rows) < len(rows):
-            self.rows = rows
+        n = len(cols["time_s"])
+        buf = next((b for b in self.free if len(b) >= n), None)
+        if buf is not None:
+            self.free.remove(buf)
+        rows, _, self.defaulted = replay_rows(cols, self.prev, buf)
         enc = cols.get("speed_enc_rpm")
-        if self.pool is None:
+        if self.threads is None:
             out = [e.run(rows, enc) for e in self.ests]
-        else:  # the slowest first (their time so far), so the others fill in beside it
-            order = sorted(range(len(self.ests)), key=lambda j: -self.ests[j].wall)
-            futures = {j: self.pool.submit(self.ests[j].run, rows, enc) for j in order}
-            out = [futures[j].result() for j in range(len(self.ests))]
+        else:
+            out = [t.submit(e.run, rows, enc) for t, e in zip(self.threads, self.ests, strict=True)]
+        self.pending.append((cols, rows if buf is None else buf, out))
+        while len(self.pending) > (self.DEPTH if self.threads is not None else 0):
+            self._collect()
+
+    def _collect(self) -> None:
+        """The oldest chunk's estimates, written and kept."""
+        cols, buf, out = self.pending.popleft()
+        if self.threads is not None:
+            out = [f.result() for f in out]
+        self.free.append(buf)
+        enc = cols.get("speed_enc_rpm")
         sig = {"time_s": cols["time_s"]}
         if enc is not None:
             sig["speed_enc_rpm"] = enc
@@ -459,7 +488,7 @@ class _Sink:
         first = (-self.done) % self.stride
         for k, v in sig.items():  # a copy: a view would keep the whole chunk alive
             self.kept.setdefault(k, []).append(v[first :: self.stride].copy())
-        self.done += len(rows)
+        self.done += len(sig["time_s"])
 
     def result(self, out) -> ReplayResult:
         signals = None
