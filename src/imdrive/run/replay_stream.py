@@ -1,13 +1,14 @@
 """The pipeline a replay streams through (:mod:`imdrive.run.replay`): the recording read a
-chunk ahead in one thread, the estimators of a chunk run in parallel threads, its estimates
-written in another.
+chunk ahead in one thread, each estimator in a thread of its own, the estimates written in
+another.
 
 Each stage works on its own chunk: reading, decompressing and checking chunk k + 1
-(:func:`read_ahead`), the estimators on chunk k, compressing and writing chunk k - 1
-(:class:`EstimateWriter`). The estimators' kernels, pyarrow's reading and writing and numpy's
-large operations release the GIL, so the stages share the cores; at most three chunks are in
-memory at a time, whatever the file's length. The results do not depend on the threads: each
-estimator's records are its own, and the chunks reach the writer in order.
+(:func:`read_ahead`), the estimators on chunk k (a fast one up to two chunks ahead of the
+slowest), compressing and writing chunk k - 1 (:class:`EstimateWriter`). The estimators'
+kernels, pyarrow's reading and writing and numpy's large operations release the GIL, so the
+stages share the cores; a handful of chunks are in memory at a time, whatever the file's
+length. The results do not depend on the threads: each estimator's records are its own, it
+takes its chunks in order, and the chunks reach the writer in order.
 """
 
 from __future__ import annotations
