@@ -25,7 +25,10 @@ own).
 Usage::
 
     python benchmarks/bench_replay.py [--rows 10000000] [--estimators mras,afo,ekf]
-        [--repeat 3] [--csv] [--keep DIR]
+        [--repeat 3] [--csv] [--keep DIR] [--stages]
+
+``--stages`` also runs the replay's stages one after the other in this process and prints
+each one's CPU time (:func:`stages`): where the time goes, whatever the machine's load.
 """
 
 from __future__ import annotations
@@ -124,6 +127,64 @@ def replay_once(path: Path, estimators: str, out: Path) -> dict:
     }
 
 
+def stages(path: Path, estimators: str, chunk_rows: int) -> dict:
+    """The replay's stages one after the other in this process, one thread, each stage's CPU
+    time (``time.process_time``): the pass over the time column, reading and checking the
+    chunks, the unit check, building the rows, each estimator, writing the estimates. What
+    the threads of a replay spread over the cores, stage by stage (it uses the replay's
+    internals, ``imdrive.run.replay``)."""
+    import numpy as np
+
+    from imdrive.run import replay as rp
+    from imdrive.run.build import build_arrays
+    from imdrive.run.recording_read import open_recording
+    from imdrive.run.replay_inputs import _limits, _scenario, _scenario_of, check_units
+    from imdrive.run.replay_stream import EstimateWriter
+
+    clock = time.process_time
+    c = clock()
+    rec = open_recording(path)
+    cpu = {"time_pass": clock() - c, "read_check": 0.0, "units": 0.0, "rows": 0.0}
+    sc = _scenario(rec, "sensorless")
+    limits = _limits(sc)
+    names = estimators.split(",")
+    drives = {n: build_arrays(_scenario_of(sc, n)) for n in names}
+    Ts = float(drives[names[0]].params.sim[0]["Ts"])
+    ests = [rp._Estimator(n, drives[n], Ts, True) for n in names]  # compiled before timing
+    prev = rp._prev_row(drives[names[0]].state0.sample[0])
+    rp.replay_rows({k: np.zeros(0) for k in rp.REQUIRED}, prev.copy())
+    cpu.update({n: 0.0 for n in names}, write=0.0)
+    rows = None
+    with tempfile.TemporaryDirectory() as tmp:
+        writer = EstimateWriter(Path(tmp), background=False)
+        chunks = iter(rec.chunks(chunk_rows))
+        while True:
+            c = clock()
+            try:
+                k0, cols = next(chunks)
+            except StopIteration:
+                break
+            cpu["read_check"] += clock() - c
+            c = clock()
+            check_units(rec, cols, k0, limits)
+            cpu["units"] += clock() - c
+            c = clock()
+            rows, _, _ = rp.replay_rows(cols, prev, rows)
+            cpu["rows"] += clock() - c
+            sig = {"time_s": cols["time_s"], "speed_enc_rpm": cols["speed_enc_rpm"]}
+            for e in ests:
+                c = clock()
+                sig[f"speed_{e.name}"], sig[f"R2_{e.name}"] = e.run(rows, cols["speed_enc_rpm"])
+                cpu[e.name] += clock() - c
+            c = clock()
+            writer.write(sig)
+            cpu["write"] += clock() - c
+        c = clock()
+        writer.close()
+        cpu["write"] += clock() - c
+    return cpu
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rows", type=int, default=10_000_000)
@@ -131,6 +192,9 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--csv", action="store_true", help="a CSV file instead of Parquet")
     ap.add_argument("--keep", metavar="DIR", help="write the file there and keep it")
+    ap.add_argument(
+        "--stages", action="store_true", help="also each stage's CPU time, in one thread"
+    )
     args = ap.parse_args()
     print(machine_line())
     with tempfile.TemporaryDirectory() as tmp:
@@ -143,6 +207,10 @@ def main() -> None:
         out = Path(tmp) / "replay"
         replay_once(path, args.estimators, out)  # warm-up: the numba cache
         runs = [replay_once(path, args.estimators, out) for _ in range(args.repeat)]
+        if args.stages:
+            from imdrive.run.recording_read import CHUNK_ROWS
+
+            parts = [stages(path, args.estimators, CHUNK_ROWS) for _ in range(args.repeat)]
     r = runs[0]
     print(f"{r['rows']} rows ({r['rows'] * 1e-4:g} s of drive), estimators {args.estimators}:")
     cpu = [(k, "s") for k in r if k.startswith("cpu_")]
@@ -156,6 +224,10 @@ def main() -> None:
         ("peak_rss_MiB", "MiB"),
     ):
         print(f"  {key:18s} {span([x[key] for x in runs], unit)}")
+    if args.stages:
+        print("  CPU time by stage, one thread:")
+        for key in parts[0]:
+            print(f"    {key:16s} {span([x[key] for x in parts], 's')}")
 
 
 if __name__ == "__main__":
