@@ -107,3 +107,23 @@ def test_files_are_byte_stream_split_and_exact(run_dir, tmp_path):
     t = pq.read_table(str(run_dir / "recording.parquet"))
     for name, v in res.recording.items():
         np.testing.assert_array_equal(t[name].to_numpy(), v, err_msg=name)
+
+
+def test_an_error_in_an_estimators_thread_stops_every_thread(run_dir, tmp_path, monkeypatch):
+    from imdrive.run import replay as rp
+
+    run = rp._Estimator.run
+    calls = []
+
+    def failing(self, rows, enc):
+        calls.append(self.name)
+        if len(calls) == 13:
+            raise RuntimeError("estimator failed")
+        return run(self, rows, enc)
+
+    monkeypatch.setattr(rp._Estimator, "run", failing)
+    with pytest.raises(RuntimeError, match="estimator failed"):
+        replay(run_dir, estimators=THREE, out=tmp_path / "out", chunk_rows=200)
+    assert len(calls) >= 13
+    assert not (tmp_path / "out").exists()
+    assert not [th for th in threading.enumerate() if th.name.startswith("imdrive-replay")]

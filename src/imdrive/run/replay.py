@@ -334,7 +334,6 @@ def replay(
     from imdrive._io import replace_folder
     from imdrive._progress import Progress
     from imdrive.run.build import build_arrays
-    from imdrive.run.decimate import Decimator
 
     rec = _source(recording, mapping)
     sc = _scenario(rec, scenario)
@@ -351,7 +350,6 @@ def replay(
     first = drives[names[0]]
     Ts = float(first.params.sim[0]["Ts"])
     q = decimation(rec, Ts)
-    limits = _limits(sc)
     model_given = all(m in rec.columns for m in MODEL_COLUMNS)
     ests = [_Estimator(n, drives[n], Ts, model_given) for n in names]
     n_rows = rec.rows // q
@@ -362,15 +360,9 @@ def replay(
     with stage as staging:
         sink = _Sink(ests, first.state0.sample[0], staging, max(1, n_rows // PLOT_POINTS))
         bar = Progress(rec.rows, "replay", unit="rows", enabled=progress, lines=None)
-        with bar, sink:
-            dec = Decimator(q) if q > 1 else None
-
-            def chunks():  # read, checked and decimated a chunk ahead (replay_stream)
-                for k0, cols in rec.chunks(chunk_rows):
-                    check_units(rec, cols, k0, limits)
-                    yield len(cols["time_s"]), (dec.push(cols) if dec is not None else cols)
-
-            for n_read, cols in read_ahead(chunks()):
+        chunks = read_ahead(_chunks(rec, chunk_rows, q, _limits(sc)))
+        with bar, sink, contextlib.closing(chunks):  # closed: its thread stopped, error or not
+            for n_read, cols in chunks:
                 sink.emit(cols)
                 bar.advance(n_read)
         res = sink.result(out)
@@ -398,6 +390,18 @@ def replay(
         if staging is not None:
             _finish(staging, res)
     return res
+
+
+def _chunks(rec, chunk_rows: int, q: int, limits: dict):
+    """(rows read, recording columns) chunks: read, every value checked, the units checked
+    against the machine (:func:`check_units`), decimated where ``q > 1``. Run a chunk ahead
+    in a thread of its own (:func:`~imdrive.run.replay_stream.read_ahead`)."""
+    from imdrive.run.decimate import Decimator
+
+    dec = Decimator(q) if q > 1 else None
+    for k0, cols in rec.chunks(chunk_rows):
+        check_units(rec, cols, k0, limits)
+        yield len(cols["time_s"]), (dec.push(cols) if dec is not None else cols)
 
 
 class _Sink:
