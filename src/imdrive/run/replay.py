@@ -13,6 +13,8 @@ The recording is streamed: read a chunk at a time (pass one reads only its time,
 it and count the rows), brought to the controller's period where it is sampled faster
 (:mod:`imdrive.run.decimate`), every estimator run over the chunk (its state carried to the
 next), the chunk's estimates written out; the memory is bounded by the chunk, not the file.
+The stages overlap in threads (:mod:`imdrive.run.replay_stream`): the next chunk is read
+while the estimators run, each in a thread of its own, and the last one is written.
 
 R2_hat: the R2-tracking law is not replayed yet. With a recording that carries the
 controller's model, an estimator's ``R2_hat`` follows what the recorded controller wrote (its
