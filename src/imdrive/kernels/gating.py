@@ -17,7 +17,9 @@ the period that ends
   step or removal;
 * ``4`` the voltage reached ``p.gate_v`` times the inverter's limit ``Vdc/sqrt 3``;
 * ``8`` the injection frequency was switched (the flux response to the new sinusoid settles),
-  or, with the Kalman law, the injection started;
+  or, with the Kalman law, the injection started. The Kalman law then discards the detected
+  signal for a settling time in rotor time constants and restarts its window there
+  (:func:`imdrive.kernels.compensator.kalman_window_step`), with no ``16`` after a bit 8 alone;
 * ``16`` within ``p.gate_hold`` periods after any of the above (the flux and the MRAS settle);
 * ``32`` the injection's amplitude was backed off below half (voltage headroom, field
   weakening: :func:`imdrive.kernels.compensator_range.injection_headroom`); a smaller
@@ -151,14 +153,11 @@ def _gate_decide(p, s, w_e):
             flags |= 8
     if s.inj_back > 0.5:  # the injection backed off (voltage headroom, field weakening)
         flags |= 32
-    if p.kf and s.inj_new:
-        # the injection started in this period: its first windows held a fraction of a period
-        # and the flux's start-up transient (measured on injection-fig6: the first two
-        # decisions stepped R2_hat 0.5 % the wrong way); settle as after a frequency switch
-        s.inj_new = False
-        flags |= 8
     if flags != 0:
-        s.g_hold = p.gate_hold
+        if not (p.kf and flags == 8):
+            # (after a frequency switch alone the Kalman law settles in time and restarts its
+            # window: compensator.kalman_window_step; no whole windows more)
+            s.g_hold = p.gate_hold
     elif s.g_hold > 0.0:
         s.g_hold -= 1.0
         flags = 16

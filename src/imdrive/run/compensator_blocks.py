@@ -16,6 +16,7 @@ from imdrive.config.registry import ESTIMATOR_SETTINGS
 from imdrive.config.scenario import Scenario
 from imdrive.errors import ConfigError
 from imdrive.fuzzy import fuzzy_table
+from imdrive.kernels.r2_kalman import SETTLE_T2
 
 RPM = 2.0 * math.pi / 60.0  # rad/s per rpm
 
@@ -179,6 +180,7 @@ def _kalman(sc, D: Resolved) -> dict:
         "kf_p0": k.prior_pu,
         "kf_R2": D.R2_hat,
         "kf_T": D.n_comp * sc.simulation.Ts_s,
+        "kf_settle": SETTLE_T2,
     }
 
 
