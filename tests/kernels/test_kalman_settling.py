@@ -1,8 +1,10 @@
 """The model-based law's decision windows on hand-made records
-(:func:`imdrive.kernels.compensator.kalman_window_step`): after the injection starts, or the
-gating switches its frequency, the detected signal is discarded for ``kf_settle`` rotor time
-constants of the controller's model ``T2_hat = L2_hat / R2_hat`` and a fresh window starts
-there; a load transient still holds ``gate_hold`` whole windows more."""
+(:func:`imdrive.kernels.compensator.kalman_window_step`): after the injection starts the
+detected signal is discarded for ``kf_settle`` rotor time constants of the controller's model
+``T2_hat = L2_hat / R2_hat`` and a fresh window starts there; a switch of the injection
+frequency or a load transient holds the window and ``gate_hold`` whole windows more (settling
+in time after a switch too was tried: it lost 3 of 4 regenerating runs at 0.05 x rated speed
+on Table IV, against 1 of 4, CHANGELOG.md)."""
 
 from __future__ import annotations
 
@@ -101,28 +103,30 @@ def test_the_settling_follows_the_models_rotor_time_constant():
     assert firsts[0] - firsts[1] == pytest.approx(SETTLE * (T2_slow - T2_fast), abs=1.5 * TS)
 
 
-def test_a_frequency_switch_settles_in_time_and_a_load_transient_still_holds_windows():
-    p, s, m = _records(gate=True, inj_freq2=2 * F_INJ, gate_df=1.0)
+def test_a_frequency_switch_and_a_load_transient_hold_whole_windows():
+    p, s, m = _records(gate=True, inj_freq2=2 * F_INJ, inj_freq3=3 * F_INJ, gate_df=1.0)
     E = _detected(m, 0.02)  # (an accepted window moves R2_hat)
     # the first window, away from the blind band: accepted
     w_far = 2 * math.pi * 10.0
     first = _run(p, s, m, T_ON, T_ON + 1.5, lambda t: E, w_e=w_far)
     assert len(first) >= 1 and s["frozen"] == 0.0
     t1 = round(first[-1] / TS) * TS
-    # at the next decision the stator frequency sits on the injection's: switched, held
+    # at the next decision the stator frequency sits on the injection's: switched to the
+    # lowest harmonic outside the band (4 Hz), held
     w_near = 2 * math.pi * F_INJ
     t_dec = t1 + N * TS
     _run(p, s, m, t1 + TS, t_dec + TS / 2, lambda t: E, w_e=w_near)
     assert s["inj_f"] == 2 * F_INJ and s["frozen"] == 8.0
-    # then the settling and one fresh window: the next decision is accepted, no flag 16
-    T2_hat = (M + LL2) / m["R2_hat"]
-    t_next = t_dec + SETTLE * T2_hat + N * TS
-    _run(p, s, m, t_dec + TS, t_next + 2 * TS, lambda t: E, w_e=w_far)
+    # then one whole window more (16), and the next is accepted
+    _run(p, s, m, t_dec + TS, t_dec + N * TS + TS / 2, lambda t: E, w_e=w_far)
+    assert s["frozen"] == 16.0 and not s["live"]
+    t_next = t_dec + 2 * N * TS
+    _run(p, s, m, t_dec + N * TS + TS, t_next + TS / 2, lambda t: E, w_e=w_far)
     assert s["frozen"] == 0.0 and s["live"]
     # a load transient (the mean iq* jumps): held, and gate_hold = 1 window more (16)
     s["g_iq_prev"], s["g_iq_known"] = 0.0, True
     s["g_iq"], s["g_cnt"] = 5.0 * 10, 10.0
-    t_a = t_next + 2 * TS
+    t_a = t_next + TS
     states = []
     for k in range(round(t_a / TS), round((t_a + 2.2 * N * TS) / TS)):
         s["demod"] = E
