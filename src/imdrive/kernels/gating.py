@@ -48,8 +48,8 @@ differently for the two. A detection that undid the filter at both side bands
 (``injection.compensate_filter``) was removed in round 4: with the three-frequency schedule and
 the Kalman law it no longer improved R2_hat (CHANGELOG.md). As the flux response falls with
 the frequency, the Kalman law divides its input by the sensitivity at the frequency in use
-(:mod:`imdrive.kernels.r2_kalman`). The envelope sweep's share of converged cells with 2, 4 and 6 Hz and a 1.5 Hz band is generated in
-docs/envelope.md.
+(:mod:`imdrive.kernels.r2_kalman`). The envelope sweep's share of converged cells with 2, 4
+and 6 Hz and a 1.5 Hz band is generated in docs/envelope.md.
 """
 
 from __future__ import annotations
