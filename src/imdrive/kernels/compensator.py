@@ -120,7 +120,7 @@ COMPENSATOR_PARAMS = record_dtype(
         ("kf_p0", f8),  # its prior: the relative uncertainty of R2_hat(0)
         ("kf_R2", f8),  # R2_hat(0), ohm
         ("kf_T", f8),  # the decision period, s
-        ("kf_settle", f8),  # its settling after the injection starts or switches, in T2_hat
+        ("kf_settle", f8),  # its settling after the injection starts, in T2_hat
         ("det", b1),  # the estimator gives no flux error: the detector's own (flux_detector.py)
     ]
 )
@@ -309,16 +309,18 @@ def kalman_window_step(p, s, m, t, w_e):
 
     A window is ``p.n`` samples (whole periods of every injection frequency in use), and the
     mean of the demodulated product over it is the decision's input. Unlike the table's grid
-    (``k % n``), a window *restarts* after an event that disturbs the flux response: when the
-    injection starts (``s.inj_new``) or the gating switches its frequency (bit 8 of
-    :func:`_gate_decide`), the detected signal is discarded for
+    (``k % n``), the first window starts when the injection's start-up has settled: when the
+    injection starts (``s.inj_new``) the detected signal is discarded for
     :func:`~imdrive.kernels.r2_kalman.settling_time` (a few rotor time constants of the
-    controller's model) and a fresh window starts there; the covariance is predicted over the
+    controller's model) and a window starts there; the covariance is predicted over the
     settling (the time passes, no measurement). The demodulated product averages over whole
-    injection periods from any start, so the restarted window measures as a grid one does. On
-    the grid the event's partial window was held and then ``p.gate_hold`` whole windows more:
-    on a slow rotor (22 kW, T2 = 0.36 s, a 2.08 s window) R2_hat was held 4.3 s after the
-    compensator's start, against about 1 s the flux transient lasts.
+    injection periods from any start, so that window measures as a grid one does. On the grid
+    the start's partial window was held and then ``p.gate_hold`` whole windows more: on a slow
+    rotor (22 kW, T2 = 0.36 s, a 2.08 s window) R2_hat was held 4.3 s after the compensator's
+    start, against about 1 s the flux transient lasts. A window the gating rejects (a
+    transient, the voltage limit, a switch of the injection frequency: :func:`_gate_decide`)
+    is held, and ``p.gate_hold`` whole windows after it (settling in time after a switch as
+    well lost more regenerating runs near zero stator frequency: CHANGELOG.md).
     """
     if s.inj_new:  # the injection started: its flux start-up transient settles first
         s.inj_new = False

@@ -63,8 +63,8 @@ from imdrive.kernels.sensitivity import in_phase_sensitivity
 GAIN_UNCERTAINTY = 0.6
 
 
-#: The settling after an event that disturbs the flux response (the injection's start, a
-#: switch of its frequency), in rotor time constants of the controller's model
+#: The settling after the injection starts (its flux start-up transient), in rotor time
+#: constants of the controller's model
 #: ``T2_hat = L2_hat/R2_hat``: the detected signal is discarded for this long, then a fresh
 #: decision window starts (:func:`settling_time`). Measured with R2_hat held at 1.2 R2 while
 #: the injection starts, injection-robust's drive at 1000 rpm, rated load: the mean of the
@@ -78,14 +78,14 @@ SETTLE_T2 = 3.0
 
 @njit(cache=True)
 def settling_time(p, m):
-    """How long the detected signal is discarded after the injection starts or its frequency
-    is switched, s: ``p.kf_settle`` rotor time constants of the controller's model,
+    """How long the detected signal is discarded after the injection starts, s:
+    ``p.kf_settle`` rotor time constants of the controller's model,
     ``T2_hat = L2_hat / R2_hat`` (the incremental ``L2`` on a saturation-aware model).
 
-    Both the plant's flux and the model's answer a sinusoid switched on (or its phase
-    restarted) with a free term ``~ exp(-t/T2)`` besides the steady response; where
-    ``T2_hat != T2`` the two free terms differ, and their difference, demodulated, reads as
-    an R2 error until it has decayed (``exp(-3) = 5 %`` after three time constants).
+    Both the plant's flux and the model's answer a sinusoid switched on with a free term
+    ``~ exp(-t/T2)`` besides the steady response; where ``T2_hat != T2`` the two free terms
+    differ, and their difference, demodulated, reads as an R2 error until it has decayed
+    (``exp(-3) = 5 %`` after three time constants).
     """
     return p.kf_settle * incremental_L2(m) / m.R2_hat
 
