@@ -93,6 +93,30 @@ def test_the_first_window_starts_after_the_settling_and_discards_what_came_befor
     assert m["R2_hat"] < R2_hat
 
 
+def test_the_settling_waits_for_the_detections_filter_when_it_is_slower():
+    # the MRAS's comparison filter at its 5 rad/s floor (0.2 s) against T2_hat = 0.09 s
+    p, s, m = _records(0.8, kf_tau_det=0.2)
+    assert settling_time(p, m) == pytest.approx(SETTLE * 0.2, rel=1e-12)
+    p, s, m = _records(0.4, kf_tau_det=0.01)  # a fast filter: the rotor's
+    assert settling_time(p, m) == pytest.approx(SETTLE * (M + LL2) / 0.4, rel=1e-12)
+
+
+def test_the_detections_time_constant_is_the_running_estimators_filter():
+    import warnings
+
+    from imdrive import Scenario
+    from imdrive.run.compensator_blocks import detection_time_constant_s
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sc = Scenario.read("injection-robust")
+        afo = sc.with_overrides(['control.speed_feedback="afo"'])
+    # the MRAS's cut-off follows the stator frequency down to 5 rad/s; the AFO's flux detector
+    # filters at the fixed 15 rad/s
+    assert detection_time_constant_s(sc) == pytest.approx(1 / 5.0)
+    assert detection_time_constant_s(afo) == pytest.approx(1 / 15.0)
+
+
 def test_the_settling_follows_the_models_rotor_time_constant():
     firsts = []
     for R2_hat in (0.4, 1.6):

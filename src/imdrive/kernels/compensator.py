@@ -120,7 +120,8 @@ COMPENSATOR_PARAMS = record_dtype(
         ("kf_p0", f8),  # its prior: the relative uncertainty of R2_hat(0)
         ("kf_R2", f8),  # R2_hat(0), ohm
         ("kf_T", f8),  # the decision period, s
-        ("kf_settle", f8),  # its settling after the injection starts, in T2_hat
+        ("kf_settle", f8),  # its settling after the injection starts, in time constants
+        ("kf_tau_det", f8),  # the detection's slowest filter time constant, s (r2_kalman.py)
         ("det", b1),  # the estimator gives no flux error: the detector's own (flux_detector.py)
     ]
 )

@@ -79,15 +79,21 @@ SETTLE_T2 = 3.0
 @njit(cache=True)
 def settling_time(p, m):
     """How long the detected signal is discarded after the injection starts, s:
-    ``p.kf_settle`` rotor time constants of the controller's model,
-    ``T2_hat = L2_hat / R2_hat`` (the incremental ``L2`` on a saturation-aware model).
+    ``p.kf_settle`` time constants, the slower of the controller's rotor, ``T2_hat = L2_hat /
+    R2_hat`` (the incremental ``L2`` on a saturation-aware model), and the detection's filter
+    ``p.kf_tau_det`` (the MRAS's comparison filter ``1/(s + wc)`` at its lowest cut-off, which
+    the flux error passes through; the running estimator's, :mod:`imdrive.run.compensator_blocks`).
 
     Both the plant's flux and the model's answer a sinusoid switched on with a free term
     ``~ exp(-t/T2)`` besides the steady response; where ``T2_hat != T2`` the two free terms
     differ, and their difference, demodulated, reads as an R2 error until it has decayed
-    (``exp(-3) = 5 %`` after three time constants).
+    (``exp(-3) = 5 %`` after three time constants). The filter answers the injection's start
+    with its own free term: on Table IV (T2 = 0.09 s, the MRAS's cut-off down to 5 rad/s near
+    zero stator frequency) three rotor time constants alone, 0.27 s, lost 2 more of 21
+    regenerating runs at -0.5 ... +0.5 Hz stator frequency than the grid's hold of a window
+    and more; with the filter's 0.2 s, 0.6 s, none (docs/machine-envelope.md).
     """
-    return p.kf_settle * incremental_L2(m) / m.R2_hat
+    return p.kf_settle * max(incremental_L2(m) / m.R2_hat, p.kf_tau_det)
 
 
 @njit(cache=True)
