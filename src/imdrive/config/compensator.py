@@ -507,7 +507,7 @@ _REPLACED = {
     "product is logged every sample (e_d0_demod): filter it where it is plotted",
     ("compensator", "gate_hold_periods"): "one whole decision window after a gated one is held on "
     "every drive (GATE_HOLD_PERIODS in run/compensator_blocks.py), the value every preset and "
-    "study used; the Kalman law settles in rotor time constants after the injection starts",
+    "study used",
 }
 for (_section, _key), _why in _REPLACED.items():
     deprecated_key(_section, _key, _why)

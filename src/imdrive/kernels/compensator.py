@@ -53,20 +53,13 @@ import math
 from numba import njit
 
 from imdrive.kernels.compensator_range import thermal_recalibrate
-from imdrive.kernels.detection import (
-    slip_coupling,
-)
+from imdrive.kernels.detection import slip_coupling
 from imdrive.kernels.fuzzy import lookup
 from imdrive.kernels.gating import (  # noqa: F401  (compensator_gate_sample: old path)
     _gate_decide,
     compensator_gate_sample,
 )
-from imdrive.kernels.r2_kalman import (
-    kalman_decision,
-    kalman_hold,
-    kalman_predict,
-    settling_time,
-)
+from imdrive.kernels.r2_kalman import kalman_decision, kalman_hold
 from imdrive.kernels.records import b1, c16, f8, record_dtype
 from imdrive.kernels.sensitivity import (  # noqa: F401  (in_phase_sensitivity: old path)
     in_phase_sensitivity,
@@ -120,8 +113,6 @@ COMPENSATOR_PARAMS = record_dtype(
         ("kf_p0", f8),  # its prior: the relative uncertainty of R2_hat(0)
         ("kf_R2", f8),  # R2_hat(0), ohm
         ("kf_T", f8),  # the decision period, s
-        ("kf_settle", f8),  # its settling after the injection starts, in time constants
-        ("kf_tau_det", f8),  # the detection's slowest filter time constant, s (r2_kalman.py)
         ("det", b1),  # the estimator gives no flux error: the detector's own (flux_detector.py)
     ]
 )
@@ -164,9 +155,6 @@ COMPENSATOR_STATE = record_dtype(
         ("kf_P00", f8),  # Kalman law: its covariance, R2, ohm^2 (0: the prior not yet set)
         ("kf_P01", f8),  # R2 and its rate, ohm^2/s
         ("kf_P11", f8),  # the rate, ohm^2/s^2
-        ("win_k", f8),  # Kalman law: samples in the present decision window
-        ("settle_from", f8),  # Kalman law: when the present settling started, s
-        ("settle_until", f8),  # and when it ends (the next window starts), s (0: not settling)
         ("dt_lam_i", c16),  # flux detector: current model, Wb (stationary frame)
         ("dt_lam_v", c16),  # its filtered voltage model, Wb
         ("dt_lam_f", c16),  # its filtered current model, Wb
@@ -268,15 +256,12 @@ def compensator_step(p, s, m, table, e_d0, t, k, w_e=0.0):
     """
     if t < p.t_on:
         return
-    if p.kf:  # the model-based law: its own windows (settling in time, not on the grid)
-        kalman_window_step(p, s, m, t, w_e)
-        return
     n = max(int(p.n), 1)
     x = s.demod if p.demodulated else e_d0  # the input: e_d0 (paper) or demodulated
     s.acc += x
     if k % n != 0:
         return
-    if p.average and s.started:
+    if p.average and (s.started or p.kf):  # (the Kalman law: always the window's mean)
         E = s.acc / n
     else:
         E = x
@@ -287,71 +272,10 @@ def compensator_step(p, s, m, table, e_d0, t, k, w_e=0.0):
         if flags != 0:
             s.started = False  # no change of E is known across a frozen period
             s.live = False
+            if p.kf:
+                kalman_hold(p, s, m, p.kf_T)
             return
     compensator_update(p, s, m, table, E)
-
-
-@njit(cache=True)
-def _start_settling(p, s, t_from, t_until):
-    """Discard the detected signal from ``t_from`` until ``t_until`` (s), then start a fresh
-    window; R2_hat is held meanwhile (``s.frozen`` bit 8)."""
-    s.settle_from = t_from
-    s.settle_until = t_until
-    s.acc = 0.0
-    s.win_k = 0.0
-    s.frozen = float(int(s.frozen) | 8)
-    s.live = False
-
-
-@njit(cache=True)
-def kalman_window_step(p, s, m, t, w_e):
-    """The decision windows of the model-based law (``p.kf``), called every control period
-    from the compensator's start.
-
-    A window is ``p.n`` samples (whole periods of every injection frequency in use), and the
-    mean of the demodulated product over it is the decision's input. Unlike the table's grid
-    (``k % n``), the first window starts when the injection's start-up has settled: when the
-    injection starts (``s.inj_new``) the detected signal is discarded for
-    :func:`~imdrive.kernels.r2_kalman.settling_time` (a few rotor time constants of the
-    controller's model) and a window starts there; the covariance is predicted over the
-    settling (the time passes, no measurement). The demodulated product averages over whole
-    injection periods from any start, so that window measures as a grid one does. On the grid
-    the start's partial window was held and then ``p.gate_hold`` whole windows more: on a slow
-    rotor (22 kW, T2 = 0.36 s, a 2.08 s window) R2_hat was held 4.3 s after the compensator's
-    start, against about 1 s the flux transient lasts. A window the gating rejects (a
-    transient, the voltage limit, a switch of the injection frequency: :func:`_gate_decide`)
-    is held, and ``p.gate_hold`` whole windows after it (settling in time after a switch as
-    well lost more regenerating runs near zero stator frequency: CHANGELOG.md).
-    """
-    if s.inj_new:  # the injection started: its flux start-up transient settles first
-        s.inj_new = False
-        t0 = max(p.inj_t_on, p.t_on)  # (the injection may have started before)
-        _start_settling(p, s, t, max(p.inj_t_on + settling_time(p, m), t0))
-    if s.settle_until > 0.0:
-        if t < s.settle_until:
-            return
-        if t > s.settle_from:  # the time passed without a measurement
-            kalman_predict(p, s, t - s.settle_from)
-        s.settle_until = 0.0
-        s.acc = 0.0
-        s.win_k = 0.0
-    s.acc += s.demod
-    s.win_k += 1.0
-    if s.win_k < max(int(p.n), 1):
-        return
-    E = s.acc / s.win_k
-    s.acc = 0.0
-    s.win_k = 0.0
-    if p.gate:
-        flags = _gate_decide(p, s, w_e)
-        s.frozen = float(flags)
-        if flags != 0:
-            s.live = False
-            kalman_hold(p, s, m, p.kf_T)
-            return
-    else:
-        s.frozen = 0.0
-    kalman_decision(p, s, m, E)
 
 
 @njit(cache=True)

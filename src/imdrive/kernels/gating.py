@@ -17,8 +17,7 @@ the period that ends
   step or removal;
 * ``4`` the voltage reached ``p.gate_v`` times the inverter's limit ``Vdc/sqrt 3``;
 * ``8`` the injection frequency was switched (the flux response to the new sinusoid settles),
-  (the Kalman law settles after the injection's start in time instead:
-  :func:`imdrive.kernels.compensator.kalman_window_step`);
+  or, with the Kalman law, the injection started;
 * ``16`` within ``p.gate_hold`` periods after any of the above (the flux and the MRAS settle);
 * ``32`` the injection's amplitude was backed off below half (voltage headroom, field
   weakening: :func:`imdrive.kernels.compensator_range.injection_headroom`); a smaller
@@ -138,6 +137,12 @@ def _gate_decide(p, s, w_e):
             flags |= 8
     if s.inj_back > 0.5:  # the injection backed off (voltage headroom, field weakening)
         flags |= 32
+    if p.kf and s.inj_new:
+        # the injection started in this period: its first windows held a fraction of a period
+        # and the flux's start-up transient (measured on injection-fig6: the first two
+        # decisions stepped R2_hat 0.5 % the wrong way); settle as after a frequency switch
+        s.inj_new = False
+        flags |= 8
     if flags != 0:
         s.g_hold = p.gate_hold
     elif s.g_hold > 0.0:

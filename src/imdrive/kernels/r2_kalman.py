@@ -63,39 +63,6 @@ from imdrive.kernels.sensitivity import in_phase_sensitivity
 GAIN_UNCERTAINTY = 0.6
 
 
-#: The settling after the injection starts (its flux start-up transient), in rotor time
-#: constants of the controller's model
-#: ``T2_hat = L2_hat/R2_hat``: the detected signal is discarded for this long, then a fresh
-#: decision window starts (:func:`settling_time`). Measured with R2_hat held at 1.2 R2 while
-#: the injection starts, injection-robust's drive at 1000 rpm, rated load: the mean of the
-#: detected product over one window starting 0, 1, 2, 3, 4 T2_hat after the start was
-#: -16, -12, -3.5, +1.3, +1.3 % off the steady one on a 22 kW catalogue motor (T2 = 0.36 s)
-#: and -8, +4, +6, +4, +0.4 % on Table IV (-20 %, 150 rpm). End to end (R2_hat(0) = 0.8, 1.0,
-#: 1.2 R2 on the 22 kW motor, 14 s): with 1 or 2 time constants the 0.8 start ended 1.8 and
-#: 2.6 % off (its few 3.1 s windows overshoot), with 3 within 0.05 % in all three.
-SETTLE_T2 = 3.0
-
-
-@njit(cache=True)
-def settling_time(p, m):
-    """How long the detected signal is discarded after the injection starts, s:
-    ``p.kf_settle`` time constants, the slower of the controller's rotor, ``T2_hat = L2_hat /
-    R2_hat`` (the incremental ``L2`` on a saturation-aware model), and the detection's filter
-    ``p.kf_tau_det`` (the MRAS's comparison filter ``1/(s + wc)`` at its lowest cut-off, which
-    the flux error passes through; the running estimator's, :mod:`imdrive.run.compensator_blocks`).
-
-    Both the plant's flux and the model's answer a sinusoid switched on with a free term
-    ``~ exp(-t/T2)`` besides the steady response; where ``T2_hat != T2`` the two free terms
-    differ, and their difference, demodulated, reads as an R2 error until it has decayed
-    (``exp(-3) = 5 %`` after three time constants). The filter answers the injection's start
-    with its own free term: on Table IV (T2 = 0.09 s, the MRAS's cut-off down to 5 rad/s near
-    zero stator frequency) three rotor time constants alone, 0.27 s, lost 2 more of 21
-    regenerating runs at -0.5 ... +0.5 Hz stator frequency than the grid's hold of a window
-    and more; with the filter's 0.2 s, 0.6 s, none (docs/machine-envelope.md).
-    """
-    return p.kf_settle * max(incremental_L2(m) / m.R2_hat, p.kf_tau_det)
-
-
 @njit(cache=True)
 def injection_amplitude(p, s):
     """The injected flux current's amplitude in use, A: the setting scaled by the voltage

@@ -16,7 +16,6 @@ from imdrive.config.registry import ESTIMATOR_SETTINGS
 from imdrive.config.scenario import Scenario
 from imdrive.errors import ConfigError
 from imdrive.fuzzy import fuzzy_table
-from imdrive.kernels.r2_kalman import SETTLE_T2
 
 RPM = 2.0 * math.pi / 60.0  # rad/s per rpm
 
@@ -189,22 +188,7 @@ def _kalman(sc, D: Resolved) -> dict:
         "kf_p0": k.prior_pu,
         "kf_R2": D.R2_hat,
         "kf_T": D.n_comp * sc.simulation.Ts_s,
-        "kf_settle": SETTLE_T2,
-        "kf_tau_det": detection_time_constant_s(sc),
     }
-
-
-def detection_time_constant_s(sc: Scenario) -> float:
-    """The slowest time constant of the filter the detected flux error passes through, s:
-    ``1/wc`` of the MRAS's comparison filter ``1/(s + wc)`` at its lowest cut-off
-    (``mras.wc_min_rad_s`` where the cut-off follows the stator frequency,
-    ``mras.wc_per_stator_frequency > 0``, else ``mras.wc_rad_s``); the flux detector of an
-    estimator without a flux error uses the fixed ``mras.wc_rad_s``
-    (:mod:`imdrive.kernels.flux_detector`). 0 for a pure integrator (``wc = 0``)."""
-    m = sc.mras
-    follows = m.wc_per_stator_frequency > 0.0 and gives_flux_error(sc.control.speed_feedback)
-    wc = min(m.wc_min_rad_s, m.wc_rad_s) if follows else m.wc_rad_s
-    return 1.0 / wc if wc > 0.0 else 0.0
 
 
 def fuzzy_lookup_table(sc: Scenario) -> np.ndarray:
