@@ -45,9 +45,7 @@ def injection_headroom(p, s, v_use, k_flux, wrapped):
         if p.inj_fw:
             s.inj_scale = k_flux
     if p.inj_fw:
-        # (before the first period's end no scale is set: the present flux factor; 0 left the
-        # first period without injection, a whole window lost: 2.08 s on a 22 kW motor)
-        return (1.0 - s.inj_back) * (s.inj_scale if s.inj_scale > 0.0 else k_flux)
+        return (1.0 - s.inj_back) * s.inj_scale
     return 1.0 - s.inj_back
 
 
