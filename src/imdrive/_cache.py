@@ -20,8 +20,10 @@ Every kernel file's cache lives in that folder, the estimator registry's generic
 (compiled later, while the engine compiles) included: a numba cache locator of our own
 (:class:`_KernelLocator`) claims every function defined under ``kernels/``, so nothing is ever
 written into the source tree or site-packages. For each module the most recently used
-:data:`KEEP` folders are kept and older ones are removed (with the single-hash
-``kernels-<hash>`` folders of imdrive 0.2 and before).
+:data:`KEEP` folders are kept, and so is every folder used within :data:`MAX_AGE_DAYS` up to
+:data:`MAX_RECENT` of them (a developer with several branches or worktrees switches between
+their kernels without compiling each again); older ones are removed, with the single-hash
+``kernels-<hash>`` folders of imdrive 0.2 and before.
 
 The folders are under ``$IMDRIVE_CACHE_DIR`` if set, else under ``$NUMBA_CACHE_DIR/imdrive`` if
 that is set, else under ``$XDG_CACHE_HOME/imdrive`` (default ``~/.cache/imdrive``); the system
@@ -40,6 +42,7 @@ import platform
 import shutil
 import sys
 import tempfile
+import time
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
@@ -48,6 +51,13 @@ KERNELS = _PKG / "kernels"
 #: Folders kept per kernel module (the most recently used): the current code's, and two earlier
 #: versions a developer may switch back to (another branch, an undone edit).
 KEEP = 3
+#: A folder used within this many days is kept beyond :data:`KEEP` (every version of a module in
+#: use on the machine), up to :data:`MAX_RECENT` of them per module. With KEEP alone, four
+#: worktrees of the project evicted each other's kernels at every switch: 2-3 min of
+#: compilation each time (a module's folders are 0.1-20 MB: the whole cache of this machine's
+#: four branches was 55 MB).
+MAX_AGE_DAYS = 7.0
+MAX_RECENT = 10
 _MARK = "_CACHE_FOLLOWS_IMPORTERS"
 
 
@@ -195,9 +205,16 @@ def module_folder(module: str, root: Path | None = None) -> Path:
     return (root or cache_root()) / f"{module}-{module_keys()[module]}"
 
 
-def prune(root: Path | None = None, keep: int = KEEP) -> list[Path]:
-    """Remove all but the ``keep`` most recently used folders of each kernel module, and the
-    single-hash ``kernels-*`` folders of imdrive 0.2; return what was removed."""
+def prune(
+    root: Path | None = None,
+    keep: int = KEEP,
+    max_age_days: float = MAX_AGE_DAYS,
+    max_recent: int = MAX_RECENT,
+    now: float | None = None,
+) -> list[Path]:
+    """Remove the folders of each kernel module but the ``keep`` most recently used and those
+    used within ``max_age_days`` (at most ``max_recent`` in all), and the single-hash
+    ``kernels-*`` folders of imdrive 0.2; return what was removed."""
     root = root or cache_root()
     groups: dict[str, list[Path]] = {}
     removed = []
@@ -215,9 +232,12 @@ def prune(root: Path | None = None, keep: int = KEEP) -> list[Path]:
             removed.append(p)
         elif p.name.startswith("imdrive.kernels") and "-" in p.name:
             groups.setdefault(p.name.rpartition("-")[0], []).append(p)
+    since = (time.time() if now is None else now) - 86400.0 * max_age_days
     for folders in groups.values():
         folders.sort(key=lambda p: p.stat().st_mtime, reverse=True)
-        removed += folders[keep:]
+        for i, p in enumerate(folders):
+            if i >= keep and (i >= max(max_recent, keep) or p.stat().st_mtime < since):
+                removed.append(p)
     for p in removed:  # another process may be reading an old one: it then compiles afresh
         if p.is_dir():
             shutil.rmtree(p, ignore_errors=True)

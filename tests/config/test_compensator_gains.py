@@ -26,7 +26,9 @@ def _slip_rpm(m) -> float:
 def test_table_iv_keeps_the_paper_numbers_exactly():
     r = resolve(Scenario.read("sensorless", ON))
     assert (r.G_CR, r.gain_E, r.gain_DE) == (0.001, 1e6, 1e6)
-    assert (r.gate_speed_rpm, r.gate_iq_A, r.gate_band) == (1.0, 0.3, 1.0)
+    # (the band: 0.75 of the 2 Hz injection since the schedule is its three harmonics; the
+    # first release's two-frequency schedule had half, 1 Hz)
+    assert (r.gate_speed_rpm, r.gate_iq_A, r.gate_band) == (1.0, 0.3, 1.5)
 
 
 @pytest.mark.parametrize("machine", ["krause-50hp", "aalto-2.2kw", "krause-2250hp"])
@@ -45,7 +47,7 @@ def test_unset_settings_keep_their_share_of_the_machine(machine):
     assert r.gate_iq_A / m.rated_current_A == pytest.approx(
         r0.gate_iq_A / m0.rated_current_A, rel=1e-12
     )
-    assert r.gate_band == pytest.approx(0.5 * r.inj_f1, rel=1e-12)
+    assert r.gate_band == pytest.approx(0.75 * r.inj_f1, rel=1e-12)
 
 
 def test_a_twin_or_an_absolute_value_wins():
@@ -93,7 +95,8 @@ def test_the_unset_injection_frequency_follows_the_rotor_corner(machine):
     Ts = sc.simulation.Ts_s
     assert r.inj_f1 / corner == pytest.approx(2.0 / corner_t4, abs=r.inj_f1 * Ts * 2.0 / corner)
     assert (1.0 / (r.inj_f1 * Ts)) == pytest.approx(round(1.0 / (r.inj_f1 * Ts)), abs=1e-6)
-    assert r.inj_f2 == 2.0 * r.inj_f1 and r.gate_band == 0.5 * r.inj_f1
+    assert (r.inj_f2, r.inj_f3) == (2.0 * r.inj_f1, 3.0 * r.inj_f1)
+    assert r.gate_band == 0.75 * r.inj_f1
     assert resolved_defaults(sc)["injection.frequency_Hz"] == r.inj_f1
     # given, it is used as it is
     given = resolve(

@@ -34,13 +34,14 @@ def test_absolute_settings_of_a_paper_preset_are_named():
 
 
 def test_many_settings_are_counted_not_dropped():
-    (msg,) = _machine_warnings("injection-fig5", ['machine.preset="aalto-2.2kw"'])
+    (msg,) = _machine_warnings("injection-fig5-realistic", ['machine.preset="aalto-2.2kw"'])
     # 10 absolute settings are stated: the speed and load profiles (rpm, N m), the
-    # compensator's clamps and gate band, the estimator's R1, R2, the injection's amplitude,
-    # frequencies, ... (all their defaults follow the machine now); six are shown, the rest
-    # counted
+    # compensator's clamps and table gains, the estimator's R2, the injection's amplitude and
+    # frequency (all their defaults follow the machine now); six are shown, the rest counted
     assert msg.count(" = ") == 6 and "and 4 more" in msg
     assert "control.speed_ref_rpm = " in msg and "load.torque_pu" in msg
+    (msg,) = _machine_warnings("injection-fig5", ['machine.preset="aalto-2.2kw"'])
+    assert msg.count(" = ") == 6 and "and 2 more" in msg  # 8: the profiles besides main's 6
 
 
 def test_a_key_set_in_the_same_layer_is_not_stale():

@@ -19,7 +19,6 @@ FIRST_RELEASE = {
     "control.field_weakening": False,
     "mras.R1_standstill": False,
     "mras.R1_rate_per_s": 0.0,
-    "injection.frequency3_Hz": None,
     "injection.headroom_voltage": None,
     "injection.headroom_from": 0.85,
     "injection.headroom_to": 0.95,
@@ -28,8 +27,10 @@ FIRST_RELEASE = {
     "compensator.gain_E_per_Wb": 1000.0,
     "compensator.gain_DE_per_Wb": 1000.0,
     "compensator.G_CR_ohm": 0.02,
-    # unset: half the 2 Hz injection, the 1 Hz the first release had as its default
-    "compensator.gate_band_Hz": None,
+    # half the 2 Hz injection, the 1 Hz the first release had as its default (its two-frequency
+    # schedule is the harmonics' schedule now, which a band of half the frequency makes the
+    # same away from 3 Hz)
+    "compensator.gate_band_pu": 0.5,
     "compensator.gate_voltage": 0.97,
     "compensator.thermal_model": False,
     "injection.decouple_slip": False,

@@ -338,7 +338,7 @@ def test_envelope_sweep_preset():
     inj = sw.scenario_for((150, -6, 1.2, 0.9, "injection"))
     assert inj.compensator.step_law == "kalman" and inj.mras.R1_rate_per_s > 0
     assert inj.mras.R1_standstill
-    assert inj.injection.frequency3_Hz == 6.0 and inj.compensator.gate_band_Hz == 1.5
+    assert (resolve(inj).inj_f3, resolve(inj).gate_band) == (6.0, 1.5)  # the defaults
     assert resolve(inj).R1_hat == pytest.approx(0.9 * inj.machine.R1_ohm)
     assert resolve(inj).R2_hat == pytest.approx(1.2 * inj.machine.R2_ohm)
     plain = sw.scenario_for((150, -6, 1.0, 1.0, "uncompensated"))

@@ -101,21 +101,37 @@ def test_the_versions_are_part_of_the_key(copy, monkeypatch):
 
 def test_old_folders_are_pruned(tmp_path):
     now = time.time()
-    for i in range(5):
+    day = 86400.0
+    for i in range(5):  # used 0, 3, 6, 9 and 12 days ago
         for m in ("imdrive.kernels.engine", "imdrive.kernels.machine"):
             p = tmp_path / f"{m}-{i:016x}"
             p.mkdir()
-            os.utime(p, (now - 100 * i, now - 100 * i))
+            os.utime(p, (now - 3 * day * i, now - 3 * day * i))
     (tmp_path / "kernels-0123456789abcdef").mkdir()  # imdrive 0.2's single-hash folder
     (tmp_path / "someone-elses").mkdir()
     (tmp_path / "notes.txt").write_text("x")
-    removed = _cache.prune(tmp_path, keep=3)
+    # the 3 most recent are kept whatever their age; beyond them the 9- and 12-day-old ones go
+    removed = _cache.prune(tmp_path, keep=3, max_age_days=7, now=now)
     assert len(removed) == 2 * 2 + 1
     left = sorted(p.name for p in tmp_path.iterdir())
     assert left == sorted(
         [f"imdrive.kernels.{m}-{i:016x}" for m in ("engine", "machine") for i in range(3)]
         + ["someone-elses", "notes.txt"]
     )
+
+
+def test_folders_in_use_on_several_branches_are_kept_up_to_a_cap(tmp_path):
+    # five worktrees used today: all kept (KEEP alone evicted two at every switch) ...
+    now = time.time()
+    for i in range(12):
+        p = tmp_path / f"imdrive.kernels.engine-{i:016x}"
+        p.mkdir()
+        os.utime(p, (now - 60 * i, now - 60 * i))
+    removed = _cache.prune(tmp_path, keep=3, max_age_days=7, max_recent=5, now=now)
+    # ... up to the cap: the five most recent stay
+    assert sorted(p.name for p in removed) == [
+        f"imdrive.kernels.engine-{i:016x}" for i in range(5, 12)
+    ]
 
 
 def test_the_engine_caches_in_its_module_folder():

@@ -1,7 +1,7 @@
 """The per-unit rates of the R2-tracking preset on the library machines: the online R1 law's
 rate per-unit of the machine's rotor corner R2/L2 (``mras.R1_rate_pu``) and the estimation
-headroom's gain bounded per injection period (``injection.headroom_gain_per_period``), as the
-drive's records receive them."""
+headroom's gain set per injection period (run/compensator_blocks.py HEADROOM_GAIN_PER_PERIOD),
+as the drive's records receive them."""
 
 from __future__ import annotations
 
@@ -60,10 +60,10 @@ def test_r1_law_bound_is_half_the_rated_frequency(machine, f_max):
     assert float(build_arrays(sc).params.est["R1_fmax"][0]) == 20.0
 
 
-def test_headroom_gain_is_bounded_per_injection_period():
-    assert headroom_rate_per_s(1.0, 0.6, 2.0) == 1.0  # Table IV's preset: unchanged
-    assert headroom_rate_per_s(1.0, 0.6, 0.15) == pytest.approx(0.09)
-    for machine in ("krause-500hp", "krause-2250hp"):
+def test_headroom_gain_is_set_per_injection_period():
+    assert headroom_rate_per_s(2.0) == 1.0  # Table IV's preset: its 1 /s
+    assert headroom_rate_per_s(0.15) == pytest.approx(0.075)
+    for machine in ("paper-table-iv", "krause-500hp", "krause-2250hp"):
         sc = _robust(machine)
         rate = float(build_arrays(sc).params.comp["inj_fw_rate"][0])
-        assert rate / resolve(sc).inj_f1 == pytest.approx(0.6)
+        assert rate / resolve(sc).inj_f1 == pytest.approx(0.5)

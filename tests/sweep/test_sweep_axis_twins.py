@@ -27,10 +27,6 @@ TWINS = {
         '"injection.frequency_Hz" = [5.0, 6.0]\n"injection.frequency_pu" = [1.0, 1.1]\n',
         ("injection.frequency_Hz", "injection.frequency_pu"),
     ),
-    "a group's other member": (
-        '"injection.frequency_Hz" = [5.0, 6.0]\n"injection.frequency2_pu" = [1.0, 1.1]\n',
-        ("injection.frequency_Hz", "injection.frequency2_pu"),
-    ),
     "a variant's R2_ohm under R2_ratio": (
         'R2_ratio = [1.0, 1.1]\n[axes.variant]\na = {}\nb = { "estimator.R2_ohm" = 0.9 }\n',
         ("R2_ratio", "variant", "estimator.R2_ohm"),
@@ -51,12 +47,6 @@ def test_twin_axes_are_refused_naming_both(axes, names):
     assert "\n" not in line
     for n in names:
         assert n in line
-
-
-def test_members_of_one_group_on_the_same_side_stay_allowed():
-    axes = '"injection.frequency_Hz" = [5.0, 6.0]\n"injection.frequency2_Hz" = [7.0, 8.0]\n'
-    sweep = parse_sweep(HEAD + axes)
-    assert sweep.n_runs == 4
 
 
 TABLES = {

@@ -170,7 +170,6 @@ def ac_test(
                 "frequency_Hz": f,
                 "t_on_s": 0.0,
                 "headroom": False,
-                "compensate_filter": False,
             },
             flux_injection=dither(sc, I_dc, f),
             estimator=model,

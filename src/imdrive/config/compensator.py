@@ -8,11 +8,18 @@ from typing import Annotated, Literal
 
 from pydantic import model_validator
 
-from imdrive.config.deprecated_keys import deprecated_key, deprecated_value
+from imdrive.config.deprecated_keys import deprecated_key, deprecated_twin, deprecated_value
 from imdrive.config.r2_kalman import KalmanLawSettings  # noqa: F401  (the law registers)
 from imdrive.config.r2_laws import law_names
-from imdrive.config.validation import Bool, Float, Int, setting, settings
+from imdrive.config.validation import Bool, Float, setting, settings
 from imdrive.errors import ConfigError
+
+#: The gating's frequency schedule: these multiples of the injection frequency f. Near the
+#: stator frequency the lowest of them at least ``compensator.gate_band_pu`` f from it is
+#: injected (kernels/gating.py). Whole multiples, a decision window of whole periods of f holds
+#: whole periods of each. Every preset and study used 1, 2, 3 f when they could be set apart
+#: (``injection.frequency2_*``, ``frequency3_*``: deprecated).
+HARMONICS = (1, 2, 3)
 
 
 @settings("compensator")
@@ -164,19 +171,22 @@ class CompensatorSettings:
     gate_speed_pu: Annotated[
         Float | None,
         setting(
-            "gate_speed_rpm in per-unit of the machine's rated slip speed; when set it "
-            "replaces gate_speed_rpm",
+            "gating: speed-reference change within a period, or mean speed error over it, "
+            "above which the period is a transient, per-unit of the machine's rated slip speed "
+            "(in field weakening the error weighted by the speed loop's gain, k^2 with the "
+            "flux-scaled speed gains)",
             gt=0.0,
-            default_doc="unset: gate_speed_rpm",
+            default_doc="0.0126: 1 rpm of Table IV's 79 rpm rated slip",
         ),
     ] = None
     gate_iq_pu: Annotated[
         Float | None,
         setting(
-            "gate_iq_A in per-unit of the machine's rated current (machine.rated_current_A, "
-            "peak); when set it replaces gate_iq_A",
+            "gating: change of the period-mean iq* from one period to the next above which the "
+            "period is a load transient, per-unit of the machine's rated current "
+            "(machine.rated_current_A, peak)",
             gt=0.0,
-            default_doc="unset: gate_iq_A",
+            default_doc="0.036: 0.3 A of Table IV's 8.3 A",
         ),
     ] = None
     gate_voltage: Annotated[
@@ -189,10 +199,11 @@ class CompensatorSettings:
     gate_band_pu: Annotated[
         Float | None,
         setting(
-            "gate_band_Hz in per-unit of the injection frequency in use at the start; when set "
-            "it replaces gate_band_Hz",
+            "gating: the injection frequency is switched to another harmonic of it when "
+            "|stator frequency| is within this of it, per-unit of the first injection frequency "
+            "(0: never)",
             ge=0.0,
-            default_doc="unset: gate_band_Hz",
+            default_doc="0.75 (1.5 Hz of Table IV's 2 Hz)",
         ),
     ] = None
     gate_band_Hz: Annotated[
@@ -202,12 +213,9 @@ class CompensatorSettings:
             "of it (0: never)",
             "Hz",
             ge=0.0,
-            default_doc="half the first injection frequency (1 Hz of Table IV's 2 Hz)",
+            default_doc="0.75 of the first injection frequency (1.5 Hz of Table IV's 2 Hz)",
         ),
     ] = None
-    gate_hold_periods: Annotated[
-        Int, setting("gating: decisions still skipped after a gated one", ge=0)
-    ] = 1
     step_law: Annotated[
         Literal[law_names()],  # the paper's table and every registered law (config/r2_laws.py)
         setting(
@@ -298,47 +306,10 @@ class InjectionSettings:
         setting(
             "the frequency in per-unit of the rotor's corner frequency R̂2/(2π L̂2) of the "
             "controller's starting model, where the in-phase sensitivity of the detection "
-            "peaks; when set it replaces frequency_Hz (and frequency2_pu, frequency3_pu their "
-            "twins), rounded so a period is a whole number of control periods",
+            "peaks; when set it replaces frequency_Hz, rounded so a period is a whole number "
+            "of control periods",
             gt=0.0,
             default_doc="unset: frequency_Hz",
-        ),
-    ] = None
-    frequency2_pu: Annotated[
-        Float | None,
-        setting(
-            "frequency2_Hz in per-unit of the same corner frequency (with frequency_pu)",
-            gt=0.0,
-            default_doc="2 × frequency_pu",
-        ),
-    ] = None
-    frequency3_pu: Annotated[
-        Float | None,
-        setting(
-            "frequency3_Hz in per-unit of the same corner frequency (with frequency_pu)",
-            gt=0.0,
-            default_doc="unset: frequency3_Hz",
-        ),
-    ] = None
-    frequency2_Hz: Annotated[
-        Float | None,
-        setting(
-            "the alternative frequency the gating switches to near the stator frequency; "
-            "the compensator period must hold whole periods of both",
-            "Hz",
-            gt=0.0,
-            default_doc="2 × frequency_Hz",
-        ),
-    ] = None
-    frequency3_Hz: Annotated[
-        Float | None,
-        setting(
-            "a third frequency for the gating's schedule: the lowest of the three at least "
-            "compensator.gate_band_Hz from the stator frequency is used (kernels/compensator.py); "
-            "the compensator period must hold whole periods of it",
-            "Hz",
-            gt=0.0,
-            default_doc="none: the two-frequency schedule",
         ),
     ] = None
     headroom: Annotated[
@@ -370,29 +341,6 @@ class InjectionSettings:
             default_doc="unset: no lowering, and no injection in field weakening",
         ),
     ] = None
-    headroom_rate_per_s: Annotated[
-        Float,
-        setting(
-            "estimation headroom: integral gain of the flux factor's logarithm (the flux moves "
-            "by this fraction of itself per second and unit of voltage-use error) on the peak "
-            "voltage use (sampled once per injection period: keep it below about "
-            "1/(injection period))",
-            "1/s",
-            gt=0.0,
-        ),
-    ] = 1.0
-    headroom_gain_per_period: Annotated[
-        Float,
-        setting(
-            "estimation headroom: the largest integral gain per injection period "
-            "(headroom_rate_per_s x the lowest injection frequency's period), so the gain "
-            "in use is min(headroom_rate_per_s, this x f_inj): the loop samples the peak "
-            "voltage use once per period, and on a machine with a slow rotor (injection "
-            "at 0.07-0.22 Hz) 1 /s was 4.5-14 per period, a limit cycle of the flux "
-            "(run/blocks.py, headroom_rate_per_s)",
-            gt=0.0,
-        ),
-    ] = 0.6
     t_on_s: Annotated[Float, setting("time the injection starts", "s", ge=0.0)] = 0.0
     decouple_slip: Annotated[
         Bool,
@@ -412,20 +360,6 @@ class InjectionSettings:
             lt=1.0,
         ),
     ] = 0.3
-    compensate_filter: Annotated[
-        Bool,
-        setting(
-            "filter-compensated detection: undo the MRAS's s/(s + ωc) comparison filter at the "
-            "injection's two side bands (kernels/compensator.py), which rotates the detected "
-            "signal at low stator frequency; false: plain 2 e_d0 sin detection"
-        ),
-    ] = False
-    lowpass_rad_s: Annotated[
-        Float,
-        setting(
-            "optional low-pass of the detected product, for display (0: none)", "rad/s", ge=0.0
-        ),
-    ] = 0.0
 
 
 def _first_frequency(inj) -> float:
@@ -462,35 +396,35 @@ def injection_frequencies_in_use(
     whole periods of, so that the synchronous detection averages over whole periods.
 
     The injection frequency with the demodulated input; with the gating's frequency schedule
-    (``compensator.gate_band_Hz`` > 0) its alternative ``frequency2_Hz`` (default twice the
-    frequency); a ``frequency3_Hz`` whenever it is given. None without injection or without
-    the compensator. ``r``: the resolved per-unit values (their frequencies and amplitude
-    replace the absolute keys, named ``..._pu`` then).
+    (a band ``compensator.gate_band_pu`` > 0) its harmonics 2 f and 3 f (:data:`HARMONICS`),
+    named by the key that sets them. None without injection or without the compensator.
+    ``r``: the resolved per-unit values (their frequency and amplitude replace the absolute
+    keys, named ``..._pu`` then).
     """
     amp = inj.amplitude_A if r is None else r.inj_amp
     if not (comp.enabled and amp > 0.0):
         return []
-    pu = r is not None and inj.frequency_pu is not None
+    key = (
+        "injection.frequency_pu"
+        if r is not None and inj.frequency_pu is not None
+        else ("injection.frequency_Hz")
+    )
     f1 = _first_frequency(inj) if r is None else r.inj_f1
-    f2 = inj.frequency2_Hz if inj.frequency2_Hz is not None else 2.0 * f1
-    f3 = inj.frequency3_Hz
-    if comp.gate_band_Hz is not None:
+    if r is not None:
+        band = r.gate_band
+    elif comp.gate_band_Hz is not None:
         band = comp.gate_band_Hz
     else:  # as config/compensator_gains.py resolves it
         from imdrive.config.compensator_gains import GATE_BAND_PU
 
         band = (comp.gate_band_pu if comp.gate_band_pu is not None else GATE_BAND_PU) * f1
-    if r is not None:
-        f2, f3, band = r.inj_f2, r.inj_f3, r.gate_band
     out = []
     demodulated = comp.input == "demodulated"
     if demodulated:
-        out.append(("injection.frequency_pu" if pu else "injection.frequency_Hz", f1))
+        out.append((key, f1))
     gating = comp.gating if comp.gating is not None else demodulated
     if gating and band > 0.0:
-        out.append(("injection.frequency2_pu" if pu else "injection.frequency2_Hz", f2))
-    if f3 is not None:
-        out.append(("injection.frequency3_pu" if pu else "injection.frequency3_Hz", f3))
+        out += [(key, n * f1) for n in HARMONICS[1:]]
     return out
 
 
@@ -515,7 +449,8 @@ def check_whole_injection_periods(
             raise ConfigError(
                 field,
                 f"the compensator period ({T:g} s, {n_comp} control periods) must hold a whole "
-                f"number of periods of {key} = {f:g} Hz (got {cycles:g})",
+                f"number of periods of {f:g} Hz (got {cycles:g}), the injection frequency or a "
+                "harmonic of it in the gating's schedule",
             )
 
 
@@ -550,3 +485,36 @@ deprecated_value(
     "one filter (the envelope sweep: 263 of 267 cells within goal against 259, off the grid "
     "78 of 80 against 80; what it costs: CHANGELOG.md, docs/envelope.md)",
 )
+
+#: Keys of mechanisms that a law or a fixed rule replaced in round 4 (issue 38: few settings,
+#: each with a measurement of what it buys).
+_REPLACED = {
+    ("injection", "frequency2_Hz"): "the gating's schedule is the harmonics 1, 2, 3 of "
+    "injection.frequency (HARMONICS in config/compensator.py): every preset and study that set "
+    "the alternatives set 2 f and 3 f",
+    ("injection", "frequency3_Hz"): "as frequency2_Hz: the third frequency is always 3 f",
+    ("injection", "headroom_rate_per_s"): "the estimation headroom's loop samples the peak voltage "
+    "once per injection period, so its gain is set per period: 0.5 (Table IV's 1 /s at 2 Hz), "
+    "HEADROOM_GAIN_PER_PERIOD in run/compensator_blocks.py",
+    ("injection", "headroom_gain_per_period"): "as headroom_rate_per_s: the gain is 0.5 per "
+    "injection period on every machine",
+    ("injection", "compensate_filter"): "undoing the MRAS's comparison filter at the side bands "
+    "did not improve R2_hat: on injection-robust at 0.05, 0.1 and 0.2 x rated speed, rated "
+    "motoring and regenerating load, R2_hat(0) = 0.8, 1.2 R2 on Table IV, Aalto 2.2 kW and "
+    "Krause 50 hp, 31 of 36 runs ended within 0.1 % of R2 of each other, 4 ended farther with "
+    "it and 1 closer, and 34 of 36 within 2 % either way",
+    ("injection", "lowpass_rad_s"): "it filtered the detected product for display only; the "
+    "product is logged every sample (e_d0_demod): filter it where it is plotted",
+    ("compensator", "gate_hold_periods"): "one whole decision window after a gated one is held on "
+    "every drive (GATE_HOLD_PERIODS in run/compensator_blocks.py), the value every preset and "
+    "study used",
+}
+for (_section, _key), _why in _REPLACED.items():
+    deprecated_key(_section, _key, _why)
+for _n in ("frequency2", "frequency3"):
+    deprecated_key("injection", f"{_n}_pu", f"as {_n}_Hz: the schedule is the harmonics of f")
+# The gate's thresholds in absolute units: no preset states them so (their defaults and the
+# recommended preset's values are per-unit of the machine).
+for _key in ("gate_speed", "gate_iq", "gate_band"):
+    _unit = {"gate_speed": "rpm", "gate_iq": "A", "gate_band": "Hz"}[_key]
+    deprecated_twin("compensator", f"{_key}_{_unit}", f"{_key}_pu")

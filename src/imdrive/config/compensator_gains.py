@@ -13,7 +13,7 @@ setting                 Table IV     scaled by
 ``gain_DE_per_Wb``                   quantiser's thresholds stay the same share of it
 ``gate_speed_rpm``      1 rpm        the rated slip speed (79 rpm on Table IV)
 ``gate_iq_A``           0.3 A        the rated current ``machine.rated_current_A``
-``gate_band_Hz``        1 Hz         the first injection frequency in use (half of it)
+``gate_band_Hz``        1.5 Hz       the first injection frequency in use (0.75 of it)
 ``injection.            2 Hz         the machine's rotor corner ``R2/(2 pi L2)``,
 frequency_Hz``                       to whole control periods
 ======================  ===========  ==============================================
@@ -41,8 +41,11 @@ TABLE_IV = {
 #: the injection's frequency on Table IV, Hz (1.1 times its rotor corner R2/(2 pi L2), 1.82 Hz)
 INJECTION_TABLE_IV_HZ = 2.0
 #: the gate's band around the injection frequency, per-unit of it, when neither
-#: ``gate_band_Hz`` nor ``gate_band_pu`` is set (1 Hz of the 2 Hz injection on Table IV)
-GATE_BAND_PU = 0.5
+#: ``gate_band_Hz`` nor ``gate_band_pu`` is set (1.5 Hz of the 2 Hz injection on Table IV):
+#: above half, so the schedule's harmonics f, 2f, 3f overlap and a stator frequency midway
+#: between two of them takes the third instead of switching at every decision (0.5 was the
+#: default of the two-frequency schedule; every injection preset set 0.75)
+GATE_BAND_PU = 0.75
 
 
 class CompensatorGains(NamedTuple):

@@ -23,6 +23,10 @@ DEPRECATED_KEYS: dict[tuple[str, str], str] = {}
 #: ``(section, key, old value)`` -> ``(new value, why)``.
 DEPRECATED_VALUES: dict[tuple[str, str, object], tuple[object, str]] = {}
 
+#: ``(section, key)`` -> its per-unit twin: absolute spellings that still act (through
+#: :mod:`imdrive.config.pairs`) with a warning, listed apart from the tables.
+DEPRECATED_TWINS: dict[tuple[str, str], str] = {}
+
 
 def deprecated_key(section: str, key: str, why: str) -> None:
     """Register ``[section] key`` as deprecated: accepted, dropped, warned with ``why``."""
@@ -34,9 +38,21 @@ def deprecated_value(section: str, key: str, old, new, why: str) -> None:
     DEPRECATED_VALUES[(section, key, old)] = (new, why)
 
 
+def deprecated_twin(section: str, key: str, twin: str) -> None:
+    """Register ``[section] key`` as the deprecated absolute spelling of ``[section] twin``:
+    it still acts, with a warning, and is listed apart in docs/scenarios.md."""
+    DEPRECATED_TWINS[(section, key)] = twin
+
+
 def is_deprecated(path) -> bool:
-    """Whether the dotted path ``path`` (a tuple of names) is a deprecated key."""
+    """Whether the dotted path ``path`` (a tuple of names) is a deprecated key that no longer
+    acts (a deprecated twin is a setting still: :data:`DEPRECATED_TWINS`)."""
     return len(path) == 2 and tuple(path) in DEPRECATED_KEYS
+
+
+def is_listed_apart(path) -> bool:
+    """Whether docs/scenarios.md lists the key ``path`` in its deprecated section."""
+    return len(path) == 2 and (tuple(path) in DEPRECATED_KEYS or tuple(path) in DEPRECATED_TWINS)
 
 
 def drop_deprecated(data: dict) -> dict:
@@ -52,6 +68,17 @@ def drop_deprecated(data: dict) -> dict:
                     f"{section}.{key}",
                     f"deprecated, no longer has any effect and is refused from imdrive "
                     f"{REMOVED_IN}: {why}",
+                ),
+                stacklevel=3,
+            )
+    for (section, key), twin in DEPRECATED_TWINS.items():
+        table = out.get(section)
+        if isinstance(table, dict) and table.get(key) is not None:
+            warnings.warn(
+                ConfigWarning(
+                    f"{section}.{key}",
+                    f"deprecated, refused from imdrive {REMOVED_IN}: state it per-unit of the "
+                    f"machine as {section}.{twin} (it still acts until then)",
                 ),
                 stacklevel=3,
             )
@@ -73,7 +100,7 @@ def drop_deprecated(data: dict) -> dict:
 def markdown_lines() -> list[str]:
     """The section "Deprecated keys" of docs/scenarios.md: every deprecated key and value,
     why it no longer acts and what replaces it."""
-    if not (DEPRECATED_KEYS or DEPRECATED_VALUES):
+    if not (DEPRECATED_KEYS or DEPRECATED_VALUES or DEPRECATED_TWINS):
         return []
     lines = [
         "## Deprecated keys",
@@ -88,6 +115,16 @@ def markdown_lines() -> list[str]:
         lines.append(f"| `{section}.{key} = {_toml(old)}` | runs as `{_toml(new)}`: {why} |")
     for (section, key), why in DEPRECATED_KEYS.items():
         lines.append(f"| `{section}.{key}` | {why} |")
+    if DEPRECATED_TWINS:
+        lines += [
+            "",
+            "Absolute spellings of per-unit settings: they still act, with a warning, and are "
+            f"refused from imdrive {REMOVED_IN}.",
+            "",
+            "| key | state it per-unit of the machine as |",
+            "|---|---|",
+        ]
+        lines += [f"| `{s}.{k}` | `{s}.{t}` |" for (s, k), t in DEPRECATED_TWINS.items()]
     return lines + [""]
 
 

@@ -284,7 +284,13 @@ def markdown() -> str:
     top = [k for k in keys if len(k.path) == 1 and k.table is None]
     out += _table("Top level", "", top, machine)
     for table in (k for k in keys if k.table is not None):
-        members = [k for k in keys if k.path[:-1] == table.path and k.table is None]
+        members = [
+            k
+            for k in keys
+            if k.path[:-1] == table.path
+            and k.table is None
+            and not deprecated_keys.is_listed_apart(k.path)
+        ]
         intro = _intro(table.table)
         if table.path == ("machine",):
             presets = "; ".join(

@@ -75,7 +75,6 @@ def _pair(absolute: str, per_unit: str, base: str, both: str = "error", quiet=Fa
     return Pair((absolute,), (per_unit,), base, both, quiet)
 
 
-_IN_F = "injection.frequency"
 #: Every absolute / per-unit pair of the scenario file.
 PAIRS: tuple[Pair, ...] = (
     _pair("control.speed_ref_rpm", "control.speed_ref_pu", "the machine's rated speed", quiet=True),
@@ -102,9 +101,9 @@ PAIRS: tuple[Pair, ...] = (
     ),
     _pair("compensator.gate_iq_A", "compensator.gate_iq_pu", "the rated current", "per_unit"),
     _pair("injection.amplitude_A", "injection.amplitude_pu", "ψ_rated / M", "per_unit"),
-    Pair(
-        (f"{_IN_F}_Hz", f"{_IN_F}2_Hz", f"{_IN_F}3_Hz"),
-        (f"{_IN_F}_pu", f"{_IN_F}2_pu", f"{_IN_F}3_pu"),
+    _pair(
+        "injection.frequency_Hz",
+        "injection.frequency_pu",
         "the rotor corner R̂2/(2π L̂2)",
         "per_unit",
     ),

@@ -82,10 +82,8 @@ class Resolved:
         Input scalings of the compensator, 1/Wb.
     inj_amp : float
         Injection amplitude, A (peak).
-    inj_f1, inj_f2 : float
-        Injection frequency and the alternative one of the gating, Hz.
-    inj_f3 : float or None
-        The third frequency of the schedule, Hz (``None``: two frequencies).
+    inj_f1, inj_f2, inj_f3 : float
+        Injection frequency and its harmonics 2 f, 3 f of the gating's schedule, Hz.
     gate_band : float
         The gating's band around the stator frequency, Hz.
     gate_speed_rpm, gate_iq_A : float
@@ -132,7 +130,7 @@ class Resolved:
     inj_amp: float
     inj_f1: float
     inj_f2: float
-    inj_f3: float | None
+    inj_f3: float
     gate_band: float
     gate_speed_rpm: float
     gate_iq_A: float
@@ -225,15 +223,12 @@ def _resolve(sc) -> Resolved:
         f_corner = R2 / (2.0 * math.pi * L2_hat)
         Ts = sc.simulation.Ts_s
         f1 = _whole_periods(inj.frequency_pu * f_corner, Ts)
-        # the others: whole multiples of the first's period where they are whole multiples
-        f2 = f1 * (inj.frequency2_pu / inj.frequency_pu if inj.frequency2_pu else 2.0)
-        f3 = None if inj.frequency3_pu is None else f1 * inj.frequency3_pu / inj.frequency_pu
     else:
         from imdrive.config.compensator_gains import injection_frequency_Hz
 
         f1 = injection_frequency_Hz(inj, m, sc.simulation.Ts_s, False)
-        f2 = inj.frequency2_Hz if inj.frequency2_Hz is not None else 2.0 * f1
-        f3 = inj.frequency3_Hz
+    # the gating's schedule: harmonics of the first (config/compensator.py HARMONICS)
+    f2, f3 = 2.0 * f1, 3.0 * f1
     from imdrive.config.compensator_gains import compensator_gains
 
     g = compensator_gains(comp, m, R2, f1)

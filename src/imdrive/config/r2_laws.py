@@ -4,9 +4,9 @@ An R2 law turns the detected flux error of a decision window into the controller
 Its settings class is registered here under the value of ``compensator.step_law`` that selects
 it and the scenario section that holds its keys; the scenario gets one section per registered
 law (as it does per estimator, :func:`imdrive.config.registry.package_sections`). The paper's
-table law (``"table"``) and this project's adaptive fuzzy law (``"adaptive"``) keep their keys
-in ``[compensator]``; a model-based law is its kernel module, its settings class and its
-tests.
+table law (``"table"``) keeps its keys in ``[compensator]`` (and so would ``"adaptive"``, a
+deprecated value that runs as ``"kalman"``); a model-based law is its kernel module, its
+settings class and its tests.
 """
 
 from __future__ import annotations

@@ -53,11 +53,7 @@ import math
 from numba import njit
 
 from imdrive.kernels.compensator_range import thermal_recalibrate
-from imdrive.kernels.detection import (  # noqa: F401  (MAX_HP_CORRECTION: old path)
-    MAX_HP_CORRECTION,
-    compensated_product,
-    slip_coupling,
-)
+from imdrive.kernels.detection import slip_coupling
 from imdrive.kernels.fuzzy import lookup
 from imdrive.kernels.gating import (  # noqa: F401  (compensator_gate_sample: old path)
     _gate_decide,
@@ -88,7 +84,6 @@ COMPENSATOR_PARAMS = record_dtype(
         ("average", b1),  # input is the mean over the compensator period, else a sample
         ("inj_amp", f8),  # amplitude of the sinusoid added to id*, A (0: off)
         ("inj_freq", f8),  # its frequency, Hz
-        ("inj_lpf", f8),  # optional low-pass on the demodulated product, rad/s (0: none)
         ("inj_t_on", f8),  # time the injection starts, s
         ("gate", b1),  # gating and frequency scheduling on
         ("gate_dw", f8),  # speed-transient threshold, mechanical rad/s
@@ -96,11 +91,10 @@ COMPENSATOR_PARAMS = record_dtype(
         ("gate_v", f8),  # voltage-saturation threshold, fraction of Vdc/sqrt(3)
         ("gate_df", f8),  # blind band half-width around the injection frequency, Hz
         ("gate_hold", f8),  # decisions skipped after a gating event
-        ("inj_freq2", f8),  # the alternative injection frequency, Hz (0: none)
+        ("inj_freq2", f8),  # the schedule's second harmonic 2 inj_freq, Hz (0: no schedule)
         ("inj_v_lo", f8),  # injection headroom: voltage use where the amplitude starts to fall
         ("inj_v_hi", f8),  # and where it reaches zero (0: no back-off)
-        ("inj_hp_wc", f8),  # MRAS filter cut-off the detection compensates, rad/s (0: plain)
-        ("inj_freq3", f8),  # a third injection frequency for the schedule, Hz (0: two only)
+        ("inj_freq3", f8),  # and its third, 3 inj_freq, Hz (0: no schedule)
         ("inj_fw", b1),  # estimation headroom: the field weakening leaves the injection room
         ("inj_v_peak", f8),  # peak voltage use per injection period it holds while injecting
         ("inj_fw_rate", f8),  # its (slow) integral gain on that peak, 1/s
@@ -199,25 +193,18 @@ def injection_sine(p, s, t, Ts):
 
 
 @njit(cache=True)
-def demodulate(p, s, e_dq0, sine, cosine, w_e, w_s, T2_hat, Ts):
+def demodulate(p, s, e_dq0, sine, w_e, w_s, T2_hat, Ts):
     """Synchronous detection of e_d0 with the injected sinusoid (updates ``s.demod``).
 
-    ``sine``, ``cosine``: ``sin`` and ``cos`` of the injection phase of this sample (both 0
-    before the injection starts); ``e_dq0``: the MRAS flux error in the controller's frame,
-    Wb; ``w_e``: the controller's stator frequency, electrical rad/s. With ``p.inj_lpf > 0``
-    the product is also low-pass filtered (rad/s), for display.
-
-    Plain detection (``p.inj_hp_wc = 0``): ``2 e_d0 sin(phase)``. Filter-compensated detection
-    (``p.inj_hp_wc = wc > 0``, :func:`compensated_product`): the MRAS compares the two flux
-    models through ``s/(s + wc)`` in the stationary frame, which rotates and scales the
-    injection's two side bands at ``w_e +- w_i`` differently when ``|w_e|`` is not far above
-    ``wc``; the detection undoes that filter at both side bands.
+    ``sine``: ``sin`` of the injection phase of this sample (0 before the injection starts);
+    ``e_dq0``: the MRAS flux error in the controller's frame, Wb; ``w_e``: the controller's
+    stator frequency, electrical rad/s. The product ``2 e_d0 sin(phase)``, whose mean over whole
+    injection periods is e_d0's in-phase part, less the slip's coupling of e_q0
+    (:func:`~imdrive.kernels.detection.slip_coupling`). Near DC the MRAS's comparison filter
+    ``s/(s + wc)`` turns the side bands ``w_e +- w_i``: the gating's frequency schedule keeps
+    them away from it (:mod:`imdrive.kernels.gating`).
     """
-    f = s.inj_f if s.inj_f > 0.0 else p.inj_freq
-    if p.inj_hp_wc > 0.0:
-        prod = compensated_product(e_dq0, sine, cosine, w_e, 2.0 * math.pi * f, p.inj_hp_wc)
-    else:
-        prod = 2.0 * e_dq0.real * sine
+    prod = 2.0 * e_dq0.real * sine
     if p.slip_decouple:
         c_d = slip_coupling(s, e_dq0, w_e, p.cpl_wc, w_s, T2_hat, Ts)
         # faded in from cpl_wmin to twice that: below, e_q0 is mostly the voltage model's
@@ -225,11 +212,7 @@ def demodulate(p, s, e_dq0, sine, cosine, w_e, w_s, T2_hat, Ts):
         k = min(max(abs(w_e) / p.cpl_wmin - 1.0, 0.0), 1.0) if p.cpl_wmin > 0.0 else 1.0
         if k > 0.0:  # (a zero term would turn a -0.0 product into +0.0 in the log)
             prod -= 2.0 * k * c_d * sine
-    w_lp = p.inj_lpf
-    if w_lp > 0.0:
-        s.demod += (1.0 - math.exp(-w_lp * Ts)) * (prod - s.demod)
-    else:
-        s.demod = prod
+    s.demod = prod
 
 
 @njit(cache=True)

@@ -1,5 +1,5 @@
-"""The detection's helpers: undoing the MRAS's comparison filter at the injection's side bands
-and removing the slip's coupling of the q-axis flux error into the d-axis one.
+"""The detection's helper: removing the slip's coupling of the q-axis flux error into the d-axis
+one.
 
 Used by :func:`imdrive.kernels.compensator.demodulate` (and importable from there).
 """
@@ -8,38 +8,9 @@ from __future__ import annotations
 
 from numba import njit
 
-#: Largest correction ``wc/|w|`` of one side band (``|H| >= 0.32``): nearer DC the side band
-#: is lost, not recoverable, and the frequency schedule moves away from it.
+#: Largest correction ``wc/|w|`` of the comparison filter ``s/(s + wc)`` (``|H| >= 0.32``)
+#: :func:`slip_coupling` undoes: nearer DC the signal is lost, not recoverable.
 MAX_HP_CORRECTION = 3.0
-
-
-@njit(cache=True)
-def compensated_product(e_dq0, sine, cosine, w_e, w_i, wc):
-    """Per-sample product whose mean over whole injection periods is the in-phase part of the
-    *unfiltered* d-axis flux error, Wb.
-
-    In the controller's frame a flux error ``A exp(j w_i t) + B exp(-j w_i t)`` reaches the
-    MRAS's comparison at the stationary-frame frequencies ``w_+- = w_e +- w_i`` through the
-    filter ``H(jw) = jw / (jw + wc)`` (Schauder's ``1/(s + wc)`` applied to both models'
-    derivatives). Its d part's in-phase coefficient with ``sin(w_i t)`` is
-    ``Im B - Im A``; with ``E = exp(j phase)`` and ``e = e_dq0``::
-
-        y = Im( e (E / H(w_-) - conj(E) / H(w_+)) ),     1/H(w) = 1 - j wc / w
-
-    whose period mean is ``Im(B) - Im(A)`` (the terms at ``2 w_i`` average out). Without the
-    filter (``H = 1``) ``y = 2 Re(e) sin(phase)``, the plain detection. ``wc/|w|`` is clamped
-    to :data:`MAX_HP_CORRECTION`.
-    """
-    cm = wc / max(abs(w_e - w_i), wc / MAX_HP_CORRECTION)
-    cp = wc / max(abs(w_e + w_i), wc / MAX_HP_CORRECTION)
-    if w_e - w_i < 0.0:
-        cm = -cm
-    if w_e + w_i < 0.0:
-        cp = -cp
-    inv_m = complex(1.0, -cm)
-    inv_p = complex(1.0, -cp)
-    E = complex(cosine, sine)
-    return (e_dq0 * (E * inv_m - E.conjugate() * inv_p)).imag
 
 
 @njit(cache=True)

@@ -28,30 +28,27 @@ The blind band: in the stationary frame the injected flux oscillation appears at
 both models' ``1/(s + wc)`` filters remove it, and the detected signal collapses (measured:
 R2_hat frozen 12-15 % off at 54 rpm / 1.5 N m and 100 rpm / -6 N m). Rather than
 freezing there (which would never converge at such an operating point), the injection
-frequency is chosen from the operating point: at each decision instant, if ``|f_e|`` (the
-period mean of the controller's stator frequency) is within ``p.gate_df`` (Hz) of the present
-frequency, the other of ``p.inj_freq`` and ``p.inj_freq2`` is taken if it is farther from
-``|f_e|`` by more than a quarter of that band (hysteresis). ``inj_freq2`` must give a whole
-number of periods in the compensator period (default ``2 inj_freq``), so both demodulate over
-whole periods; the phase restarts at zero at the switch.
+frequency is chosen from the operating point among the harmonics ``p.inj_freq``,
+``p.inj_freq2 = 2 p.inj_freq`` and ``p.inj_freq3 = 3 p.inj_freq``
+(:data:`imdrive.config.compensator.HARMONICS`; :func:`_choose_of_three`): the frequency in use
+is kept while it is at least ``p.gate_df`` from ``|f_e|`` (the period mean of the controller's
+stator frequency), and otherwise the lowest of the three that is, so that *both* side bands
+stay ``p.gate_df`` away from DC; the phase restarts at zero at the switch. A decision window of
+whole periods of the first holds whole periods of each. With a band above half the first
+frequency the three cover every ``|f_e|`` with overlaps, so the schedule has hysteresis of its
+own (a switch happens only when the frequency in use falls inside the band). The third
+frequency was added because with two an operating point midway between them (``|f_e|`` = 3 Hz
+for 2 and 4 Hz) has a side band at 1 Hz whichever is used, and R2_hat ended 4 % off there
+(150 rpm, -12 N m).
 
 The side bands are also *distorted* well outside the blind band: at ``|w_e +- w_i|`` of the
 order of ``wc`` the filter ``s/(s + wc)`` turns each of them by up to 70 degrees and scales it,
-differently for the two, so the plain detection mixes the (large) quadrature response into
-the in-phase one: measured at 50 rpm, 6 N m (f_e = 2.2 Hz, f_i = 4 Hz) it saw 0.32 of the
-true in-phase part plus quadrature leakage, and R2_hat ended 5-10 % off.
-``p.inj_hp_wc = wc`` (``injection.compensate_filter``) detects through
-:func:`compensated_product` instead, which undoes the filter at both side bands.
-
-With a third frequency (``p.inj_freq3 > 0``, :func:`_choose_of_three`) the schedule keeps the
-frequency in use while it is at least ``p.gate_df`` from ``|f_e|`` and otherwise takes the
-lowest of the three that is, so that *both* side bands stay ``p.gate_df`` away from DC: with
-two frequencies an operating point midway between them (``|f_e|`` = 3 Hz for 2 and 4 Hz)
-has a side band at 1 Hz whichever is used, and R2_hat ended 4 % off there (150 rpm,
--12 N m). As the flux response falls with the frequency, the Kalman law divides its input
-by the sensitivity at the frequency in use (:mod:`imdrive.kernels.r2_kalman`). The envelope
-sweep's share of converged cells with 2, 4 and 6 Hz and a 1.5 Hz band is generated in
-docs/envelope.md.
+differently for the two. A detection that undid the filter at both side bands
+(``injection.compensate_filter``) was removed in round 4: with the three-frequency schedule and
+the Kalman law it no longer improved R2_hat (CHANGELOG.md). As the flux response falls with
+the frequency, the Kalman law divides its input by the sensitivity at the frequency in use
+(:mod:`imdrive.kernels.r2_kalman`). The envelope sweep's share of converged cells with 2, 4
+and 6 Hz and a 1.5 Hz band is generated in docs/envelope.md.
 """
 
 from __future__ import annotations
@@ -137,17 +134,6 @@ def _gate_decide(p, s, w_e):
         _choose_of_three(p, s, fe)
         if s.inj_f != s.inj_f_prev:
             s.inj_f_prev = s.inj_f
-            flags |= 8
-    elif p.inj_freq2 > 0.0:
-        f_now = s.inj_f if s.inj_f > 0.0 else p.inj_freq
-        f_other = p.inj_freq2 if f_now == p.inj_freq else p.inj_freq
-        # a margin of a quarter of the band before switching: without it a point midway
-        # between the two frequencies switched at every decision, and the compensator stayed
-        # frozen (measured at 50 rpm, 6 N m)
-        d_now = abs(fe - f_now)
-        if d_now < p.gate_df and abs(fe - f_other) > d_now + 0.25 * p.gate_df:
-            s.inj_f = f_other
-            s.inj_phase = 0.0
             flags |= 8
     if s.inj_back > 0.5:  # the injection backed off (voltage headroom, field weakening)
         flags |= 32

@@ -22,6 +22,9 @@ replayed estimator's model; where they agree the replayed estimator keeps its ow
 adaptation carries on). ``M_hat`` is the controller's alone: it is taken as recorded. With the
 run's own estimator this reproduces the closed loop's model exactly; a recording without the
 model leaves the estimator the scenario's, adapted by itself alone.
+
+Both functions release the GIL (``nogil``): the estimators of one chunk run in parallel
+threads, each on its own records and output arrays, reading the same rows.
 """
 
 from __future__ import annotations
@@ -64,7 +67,77 @@ R_OK = 0
 R_NAN = 1
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, nogil=True)
+def fill_rows(rows, t, i_a, i_b, v_a, v_b, ctx, model, prev):
+    """Build a chunk's :data:`REPLAY_ROW` rows from the recording's columns, in one pass.
+
+    Parameters
+    ----------
+    rows : REPLAY_ROW[n]
+        Filled (every field).
+    t, i_a, i_b, v_a, v_b : float64[n]
+        ``time_s``, ``i_alpha_meas_A``, ``i_beta_meas_A``, ``v_alpha_cmd_V``,
+        ``v_beta_cmd_V``.
+    ctx : float64[7, n] or float64[7, 1]
+        The context: ``theta_e_rad``, ``w_e_rad_s``, ``id_ref_A``, ``iq_ref_A``,
+        ``w_ref_rad_s``, ``i_inj_A``, ``hold_R1_flag``; a row of length 1 is a constant (a
+        column the recording lacks, at its default).
+    model : float64[5, n] or float64[5, 0]
+        ``R1_hat_ohm``, ``R2_hat_ohm``, ``M_hat_H``, ``R1_hat_after_ohm``,
+        ``R2_hat_after_ohm``; empty where the recording lacks the model (those fields zero).
+    prev : complex128[4]
+        The row before the chunk: its current, its voltage, its ``R1_hat_after`` and
+        ``R2_hat_after`` (real parts; NaN before the first row); updated to the chunk's last.
+
+    Notes
+    -----
+    Row k's voltage is the one commanded at t_{k-1}, for the period that ends at t_k; its
+    ``i_prev_ab`` the current sampled at t_{k-1}.
+    """
+    n = rows.shape[0]
+    nc = ctx.shape[1]
+    given = model.shape[1] > 0
+    i_last = prev[0]
+    v_last = prev[1]
+    R1_last = prev[2].real
+    R2_last = prev[3].real
+    for k in range(n):
+        r = rows[k]
+        c = k if nc > 1 else 0
+        i_ab = complex(i_a[k], i_b[k])
+        r.t = t[k]
+        r.i_ab = i_ab
+        r.i_prev_ab = i_last
+        r.v_ab = v_last
+        i_last = i_ab
+        v_last = complex(v_a[k], v_b[k])
+        r.theta_e = ctx[0, c]
+        r.w_e = ctx[1, c]
+        r.i_ref_dq = complex(ctx[2, c], ctx[3, c])
+        r.w_ref = ctx[4, c]
+        r.i_inj = ctx[5, c]
+        r.hold_R1 = ctx[6, c] != 0.0
+        if given:
+            r.R1_hat = model[0, k]
+            r.R2_hat = model[1, k]
+            r.M_hat = model[2, k]
+            r.R1_prev = R1_last
+            r.R2_prev = R2_last
+            R1_last = model[3, k]
+            R2_last = model[4, k]
+        else:
+            r.R1_hat = 0.0
+            r.R2_hat = 0.0
+            r.M_hat = 0.0
+            r.R1_prev = 0.0
+            r.R2_prev = 0.0
+    prev[0] = i_last
+    prev[1] = v_last
+    prev[2] = R1_last
+    prev[3] = R2_last
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
 def replay_estimator(pe, mdl, est, rows, Ts, model_given, w_out, R2_out):
     """Run one estimator over the recording's ``rows`` (its records updated in place).
 

@@ -229,13 +229,10 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc
     v_use = smp.v_use
     v_fw = v_use
     sine = 0.0
-    cosine = 0.0
     i_inj = 0.0
     if pk.inj_amp != 0.0:
         ph0 = cmp.inj_phase
         sine = injection_sine(pk, cmp, t, Ts)
-        # the cosine only for the filter-compensated detection (one cos per period)
-        cosine = math.cos(ph0) if pk.inj_hp_wc > 0.0 and t >= pk.inj_t_on else 0.0
         a_inj = 1.0
         if pk.inj_v_hi > 0.0:  # the injection backs off near the voltage limit
             wrapped = cmp.inj_phase < ph0
@@ -271,7 +268,7 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc
 
     if pk.inj_amp != 0.0:
         T2_hat = incremental_L2(mdl) / mdl.R2_hat
-        demodulate(pk, cmp, e_dq0, sine, cosine, ctl.w_e, ctl.w_sl, T2_hat, Ts)
+        demodulate(pk, cmp, e_dq0, sine, ctl.w_e, ctl.w_sl, T2_hat, Ts)
     if pk.enabled:
         if pk.gate and t >= pk.t_on:  # the compensator's gating signals
             w_fb_g = w_r_hat / pp.n_p if sim.sensorless else x.w_m

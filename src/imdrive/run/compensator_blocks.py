@@ -45,9 +45,7 @@ def compensator_fields(sc: Scenario, D: Resolved) -> tuple[dict, dict]:
         average=comp.average,
         inj_amp=r.inj_amp,
         inj_freq=r.inj_f1,
-        inj_lpf=inj.lowpass_rad_s,
         inj_t_on=inj.t_on_s,
-        inj_hp_wc=sc.mras.wc_rad_s if inj.compensate_filter else 0.0,
         slip_decouple=inj.decouple_slip,
         cpl_wc=sc.mras.wc_rad_s,
         cpl_wmin=2 * math.pi * sc.machine.rated_frequency_Hz * inj.decouple_slip_fmin_pu,
@@ -64,7 +62,23 @@ def compensator_fields(sc: Scenario, D: Resolved) -> tuple[dict, dict]:
     return record, derived
 
 
-def headroom_rate_per_s(rate_per_s: float, gain_per_period: float, f_inj_Hz: float) -> float:
+#: The estimation headroom's integral gain per injection period (:func:`headroom_rate_per_s`):
+#: Table IV's 1 /s at its 2 Hz injection, where the loop's gain per period times the voltage
+#: use is 0.4 and it settles without overshoot (kernels/compensator_range.py,
+#: headroom_weakening_input). It replaced two settings
+#: (``injection.headroom_rate_per_s``, 1 /s, capped at ``headroom_gain_per_period`` 0.6 per
+#: period): the cap, not the rate, acted on every machine with an injection below 1.67 Hz.
+HEADROOM_GAIN_PER_PERIOD = 0.5
+
+#: Decision windows still held after a gated one (``compensator.gate_hold_periods`` until round
+#: 4, the value every preset and study used): the flux and the MRAS settle after a speed or
+#: load transient, a voltage limit or a switch of the injection frequency.
+GATE_HOLD_PERIODS = 1
+
+
+def headroom_rate_per_s(
+    f_inj_Hz: float, gain_per_period: float = HEADROOM_GAIN_PER_PERIOD
+) -> float:
     """The estimation headroom's integral gain in use, 1/s.
 
     Its slow term acts on the peak voltage use of the last whole injection period, held over
@@ -81,20 +95,17 @@ def headroom_rate_per_s(rate_per_s: float, gain_per_period: float, f_inj_Hz: flo
 
     Parameters
     ----------
-    rate_per_s : float
-        ``injection.headroom_rate_per_s``, 1/s.
-    gain_per_period : float
-        ``injection.headroom_gain_per_period``: the largest ``rate / f_inj``.
     f_inj_Hz : float
         The lowest injection frequency, Hz (its period is the longest the loop holds a sample).
+    gain_per_period : float
+        The gain per injection period (:data:`HEADROOM_GAIN_PER_PERIOD`).
 
     Returns
     -------
     float
-        ``min(rate_per_s, gain_per_period f_inj_Hz)``, 1/s (with the defaults 1 /s and
-        0.6, the setting itself where the injection is at 1.67 Hz or faster).
+        ``gain_per_period f_inj_Hz``, 1/s (1 /s on Table IV, 0.055 /s on Krause 2250 hp).
     """
-    return min(rate_per_s, gain_per_period * f_inj_Hz)
+    return gain_per_period * f_inj_Hz
 
 
 def _gating(sc, r) -> dict:
@@ -118,9 +129,7 @@ def _gating(sc, r) -> dict:
         out |= {
             "inj_fw": True,
             "inj_v_peak": inj.headroom_voltage,
-            "inj_fw_rate": headroom_rate_per_s(
-                inj.headroom_rate_per_s, inj.headroom_gain_per_period, r.inj_f1
-            ),
+            "inj_fw_rate": headroom_rate_per_s(r.inj_f1),
             "fw_v": fw_v,
             "fw_rate": sc.control.field_weakening_rate,
         }
@@ -135,9 +144,9 @@ def _gating(sc, r) -> dict:
         "gate_diq": r.gate_iq_A,
         "gate_v": comp.gate_voltage,
         "gate_df": band if injecting else 0.0,
-        "gate_hold": float(comp.gate_hold_periods),
+        "gate_hold": float(GATE_HOLD_PERIODS),
         "inj_freq2": f2 if injecting and band > 0 else 0.0,
-        "inj_freq3": (r.inj_f3 if r.inj_f3 is not None and injecting and band > 0 else 0.0),
+        "inj_freq3": r.inj_f3 if injecting and band > 0 else 0.0,
     }
 
 

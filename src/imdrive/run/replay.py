@@ -13,6 +13,8 @@ The recording is streamed: read a chunk at a time (pass one reads only its time,
 it and count the rows), brought to the controller's period where it is sampled faster
 (:mod:`imdrive.run.decimate`), every estimator run over the chunk (its state carried to the
 next), the chunk's estimates written out; the memory is bounded by the chunk, not the file.
+The stages overlap in threads (:mod:`imdrive.run.replay_stream`): the next chunk is read
+while the estimators run, each in a thread of its own, and the last one is written.
 
 R2_hat: the R2-tracking law is not replayed yet. With a recording that carries the
 controller's model, an estimator's ``R2_hat`` follows what the recorded controller wrote (its
@@ -23,16 +25,19 @@ where :func:`imdrive.kernels.replay.replay_estimator` writes the recorded R2_hat
 
 from __future__ import annotations
 
+import collections
 import contextlib
 import math
+import os
 import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
 
 from imdrive.errors import ConfigError
-from imdrive.kernels.replay import R_OK, REPLAY_ROW, replay_estimator
-from imdrive.run.recording import CONTEXT_DEFAULTS, MODEL_COLUMNS, Recording
+from imdrive.kernels.replay import R_OK, REPLAY_ROW, fill_rows, replay_estimator
+from imdrive.run.recording import CONTEXT_DEFAULTS, MODEL_COLUMNS, REQUIRED, Recording
 from imdrive.run.recording_read import CHUNK_ROWS, open_recording
 from imdrive.run.replay_inputs import (
     _estimator_names,
@@ -42,6 +47,7 @@ from imdrive.run.replay_inputs import (
     check_units,
     decimation,
 )
+from imdrive.run.replay_stream import EstimateWriter, read_ahead
 
 #: the files a replay folder holds
 REPLAY_FILES = ("timeseries.parquet", "summary.json", "replay.png", "report.html")
@@ -102,7 +108,7 @@ class ReplayResult:
 
         _check_out(out_dir, force)
         with replace_folder(out_dir) as staging:
-            w = _Writer(staging)
+            w = EstimateWriter(staging, background=False)
             w.write(self.signals)
             w.close()
             _finish(staging, self)
@@ -115,37 +121,6 @@ def _check_out(out, force: bool) -> None:
     problem = output_folder_problem(out, lambda n: n in REPLAY_FILES, force, "an imdrive replay")
     if problem is not None:
         raise ConfigError("--out", problem)
-
-
-class _Writer:
-    """``timeseries.parquet`` written a chunk at a time (units in the schema's metadata)."""
-
-    def __init__(self, folder: Path):
-        self.path = folder / "timeseries.parquet"
-        self._w = None
-
-    def write(self, cols: dict) -> None:
-        import json
-
-        import pyarrow as pa
-        import pyarrow.parquet as pq
-
-        from imdrive.run.columns import unit_of
-
-        table = pa.table({k: np.asarray(v) for k, v in cols.items()})
-        if self._w is None:
-            meta = {b"imdrive.units": json.dumps({n: unit_of(n) for n in cols}).encode()}
-            schema = table.schema.with_metadata(meta)
-            # zstd's fastest level: the estimates barely compress, and the writer must keep
-            # up with the estimators (a 10^7-row replay)
-            self._w = pq.ParquetWriter(
-                str(self.path), schema, compression="zstd", compression_level=1
-            )
-        self._w.write_table(table.cast(self._w.schema))
-
-    def close(self) -> None:
-        if self._w is not None:
-            self._w.close()
 
 
 def _finish(folder: Path, res: ReplayResult) -> None:
@@ -161,19 +136,22 @@ def _finish(folder: Path, res: ReplayResult) -> None:
     write_report(res, folder / "report.html")
 
 
-def replay_rows(cols: dict, prev: dict) -> tuple[np.ndarray, bool, list[str]]:
+def replay_rows(cols: dict, prev: np.ndarray, rows: np.ndarray | None = None):
     """A chunk of the recording as :data:`~imdrive.kernels.replay.REPLAY_ROW` rows: each
     row's current, the previous row's current and voltage, the context columns or their
-    defaults.
+    defaults (:func:`~imdrive.kernels.replay.fill_rows`, one compiled pass).
 
     Parameters
     ----------
     cols : dict
         The chunk's recording columns.
-    prev : dict
-        The last row before the chunk: ``i_ab``, ``v_ab`` (for the first chunk the drive's
-        initial ``SAMPLE_STATE``), and ``R1_after``/``R2_after`` (NaN for the first chunk: the
-        recorded model taken as it is). Updated to the chunk's last row.
+    prev : numpy.ndarray, complex128[4]
+        The last row before the chunk: its current, its voltage (for the first chunk the
+        drive's initial ``SAMPLE_STATE``), its ``R1_hat_after`` and ``R2_hat_after`` (NaN for
+        the first chunk: the recorded model taken as it is). Updated to the chunk's last row.
+    rows : numpy.ndarray, optional
+        A ``REPLAY_ROW`` buffer at least as long as the chunk, reused (its first rows are
+        returned); default: a new one.
 
     Returns
     -------
@@ -185,37 +163,28 @@ def replay_rows(cols: dict, prev: dict) -> tuple[np.ndarray, bool, list[str]]:
     """
     c = cols
     n = len(c["time_s"])
-    rows = np.zeros(n, dtype=REPLAY_ROW)
-    rows["t"] = c["time_s"]
-    i_ab = c["i_alpha_meas_A"] + 1j * c["i_beta_meas_A"]
-    v_ab = c["v_alpha_cmd_V"] + 1j * c["v_beta_cmd_V"]
-    rows["i_ab"] = i_ab
-    rows["i_prev_ab"][1:] = i_ab[:-1]
-    rows["i_prev_ab"][0] = prev["i_ab"]
-    rows["v_ab"][1:] = v_ab[:-1]  # commanded at t_{k-1} for the period that ends at t_k
-    rows["v_ab"][0] = prev["v_ab"]
-    prev["i_ab"], prev["v_ab"] = i_ab[-1], v_ab[-1]
+    rows = np.empty(n, dtype=REPLAY_ROW) if rows is None or len(rows) < n else rows[:n]
     defaulted = [name for name in CONTEXT_DEFAULTS if name not in c]
-    ctx = {name: c.get(name, CONTEXT_DEFAULTS[name]) for name in CONTEXT_DEFAULTS}
-    rows["theta_e"] = ctx["theta_e_rad"]
-    rows["w_e"] = ctx["w_e_rad_s"]
-    rows["i_ref_dq"] = np.asarray(ctx["id_ref_A"]) + 1j * np.asarray(ctx["iq_ref_A"])
-    rows["w_ref"] = ctx["w_ref_rad_s"]
-    rows["i_inj"] = ctx["i_inj_A"]
-    rows["hold_R1"] = np.asarray(ctx["hold_R1_flag"]) != 0.0
+    ctx = np.empty((len(CONTEXT_DEFAULTS), n))
+    for j, name in enumerate(CONTEXT_DEFAULTS):
+        ctx[j] = c.get(name, CONTEXT_DEFAULTS[name])
     model_given = all(m in c for m in MODEL_COLUMNS)
+    model = np.empty((len(MODEL_COLUMNS), n if model_given else 0))
     if model_given:
-        rows["R1_hat"] = c["R1_hat_ohm"]
-        rows["R2_hat"] = c["R2_hat_ohm"]
-        rows["M_hat"] = c["M_hat_H"]
-        # the model the run's estimator left at the last sample
-        rows["R1_prev"][1:] = c["R1_hat_after_ohm"][:-1]
-        rows["R2_prev"][1:] = c["R2_hat_after_ohm"][:-1]
-        rows["R1_prev"][0] = prev["R1_after"]
-        rows["R2_prev"][0] = prev["R2_after"]
-        prev["R1_after"] = c["R1_hat_after_ohm"][-1]
-        prev["R2_after"] = c["R2_hat_after_ohm"][-1]
+        for j, name in enumerate(MODEL_COLUMNS):
+            model[j] = c[name]
+    f = np.ascontiguousarray
+    fill_rows(
+        rows, f(c["time_s"], dtype=float), f(c["i_alpha_meas_A"], dtype=float),
+        f(c["i_beta_meas_A"], dtype=float), f(c["v_alpha_cmd_V"], dtype=float),
+        f(c["v_beta_cmd_V"], dtype=float), ctx, model, prev,
+    )  # fmt: skip
     return rows, model_given, defaulted
+
+
+def _prev_row(sample0) -> np.ndarray:
+    """:func:`replay_rows`'s ``prev`` before the first row: the drive's initial samples."""
+    return np.array([sample0["i_prev_ab"], sample0["v_prev_ab"], np.nan, np.nan], complex)
 
 
 class _Errors:
@@ -253,31 +222,42 @@ class _Estimator:
         self.diverged_at = None
         self.errors = _Errors()
         self.R2_end = None
-        self.wall = 0.0
+        self.wall = 0.0  # s, its kernel's wall time (in a thread: waits for a core count)
+        self.cpu = 0.0  # s, its kernel's CPU time
         w, R2 = np.zeros(0), np.zeros(0)  # compile (or load from the cache) before timing
         none = np.zeros(0, REPLAY_ROW)
         replay_estimator(a.params.est, self.mdl, self.est, none, Ts, model_given, w, R2)
 
     def run(self, rows: np.ndarray, enc) -> tuple[np.ndarray, np.ndarray]:
+        """The estimator over ``rows`` (its records carried on): its speed estimate, rpm, and
+        its ``R2_hat``, ohm (NaN from the row after a state stopped being finite). Called
+        from a worker thread: the kernel releases the GIL, and nothing here is shared with
+        the other estimators but the rows, which it only reads."""
         n = len(rows)
-        w = np.full(n, np.nan)
-        R2 = np.full(n, np.nan)
-        if self.status == R_OK:
-            t0 = time.perf_counter()
-            status, k_end = replay_estimator(
-                self.a.params.est, self.mdl, self.est, rows, self.Ts, self.model_given, w, R2
-            )
-            self.wall += time.perf_counter() - t0
-            n_ok = k_end if status == R_OK else k_end - 1
-            if status != R_OK:
-                self.status = status
-                self.diverged_at = float(rows["t"][k_end - 1])
-            if n_ok:
-                self.R2_end = float(R2[n_ok - 1])
-                if enc is not None:
-                    self.errors.add(w[:n_ok] / self.n_p * RPM - enc[:n_ok])
-            self.n_ok += n_ok
-        return w / self.n_p * RPM, R2
+        if self.status != R_OK:
+            return np.full(n, np.nan), np.full(n, np.nan)
+        w = np.empty(n)
+        R2 = np.empty(n)
+        t0, c0 = time.perf_counter(), time.thread_time()
+        status, k_end = replay_estimator(
+            self.a.params.est, self.mdl, self.est, rows, self.Ts, self.model_given, w, R2
+        )
+        self.wall += time.perf_counter() - t0
+        self.cpu += time.thread_time() - c0
+        w[k_end:] = np.nan
+        R2[k_end:] = np.nan
+        n_ok = k_end if status == R_OK else k_end - 1
+        if status != R_OK:
+            self.status = status
+            self.diverged_at = float(rows["t"][k_end - 1])
+        w /= self.n_p  # electrical rad/s -> mechanical rpm
+        w *= RPM
+        if n_ok:
+            self.R2_end = float(R2[n_ok - 1])
+            if enc is not None:
+                self.errors.add(w[:n_ok] - enc[:n_ok])
+        self.n_ok += n_ok
+        return w, R2
 
     def summary(self) -> dict:
         s = {"status": "ok" if self.status == R_OK else "diverged"}
@@ -356,7 +336,6 @@ def replay(
     from imdrive._io import replace_folder
     from imdrive._progress import Progress
     from imdrive.run.build import build_arrays
-    from imdrive.run.decimate import Decimator
 
     rec = _source(recording, mapping)
     sc = _scenario(rec, scenario)
@@ -373,21 +352,21 @@ def replay(
     first = drives[names[0]]
     Ts = float(first.params.sim[0]["Ts"])
     q = decimation(rec, Ts)
-    limits = _limits(sc)
     model_given = all(m in rec.columns for m in MODEL_COLUMNS)
     ests = [_Estimator(n, drives[n], Ts, model_given) for n in names]
     n_rows = rec.rows // q
+    # fill_rows compiled (or loaded from the cache) before the clock starts
+    replay_rows({k: np.zeros(0) for k in REQUIRED}, _prev_row(first.state0.sample[0]))
     t0 = time.perf_counter()
     stage = replace_folder(out) if out is not None else contextlib.nullcontext(None)
     with stage as staging:
         sink = _Sink(ests, first.state0.sample[0], staging, max(1, n_rows // PLOT_POINTS))
         bar = Progress(rec.rows, "replay", unit="rows", enabled=progress, lines=None)
-        with bar:
-            dec = Decimator(q) if q > 1 else None
-            for k0, cols in rec.chunks(chunk_rows):
-                check_units(rec, cols, k0, limits)
-                sink.emit(dec.push(cols) if dec is not None else cols)
-                bar.advance(len(cols["time_s"]))
+        chunks = read_ahead(_chunks(rec, chunk_rows, q, _limits(sc)))
+        with bar, sink, contextlib.closing(chunks):  # closed: its thread stopped, error or not
+            for n_read, cols in chunks:
+                sink.emit(cols)
+                bar.advance(n_read)
         res = sink.result(out)
         elapsed = time.perf_counter() - t0
         res.summary = {
@@ -403,7 +382,8 @@ def replay(
             "context_defaulted": sink.defaulted,
             "model": "the recorded controller's writes" if model_given else "the scenario's",
             "R2_law": "none: R2_hat as the recorded controller wrote it, or the estimator's own",
-            "wall_time_s": sum(e.wall for e in ests),
+            "wall_time_s": sum(e.wall for e in ests),  # in parallel: may exceed elapsed_s
+            "estimators_cpu_s": {e.name: e.cpu for e in ests},
             "elapsed_s": elapsed,
             "real_time_factor": sink.done * Ts / elapsed if elapsed > 0 else None,
             "estimators": {e.name: e.summary() for e in ests},
@@ -414,36 +394,96 @@ def replay(
     return res
 
 
+def _chunks(rec, chunk_rows: int, q: int, limits: dict):
+    """(rows read, recording columns) chunks: read, every value checked, the units checked
+    against the machine (:func:`check_units`), decimated where ``q > 1``. Run a chunk ahead
+    in a thread of its own (:func:`~imdrive.run.replay_stream.read_ahead`)."""
+    from imdrive.run.decimate import Decimator
+
+    dec = Decimator(q) if q > 1 else None
+    for k0, cols in rec.chunks(chunk_rows):
+        check_units(rec, cols, k0, limits)
+        yield len(cols["time_s"]), (dec.push(cols) if dec is not None else cols)
+
+
 class _Sink:
-    """Where the replayed chunks go: every estimator run over them, the estimates written
-    (``timeseries.parquet`` in ``staging``) or kept in memory, every ``stride``-th row kept
-    for the figures."""
+    """Where the replayed chunks go: every estimator run over them, each in a thread of its
+    own, the estimates written (``timeseries.parquet`` in ``staging``, by a thread of its
+    own) or kept in memory, every ``stride``-th row kept for the figures.
+
+    The estimators are not held at a barrier after each chunk: a chunk's rows are handed to
+    every estimator's thread (which takes its chunks in order, its records carried on) and
+    collected, in order, once every estimator is done with it, while up to :attr:`DEPTH`
+    later chunks are under way; a fast estimator runs ahead instead of waiting for the slow
+    one. A context manager: on leaving it every thread has finished, error or not (before a
+    refusal removes the staging folder)."""
+
+    #: chunks handed to the estimators and not yet collected, at most
+    DEPTH = 2
 
     def __init__(self, ests, sample0, staging, stride: int):
         self.ests = ests
-        self.prev = {
-            "i_ab": sample0["i_prev_ab"],
-            "v_ab": sample0["v_prev_ab"],
-            "R1_after": np.nan,
-            "R2_after": np.nan,
-        }
-        self.writer = _Writer(staging) if staging is not None else None
+        self.prev = _prev_row(sample0)
+        self.free: list[np.ndarray] = []  # REPLAY_ROW buffers of collected chunks, reused
+        self.pending: collections.deque = collections.deque()
+        self.writer = EstimateWriter(staging) if staging is not None else None
+        parallel = len(ests) > 1 and (os.cpu_count() or 1) > 1
+        self.threads = (
+            [ThreadPoolExecutor(1, f"imdrive-replay-{e.name}") for e in ests] if parallel else None
+        )
         self.memory: dict[str, list] = {}
         self.kept: dict[str, list] = {}
         self.stride = stride
         self.done = 0
         self.defaulted: list[str] = []
 
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        try:
+            if exc[0] is None:
+                while self.pending:
+                    self._collect()
+        finally:
+            for t in self.threads or ():
+                t.shutdown(wait=True, cancel_futures=True)
+            if self.writer is not None:
+                writer, self.writer = self.writer, None
+                if exc[0] is None:
+                    writer.close()
+                else:
+                    with contextlib.suppress(Exception):  # the error that got here is the one
+                        writer.close()
+
     def emit(self, cols: dict) -> None:
         if not cols or len(cols["time_s"]) == 0:
             return
-        rows, _, self.defaulted = replay_rows(cols, self.prev)
+        n = len(cols["time_s"])
+        buf = next((b for b in self.free if len(b) >= n), None)
+        if buf is not None:
+            self.free.remove(buf)
+        rows, _, self.defaulted = replay_rows(cols, self.prev, buf)
+        enc = cols.get("speed_enc_rpm")
+        if self.threads is None:
+            out = [e.run(rows, enc) for e in self.ests]
+        else:
+            out = [t.submit(e.run, rows, enc) for t, e in zip(self.threads, self.ests, strict=True)]
+        self.pending.append((cols, rows if buf is None else buf, out))
+        while len(self.pending) > (self.DEPTH if self.threads is not None else 0):
+            self._collect()
+
+    def _collect(self) -> None:
+        """The oldest chunk's estimates, written and kept."""
+        cols, buf, out = self.pending.popleft()
+        if self.threads is not None:
+            out = [f.result() for f in out]
+        self.free.append(buf)
         enc = cols.get("speed_enc_rpm")
         sig = {"time_s": cols["time_s"]}
         if enc is not None:
             sig["speed_enc_rpm"] = enc
-        for e in self.ests:
-            speed, R2 = e.run(rows, enc)
+        for e, (speed, R2) in zip(self.ests, out, strict=True):
             sig[column_name(e.name, "speed_est", "rpm")] = speed
             sig[column_name(e.name, "R2_hat", "ohm")] = R2
         if self.writer is not None:
@@ -452,15 +492,13 @@ class _Sink:
             for k, v in sig.items():
                 self.memory.setdefault(k, []).append(v)
         first = (-self.done) % self.stride
-        for k, v in sig.items():
-            self.kept.setdefault(k, []).append(v[first :: self.stride])
-        self.done += len(rows)
+        for k, v in sig.items():  # a copy: a view would keep the whole chunk alive
+            self.kept.setdefault(k, []).append(v[first :: self.stride].copy())
+        self.done += len(sig["time_s"])
 
     def result(self, out) -> ReplayResult:
-        if self.writer is not None:
-            self.writer.close()
         signals = None
-        if self.writer is None:
+        if out is None:
             signals = {k: np.concatenate(v) for k, v in self.memory.items()}
         res = ReplayResult(signals, {}, out)
         res.plot = {k: np.concatenate(v) for k, v in self.kept.items()}

@@ -123,15 +123,20 @@ def check_units(rec, cols: dict, k0: int, limits: dict) -> None:
     the machine's rated one (a unit or scale that contradicts the scenario): one line
     naming the file's column, the row and the rule."""
     checks = [
-        ("i", np.hypot(cols["i_alpha_meas_A"], cols["i_beta_meas_A"]), "i_alpha_meas_A"),
-        ("v", np.hypot(cols["v_alpha_cmd_V"], cols["v_beta_cmd_V"]), "v_alpha_cmd_V"),
+        ("i", ("i_alpha_meas_A", "i_beta_meas_A")),
+        ("v", ("v_alpha_cmd_V", "v_beta_cmd_V")),
     ]
     if "speed_enc_rpm" in cols:
-        checks.append(("n", np.abs(cols["speed_enc_rpm"]), "speed_enc_rpm"))
-    for key, mag, name in checks:
-        if key not in limits:
+        checks.append(("n", ("speed_enc_rpm",)))
+    for key, names in checks:
+        if key not in limits or len(cols[names[0]]) == 0:
             continue
         lim, rated, unit, units = limits[key]
+        name = names[0]
+        square = sum(cols[c] * cols[c] for c in names)  # no hypot: a square is cheaper
+        if not np.max(square) > lim * lim:
+            continue
+        mag = np.sqrt(square)
         bad = np.flatnonzero(mag > lim)
         if bad.size:
             k = int(bad[0])

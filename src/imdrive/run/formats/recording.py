@@ -19,7 +19,8 @@ FORMAT = OutputFormat(
     write=_write,
     description="what the controller saw every control period (measured currents, DC-link "
     "voltage, commanded voltage, encoder speed, injection, and the context its estimator "
-    "read), zstd Parquet with units in the schema metadata, and recording.toml (units, sample "
-    "period, estimator, the scenario): the input of `imdrive replay`",
+    "read), zstd Parquet (floats byte-stream split) with units in the schema metadata, and "
+    "recording.toml (units, sample period, estimator, the scenario): the input of "
+    "`imdrive replay`",
     order=35,
 )
