@@ -117,6 +117,7 @@ INTRA = {
         "circuit",
         "foc",
         "figures",
+        "inertia",
         "nameplate_lee",
         "nameplate_catalogue",
         "nameplate_fit",

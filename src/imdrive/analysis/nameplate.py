@@ -37,6 +37,7 @@ import warnings
 from dataclasses import dataclass, field
 
 from imdrive.analysis.circuit import equivalent_circuit
+from imdrive.analysis.inertia import inertia_constant_s, inertia_problem, rotor_inertia_kgm2
 from imdrive.analysis.nameplate_catalogue import catalogue_circuit
 from imdrive.analysis.nameplate_fit import DEFAULT_BREAKDOWN_RATIO, fit_circuit
 from imdrive.analysis.nameplate_lee import (
@@ -86,8 +87,23 @@ DEFAULT_CODE_LETTER = "G"
 #: X1 / (X1 + X2) by NEMA design letter (IEEE Std 112).
 LEAKAGE_SPLIT = {"A": 0.5, "B": 0.4, "C": 0.3, "D": 0.5, "wound": 0.5}
 
-#: An inertia constant ``H = J w_m^2 / (2 P)``, s, for a J the data do not give.
-DEFAULT_INERTIA_CONSTANT_S = 0.5
+#: Deprecated names -> (value, what replaced them): importable, with a DeprecationWarning.
+_DEPRECATED = {
+    "DEFAULT_INERTIA_CONSTANT_S": (
+        0.5,
+        "the inertia constant H = J w_m^2 / (2 P), s, that set a J the data do not give in "
+        "imdrive 0.1; J now comes from the rotor's size "
+        "(imdrive.analysis.inertia.rotor_inertia_kgm2)",
+    ),
+}
+
+
+def __getattr__(name: str):
+    if name in _DEPRECATED:
+        value, what = _DEPRECATED[name]
+        warnings.warn(f"{name} is deprecated: {what}", DeprecationWarning, stacklevel=2)
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 @dataclass(frozen=True)
@@ -120,8 +136,9 @@ class Nameplate:
         ``X1 / (X1 + X2)``, dimensionless (:data:`LEAKAGE_SPLIT`); freed when both the
         breakdown torque and the starting current are given.
     J_kgm2 : float or None
-        Rotor inertia, kg m^2; ``None``: from an inertia constant of
-        :data:`DEFAULT_INERTIA_CONSTANT_S`.
+        Rotor inertia, kg m^2; ``None``: that of a rotor of this size,
+        ``J = k_J (T_n / 1 N m)^a_J`` (:func:`~imdrive.analysis.inertia.rotor_inertia_kgm2`,
+        imdrive's fit to catalogue motors). One more than 4 times off it is warned about.
     code_letter : str or None
         NEMA code letter (locked-rotor kVA per hp,
         :data:`~imdrive.analysis.nameplate_lee.NEMA_CODE_LETTERS`), used by ``method="lee"``
@@ -290,7 +307,8 @@ def estimate_circuit(
     Warns
     -----
     ConfigWarning
-        A rated slip outside :data:`SLIP_RANGE`.
+        A rated slip outside :data:`SLIP_RANGE`; a given J more than
+        :data:`~imdrive.analysis.inertia.INERTIA_WARN_FACTOR` times off a rotor of this size.
     DeprecationWarning
         ``method`` ``"lee"``, ``"fit"`` or not given.
 
@@ -340,7 +358,12 @@ def _estimate_circuit(plate, description, method, **options) -> NameplateFit:
 
 
 def _warn_suspicious(p: Nameplate) -> None:
-    """A :class:`~imdrive.errors.ConfigWarning` for a rated slip outside :data:`SLIP_RANGE`."""
+    """A :class:`~imdrive.errors.ConfigWarning` for a rated slip outside :data:`SLIP_RANGE`
+    and for a given J far from a rotor of this size
+    (:func:`~imdrive.analysis.inertia.inertia_problem`)."""
+    problem = None if p.J_kgm2 is None else inertia_problem(p.J_kgm2, p.power_W, p.speed_rpm)
+    if problem is not None:
+        warnings.warn(ConfigWarning("J_kgm2", problem), stacklevel=4)
     lo, hi = SLIP_RANGE
     if not lo <= p.slip <= hi:
         warnings.warn(
@@ -355,13 +378,16 @@ def _warn_suspicious(p: Nameplate) -> None:
 
 def _machine(p: Nameplate, R1, R2, X1, X2, XM, description: str, assumed: list) -> MachineParams:
     """The MachineParams of a circuit (ohm at the rated frequency) and its nameplate; J from
-    the plate or an inertia constant (appended to ``assumed``)."""
+    the plate or, when it gives none, a rotor of its size (appended to ``assumed``)."""
     w_e = 2.0 * math.pi * p.frequency_Hz
     J = p.J_kgm2
     if J is None:
-        w_m = p.speed_rpm * math.pi / 30.0
-        J = 2.0 * DEFAULT_INERTIA_CONSTANT_S * p.power_W / w_m**2
-        assumed.append(f"J from an inertia constant H = {DEFAULT_INERTIA_CONSTANT_S:g} s")
+        J = rotor_inertia_kgm2(p.power_W, p.speed_rpm)
+        H = inertia_constant_s(J, p.power_W, p.speed_rpm)
+        assumed.append(
+            f"J = {J:.3g} kg m^2 of a rotor of this size (inertia constant H = {H:.3g} s; "
+            "imdrive.analysis.inertia, fitted to catalogue motors of 0.75-22 kW)"
+        )
     return MachineParams(
         R1_ohm=R1,
         R2_ohm=R2,

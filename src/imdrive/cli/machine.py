@@ -70,7 +70,9 @@ def add_parser(sub) -> None:
         ("--stray-loss-fraction", "stray-load loss / rated power (default IEEE Std 112's)"),
     ):
         mn.add_argument(flag, type=float, help=text)
-    mn.add_argument("--J", type=float, help="rotor inertia, kg m^2 (default: H = 0.5 s)")
+    mn.add_argument(
+        "--J", type=float, help="rotor inertia, kg m^2 (default: that of a rotor of this size)"
+    )
     mn.add_argument("--description", help="text for the machine's description")
     mn.add_argument("--out", metavar="FILE", help="write the TOML here (default: stdout)")
     mn.set_defaults(func=_cmd_machine_from_nameplate)

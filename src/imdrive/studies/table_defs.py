@@ -260,6 +260,32 @@ register(
 )
 
 
+# docs/nameplate.md: the default rotor inertia against catalogue motors
+# (imdrive.studies.inertia_catalogue)
+
+
+def _inertia_catalogue(df) -> list[str]:
+    from imdrive.studies.inertia_catalogue import markdown
+
+    return markdown(df)
+
+
+def _measure_inertia_catalogue():
+    from imdrive.studies.inertia_catalogue import run
+
+    return run()
+
+
+register(
+    DocTable(
+        "inertia-catalogue",
+        "nameplate.md",
+        "data/inertia_catalogue.csv",
+        _inertia_catalogue,
+        _measure_inertia_catalogue,
+    )
+)
+
 # ---------------------------------------------------------------------------------------------
 # docs/machine-envelope.md: why the large machines lose control at rated speed
 
