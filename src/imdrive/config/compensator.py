@@ -26,13 +26,21 @@ HARMONICS = (1, 2, 3)
 class CompensatorSettings:
     """The fuzzy rotor-resistance compensator (``[compensator]``, paper §4).
 
-    ``gain_E_per_Wb`` and ``gain_DE_per_Wb`` scale e_d0 and its change per period before the
-    quantiser (thresholds 0.25 ... 5): 1e6 reproduces the paper's micro-weber thresholds.
-    ``G_CR_ohm`` is the change of R2_hat per output level and period. Unset, these and the
-    gate's thresholds are the paper's numbers on Table IV scaled to the machine
-    (:mod:`imdrive.config.compensator_gains`). The clamps default to
-    0.5 and 2 times the initial estimate. ``period_s`` defaults to 10 ms, or to one injection
-    period with ``input = "demodulated"``.
+    ``gain_E_pu`` and ``gain_DE_pu`` scale e_d0 and its change per period before the
+    quantiser (thresholds 0.25 ... 5), in per-unit of ``1/ψ_rated``: the paper's 1e6 /Wb (its
+    micro-weber thresholds) is 463116 on Table IV. ``G_CR_pu`` is the change of R2_hat per
+    output level and period in per-unit of the initial R̂2. Unset, these and the gate's
+    thresholds are the paper's numbers on Table IV scaled to the machine
+    (:mod:`imdrive.config.compensator_gains`). The clamps ``R2_min_ratio``, ``R2_max_ratio``
+    default to 0.5 and 2 times the initial estimate. ``period_s`` defaults to 10 ms, or to one
+    injection period with ``input = "demodulated"``.
+
+    Each of these had an absolute spelling (``gain_E_per_Wb``, ``gain_DE_per_Wb``,
+    ``G_CR_ohm``, ``R2_min_ohm``, ``R2_max_ohm``; deprecated twins since round 7, they still
+    act with a warning): the per-unit value times its base is the absolute one, and every
+    preset's absolute value is reproduced to the last bit by the per-unit value it states
+    now, or by the default that is the paper's number on Table IV (tests/config/
+    test_deprecated_twins.py).
     """
 
     enabled: Annotated[Bool, setting("run the fuzzy R2 compensator")] = False
@@ -77,44 +85,45 @@ class CompensatorSettings:
     G_CR_pu: Annotated[
         Float | None,
         setting(
-            "change of R̂2 per output level and period in per-unit of the initial R̂2; when "
-            "set it replaces G_CR_ohm, so the step follows the machine",
+            "change of R̂2 per output level and period in per-unit of the initial R̂2, so the "
+            "step follows the machine",
             ge=0.0,
-            default_doc="unset: G_CR_ohm",
+            default_doc="the paper's 0.001 ohm on Table IV scaled by the machine's R2 (0.12 % "
+            "of it)",
         ),
     ] = None
     gain_E_pu: Annotated[
         Float | None,
         setting(
-            "gain_E_per_Wb in per-unit of the machine's rated flux (gain_E_per_Wb = gain_E_pu "
-            "/ ψ_rated); when set it replaces gain_E_per_Wb",
+            "scaling of e_d0 before the 13-level quantiser, in per-unit of 1/ψ_rated (the "
+            "scaling is gain_E_pu / ψ_rated, 1/Wb)",
             gt=0.0,
-            default_doc="unset: gain_E_per_Wb",
+            default_doc="the paper's 1e6 /Wb on Table IV: 1e6 × its ψ_rated, 463116",
         ),
     ] = None
     gain_DE_pu: Annotated[
         Float | None,
         setting(
-            "gain_DE_per_Wb in per-unit of the machine's rated flux; when set it replaces "
-            "gain_DE_per_Wb",
+            "scaling of the change of e_d0 per period before the quantiser, in per-unit of "
+            "1/ψ_rated",
             gt=0.0,
-            default_doc="unset: gain_DE_per_Wb",
+            default_doc="the paper's 1e6 /Wb on Table IV: 463116",
         ),
     ] = None
     R2_min_ratio: Annotated[
         Float | None,
         setting(
-            "lower clamp of R̂2 as a multiple of the initial R̂2 (instead of R2_min_ohm)",
+            "lower clamp of R̂2 as a multiple of the initial R̂2",
             gt=0.0,
-            default_doc="0.5 unless R2_min_ohm is set",
+            default_doc="0.5",
         ),
     ] = None
     R2_max_ratio: Annotated[
         Float | None,
         setting(
-            "upper clamp of R̂2 as a multiple of the initial R̂2 (instead of R2_max_ohm)",
+            "upper clamp of R̂2 as a multiple of the initial R̂2",
             gt=0.0,
-            default_doc="2 unless R2_max_ohm is set",
+            default_doc="2",
         ),
     ] = None
     R2_min_ohm: Annotated[
@@ -272,23 +281,29 @@ class InjectionSettings:
     R2 identification from a low-frequency AC flux component is Kubota & Matsuse (IEEE Trans.
     Ind. Appl. 30(5), 1994); feeding its demodulated flux error to the paper's table is ours.
 
-    ``amplitude_A`` = 0 switches it off. The compensator's ``input = "demodulated"`` feeds on
-    e_d0 detected synchronously with this sinusoid; its period must be a whole number of
+    ``amplitude_pu`` unset or 0 switches it off. The compensator's ``input = "demodulated"``
+    feeds on e_d0 detected synchronously with this sinusoid; its period must be a whole number of
     periods of every injection frequency it uses (the default compensator period for that
     input is one; :func:`check_whole_injection_periods`).
     """
 
     amplitude_A: Annotated[
-        Float, setting("amplitude of the sinusoid added to id* (0: off)", "A", ge=0.0)
-    ] = 0.0
+        Float | None,
+        setting(
+            "amplitude of the sinusoid added to id* (0: off)",
+            "A",
+            ge=0.0,
+            default_doc="unset: amplitude_pu (0: off)",
+        ),
+    ] = None
     amplitude_pu: Annotated[
         Float | None,
         setting(
-            "the amplitude in per-unit of the machine's rated magnetising current ψ_rated/M "
-            "(peak); when set it replaces amplitude_A, so the excitation follows the machine",
+            "the amplitude of the sinusoid added to id* in per-unit of the machine's rated "
+            "magnetising current ψ_rated/M (peak; 0: off), so the excitation follows the machine",
             ge=0.0,
             lt=1.0,
-            default_doc="unset: amplitude_A",
+            default_doc="0 (off)",
         ),
     ] = None
     frequency_Hz: Annotated[
@@ -306,10 +321,11 @@ class InjectionSettings:
         setting(
             "the frequency in per-unit of the rotor's corner frequency R̂2/(2π L̂2) of the "
             "controller's starting model, where the in-phase sensitivity of the detection "
-            "peaks; when set it replaces frequency_Hz, rounded so a period is a whole number "
-            "of control periods",
+            "peaks; rounded so a period is a whole number of control periods",
             gt=0.0,
-            default_doc="unset: frequency_Hz",
+            default_doc="Table IV's 2 Hz scaled by the machine's rotor corner R2/(2π L2) "
+            "(1.098 × it), to whole control periods (config/compensator_gains.py "
+            "injection_frequency_Hz): exactly 2 Hz on Table IV",
         ),
     ] = None
     headroom: Annotated[
@@ -362,6 +378,14 @@ class InjectionSettings:
     ] = 0.3
 
 
+def injection_amplitude_given(inj) -> float:
+    """The injection's amplitude as stated, in its own unit (per-unit or, deprecated, A): 0
+    when neither ``amplitude_pu`` nor ``amplitude_A`` is set; whether it is on is its sign."""
+    if inj.amplitude_pu is not None:
+        return inj.amplitude_pu
+    return inj.amplitude_A if inj.amplitude_A is not None else 0.0
+
+
 def _first_frequency(inj) -> float:
     """The injection frequency without the scenario's machine (no resolved values at hand):
     as given, else Table IV's default."""
@@ -401,7 +425,7 @@ def injection_frequencies_in_use(
     ``r``: the resolved per-unit values (their frequency and amplitude replace the absolute
     keys, named ``..._pu`` then).
     """
-    amp = inj.amplitude_A if r is None else r.inj_amp
+    amp = injection_amplitude_given(inj) if r is None else r.inj_amp
     if not (comp.enabled and amp > 0.0):
         return []
     key = (
@@ -518,3 +542,19 @@ for _n in ("frequency2", "frequency3"):
 for _key in ("gate_speed", "gate_iq", "gate_band"):
     _unit = {"gate_speed": "rpm", "gate_iq": "A", "gate_band": "Hz"}[_key]
     deprecated_twin("compensator", f"{_key}_{_unit}", f"{_key}_pu")
+# The table law's scalings and step, the clamps, the injections' amplitude and frequency in
+# absolute units (round 7, issue 38): each is one setting with its per-unit twin
+# (config/pairs.py), and the presets state the twin with the value that gives the same float
+# on Table IV (or leave it to its default, which is the paper's number there).
+for _section, _key, _twin in (
+    ("compensator", "gain_E_per_Wb", "gain_E_pu"),
+    ("compensator", "gain_DE_per_Wb", "gain_DE_pu"),
+    ("compensator", "G_CR_ohm", "G_CR_pu"),
+    ("compensator", "R2_min_ohm", "R2_min_ratio"),
+    ("compensator", "R2_max_ohm", "R2_max_ratio"),
+    ("injection", "frequency_Hz", "frequency_pu"),
+    ("flux_injection", "frequency_Hz", "frequency_pu"),  # (config/estimators.py's section)
+):
+    deprecated_twin(_section, _key, _twin)
+# 0 A was its default (the injection off): a scenario written out in full states it
+deprecated_twin("injection", "amplitude_A", "amplitude_pu", unset=0.0)

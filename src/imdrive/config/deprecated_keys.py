@@ -27,6 +27,10 @@ DEPRECATED_VALUES: dict[tuple[str, str, object], tuple[object, str]] = {}
 #: :mod:`imdrive.config.pairs`) with a warning, listed apart from the tables.
 DEPRECATED_TWINS: dict[tuple[str, str], str] = {}
 
+#: ``(section, key)`` -> the value of a deprecated twin that states nothing (its old default,
+#: which a scenario written out in full carries: ``injection.amplitude_A = 0.0``): not warned.
+TWIN_UNSET: dict[tuple[str, str], object] = {}
+
 
 def deprecated_key(section: str, key: str, why: str) -> None:
     """Register ``[section] key`` as deprecated: accepted, dropped, warned with ``why``."""
@@ -38,10 +42,13 @@ def deprecated_value(section: str, key: str, old, new, why: str) -> None:
     DEPRECATED_VALUES[(section, key, old)] = (new, why)
 
 
-def deprecated_twin(section: str, key: str, twin: str) -> None:
+def deprecated_twin(section: str, key: str, twin: str, unset=None) -> None:
     """Register ``[section] key`` as the deprecated absolute spelling of ``[section] twin``:
-    it still acts, with a warning, and is listed apart in docs/scenarios.md."""
+    it still acts, with a warning, and is listed apart in docs/scenarios.md. ``unset``: a value
+    besides None that states nothing (its old default), left without a warning."""
     DEPRECATED_TWINS[(section, key)] = twin
+    if unset is not None:
+        TWIN_UNSET[(section, key)] = unset
 
 
 def is_deprecated(path) -> bool:
@@ -73,7 +80,8 @@ def drop_deprecated(data: dict) -> dict:
             )
     for (section, key), twin in DEPRECATED_TWINS.items():
         table = out.get(section)
-        if isinstance(table, dict) and table.get(key) is not None:
+        value = table.get(key) if isinstance(table, dict) else None
+        if value is not None and not _states_nothing(section, key, value):
             warnings.warn(
                 ConfigWarning(
                     f"{section}.{key}",
@@ -95,6 +103,11 @@ def drop_deprecated(data: dict) -> dict:
                 stacklevel=3,
             )
     return out
+
+
+def _states_nothing(section: str, key: str, value) -> bool:
+    unset = TWIN_UNSET.get((section, key))
+    return unset is not None and not isinstance(value, bool) and value == unset
 
 
 def markdown_lines() -> list[str]:

@@ -246,7 +246,9 @@ def _resolve(sc) -> Resolved:
         G_CR=g.G_CR,
         gain_E=g.gain_E,
         gain_DE=g.gain_DE,
-        inj_amp=inj.amplitude_A if inj.amplitude_pu is None else inj.amplitude_pu * psi / m.M_H,
+        inj_amp=(
+            (inj.amplitude_A or 0.0) if inj.amplitude_pu is None else inj.amplitude_pu * psi / m.M_H
+        ),
         inj_f1=f1,
         inj_f2=f2,
         inj_f3=f3,
