@@ -44,7 +44,17 @@ class CompensatorSettings:
     """
 
     enabled: Annotated[Bool, setting("run the fuzzy R2 compensator")] = False
-    t_on_s: Annotated[Float, setting("time the compensator starts", "s", ge=0.0)] = 0.0
+    t_on_s: Annotated[
+        Float,
+        setting(
+            "time R2 tracking starts, the compensator and its injection ([injection]), in the "
+            "duty cycle's time: it moves with the speed and load profiles when the drive's "
+            "sequence delays them (the premagnetisation, the standstill R1 test's wait; "
+            "config/sequence.py)",
+            "s",
+            ge=0.0,
+        ),
+    ] = 0.0
     period_s: Annotated[
         Float | None,
         setting(
@@ -357,7 +367,6 @@ class InjectionSettings:
             default_doc="unset: no lowering, and no injection in field weakening",
         ),
     ] = None
-    t_on_s: Annotated[Float, setting("time the injection starts", "s", ge=0.0)] = 0.0
     decouple_slip: Annotated[
         Bool,
         setting(
@@ -529,6 +538,9 @@ _REPLACED = {
     "it and 1 closer, and 34 of 36 within 2 % either way",
     ("injection", "lowpass_rad_s"): "it filtered the detected product for display only; the "
     "product is logged every sample (e_d0_demod): filter it where it is plotted",
+    ("injection", "t_on_s"): "the injection starts with the compensator, at compensator.t_on_s "
+    "(which moves with the drive's sequence as the profiles do): every preset, sweep and study "
+    "that set both set them equal",
     ("compensator", "gate_hold_periods"): "one whole decision window after a gated one is held on "
     "every drive (GATE_HOLD_PERIODS in run/compensator_blocks.py), the value every preset and "
     "study used",
