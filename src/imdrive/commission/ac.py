@@ -168,7 +168,6 @@ def ac_test(
             injection={
                 "amplitude_A": I_ac,
                 "frequency_Hz": f,
-                "headroom": False,
             },
             flux_injection=dither(sc, I_dc, f),
             estimator=model,

@@ -43,7 +43,7 @@ def compensator_fields(sc: Scenario, D: Resolved) -> tuple[dict, dict]:
         R2_min=R2_min,
         R2_max=R2_max,
         demodulated=comp.input == "demodulated",
-        average=comp.average,
+        average=True,  # the window's mean, always (compensator.average: deprecated)
         inj_amp=r.inj_amp,
         inj_freq=r.inj_f1,
         inj_t_on=t_on,  # the injection starts with the compensator
@@ -127,7 +127,9 @@ def _gating(sc, r) -> dict:
     on = comp.gating if comp.gating is not None else comp.input == "demodulated"
     out = {}
     inj = sc.injection
-    headroom = inj.headroom if inj.headroom is not None else field_weakening_on(sc)
+    # the amplitude backs off near the voltage limit whenever the field weakening is on
+    # (injection.headroom, deprecated: config/compensator.py)
+    headroom = field_weakening_on(sc)
     if headroom and r.inj_amp > 0.0:
         if not inj.headroom_from < inj.headroom_to:
             raise ConfigError("injection.headroom_from", "must be < injection.headroom_to")

@@ -1,0 +1,66 @@
+"""R2-tracking settings replaced by a rule in round 7 (issue 38): ``compensator.average`` (the
+decision window's mean, always) and ``injection.headroom`` (on exactly with the field
+weakening). Each is accepted with a warning that says the rule, and has no effect; the
+measurements behind the rules are in their deprecation notes (config/compensator.py).
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import pytest
+
+from imdrive.config.field_weakening import field_weakening_on
+from imdrive.config.scenario import Scenario
+from imdrive.run.build import build_arrays
+
+
+def _read(preset, *overrides):
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        sc = Scenario.read(preset, list(overrides))
+    return sc, [str(w.message) for w in caught]
+
+
+@pytest.mark.parametrize("preset", ["paper-fig5", "injection-fig5-realistic"])
+def test_the_compensators_input_is_always_the_windows_mean(preset):
+    sc, notes = _read(preset, "compensator.average=false")
+    (note,) = [n for n in notes if n.startswith("compensator.average")]
+    assert "no longer has any effect" in note and "mean over the decision window" in note
+    assert build_arrays(sc).params.comp[0]["average"]  # the mean, as without the key
+    assert (
+        build_arrays(sc).params.comp.tobytes()
+        == build_arrays(_read(preset)[0]).params.comp.tobytes()
+    )
+
+
+NO_FIELD_WEAKENING = {"control.field_weakening": False, "injection.headroom_voltage": None}
+
+
+@pytest.mark.parametrize(
+    ("overrides", "backs_off"),
+    [
+        ({}, True),  # injection-robust: field weakening on
+        ({"injection.headroom": False}, True),  # the key is gone: the rule decides
+        (NO_FIELD_WEAKENING, False),
+        (NO_FIELD_WEAKENING | {"injection.headroom": True}, False),
+    ],
+)
+def test_the_injection_backs_off_exactly_with_the_field_weakening(overrides, backs_off):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sc = Scenario.read("injection-robust").with_overrides(overrides)
+    comp = build_arrays(sc).params.comp[0]
+    assert field_weakening_on(sc) == backs_off
+    assert (comp["inj_v_hi"] > 0.0) == backs_off
+    if backs_off:
+        assert (comp["inj_v_lo"], comp["inj_v_hi"]) == (
+            sc.injection.headroom_from,
+            sc.injection.headroom_to,
+        )
+
+
+def test_the_headroom_key_warns_with_its_rule():
+    _, notes = _read("injection-robust", "injection.headroom=false")
+    (note,) = [n for n in notes if n.startswith("injection.headroom:")]
+    assert "exactly when the field weakening is on" in note
