@@ -20,7 +20,6 @@ INJ = ["compensator.enabled=true", 'compensator.input="demodulated"']
 #: key=value -> (its per-unit twin, how the resolved scenario reads it)
 TWINS = {
     "compensator.gain_E_per_Wb=1234.5": ("compensator.gain_E_pu", lambda sc, r: r.gain_E),
-    "compensator.gain_DE_per_Wb=1234.5": ("compensator.gain_DE_pu", lambda sc, r: r.gain_DE),
     "compensator.G_CR_ohm=1234.5e-6": ("compensator.G_CR_pu", lambda sc, r: r.G_CR * 1e6),
     "compensator.R2_min_ohm=0.5": ("compensator.R2_min_ratio", lambda sc, r: r.R2_min),
     "compensator.R2_max_ohm=1.5": ("compensator.R2_max_ratio", lambda sc, r: r.R2_max),

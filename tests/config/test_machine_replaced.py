@@ -52,7 +52,6 @@ frequency_Hz = 2.0
 enabled = true
 input = "demodulated"
 gain_E_per_Wb = 1000.0
-gain_DE_per_Wb = 1000.0
 G_CR_ohm = 0.02
 R2_min_ohm = 0.408
 R2_max_ohm = 1.224
@@ -63,10 +62,10 @@ def test_many_settings_are_counted_not_dropped(tmp_path):
     path = tmp_path / "absolute.toml"
     path.write_text(ABSOLUTE)  # a user's file of before round 7: every key absolute
     (msg,) = _machine_warnings(str(path), ['machine.preset="aalto-2.2kw"'])
-    # 10 absolute settings are stated: the speed and load profiles (rpm, N m), the
-    # compensator's clamps and table gains, the estimator's R2, the injection's amplitude and
-    # frequency; six are shown, the rest counted
-    assert msg.count(" = ") == 6 and "and 4 more" in msg
+    # 9 absolute settings are stated: the speed and load profiles (rpm, N m), the
+    # compensator's clamps, table gain and step, the estimator's R2, the injection's amplitude
+    # and frequency; six are shown, the rest counted
+    assert msg.count(" = ") == 6 and "and 3 more" in msg
     assert "control.speed_ref_rpm = " in msg and "load.torque_pu" in msg
     (msg,) = _machine_warnings("injection-fig5", ['machine.preset="aalto-2.2kw"'])
     # the profiles, R2_hat(0) and the online R1 law's rate

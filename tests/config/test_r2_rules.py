@@ -64,3 +64,17 @@ def test_the_headroom_key_warns_with_its_rule():
     _, notes = _read("injection-robust", "injection.headroom=false")
     (note,) = [n for n in notes if n.startswith("injection.headroom:")]
     assert "exactly when the field weakening is on" in note
+
+
+@pytest.mark.parametrize("preset", ["paper-fig5", "injection-fig5-realistic"])
+def test_the_change_of_e_is_scaled_as_e(preset):
+    """The paper's Tables I and II quantise E and DE on one set of micro-weber thresholds:
+    one gain, ``gain_E_pu`` (the paper's 1e6 /Wb, the realistic presets' 1000 /Wb)."""
+    sc, _ = _read(preset)
+    comp = build_arrays(sc).params.comp[0]
+    assert comp["G_DE"] == comp["G_E"] == (1e6 if preset == "paper-fig5" else 1000.0)
+    given, notes = _read(preset, "compensator.gain_DE_pu=1.0", "compensator.gain_E_pu=2.0")
+    (note,) = [n for n in notes if n.startswith("compensator.gain_DE_pu")]
+    assert "no longer has any effect" in note and "scaled as E" in note
+    comp = build_arrays(given).params.comp[0]
+    assert comp["G_DE"] == comp["G_E"] == 2.0 / sc.machine.rated_flux_Wb

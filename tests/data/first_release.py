@@ -24,8 +24,7 @@ FIRST_RELEASE = {
     "injection.headroom_to": 0.95,
     "compensator.step_law": "table",  # the paper's table with the first release's scaling
     "compensator.table": "paper",
-    "compensator.gain_E_pu": 463.1158419669872,  # 1000 /Wb on Table IV, to the bit
-    "compensator.gain_DE_pu": 463.1158419669872,
+    "compensator.gain_E_pu": 463.1158419669872,  # 1000 /Wb on Table IV (E and DE), to the bit
     # the step and the clamps in ohm as the first release had them, whatever R2_hat(0) a test
     # sets (deprecated spellings: their per-unit twins are of R2_hat(0))
     "compensator.G_CR_ohm": 0.02,

@@ -26,21 +26,22 @@ HARMONICS = (1, 2, 3)
 class CompensatorSettings:
     """The fuzzy rotor-resistance compensator (``[compensator]``, paper §4).
 
-    ``gain_E_pu`` and ``gain_DE_pu`` scale e_d0 and its change per period before the
-    quantiser (thresholds 0.25 ... 5), in per-unit of ``1/ψ_rated``: the paper's 1e6 /Wb (its
-    micro-weber thresholds) is 463116 on Table IV. ``G_CR_pu`` is the change of R2_hat per
-    output level and period in per-unit of the initial R̂2. Unset, these and the gate's
-    thresholds are the paper's numbers on Table IV scaled to the machine
+    ``gain_E_pu`` scales e_d0 and its change per period (E and DE) before the quantiser
+    (thresholds 0.25 ... 5), in per-unit of ``1/ψ_rated``: the paper's 1e6 /Wb (its
+    micro-weber thresholds) is 463116 on Table IV. One gain for both: the paper's Tables I and
+    II quantise E and DE on the same micro-weber thresholds, and every preset, sweep and study
+    set the two equal (``gain_DE_pu`` and ``gain_DE_per_Wb`` are deprecated). ``G_CR_pu`` is
+    the change of R2_hat per output level and period in per-unit of the initial R̂2. Unset,
+    these and the gate's thresholds are the paper's numbers on Table IV scaled to the machine
     (:mod:`imdrive.config.compensator_gains`). The clamps ``R2_min_ratio``, ``R2_max_ratio``
     default to 0.5 and 2 times the initial estimate. ``period_s`` defaults to 10 ms, or to one
     injection period with ``input = "demodulated"``.
 
-    Each of these had an absolute spelling (``gain_E_per_Wb``, ``gain_DE_per_Wb``,
-    ``G_CR_ohm``, ``R2_min_ohm``, ``R2_max_ohm``; deprecated twins since round 7, they still
-    act with a warning): the per-unit value times its base is the absolute one, and every
-    preset's absolute value is reproduced to the last bit by the per-unit value it states
-    now, or by the default that is the paper's number on Table IV (tests/config/
-    test_deprecated_twins.py).
+    Each of these had an absolute spelling (``gain_E_per_Wb``, ``G_CR_ohm``, ``R2_min_ohm``,
+    ``R2_max_ohm``; deprecated twins since round 7, they still act with a warning): the
+    per-unit value times its base is the absolute one, and every preset's absolute value is
+    reproduced to the last bit by the per-unit value it states now, or by the default that is
+    the paper's number on Table IV (tests/config/test_deprecated_twins.py).
     """
 
     enabled: Annotated[Bool, setting("run the fuzzy R2 compensator")] = False
@@ -74,15 +75,6 @@ class CompensatorSettings:
             "(config/compensator_gains.py)",
         ),
     ] = None
-    gain_DE_per_Wb: Annotated[
-        Float | None,
-        setting(
-            "scaling of the change of e_d0 per period before the quantiser",
-            "1/Wb",
-            gt=0.0,
-            default_doc="the paper's 1e6 on Table IV scaled by 1/ψ_rated",
-        ),
-    ] = None
     G_CR_ohm: Annotated[
         Float | None,
         setting(
@@ -105,19 +97,10 @@ class CompensatorSettings:
     gain_E_pu: Annotated[
         Float | None,
         setting(
-            "scaling of e_d0 before the 13-level quantiser, in per-unit of 1/ψ_rated (the "
-            "scaling is gain_E_pu / ψ_rated, 1/Wb)",
+            "scaling of e_d0 and of its change per period (E and DE) before the 13-level "
+            "quantiser, in per-unit of 1/ψ_rated (the scaling is gain_E_pu / ψ_rated, 1/Wb)",
             gt=0.0,
             default_doc="the paper's 1e6 /Wb on Table IV: 1e6 × its ψ_rated, 463116",
-        ),
-    ] = None
-    gain_DE_pu: Annotated[
-        Float | None,
-        setting(
-            "scaling of the change of e_d0 per period before the quantiser, in per-unit of "
-            "1/ψ_rated",
-            gt=0.0,
-            default_doc="the paper's 1e6 /Wb on Table IV: 463116",
         ),
     ] = None
     R2_min_ratio: Annotated[
@@ -537,6 +520,10 @@ _REPLACED = {
     ("injection", "t_on_s"): "the injection starts with the compensator, at compensator.t_on_s "
     "(which moves with the drive's sequence as the profiles do): every preset, sweep and study "
     "that set both set them equal",
+    ("compensator", "gain_DE_pu"): "the change of E per period (DE) is scaled as E, by gain_E_pu: "
+    "the paper's Tables I and II quantise both on the same micro-weber thresholds, and every "
+    "preset, sweep and study set the two equal (1e6 and 1000 /Wb)",
+    ("compensator", "gain_DE_per_Wb"): "as gain_DE_pu: DE is scaled as E (gain_E_pu)",
     ("compensator", "average"): "the input is always its mean over the decision window (a "
     "boxcar anti-aliasing filter; for the demodulated input it is the synchronous detection "
     "itself), as every preset and study had it: a sample at the window's end left R2_hat at its "
@@ -567,7 +554,6 @@ for _key in ("gate_speed", "gate_iq", "gate_band"):
 # on Table IV (or leave it to its default, which is the paper's number there).
 for _section, _key, _twin in (
     ("compensator", "gain_E_per_Wb", "gain_E_pu"),
-    ("compensator", "gain_DE_per_Wb", "gain_DE_pu"),
     ("compensator", "G_CR_ohm", "G_CR_pu"),
     ("compensator", "R2_min_ohm", "R2_min_ratio"),
     ("compensator", "R2_max_ohm", "R2_max_ratio"),

@@ -26,8 +26,7 @@ LAWS = {
     "published table": (
         'compensator.step_law="table"',
         'compensator.table="paper"',
-        "compensator.gain_E_pu=463.1158419669872",  # 1000 /Wb on Table IV, to the bit
-        "compensator.gain_DE_pu=463.1158419669872",
+        "compensator.gain_E_pu=463.1158419669872",  # 1000 /Wb on Table IV (E and DE), to the bit
         # 20 mohm per level whatever R2_hat(0) is (a deprecated spelling: G_CR_pu is of R2_hat(0),
         # which the ramps set to R2)
         "compensator.G_CR_ohm=0.02",
