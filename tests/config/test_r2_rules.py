@@ -78,3 +78,20 @@ def test_the_change_of_e_is_scaled_as_e(preset):
     assert "no longer has any effect" in note and "scaled as E" in note
     comp = build_arrays(given).params.comp[0]
     assert comp["G_DE"] == comp["G_E"] == 2.0 / sc.machine.rated_flux_Wb
+
+
+def test_a_scenario_written_out_in_full_by_the_last_release_warns_only_where_it_differs():
+    """A summary.json of 0.1 states every key: ``compensator.average = true`` and an
+    ``injection.t_on_s`` equal to the compensator's ask for what the rules do."""
+    old = {
+        "drive": {"mode": "vector"},
+        "compensator": {"enabled": True, "t_on_s": 4.0, "average": True},
+        "injection": {"t_on_s": 4.0, "amplitude_pu": 0.075},
+    }
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        Scenario.from_dict(old)
+    changed = {**old, "injection": {"t_on_s": 2.0, "amplitude_pu": 0.075}}
+    with pytest.warns(Warning, match="injection.t_on_s: deprecated"):
+        sc = Scenario.from_dict(changed)
+    assert build_arrays(sc).params.comp[0]["inj_t_on"] == 4.0  # with the compensator

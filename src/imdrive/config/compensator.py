@@ -539,8 +539,21 @@ _REPLACED = {
     "every drive (GATE_HOLD_PERIODS in run/compensator_blocks.py), the value every preset and "
     "study used",
 }
+
+
+def _compensator_start(data: dict):
+    comp = data.get("compensator")
+    return comp.get("t_on_s", 0.0) if isinstance(comp, dict) else 0.0
+
+
+#: The values of a replaced key that ask for what its rule does (a scenario written out in
+#: full by an earlier release states every key): dropped without a warning.
+_ASKS_FOR_THE_RULE = {
+    ("injection", "t_on_s"): lambda data, v: v == _compensator_start(data),
+    ("compensator", "average"): lambda data, v: v is True,
+}
 for (_section, _key), _why in _REPLACED.items():
-    deprecated_key(_section, _key, _why)
+    deprecated_key(_section, _key, _why, _ASKS_FOR_THE_RULE.get((_section, _key)))
 for _n in ("frequency2", "frequency3"):
     deprecated_key("injection", f"{_n}_pu", f"as {_n}_Hz: the schedule is the harmonics of f")
 # The gate's thresholds in absolute units: no preset states them so (their defaults and the

@@ -20,6 +20,11 @@ REMOVED_IN = "0.3"
 #: ``(section, key)`` -> why it has no effect now, and what replaces it.
 DEPRECATED_KEYS: dict[tuple[str, str], str] = {}
 
+#: ``(section, key)`` -> ``asks_for_the_rule(data, value)``: whether a deprecated key's value
+#: asks for what its rule does anyway (its old default, which a scenario written out in full
+#: by an earlier release carries): dropped without a warning.
+DEPRECATED_SILENT_IF: dict[tuple[str, str], object] = {}
+
 #: ``(section, key, old value)`` -> ``(new value, why)``.
 DEPRECATED_VALUES: dict[tuple[str, str, object], tuple[object, str]] = {}
 
@@ -32,9 +37,13 @@ DEPRECATED_TWINS: dict[tuple[str, str], str] = {}
 TWIN_UNSET: dict[tuple[str, str], object] = {}
 
 
-def deprecated_key(section: str, key: str, why: str) -> None:
-    """Register ``[section] key`` as deprecated: accepted, dropped, warned with ``why``."""
+def deprecated_key(section: str, key: str, why: str, silent_if=None) -> None:
+    """Register ``[section] key`` as deprecated: accepted, dropped, warned with ``why``.
+    ``silent_if(data, value)``: true when the value asks for what the rule does (the
+    scenario's TOML-shaped ``data``), dropped then without a warning."""
     DEPRECATED_KEYS[(section, key)] = why
+    if silent_if is not None:
+        DEPRECATED_SILENT_IF[(section, key)] = silent_if
 
 
 def deprecated_value(section: str, key: str, old, new, why: str) -> None:
@@ -69,7 +78,11 @@ def drop_deprecated(data: dict) -> dict:
     for (section, key), why in DEPRECATED_KEYS.items():
         table = out.get(section)
         if isinstance(table, dict) and key in table:
+            silent_if = DEPRECATED_SILENT_IF.get((section, key))
+            quiet = silent_if is not None and silent_if(data, table[key])
             out = {**out, section: {k: v for k, v in table.items() if k != key}}
+            if quiet:
+                continue
             warnings.warn(
                 ConfigWarning(
                     f"{section}.{key}",
