@@ -95,3 +95,16 @@ def test_a_scenario_written_out_in_full_by_the_last_release_warns_only_where_it_
     with pytest.warns(Warning, match="injection.t_on_s: deprecated"):
         sc = Scenario.from_dict(changed)
     assert build_arrays(sc).params.comp[0]["inj_t_on"] == 4.0  # with the compensator
+
+
+def test_an_unset_deprecated_key_of_a_summary_json_warns_nothing():
+    """summary.json writes an unset key as null: ``gain_DE_pu``, ``injection.headroom``."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        Scenario.from_dict(
+            {
+                "drive": {"mode": "vector"},
+                "compensator": {"gain_DE_pu": None, "gain_DE_per_Wb": None},
+                "injection": {"headroom": None},
+            }
+        )

@@ -79,7 +79,8 @@ def drop_deprecated(data: dict) -> dict:
         table = out.get(section)
         if isinstance(table, dict) and key in table:
             silent_if = DEPRECATED_SILENT_IF.get((section, key))
-            quiet = silent_if is not None and silent_if(data, table[key])
+            # None states nothing (a summary.json writes an unset key as null)
+            quiet = table[key] is None or (silent_if is not None and silent_if(data, table[key]))
             out = {**out, section: {k: v for k, v in table.items() if k != key}}
             if quiet:
                 continue
