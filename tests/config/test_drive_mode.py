@@ -28,7 +28,7 @@ def test_control_without_drive_warns_naming_the_sections():
     [
         ("estimator", "R1_ratio", 1.1),
         ("mras", "K1", 50.0),
-        ("injection", "t_on_s", 1.0),
+        ("injection", "amplitude_pu", 0.1),
         ("afo", "rho", 0.5),
     ],
 )

@@ -28,20 +28,48 @@ def _machine_warnings(preset: str, overrides: list[str]) -> list[str]:
 def test_absolute_settings_of_a_paper_preset_are_named():
     (msg,) = _machine_warnings("paper-fig5", ['machine.preset="krause-50hp"'])
     assert "krause-50hp replaces paper-table-iv" in msg
-    for key in ("estimator.R2_ohm = 0.9792", "compensator.R2_min_ohm = 0.408"):
-        assert key in msg
-    assert "estimator.R2_ratio" in msg and "compensator.R2_min_ratio" in msg
+    assert "estimator.R2_ohm = 0.9792" in msg and "estimator.R2_ratio" in msg
+    # its clamps are stated per-unit of R2_hat(0) since round 7, its gains are the defaults:
+    # they follow the machine, and are not named
+    assert "compensator." not in msg
 
 
-def test_many_settings_are_counted_not_dropped():
-    (msg,) = _machine_warnings("injection-fig5-realistic", ['machine.preset="aalto-2.2kw"'])
-    # 10 absolute settings are stated: the speed and load profiles (rpm, N m), the
-    # compensator's clamps and table gains, the estimator's R2, the injection's amplitude and
-    # frequency (all their defaults follow the machine now); six are shown, the rest counted
-    assert msg.count(" = ") == 6 and "and 4 more" in msg
+ABSOLUTE = """
+[machine]
+preset = "paper-table-iv"
+[drive]
+mode = "vector"
+[control]
+speed_ref_rpm = { initial = 0, changes = [{ at = 0.5, to = 1000, over = 1.0 }] }
+[load]
+torque_Nm = { initial = 0, changes = [{ at = 2.0, to = 12 }] }
+[estimator]
+R2_ohm = 0.9792
+[injection]
+amplitude_A = 0.5
+frequency_Hz = 2.0
+[compensator]
+enabled = true
+input = "demodulated"
+gain_E_per_Wb = 1000.0
+G_CR_ohm = 0.02
+R2_min_ohm = 0.408
+R2_max_ohm = 1.224
+"""
+
+
+def test_many_settings_are_counted_not_dropped(tmp_path):
+    path = tmp_path / "absolute.toml"
+    path.write_text(ABSOLUTE)  # a user's file of before round 7: every key absolute
+    (msg,) = _machine_warnings(str(path), ['machine.preset="aalto-2.2kw"'])
+    # 9 absolute settings are stated: the speed and load profiles (rpm, N m), the
+    # compensator's clamps, table gain and step, the estimator's R2, the injection's amplitude
+    # and frequency; six are shown, the rest counted
+    assert msg.count(" = ") == 6 and "and 3 more" in msg
     assert "control.speed_ref_rpm = " in msg and "load.torque_pu" in msg
     (msg,) = _machine_warnings("injection-fig5", ['machine.preset="aalto-2.2kw"'])
-    assert msg.count(" = ") == 6 and "and 2 more" in msg  # 8: the profiles besides main's 6
+    # the profiles, R2_hat(0) and the online R1 law's rate
+    assert msg.count(" = ") == 4 and "more" not in msg and "mras.R1_rate_per_s" in msg
 
 
 def test_a_key_set_in_the_same_layer_is_not_stale():
@@ -49,7 +77,7 @@ def test_a_key_set_in_the_same_layer_is_not_stale():
         "paper-fig5", ['machine.preset="krause-50hp"', "estimator.R2_ratio=1.2"]
     )
     assert "estimator.R2_ohm" not in msg
-    assert "compensator.R2_min_ohm = 0.408" in msg
+    assert "control.speed_ref_rpm" in msg
 
 
 def test_commissioned_tables_are_named():

@@ -138,6 +138,11 @@ def test_an_old_absolute_key_runs_on_a_per_unit_preset():
         "mras.R1_rate_per_s: replaces mras.R1_rate_pu = 0.02621 of the scenario underneath",
         "estimator.R2_ohm: replaces estimator.R2_ratio = 1.2 of the scenario underneath",
         "injection.amplitude_A: replaces injection.amplitude_pu = 0.075 of the scenario underneath",
+        # deprecated twins since round 7: they act, and say what to state instead
+        "compensator.G_CR_ohm: deprecated, refused from imdrive 0.3: state it per-unit of the "
+        "machine as compensator.G_CR_pu (it still acts until then)",
+        "injection.amplitude_A: deprecated, refused from imdrive 0.3: state it per-unit of the "
+        "machine as injection.amplitude_pu (it still acts until then)",
         'compensator.G_CR_ohm: has no effect with step_law = "kalman": the model-based law '
         "reads its settings from [kalman] (noise_pu, drift_pu, prior_pu)",
     ]
@@ -171,8 +176,9 @@ def test_the_injection_frequency_switches_units():
     # (its alternatives frequency2_*, frequency3_* are the harmonics now: no keys of their own)
     sc, notes = _read("injection-robust", "injection.frequency_Hz=2.0")
     assert sc.injection.frequency_pu is None
-    assert [n.split(" = ")[0] for n in notes] == [
-        "injection.frequency_Hz: replaces injection.frequency_pu"
+    assert [n.split(" = ")[0].split(":")[:2] for n in notes] == [
+        ["injection.frequency_Hz", " replaces injection.frequency_pu"],
+        ["injection.frequency_Hz", " deprecated, refused from imdrive 0.3"],  # since round 7
     ]
 
 

@@ -24,9 +24,12 @@ FIRST_RELEASE = {
     "injection.headroom_to": 0.95,
     "compensator.step_law": "table",  # the paper's table with the first release's scaling
     "compensator.table": "paper",
-    "compensator.gain_E_per_Wb": 1000.0,
-    "compensator.gain_DE_per_Wb": 1000.0,
+    "compensator.gain_E_pu": 463.1158419669872,  # 1000 /Wb on Table IV (E and DE), to the bit
+    # the step and the clamps in ohm as the first release had them, whatever R2_hat(0) a test
+    # sets (deprecated spellings: their per-unit twins are of R2_hat(0))
     "compensator.G_CR_ohm": 0.02,
+    "compensator.R2_min_ohm": 0.408,
+    "compensator.R2_max_ohm": 1.224,
     # half the 2 Hz injection, the 1 Hz the first release had as its default (its two-frequency
     # schedule is the harmonics' schedule now, which a band of half the frequency makes the
     # same away from 3 Hz)

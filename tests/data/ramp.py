@@ -33,7 +33,6 @@ def ramp_scenario(
                 "initial": 0,
                 "changes": [{"at": 0.5, "to": speed_pu * rp.speed_rpm, "over": 3.0}],
             },
-            "injection.t_on_s": 5.0,
             "compensator.t_on_s": 5.0,
         }
         | overrides

@@ -34,7 +34,6 @@ def _regenerating(machine: str, speed_pu: float, load_pu: float, R2_ratio: float
         {
             "estimator.R2_ratio": R2_ratio,
             "control.speed_ref_rpm": ramp,
-            "injection.t_on_s": 5.0,
             "compensator.t_on_s": 5.0,
             "simulation.t_end_s": 20.0,
         }

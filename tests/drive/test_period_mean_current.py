@@ -31,7 +31,7 @@ def _steady_run(machine):
         {
             "control.speed_feedback": "measured",
             "compensator.enabled": False,
-            "injection.t_on_s": 100.0,
+            "compensator.t_on_s": 100.0,  # the injection starts with it: never
             "estimator.R2_ratio": 1.0,
             "estimator.R1_ratio": 1.0,
             "simulation.t_end_s": 6.0,

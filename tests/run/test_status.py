@@ -257,7 +257,8 @@ def test_the_low_frequency_note_names_what_held_there_unless_it_is_in_use():
 
 
 class _Held:
-    """A run's shape as :func:`held_shares` reads it: its scenario and logged signals."""
+    """A run's shape as :func:`held_shares` reads it: its scenario, logged signals and the
+    compensator's start in the run's time (its final state, ``on`` and ``t_start``)."""
 
     def __init__(self, t, flags, t_on=0.0):
         import types
@@ -268,6 +269,9 @@ class _Held:
             compensator=types.SimpleNamespace(enabled=True, t_on_s=t_on)
         )
         self.signals = {"time_s": np.asarray(t, float), "comp_frozen_flags": np.asarray(flags)}
+        comp = np.zeros(1, dtype=[("on", bool), ("t_start", float)])
+        comp[0] = (True, t_on)
+        self.state_final = types.SimpleNamespace(comp=comp)
 
 
 def test_held_shares_count_each_cause_over_the_active_time():

@@ -12,14 +12,15 @@ def _cmd_presets(args) -> int:
     from imdrive.config.machine import machine_presets
     from imdrive.config.presets import preset_names
     from imdrive.config.scenario import Scenario
-    from imdrive.sweep import load_sweep, sweep_names
+    from imdrive.sweep import sweep_names
+    from imdrive.sweep.spec import sweep_description
 
     groups = {
         "scenario presets (imdrive run NAME):": {
             name: (Scenario.read(name).description or "") for name in preset_names()
         },
         "sweep presets (imdrive sweep NAME):": {
-            name: (load_sweep(name).description or "") for name in sweep_names()
+            name: sweep_description(name) for name in sweep_names()
         },
         "machine parameter sets ([machine] preset = NAME):": dict(machine_presets()),
     }

@@ -168,8 +168,6 @@ def ac_test(
             injection={
                 "amplitude_A": I_ac,
                 "frequency_Hz": f,
-                "t_on_s": 0.0,
-                "headroom": False,
             },
             flux_injection=dither(sc, I_dc, f),
             estimator=model,

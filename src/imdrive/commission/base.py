@@ -258,7 +258,7 @@ def switched_off(sc: Scenario) -> list[str]:
     inj, comp, ctl, mras = sc.injection, sc.compensator, sc.control, sc.mras
     if comp.enabled:
         out.append("compensator.enabled: R2 tracking; R2 is what commissioning identifies")
-    if inj.amplitude_A > 0.0 or (inj.amplitude_pu or 0.0) > 0.0:
+    if (inj.amplitude_A or 0.0) > 0.0 or (inj.amplitude_pu or 0.0) > 0.0:
         out.append("injection: R2 tracking's signal; the AC test imposes its own")
     if sc.flux_injection.amplitude > 0.0:
         out.append("flux_injection: the AC test uses its own (a dither)")

@@ -271,7 +271,7 @@ def plugin_rules(sc) -> None:
 #: The ``[compensator]`` keys of the paper's fuzzy law (the table's scaling and step), which
 #: the model-based law (``step_law = "kalman"``) does not read.
 FUZZY_LAW_KEYS = (
-    "gain_E_per_Wb", "gain_DE_per_Wb", "gain_E_pu", "gain_DE_pu", "G_CR_ohm", "G_CR_pu", "table",
+    "gain_E_per_Wb", "gain_E_pu", "G_CR_ohm", "G_CR_pu", "table",
 )  # fmt: skip
 
 

@@ -26,17 +26,36 @@ HARMONICS = (1, 2, 3)
 class CompensatorSettings:
     """The fuzzy rotor-resistance compensator (``[compensator]``, paper §4).
 
-    ``gain_E_per_Wb`` and ``gain_DE_per_Wb`` scale e_d0 and its change per period before the
-    quantiser (thresholds 0.25 ... 5): 1e6 reproduces the paper's micro-weber thresholds.
-    ``G_CR_ohm`` is the change of R2_hat per output level and period. Unset, these and the
-    gate's thresholds are the paper's numbers on Table IV scaled to the machine
-    (:mod:`imdrive.config.compensator_gains`). The clamps default to
-    0.5 and 2 times the initial estimate. ``period_s`` defaults to 10 ms, or to one injection
-    period with ``input = "demodulated"``.
+    ``gain_E_pu`` scales e_d0 and its change per period (E and DE) before the quantiser
+    (thresholds 0.25 ... 5), in per-unit of ``1/ψ_rated``: the paper's 1e6 /Wb (its
+    micro-weber thresholds) is 463116 on Table IV. One gain for both: the paper's Tables I and
+    II quantise E and DE on the same micro-weber thresholds, and every preset, sweep and study
+    set the two equal (``gain_DE_pu`` and ``gain_DE_per_Wb`` are deprecated). ``G_CR_pu`` is
+    the change of R2_hat per output level and period in per-unit of the initial R̂2. Unset,
+    these and the gate's thresholds are the paper's numbers on Table IV scaled to the machine
+    (:mod:`imdrive.config.compensator_gains`). The clamps ``R2_min_ratio``, ``R2_max_ratio``
+    default to 0.5 and 2 times the initial estimate. ``period_s`` defaults to 10 ms, or to one
+    injection period with ``input = "demodulated"``.
+
+    Each of these had an absolute spelling (``gain_E_per_Wb``, ``G_CR_ohm``, ``R2_min_ohm``,
+    ``R2_max_ohm``; deprecated twins since round 7, they still act with a warning): the
+    per-unit value times its base is the absolute one, and every preset's absolute value is
+    reproduced to the last bit by the per-unit value it states now, or by the default that is
+    the paper's number on Table IV (tests/config/test_deprecated_twins.py).
     """
 
     enabled: Annotated[Bool, setting("run the fuzzy R2 compensator")] = False
-    t_on_s: Annotated[Float, setting("time the compensator starts", "s", ge=0.0)] = 0.0
+    t_on_s: Annotated[
+        Float,
+        setting(
+            "time R2 tracking starts, the compensator and its injection ([injection]), in the "
+            "duty cycle's time: it moves with the speed and load profiles when the drive's "
+            "sequence delays them (the premagnetisation, the standstill R1 test's wait; "
+            "config/sequence.py)",
+            "s",
+            ge=0.0,
+        ),
+    ] = 0.0
     period_s: Annotated[
         Float | None,
         setting(
@@ -56,15 +75,6 @@ class CompensatorSettings:
             "(config/compensator_gains.py)",
         ),
     ] = None
-    gain_DE_per_Wb: Annotated[
-        Float | None,
-        setting(
-            "scaling of the change of e_d0 per period before the quantiser",
-            "1/Wb",
-            gt=0.0,
-            default_doc="the paper's 1e6 on Table IV scaled by 1/ψ_rated",
-        ),
-    ] = None
     G_CR_ohm: Annotated[
         Float | None,
         setting(
@@ -77,44 +87,36 @@ class CompensatorSettings:
     G_CR_pu: Annotated[
         Float | None,
         setting(
-            "change of R̂2 per output level and period in per-unit of the initial R̂2; when "
-            "set it replaces G_CR_ohm, so the step follows the machine",
+            "change of R̂2 per output level and period in per-unit of the initial R̂2, so the "
+            "step follows the machine",
             ge=0.0,
-            default_doc="unset: G_CR_ohm",
+            default_doc="the paper's 0.001 ohm on Table IV scaled by the machine's R2 (0.12 % "
+            "of it)",
         ),
     ] = None
     gain_E_pu: Annotated[
         Float | None,
         setting(
-            "gain_E_per_Wb in per-unit of the machine's rated flux (gain_E_per_Wb = gain_E_pu "
-            "/ ψ_rated); when set it replaces gain_E_per_Wb",
+            "scaling of e_d0 and of its change per period (E and DE) before the 13-level "
+            "quantiser, in per-unit of 1/ψ_rated (the scaling is gain_E_pu / ψ_rated, 1/Wb)",
             gt=0.0,
-            default_doc="unset: gain_E_per_Wb",
-        ),
-    ] = None
-    gain_DE_pu: Annotated[
-        Float | None,
-        setting(
-            "gain_DE_per_Wb in per-unit of the machine's rated flux; when set it replaces "
-            "gain_DE_per_Wb",
-            gt=0.0,
-            default_doc="unset: gain_DE_per_Wb",
+            default_doc="the paper's 1e6 /Wb on Table IV: 1e6 × its ψ_rated, 463116",
         ),
     ] = None
     R2_min_ratio: Annotated[
         Float | None,
         setting(
-            "lower clamp of R̂2 as a multiple of the initial R̂2 (instead of R2_min_ohm)",
+            "lower clamp of R̂2 as a multiple of the initial R̂2",
             gt=0.0,
-            default_doc="0.5 unless R2_min_ohm is set",
+            default_doc="0.5",
         ),
     ] = None
     R2_max_ratio: Annotated[
         Float | None,
         setting(
-            "upper clamp of R̂2 as a multiple of the initial R̂2 (instead of R2_max_ohm)",
+            "upper clamp of R̂2 as a multiple of the initial R̂2",
             gt=0.0,
-            default_doc="2 unless R2_max_ohm is set",
+            default_doc="2",
         ),
     ] = None
     R2_min_ohm: Annotated[
@@ -136,9 +138,6 @@ class CompensatorSettings:
             "injection ([injection])"
         ),
     ] = "e_d0"
-    average: Annotated[
-        Bool, setting("the input is its mean over the period, not a sample at its end")
-    ] = True
     gating: Annotated[
         Bool | None,
         setting(
@@ -272,23 +271,29 @@ class InjectionSettings:
     R2 identification from a low-frequency AC flux component is Kubota & Matsuse (IEEE Trans.
     Ind. Appl. 30(5), 1994); feeding its demodulated flux error to the paper's table is ours.
 
-    ``amplitude_A`` = 0 switches it off. The compensator's ``input = "demodulated"`` feeds on
-    e_d0 detected synchronously with this sinusoid; its period must be a whole number of
+    ``amplitude_pu`` unset or 0 switches it off. The compensator's ``input = "demodulated"``
+    feeds on e_d0 detected synchronously with this sinusoid; its period must be a whole number of
     periods of every injection frequency it uses (the default compensator period for that
     input is one; :func:`check_whole_injection_periods`).
     """
 
     amplitude_A: Annotated[
-        Float, setting("amplitude of the sinusoid added to id* (0: off)", "A", ge=0.0)
-    ] = 0.0
+        Float | None,
+        setting(
+            "amplitude of the sinusoid added to id* (0: off)",
+            "A",
+            ge=0.0,
+            default_doc="unset: amplitude_pu (0: off)",
+        ),
+    ] = None
     amplitude_pu: Annotated[
         Float | None,
         setting(
-            "the amplitude in per-unit of the machine's rated magnetising current ψ_rated/M "
-            "(peak); when set it replaces amplitude_A, so the excitation follows the machine",
+            "the amplitude of the sinusoid added to id* in per-unit of the machine's rated "
+            "magnetising current ψ_rated/M (peak; 0: off), so the excitation follows the machine",
             ge=0.0,
             lt=1.0,
-            default_doc="unset: amplitude_A",
+            default_doc="0 (off)",
         ),
     ] = None
     frequency_Hz: Annotated[
@@ -306,23 +311,23 @@ class InjectionSettings:
         setting(
             "the frequency in per-unit of the rotor's corner frequency R̂2/(2π L̂2) of the "
             "controller's starting model, where the in-phase sensitivity of the detection "
-            "peaks; when set it replaces frequency_Hz, rounded so a period is a whole number "
-            "of control periods",
+            "peaks; rounded so a period is a whole number of control periods",
             gt=0.0,
-            default_doc="unset: frequency_Hz",
-        ),
-    ] = None
-    headroom: Annotated[
-        Bool | None,
-        setting(
-            "the amplitude backs off as the voltage use (peak over each injection period) "
-            "rises from headroom_from to headroom_to, and is off in field weakening; the "
-            "compensator freezes below half amplitude (kernels/compensator.py)",
-            default_doc="on with control.field_weakening (set or by default), else off",
+            default_doc="Table IV's 2 Hz scaled by the machine's rotor corner R2/(2π L2) "
+            "(1.098 × it), to whole control periods (config/compensator_gains.py "
+            "injection_frequency_Hz): exactly 2 Hz on Table IV",
         ),
     ] = None
     headroom_from: Annotated[
-        Float, setting("headroom: voltage use where the amplitude starts to fall", gt=0.0)
+        Float,
+        setting(
+            "with the field weakening on (control.field_weakening), the amplitude backs off "
+            "as the voltage use (peak over each injection period) rises from headroom_from to "
+            "headroom_to, and is off in field weakening unless headroom_voltage is set; the "
+            "compensator freezes below half amplitude (kernels/compensator_range.py, "
+            "injection_headroom): the voltage use where it starts to fall",
+            gt=0.0,
+        ),
     ] = 0.85
     headroom_to: Annotated[
         Float, setting("headroom: voltage use where it reaches zero", gt=0.0)
@@ -341,7 +346,6 @@ class InjectionSettings:
             default_doc="unset: no lowering, and no injection in field weakening",
         ),
     ] = None
-    t_on_s: Annotated[Float, setting("time the injection starts", "s", ge=0.0)] = 0.0
     decouple_slip: Annotated[
         Bool,
         setting(
@@ -360,6 +364,14 @@ class InjectionSettings:
             lt=1.0,
         ),
     ] = 0.3
+
+
+def injection_amplitude_given(inj) -> float:
+    """The injection's amplitude as stated, in its own unit (per-unit or, deprecated, A): 0
+    when neither ``amplitude_pu`` nor ``amplitude_A`` is set; whether it is on is its sign."""
+    if inj.amplitude_pu is not None:
+        return inj.amplitude_pu
+    return inj.amplitude_A if inj.amplitude_A is not None else 0.0
 
 
 def _first_frequency(inj) -> float:
@@ -401,7 +413,7 @@ def injection_frequencies_in_use(
     ``r``: the resolved per-unit values (their frequency and amplitude replace the absolute
     keys, named ``..._pu`` then).
     """
-    amp = inj.amplitude_A if r is None else r.inj_amp
+    amp = injection_amplitude_given(inj) if r is None else r.inj_amp
     if not (comp.enabled and amp > 0.0):
         return []
     key = (
@@ -505,12 +517,43 @@ _REPLACED = {
     "it and 1 closer, and 34 of 36 within 2 % either way",
     ("injection", "lowpass_rad_s"): "it filtered the detected product for display only; the "
     "product is logged every sample (e_d0_demod): filter it where it is plotted",
+    ("injection", "t_on_s"): "the injection starts with the compensator, at compensator.t_on_s "
+    "(which moves with the drive's sequence as the profiles do): every preset, sweep and study "
+    "that set both set them equal",
+    ("compensator", "gain_DE_pu"): "the change of E per period (DE) is scaled as E, by gain_E_pu: "
+    "the paper's Tables I and II quantise both on the same micro-weber thresholds, and every "
+    "preset, sweep and study set the two equal (1e6 and 1000 /Wb)",
+    ("compensator", "gain_DE_per_Wb"): "as gain_DE_pu: DE is scaled as E (gain_E_pu)",
+    ("compensator", "average"): "the input is always its mean over the decision window (a "
+    "boxcar anti-aliasing filter; for the demodulated input it is the synchronous detection "
+    "itself), as every preset and study had it: a sample at the window's end left R2_hat at its "
+    "start on injection-fig5/6-realistic (+-20 %, 0.39 % with the mean), and with the paper's "
+    "e_d0 input neither converges (paper-fig5/6, 1000 and 150 rpm, average and realistic drive: "
+    "-50 ... +50 % either way)",
+    ("injection", "headroom"): "the injection's amplitude backs off near the voltage limit "
+    "exactly when the field weakening is on (its default; no preset or study set it): with the "
+    "field weakening on and it off, R2_hat ended 0.42 % and the speed 0.23 rpm off at 0.93 x "
+    "rated speed and load on Table IV (0.00 with it; Aalto 2.2 kW 0.48 rpm), without the field "
+    "weakening it changed nothing (R2_hat held at +20 % near base speed either way)",
     ("compensator", "gate_hold_periods"): "one whole decision window after a gated one is held on "
     "every drive (GATE_HOLD_PERIODS in run/compensator_blocks.py), the value every preset and "
     "study used",
 }
+
+
+def _compensator_start(data: dict):
+    comp = data.get("compensator")
+    return comp.get("t_on_s", 0.0) if isinstance(comp, dict) else 0.0
+
+
+#: The values of a replaced key that ask for what its rule does (a scenario written out in
+#: full by an earlier release states every key): dropped without a warning.
+_ASKS_FOR_THE_RULE = {
+    ("injection", "t_on_s"): lambda data, v: v == _compensator_start(data),
+    ("compensator", "average"): lambda data, v: v is True,
+}
 for (_section, _key), _why in _REPLACED.items():
-    deprecated_key(_section, _key, _why)
+    deprecated_key(_section, _key, _why, _ASKS_FOR_THE_RULE.get((_section, _key)))
 for _n in ("frequency2", "frequency3"):
     deprecated_key("injection", f"{_n}_pu", f"as {_n}_Hz: the schedule is the harmonics of f")
 # The gate's thresholds in absolute units: no preset states them so (their defaults and the
@@ -518,3 +561,18 @@ for _n in ("frequency2", "frequency3"):
 for _key in ("gate_speed", "gate_iq", "gate_band"):
     _unit = {"gate_speed": "rpm", "gate_iq": "A", "gate_band": "Hz"}[_key]
     deprecated_twin("compensator", f"{_key}_{_unit}", f"{_key}_pu")
+# The table law's scalings and step, the clamps, the injections' amplitude and frequency in
+# absolute units (round 7, issue 38): each is one setting with its per-unit twin
+# (config/pairs.py), and the presets state the twin with the value that gives the same float
+# on Table IV (or leave it to its default, which is the paper's number there).
+for _section, _key, _twin in (
+    ("compensator", "gain_E_per_Wb", "gain_E_pu"),
+    ("compensator", "G_CR_ohm", "G_CR_pu"),
+    ("compensator", "R2_min_ohm", "R2_min_ratio"),
+    ("compensator", "R2_max_ohm", "R2_max_ratio"),
+    ("injection", "frequency_Hz", "frequency_pu"),
+    ("flux_injection", "frequency_Hz", "frequency_pu"),  # (config/estimators.py's section)
+):
+    deprecated_twin(_section, _key, _twin)
+# 0 A was its default (the injection off): a scenario written out in full states it
+deprecated_twin("injection", "amplitude_A", "amplitude_pu", unset=0.0)

@@ -9,8 +9,8 @@ number on the Table IV machine scaled by the machine's base quantity
 setting                 Table IV     scaled by
 ======================  ===========  ==============================================
 ``G_CR_ohm``            0.001 ohm    the machine's R2 (the step stays 0.12 % of R2)
-``gain_E_per_Wb``,      1e6 /Wb      ``1 / psi_rated``: e_d0 is a flux, so the
-``gain_DE_per_Wb``                   quantiser's thresholds stay the same share of it
+``gain_E_per_Wb``       1e6 /Wb      ``1 / psi_rated``: e_d0 is a flux, so the
+(E and DE)                           quantiser's thresholds stay the same share of it
 ``gate_speed_rpm``      1 rpm        the rated slip speed (79 rpm on Table IV)
 ``gate_iq_A``           0.3 A        the rated current ``machine.rated_current_A``
 ``gate_band_Hz``        1.5 Hz       the first injection frequency in use (0.75 of it)
@@ -34,7 +34,6 @@ from imdrive.config.table_iv import table_iv_scaled
 TABLE_IV = {
     "G_CR_ohm": 0.001,
     "gain_E_per_Wb": 1e6,
-    "gain_DE_per_Wb": 1e6,
     "gate_speed_rpm": 1.0,
     "gate_iq_A": 0.3,
 }
@@ -119,16 +118,13 @@ def compensator_gains(comp, machine, R2_hat: float, f_injection_Hz: float) -> Co
     CompensatorGains
     """
     psi = machine.rated_flux_Wb
-    gain_E, gain_DE = (
-        _pick(
-            getattr(comp, f"{k}_pu"),
-            1.0 / psi,
-            getattr(comp, f"{k}_per_Wb"),
-            TABLE_IV[f"{k}_per_Wb"],
-            _inverse_rated_flux,
-            machine,
-        )
-        for k in ("gain_E", "gain_DE")
+    gain_E = _pick(
+        comp.gain_E_pu,
+        1.0 / psi,
+        comp.gain_E_per_Wb,
+        TABLE_IV["gain_E_per_Wb"],
+        _inverse_rated_flux,
+        machine,
     )
     if comp.gate_band_pu is not None:
         band = comp.gate_band_pu * f_injection_Hz
@@ -146,7 +142,7 @@ def compensator_gains(comp, machine, R2_hat: float, f_injection_Hz: float) -> Co
             machine,
         ),
         gain_E=gain_E,
-        gain_DE=gain_DE,
+        gain_DE=gain_E,  # DE is scaled as E (the paper's Tables I and II: one set of thresholds)
         gate_speed_rpm=_pick(
             comp.gate_speed_pu,
             _rated_slip_rpm(machine) if comp.gate_speed_pu is not None else 0.0,

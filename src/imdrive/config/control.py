@@ -219,7 +219,7 @@ class ControlSettings:
         setting(
             "field weakening above base speed: the flux reference is scaled down by a voltage "
             "feedback that holds the voltage use at field_weakening_voltage "
-            "(kernels/ifoc.py, field_weakening); turns injection.headroom on",
+            "(kernels/ifoc.py, field_weakening); turns the injection's headroom on",
             default_doc="on when the speed reference reaches the speed where the rated "
             "torque at rated flux needs more than field_weakening_voltage of Vdc/√3 "
             "(config/field_weakening.py), else off",

@@ -20,6 +20,11 @@ REMOVED_IN = "0.3"
 #: ``(section, key)`` -> why it has no effect now, and what replaces it.
 DEPRECATED_KEYS: dict[tuple[str, str], str] = {}
 
+#: ``(section, key)`` -> ``asks_for_the_rule(data, value)``: whether a deprecated key's value
+#: asks for what its rule does anyway (its old default, which a scenario written out in full
+#: by an earlier release carries): dropped without a warning.
+DEPRECATED_SILENT_IF: dict[tuple[str, str], object] = {}
+
 #: ``(section, key, old value)`` -> ``(new value, why)``.
 DEPRECATED_VALUES: dict[tuple[str, str, object], tuple[object, str]] = {}
 
@@ -27,10 +32,18 @@ DEPRECATED_VALUES: dict[tuple[str, str, object], tuple[object, str]] = {}
 #: :mod:`imdrive.config.pairs`) with a warning, listed apart from the tables.
 DEPRECATED_TWINS: dict[tuple[str, str], str] = {}
 
+#: ``(section, key)`` -> the value of a deprecated twin that states nothing (its old default,
+#: which a scenario written out in full carries: ``injection.amplitude_A = 0.0``): not warned.
+TWIN_UNSET: dict[tuple[str, str], object] = {}
 
-def deprecated_key(section: str, key: str, why: str) -> None:
-    """Register ``[section] key`` as deprecated: accepted, dropped, warned with ``why``."""
+
+def deprecated_key(section: str, key: str, why: str, silent_if=None) -> None:
+    """Register ``[section] key`` as deprecated: accepted, dropped, warned with ``why``.
+    ``silent_if(data, value)``: true when the value asks for what the rule does (the
+    scenario's TOML-shaped ``data``), dropped then without a warning."""
     DEPRECATED_KEYS[(section, key)] = why
+    if silent_if is not None:
+        DEPRECATED_SILENT_IF[(section, key)] = silent_if
 
 
 def deprecated_value(section: str, key: str, old, new, why: str) -> None:
@@ -38,10 +51,13 @@ def deprecated_value(section: str, key: str, old, new, why: str) -> None:
     DEPRECATED_VALUES[(section, key, old)] = (new, why)
 
 
-def deprecated_twin(section: str, key: str, twin: str) -> None:
+def deprecated_twin(section: str, key: str, twin: str, unset=None) -> None:
     """Register ``[section] key`` as the deprecated absolute spelling of ``[section] twin``:
-    it still acts, with a warning, and is listed apart in docs/scenarios.md."""
+    it still acts, with a warning, and is listed apart in docs/scenarios.md. ``unset``: a value
+    besides None that states nothing (its old default), left without a warning."""
     DEPRECATED_TWINS[(section, key)] = twin
+    if unset is not None:
+        TWIN_UNSET[(section, key)] = unset
 
 
 def is_deprecated(path) -> bool:
@@ -62,7 +78,12 @@ def drop_deprecated(data: dict) -> dict:
     for (section, key), why in DEPRECATED_KEYS.items():
         table = out.get(section)
         if isinstance(table, dict) and key in table:
+            silent_if = DEPRECATED_SILENT_IF.get((section, key))
+            # None states nothing (a summary.json writes an unset key as null)
+            quiet = table[key] is None or (silent_if is not None and silent_if(data, table[key]))
             out = {**out, section: {k: v for k, v in table.items() if k != key}}
+            if quiet:
+                continue
             warnings.warn(
                 ConfigWarning(
                     f"{section}.{key}",
@@ -73,7 +94,8 @@ def drop_deprecated(data: dict) -> dict:
             )
     for (section, key), twin in DEPRECATED_TWINS.items():
         table = out.get(section)
-        if isinstance(table, dict) and table.get(key) is not None:
+        value = table.get(key) if isinstance(table, dict) else None
+        if value is not None and not _states_nothing(section, key, value):
             warnings.warn(
                 ConfigWarning(
                     f"{section}.{key}",
@@ -95,6 +117,11 @@ def drop_deprecated(data: dict) -> dict:
                 stacklevel=3,
             )
     return out
+
+
+def _states_nothing(section: str, key: str, value) -> bool:
+    unset = TWIN_UNSET.get((section, key))
+    return unset is not None and not isinstance(value, bool) and value == unset
 
 
 def markdown_lines() -> list[str]:

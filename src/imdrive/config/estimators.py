@@ -308,7 +308,7 @@ class FluxInjectionSettings:
             "frequency_Hz in per-unit of the controller's rotor corner R̂2(0)/(2π L̂2), as "
             "injection.frequency_pu: the flux follows its command through the rotor's corner",
             gt=0.0,
-            default_doc="unset: frequency_Hz",
+            default_doc="Table IV's 2 Hz scaled by the machine's rotor corner (1.098 × it)",
         ),
     ] = None
 

@@ -86,7 +86,6 @@ PAIRS: tuple[Pair, ...] = (
     _pair("compensator.R2_max_ohm", "compensator.R2_max_ratio", "the initial R̂2"),
     _pair("compensator.G_CR_ohm", "compensator.G_CR_pu", "the initial R̂2", "per_unit"),
     _pair("compensator.gain_E_per_Wb", "compensator.gain_E_pu", "1/ψ_rated", "per_unit"),
-    _pair("compensator.gain_DE_per_Wb", "compensator.gain_DE_pu", "1/ψ_rated", "per_unit"),
     _pair(
         "compensator.gate_band_Hz",
         "compensator.gate_band_pu",

@@ -10,7 +10,7 @@ per-unit key                                SI value
 ``M_ratio``                                 controller's starting model)
 ``compensator.R2_min_ratio``, ``_max_``     ``ratio x R2_hat(0)`` (default 0.5 and 2)
 ``compensator.G_CR_pu``                     ``G_CR_pu x R2_hat(0)``, ohm per output level
-``compensator.gain_E_pu``, ``gain_DE_pu``   ``gain / psi_rated``, 1/Wb
+``compensator.gain_E_pu`` (E and DE)       ``gain / psi_rated``, 1/Wb
 ``injection.amplitude_pu``                  ``amplitude_pu x psi_rated / M``, A (peak)
 ``injection.frequency_pu`` (``2_``, ``3_``) ``pu x R2_hat(0) / (2 pi L2_hat)``, Hz, rounded
                                             to whole control periods
@@ -246,7 +246,9 @@ def _resolve(sc) -> Resolved:
         G_CR=g.G_CR,
         gain_E=g.gain_E,
         gain_DE=g.gain_DE,
-        inj_amp=inj.amplitude_A if inj.amplitude_pu is None else inj.amplitude_pu * psi / m.M_H,
+        inj_amp=(
+            (inj.amplitude_A or 0.0) if inj.amplitude_pu is None else inj.amplitude_pu * psi / m.M_H
+        ),
         inj_f1=f1,
         inj_f2=f2,
         inj_f3=f3,

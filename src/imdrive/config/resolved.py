@@ -51,7 +51,6 @@ def resolved_defaults(sc) -> dict[str, object]:
         for key, value in (
             ("G_CR_ohm", r.G_CR),
             ("gain_E_per_Wb", r.gain_E),
-            ("gain_DE_per_Wb", r.gain_DE),
             ("gate_speed_rpm", r.gate_speed_rpm),
             ("gate_iq_A", r.gate_iq_A),
             ("gate_band_Hz", r.gate_band),

@@ -30,6 +30,11 @@ drive does:
    0.6 R2 and short from R̂2(0) > R2, where the kernel held the speed reference alone and a
    load step stated after its start overtook it (Krause 2250 hp: the drive at standstill
    pulled to -300 rpm). This time is not added to the run's end.
+   R2 tracking's start, ``compensator.t_on_s`` (its injection's too), is a time of the duty
+   cycle and moves with it, by the delay and the test's wait alike
+   (:func:`imdrive.run.compensator_blocks.tracking_start_s`, ``t_hold``): it stood at its
+   absolute time before, and on Krause 2250 hp ``injection-robust``'s compensator started
+   1.7 s before the speed reference left zero, not 3.5 s after it as on Table IV.
 2. **Torque-limited ramps** (``control.ramp_torque_limit``). A ramp of the speed reference
    steeper than the machine can follow at the drive's torque limit is followed at
    :data:`RAMP_TORQUE_SHARE` of the acceleration that limit leaves over the load,

@@ -324,7 +324,7 @@ def run_one(P, S, i, n_steps, n_win, log_out, log_every, metrics, scratch, lc_bo
     acc_arr = new_accumulator()
     Ts = P.sim[i].Ts
     k_win0 = max(n_steps - n_win, 0)
-    t_on = P.comp[i].t_on if P.comp[i].enabled else np.inf
+    t_on = np.inf  # the compensator's start in the run's time, once it has started
     i_max = P.control[i].i_max  # torque-limited following is not a loss of control
     k0 = 0
     while True:
@@ -339,6 +339,8 @@ def run_one(P, S, i, n_steps, n_win, log_out, log_every, metrics, scratch, lc_bo
         )  # fmt: skip
         ok = status == S_OK
         rows = ke + 1 if (ok and final) else ke
+        if P.comp[i].enabled and S.comp[i].on:  # (the R1 test's wait moves it: stages.py)
+            t_on = S.comp[i].t_start
         accumulate(scratch, rows, k0, k_win0, acc_arr, lc_bound, lc_n, t_on, i_max)
         for r in range(rows):
             k = k0 + r

@@ -73,7 +73,7 @@ THRESHOLD_1 = 1.0
 COMPENSATOR_PARAMS = record_dtype(
     [
         ("enabled", b1),  # compensator present
-        ("t_on", f8),  # time it is enabled, s
+        ("t_on", f8),  # time it and its injection start in the duty cycle's time, s
         ("n", f8),  # compensator period in control periods
         ("G_E", f8),  # scaling gain of E = e_d0, 1/Wb
         ("G_DE", f8),  # scaling gain of DE = change of E per compensator period, 1/Wb
@@ -84,7 +84,7 @@ COMPENSATOR_PARAMS = record_dtype(
         ("average", b1),  # input is the mean over the compensator period, else a sample
         ("inj_amp", f8),  # amplitude of the sinusoid added to id*, A (0: off)
         ("inj_freq", f8),  # its frequency, Hz
-        ("inj_t_on", f8),  # time the injection starts, s
+        ("inj_t_on", f8),  # time the injection starts in the duty cycle's time, s
         ("gate", b1),  # gating and frequency scheduling on
         ("gate_dw", f8),  # speed-transient threshold, mechanical rad/s
         ("gate_diq", f8),  # load-transient threshold on the period-mean iq*, A
@@ -158,6 +158,8 @@ COMPENSATOR_STATE = record_dtype(
         ("dt_lam_i", c16),  # flux detector: current model, Wb (stationary frame)
         ("dt_lam_v", c16),  # its filtered voltage model, Wb
         ("dt_lam_f", c16),  # its filtered current model, Wb
+        ("on", b1),  # the compensator has started (its start in the duty cycle's time)
+        ("t_start", f8),  # the run's time it started, s
     ]
 )
 

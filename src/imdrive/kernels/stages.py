@@ -223,6 +223,9 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc
     """
     t = smpl.t
     Ts = sim.Ts
+    # R2 tracking starts in the duty cycle's time, as the profiles run: held back with them
+    # while the standstill R1 test extends the premagnetisation (mdl.t_hold, profiles())
+    t_cyc = t - mdl.t_hold
     # the modulator's share used, the inverter-error compensation included: the field
     # weakening and the headroom must leave it room (without it, at twice the rated speed on
     # the dead-time bridge the compensation's few percent pushed the sum into the limit)
@@ -232,7 +235,7 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc
     i_inj = 0.0
     if pk.inj_amp != 0.0:
         ph0 = cmp.inj_phase
-        sine = injection_sine(pk, cmp, t, Ts)
+        sine = injection_sine(pk, cmp, t_cyc, Ts)
         a_inj = 1.0
         if pk.inj_v_hi > 0.0:  # the injection backs off near the voltage limit
             wrapped = cmp.inj_phase < ph0
@@ -247,7 +250,7 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc
 
     # R1 adaptation held from the compensator's start until it first updates and whenever
     # its gating freezes it (transients)
-    hold_R1 = pk.enabled and pk.gate and (t < pk.t_on or cmp.frozen != 0.0)
+    hold_R1 = pk.enabled and pk.gate and (t_cyc < pk.t_on or cmp.frozen != 0.0)
     # and, whatever the compensator, while the speed reference moves and the drive settles:
     # the law reads the flux error as a resistance error, and a ramp's is the estimator's lag
     if w_ref != ctl.w_ref_prev:
@@ -270,7 +273,10 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc
         T2_hat = incremental_L2(mdl) / mdl.R2_hat
         demodulate(pk, cmp, e_dq0, sine, ctl.w_e, ctl.w_sl, T2_hat, Ts)
     if pk.enabled:
-        if pk.gate and t >= pk.t_on:  # the compensator's gating signals
+        if t_cyc >= pk.t_on and not cmp.on:  # its start, in the run's time (the metrics')
+            cmp.on = True
+            cmp.t_start = t
+        if pk.gate and t_cyc >= pk.t_on:  # the compensator's gating signals
             w_fb_g = w_r_hat / pp.n_p if sim.sensorless else x.w_m
             # the load-transient gate compares torques: iq* at the reference flux, scaled by
             # the field weakening's flux factor (in deep field weakening the speed loop's iq*
@@ -279,9 +285,9 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc
             iq_torque = ctl.i_ref_dq.imag * (1.0 - ctl.fw_cut)
             g_w = speed_loop_gain(pc, ctl)  # the speed error weighted by the loop's gain
             compensator_gate_sample(pk, cmp, w_ref, w_fb_g, iq_torque, v_use, ctl.w_e, g_w)
-        compensator_step(pk, cmp, mdl, table, e_dq0.real, t, smpl.k, ctl.w_e)
+        compensator_step(pk, cmp, mdl, table, e_dq0.real, t_cyc, smpl.k, ctl.w_e)
         if pk.th_on:  # the rotor thermal model carries R2_hat while it is held
-            thermal_step(pk, cmp, mdl, ctl.i_s_dq.imag, t, Ts)
+            thermal_step(pk, cmp, mdl, ctl.i_s_dq.imag, t_cyc, Ts)
     return Estimate(w_r_hat, e_dq0, i_inj, v_use, v_fw, hold_R1, R1_after, R2_after)
 
 

@@ -30,11 +30,12 @@ def compensator_fields(sc: Scenario, D: Resolved) -> tuple[dict, dict]:
     inj = sc.injection
     r = D
     n_comp = D.n_comp
+    t_on = tracking_start_s(sc)
     R2_min = r.R2_min
     R2_max = r.R2_max
     record = dict(
         enabled=comp.enabled,
-        t_on=comp.t_on_s,
+        t_on=t_on,
         n=n_comp,
         G_E=r.gain_E,
         G_DE=r.gain_DE,
@@ -42,10 +43,10 @@ def compensator_fields(sc: Scenario, D: Resolved) -> tuple[dict, dict]:
         R2_min=R2_min,
         R2_max=R2_max,
         demodulated=comp.input == "demodulated",
-        average=comp.average,
+        average=True,  # the window's mean, always (compensator.average: deprecated)
         inj_amp=r.inj_amp,
         inj_freq=r.inj_f1,
-        inj_t_on=inj.t_on_s,
+        inj_t_on=t_on,  # the injection starts with the compensator
         slip_decouple=inj.decouple_slip,
         cpl_wc=sc.mras.wc_rad_s,
         cpl_wmin=2 * math.pi * sc.machine.rated_frequency_Hz * inj.decouple_slip_fmin_pu,
@@ -60,6 +61,18 @@ def compensator_fields(sc: Scenario, D: Resolved) -> tuple[dict, dict]:
         "R2_hat_max_ohm": R2_max,
     }
     return record, derived
+
+
+def tracking_start_s(sc: Scenario) -> float:
+    """When R2 tracking, the compensator and its injection, starts in the kernels' duty-cycle
+    time, s: ``compensator.t_on_s`` moved by the premagnetisation's delay of the profiles
+    (:func:`imdrive.config.sequence.sequence`, ``delay_s``), exactly as the speed reference and
+    the load move; in the run, the standstill R1 test's wait holds it back with them too
+    (``t_hold``, kernels/stages.py). No preset on Table IV is delayed (3 T2 = 0.26 s before
+    their 0.5 s start): the same float as ``t_on_s`` there."""
+    from imdrive.config.sequence import sequence
+
+    return sc.compensator.t_on_s + sequence(sc).delay_s
 
 
 #: The estimation headroom's integral gain per injection period (:func:`headroom_rate_per_s`):
@@ -114,7 +127,9 @@ def _gating(sc, r) -> dict:
     on = comp.gating if comp.gating is not None else comp.input == "demodulated"
     out = {}
     inj = sc.injection
-    headroom = inj.headroom if inj.headroom is not None else field_weakening_on(sc)
+    # the amplitude backs off near the voltage limit whenever the field weakening is on
+    # (injection.headroom, deprecated: config/compensator.py)
+    headroom = field_weakening_on(sc)
     if headroom and r.inj_amp > 0.0:
         if not inj.headroom_from < inj.headroom_to:
             raise ConfigError("injection.headroom_from", "must be < injection.headroom_to")

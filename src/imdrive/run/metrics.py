@@ -55,8 +55,8 @@ least a fifth of it is left (:func:`steady_window_periods`; the status says when
                          standstill run, 1 identified, 2 could not, 3 one level of two
                          (NaN without the MRAS);
                          the batch takes it from the final state
-``R2_held_pct``          share of the samples from the compensator's enable time
-                         (``t >= compensator.t_on_s``) at which R2_hat was held, i.e. the
+``R2_held_pct``          share of the samples from the compensator's start
+                         (:func:`compensator_start_s`) at which R2_hat was held, i.e. the
                          gating mask ``comp_frozen`` of the last decision was not 0, % (NaN
                          without a compensator)
 ``R2_held_causes``       OR of those masks (the bits of :mod:`imdrive.kernels.compensator`)
@@ -314,6 +314,27 @@ def _window_peak_pct(R2_hat, R2) -> float:
     return float(100.0 * e[np.argmax(np.abs(e))])
 
 
+def compensator_start_s(res) -> float:
+    """When the R2 compensator started in the run's time, s (``inf``: it never did).
+
+    ``compensator.t_on_s`` is a time of the duty cycle: the drive moves it with the speed and
+    load profiles, by the premagnetisation's delay and the standstill R1 test's wait
+    (:func:`imdrive.run.compensator_blocks.tracking_start_s`, kernels/stages.py). The kernels
+    record where it fell (``COMPENSATOR_STATE.t_start``); a result without its final state
+    (a stand-in) falls back on the configured start moved by the premagnetisation's delay.
+    """
+    comp = res.scenario.compensator
+    if not comp.enabled:
+        return math.inf
+    state = getattr(res, "state_final", None)
+    if state is not None and "on" in state.comp.dtype.names:
+        c = state.comp[0]
+        return float(c["t_start"]) if c["on"] else math.inf
+    from imdrive.run.compensator_blocks import tracking_start_s
+
+    return tracking_start_s(res.scenario)
+
+
 def held_metrics(res) -> dict:
     """``R2_held_pct``, ``R2_held_causes``, ``R2_held_since_s``, ``R2_held_end_causes`` of a
     run (module docstring), from its logged gating mask."""
@@ -324,7 +345,7 @@ def held_metrics(res) -> dict:
     if not comp.enabled or "comp_frozen_flags" not in s:
         active = np.zeros(len(t), dtype=bool)
     else:
-        active = t >= comp.t_on_s
+        active = t >= compensator_start_s(res)
     if not active.any():
         return dict.fromkeys(
             ("R2_held_pct", "R2_held_causes", "R2_held_since_s", "R2_held_end_causes"), nan
@@ -349,7 +370,7 @@ def held_metrics(res) -> dict:
 
 def held_shares(res) -> dict[str, float]:
     """The share of time R̂2 was held for each cause, % of the samples from the compensator's
-    enable time (``t >= compensator.t_on_s``), by the groups of
+    enable time (``t >=`` its start, :func:`compensator_start_s`), by the groups of
     :data:`imdrive.run.status.HELD_CAUSES` (a sample held for two causes counts in both; a
     settling bit, 16, counts with the event it follows, as in
     :func:`imdrive.run.status.held_reasons`). Empty without a compensator or when R̂2 was never
@@ -360,7 +381,7 @@ def held_shares(res) -> dict[str, float]:
     s = res.signals
     if not comp.enabled or "comp_frozen_flags" not in s:
         return {}
-    active = s["time_s"] >= comp.t_on_s
+    active = s["time_s"] >= compensator_start_s(res)
     flags = s["comp_frozen_flags"][active].astype(np.int64)
     if not flags.size:
         return {}
@@ -392,7 +413,7 @@ def compensation_metrics(
         return None
     s = res.signals
     t = s["time_s"]
-    t_on = comp.t_on_s
+    t_on = compensator_start_s(res)
     ratio_err = np.abs(s["R2_hat_ohm"] / s["R2_ohm"] - 1.0)
     outside = np.nonzero((ratio_err > tol) | (t < t_on))[0]
     if len(outside) == 0:

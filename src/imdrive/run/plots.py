@@ -23,6 +23,7 @@ import numpy as np
 from imdrive.config.sequence import sequence
 from imdrive.run.columns import current_name
 from imdrive.run.export import unit_of
+from imdrive.run.metrics import compensator_start_s
 
 if TYPE_CHECKING:  # matplotlib is loaded by the first figure, not by the tables below
     from imdrive._figure import DisplayFigure as Figure
@@ -206,8 +207,9 @@ def steady_start(res) -> float:
     90 % of the run."""
     sc = res.scenario
     t_end = float(res.time_s[-1])
-    if "R2_hat_ohm" in res.signals and sc.compensator.enabled and sc.compensator.t_on_s < t_end:
-        return float(sc.compensator.t_on_s)
+    t_on = compensator_start_s(res)
+    if "R2_hat_ohm" in res.signals and t_on < t_end:
+        return t_on
     seq = sequence(sc)
     last = max(seq.speed_ref_rpm.points[-1][0], seq.load_Nm.points[-1][0])
     return min(max(last + 1.0, 0.5 * t_end), 0.9 * t_end)
@@ -245,15 +247,15 @@ def _ylabel(ax, quantity: str, column: str) -> None:
 
 def _mark_switch_on(axes, res) -> None:
     """A vertical line on every panel at the compensator's switch-on, labelled on the first."""
-    comp = res.scenario.compensator
-    if not comp.enabled or comp.t_on_s >= res.time_s[-1]:
+    t_on = compensator_start_s(res)
+    if t_on >= res.time_s[-1]:
         return
     for ax in axes:
-        ax.axvline(comp.t_on_s, color="0.35", lw=0.9, ls="-.")
+        ax.axvline(t_on, color="0.35", lw=0.9, ls="-.")
     axes[0].text(
-        comp.t_on_s,
+        t_on,
         0.97,
-        f" compensator on ({comp.t_on_s:g} s)",
+        f" compensator on ({t_on:.4g} s)",
         transform=axes[0].get_xaxis_transform(),
         ha="left",
         va="top",

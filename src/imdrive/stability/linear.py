@@ -131,7 +131,7 @@ def map_scenario(
                 raise ConfigError(f"{name[:2]}_ratio", f"must be finite and > 0 (got {ratio})")
             ch[name] = ratio * base
     comp = replace(sc.compensator, enabled=False)
-    inj = replace(sc.injection, amplitude_A=0.0, amplitude_pu=None)
+    inj = replace(sc.injection, amplitude_A=None, amplitude_pu=None)
     return replace(sc, estimator=replace(est, **ch), compensator=comp, injection=inj)
 
 
@@ -198,7 +198,7 @@ def solve_operating_points(sc: Scenario, speeds_rpm, torques_Nm) -> OperatingPoi
         raise ConfigError("points", "speeds and torques must be 1-D, non-empty, of equal length")
     if not (np.all(np.isfinite(speeds)) and np.all(np.isfinite(torques))):
         raise ConfigError("points", "speeds and torques must be finite")
-    if sc.compensator.enabled or sc.injection.amplitude_A != 0.0 or sc.injection.amplitude_pu:
+    if sc.compensator.enabled or sc.injection.amplitude_A or sc.injection.amplitude_pu:
         sc = map_scenario(sc)
     n = len(speeds)
     w_ref = speeds * RPM

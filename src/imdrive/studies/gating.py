@@ -30,6 +30,8 @@ def _scenario(speed: float, torque: float, ratio: float, gating: bool) -> Scenar
             f"control.speed_ref_rpm={{initial=0,changes=[{{at=0.5,to={speed},over=1.0}}]}}",
             f"load.torque_Nm={{initial=0,changes=[{{at=2.0,to={torque}}}]}}",
             f"estimator.R2_ohm={ratio * R2}",
+            # clamps in ohm whatever R2_hat(0) is (deprecated spellings: R2_min_ratio is of
+            # R2_hat(0), which this study varies)
             "compensator.R2_min_ohm=0.3",
             "compensator.R2_max_ohm=1.5",
             f"compensator.gating={str(gating).lower()}",

@@ -151,14 +151,12 @@ def timeline(machine) -> tuple[float, float, float]:
 
 
 def _later_start(base, delay: float) -> list[str]:
-    """Overrides moving the compensator's and the injection's start by ``delay`` s (the ramp
-    starts that much later than in the preset), none when ``delay`` is 0."""
+    """Overrides moving R2 tracking's start (the compensator's, and its injection's with it)
+    by ``delay`` s (the ramp starts that much later than in the preset), none when ``delay``
+    is 0."""
     if delay <= 0.0 or not base.compensator.enabled:
         return []
-    return [
-        f"compensator.t_on_s={base.compensator.t_on_s + delay}",
-        f"injection.t_on_s={base.injection.t_on_s + delay}",
-    ]
+    return [f"compensator.t_on_s={base.compensator.t_on_s + delay}"]
 
 
 def scenarios(machines=None, drives=DRIVES, speeds=SPEEDS_PU, loads=LOADS_PU, ratios=R2_RATIOS):

@@ -183,7 +183,8 @@ def injection_signal(ratios=RATIOS, speeds=(1000.0, 150.0)) -> pd.DataFrame:
                 RATED_LOAD_NM,
                 r,
                 t_end=8.0,
-                extra=("injection.amplitude_A=0.5", "injection.frequency_Hz=2.0"),
+                # 0.5 A to the bit; the frequency's default is 2 Hz on Table IV
+                extra=("injection.amplitude_pu=0.07481929327407892",),
             )
             w = res.window(4.0, 8.0)
             n = len(w["time_s"]) - 1  # 4 s = 8 whole injection periods
@@ -205,6 +206,9 @@ def thermal_tracking():
         "injection-fig5",
         [
             "estimator.R2_ohm=0.816",
+            # the preset's clamps, 0.408 and 1.224 ohm, of R2_hat(0) = R2 (exact in floats)
+            "compensator.R2_min_ratio=0.5",
+            "compensator.R2_max_ratio=1.5",
             "plant.R2_scale={ initial = 1.0, changes = [{ at = 6.0, to = 1.3, over = 20.0 }] }",
             "simulation.t_end_s=32.0",
         ],

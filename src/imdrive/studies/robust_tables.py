@@ -26,13 +26,16 @@ LAWS = {
     "published table": (
         'compensator.step_law="table"',
         'compensator.table="paper"',
-        "compensator.gain_E_per_Wb=1000",
-        "compensator.gain_DE_per_Wb=1000",
+        "compensator.gain_E_pu=463.1158419669872",  # 1000 /Wb on Table IV (E and DE), to the bit
+        # 20 mohm per level whatever R2_hat(0) is (a deprecated spelling: G_CR_pu is of R2_hat(0),
+        # which the ramps set to R2)
         "compensator.G_CR_ohm=0.02",
     ),
     "Kalman": (),
 }
 R1_ON = ("mras.R1_rate_per_s=0.3",)
+#: the presets' clamps, 0.408 and 1.224 ohm, with R2_hat(0) = R2 (0.816 ohm): exact in floats
+CLAMPS = ("compensator.R2_min_ratio=0.5", "compensator.R2_max_ratio=1.5")
 
 
 def _ramp(preset: str, extra=()) -> Scenario:
@@ -40,6 +43,7 @@ def _ramp(preset: str, extra=()) -> Scenario:
         preset,
         [
             "estimator.R2_ohm=0.816",
+            *CLAMPS,
             "plant.R2_scale={initial=1,changes=[{at=8,to=1.3,over=5}]}",
             "simulation.t_end_s=19",
             "output.figures=false",
@@ -131,6 +135,7 @@ def _thermal(extra) -> Scenario:
         "injection-fig5-150rpm",
         [
             "estimator.R2_ohm=0.816",
+            *CLAMPS,
             "plant.thermal.enabled=true",
             "plant.thermal.tau1_s=15",
             "plant.thermal.tau2_s=15",

@@ -124,6 +124,14 @@ def sweep_text(ref: str) -> tuple[str, Path | None]:
     return read_user_text(ref, "sweep", MAX_TOML_BYTES, "sweep file"), Path(ref).resolve().parent
 
 
+def sweep_description(name: str) -> str:
+    """The description of built-in sweep ``name``, read from its file without building its
+    scenarios (``imdrive presets`` lists them; building is for running them, and warns about
+    what they state: a deprecated spelling of a sweep that keeps one)."""
+    text, _ = sweep_text(name)
+    return _name_and_description(_read_toml(text), name)[1]
+
+
 def parse_sweep(
     text: str,
     folder: Path | None = None,
