@@ -1,5 +1,5 @@
 """The standstill R1 identification at two current levels
-(kernels/estimators/mras_standstill.py), on hand-made records and a synthetic machine.
+(kernels/r1_standstill.py, the controller's block), on hand-made records and a synthetic machine.
 
 The synthetic stator voltage along a DC current ``i`` is ``R1 i + u0 + sigma_L1 di/dt + (M/L2)
 dpsi/dt`` with a first-order rotor flux ``T2 dpsi/dt = M i - psi``: a constant residual ``u0``
@@ -17,11 +17,11 @@ import math
 import numpy as np
 import pytest
 
-from imdrive.kernels.estimators.mras import MRAS_PARAMS, MRAS_STATE, mras_r1_standstill
-from imdrive.kernels.ifoc import CONTROL_STATE, standstill_compensation
+from imdrive.kernels.ifoc import CONTROL_PARAMS, CONTROL_STATE, standstill_compensation
 from imdrive.kernels.inverter import clarke
 from imdrive.kernels.inverter_scale import start_from_identified
 from imdrive.kernels.model import MODEL_STATE
+from imdrive.kernels.r1_standstill import r1_standstill
 from imdrive.kernels.records import new_record
 
 TS = 1e-4
@@ -36,16 +36,16 @@ def _identify(t2_hat_ratio=1.0, levels=2, magnetise_s=0.5, hold_T2=16.0):
     of its profile (later by the time held). Returns the records and the time it left zero."""
     T2_hat = t2_hat_ratio * T2
     p = new_record(
-        MRAS_PARAMS, R1_min=0.1, R1_max=5.0, R1_dc=True, R1_dc_settle=T2_hat,
+        CONTROL_PARAMS, R1_dc_min=0.1, R1_dc_max=5.0, R1_dc=True, R1_dc_settle=T2_hat,
         R1_dc_block=0.25 * T2_hat, R1_dc_nT2=3.5, R1_dc_levels=levels, R1_dc_boost=-0.4,
         R1_dc_hold=hold_T2 * T2_hat,
     )[0]  # fmt: skip
     m = new_record(
         MODEL_STATE, R1_hat=0.9 * R1, R2_hat=L2 / T2_hat, Ll1_hat=LL, Ll2_hat=LL, M_hat=M
     )[0]
-    s = np.zeros(1, dtype=MRAS_STATE)[0]
+    s = np.zeros(1, dtype=CONTROL_STATE)[0]
     sigma_L1 = (M + LL) - M * M / L2
-    psi, lam, i_prev, t, t_hold = 0.0, 0.0, 0.0, 0.0, 0.0
+    psi, i_prev, t, t_hold = 0.0, 0.0, 0.0, 0.0
     left_at = None
     while t < magnetise_s + 3.0:
         w_ref = 0.0 if t - t_hold < magnetise_s else 1.0
@@ -57,10 +57,7 @@ def _identify(t2_hat_ratio=1.0, levels=2, magnetise_s=0.5, hold_T2=16.0):
         i = I0 * (1.0 + m["dc_boost"])
         dpsi = (M * i - psi) / T2
         v = R1 * i + U0 + sigma_L1 * (i - i_prev) / TS + (M / L2) * dpsi
-        dlam = (M * i - lam) / T2_hat * TS  # the controller's current model
-        lam += dlam
-        s["dlam_i_ab"] = dlam
-        mras_r1_standstill(p, m, s, v, 0.0, i_prev, 0.0, i, 0.0, w_ref, 0.0, TS)
+        r1_standstill(p, m, s, v, 0.0, i_prev, 0.0, i, 0.0, w_ref, 0.0, TS)
         psi += dpsi * TS
         i_prev = i
         t += TS

@@ -40,6 +40,7 @@ CONTEXT = {
     "iq_ref_A": "iqref",
     "w_ref_rad_s": "wref",
     "hold_R1_flag": "hold",
+    "restart_flag": "restart",
     "i_inj_A": "iinj",
     "R1_hat_ohm": "R1",
     "R2_hat_ohm": "R2",

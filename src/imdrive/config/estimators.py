@@ -24,7 +24,7 @@ from imdrive.config.mras_regeneration import (
     RegenerationSpeed,
     regeneration_params,
 )
-from imdrive.config.r1_standstill import StandstillHold, r1_standstill_levels
+from imdrive.config.r1_standstill import StandstillHold
 from imdrive.config.registry import (  # noqa: F401  (re-exported: the settings half's API)
     ESTIMATOR_SETTINGS,
     EstimatorContext,
@@ -438,11 +438,12 @@ class MrasSettings:
     R1_standstill: Annotated[
         Bool,
         setting(
-            "standstill R1 identification: while the speed reference is zero and the flux "
+            "standstill R1 identification by the drive, whatever control.speed_feedback (the "
+            "key keeps its [mras] name): while the speed reference is zero and the flux "
             "current flows, R̂1 = Σ v·i / Σ |i|² over the part after the measured flux build-up, "
             "applied when the reference leaves zero, log column R1_id_status 1 identified, 2 "
             "could not, 3 one level of two (then the run's verdict_text says so; "
-            "kernels/estimators/mras_standstill.py); at one level biased by the dead-time "
+            "kernels/r1_standstill.py); at one level biased by the dead-time "
             "compensation's residual (1.13 R1 on the envelope's bridge), at two levels not "
             "(R1_standstill_levels)"
         ),
@@ -454,7 +455,7 @@ class MrasSettings:
             "voltage / |i|) or 2 (R̂1 = Δu/Δi, Holtz & Quan 2002; the residual starts the "
             "compensation's scale): the flux current at R1_standstill_first_level of its "
             "reference, then at it; the duty cycle waits for the test at most "
-            "R1_standstill_hold_T2 (kernels/estimators/mras_standstill.py)",
+            "R1_standstill_hold_T2 (kernels/r1_standstill.py)",
             ge=1,
             le=2,
             default_doc="2 where the controller compensates its inverter's error, else 1",
@@ -544,32 +545,23 @@ class MrasSettings:
                 "mras.R1_rate_pu", "set mras.R1_rate_per_s or mras.R1_rate_pu, not both"
             )
         k_R1 = self.R1_rate_per_s if self.R1_rate_pu is None else self.R1_rate_pu / sc.machine.T2_s
-        params = dict(
-            wc=self.wc_rad_s,
-            wc_k=self.wc_per_stator_frequency,
-            wc_min=self.wc_min_rad_s,
-            wc_tau=self.wc_follow_time_s,
-            K1=K1,
-            K2=K2,
-            b2=b2,
-            b2_wmin=self.acceleration_tracking_from_pu * 2 * math.pi * f_rated,
-            k_R1=k_R1,
-            R1_fmax=r1_max_freq_Hz(self, f_rated),
-            R1_min=0.5 * ctx.R1_hat,
-            R1_max=2.0 * ctx.R1_hat,
-            psi2_norm=ctx.psi0 * ctx.psi0 if normalise else 0.0,
-            R1_dc=self.R1_standstill,
-            # the window opens 3.5 rotor time constants, measured on the flux build-up
-            # (blocks of a quarter of the controller's T2_hat), into the run
-            R1_dc_settle=ctx.L2_hat / ctx.R2_hat,
-            R1_dc_block=0.25 * ctx.L2_hat / ctx.R2_hat,
-            R1_dc_nT2=3.5,
-            R1_dc_levels=r1_standstill_levels(sc),
-            R1_dc_boost=self.R1_standstill_first_level - 1.0,
-            R1_dc_hold=self.R1_standstill_hold_T2 * ctx.L2_hat / ctx.R2_hat,
-            bend=self.period_mean_current,
+        params = {
+            "wc": self.wc_rad_s,
+            "wc_k": self.wc_per_stator_frequency,
+            "wc_min": self.wc_min_rad_s,
+            "wc_tau": self.wc_follow_time_s,
+            "K1": K1,
+            "K2": K2,
+            "b2": b2,
+            "b2_wmin": self.acceleration_tracking_from_pu * 2 * math.pi * f_rated,
+            "k_R1": k_R1,
+            "R1_fmax": r1_max_freq_Hz(self, f_rated),
+            "R1_min": 0.5 * ctx.R1_hat,
+            "R1_max": 2.0 * ctx.R1_hat,
+            "psi2_norm": ctx.psi0 * ctx.psi0 if normalise else 0.0,
+            "bend": self.period_mean_current,
             **regeneration_params(self, sc.machine, ctx.psi0),
-        )
+        }
         src = {
             "mras_K1": "mras.K1" if self.K1 is not None else "mras.bandwidth_Hz",
             "mras_K2": "mras.K2" if self.K2 is not None else "mras.bandwidth_Hz",

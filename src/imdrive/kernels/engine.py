@@ -98,11 +98,13 @@ BASE_LOG_FIELDS = (
 
 def log_dtype(estimator: str | registry.EstimatorKernel = "mras") -> np.dtype:
     """The log record of a drive with ``estimator``: the base fields, then the estimator's own
-    (in the order of the MRAS log of 0.2 for the MRAS, so its columns keep their place)."""
+    (in the order of the MRAS log of 0.2 for the MRAS, so its columns keep their place: a base
+    field the estimator also declares, ``R1_id_status``, is placed among its own)."""
     k = registry.kernel(estimator) if isinstance(estimator, str) else estimator
     base = list(BASE_LOG_FIELDS)
     at = base.index("e_q0") + 1
-    names = base[:at] + [f for f in k.log_fields if f not in base] + base[at:]
+    own = list(k.log_fields)
+    names = [f for f in base[:at] if f not in own] + own + [f for f in base[at:] if f not in own]
     return record_dtype([(name, f8) for name in names])
 
 

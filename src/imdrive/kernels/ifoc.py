@@ -60,6 +60,7 @@ from imdrive.kernels.model import (
     table_interp,
     update_magnetising,
 )
+from imdrive.kernels.r1_standstill import R1_STANDSTILL_PARAMS, R1_STANDSTILL_STATE
 from imdrive.kernels.records import b1, c16, f8, i8, record_dtype
 from imdrive.kernels.speed_control import speed_pi_gains
 
@@ -104,6 +105,7 @@ CONTROL_PARAMS = record_dtype(
         ("or_wmin", f8),  # orientation check from this |w_e|, rad/s (0: off)
         ("or_trip", f8),  # misoriented and voltage-limited this long: realign, s
     ]
+    + R1_STANDSTILL_PARAMS  # the standstill R1 test (kernels/r1_standstill.py)
 )
 
 #: State of the controller (and of the open-loop voltage drive).
@@ -129,10 +131,19 @@ CONTROL_STATE = record_dtype(
         ("ref_moved_at", f8),  # when the speed reference last moved, s (-inf: never)
         ("or_time", f8),  # how long the orientation check has seen the frame off, s
     ]
+    + R1_STANDSTILL_STATE
 )
 
 #: Log fields of this block.
-LOG_FIELDS = ("speed_ref", "id_ref", "iq_ref", "i_d", "i_q", "theta_e")
+LOG_FIELDS = (
+    "speed_ref",
+    "id_ref",
+    "iq_ref",
+    "i_d",
+    "i_q",
+    "theta_e",
+    "R1_id_status",  # the standstill R1 test (kernels/r1_standstill.py): 0 not run, 1, 2, 3
+)
 
 
 @njit(cache=True)
@@ -311,6 +322,7 @@ def log_control(row, s, w_ref_m, theta_k):
     row.i_d = s.i_s_dq.real
     row.i_q = s.i_s_dq.imag
     row.theta_e = theta_k
+    row.R1_id_status = s.dc_status
 
 
 @njit(cache=True)

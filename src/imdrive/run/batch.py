@@ -301,8 +301,7 @@ def _run_block(block, offset, logs, log_every, window_s, parallel, errors):
             s_blk[i] = out.status[g]
             k_blk[i] = out.k_end[g]
             ts_blk[i] = a.Ts
-            if "dc_status" in state.est.dtype.names:
-                r1_blk[i] = state.est[g]["dc_status"]
+            r1_blk[i] = state.control[g]["dc_status"]
             if logs:
                 lg = logged_rows(log[g], out.status[g], out.k_end[g], le)
                 final = DriveState(*(f[g : g + 1].copy() for f in state))

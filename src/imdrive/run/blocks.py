@@ -20,6 +20,7 @@ from imdrive.config.current_control import current_controller
 from imdrive.config.field_weakening import field_weakening_on
 from imdrive.config.perunit import Resolved, adc_range_A, sign_band_A
 from imdrive.config.profiles import Profile
+from imdrive.config.r1_standstill import r1_standstill_fields
 from imdrive.config.scaled import flux_injection_frequency_Hz, plant_thermal_resistances
 from imdrive.config.scenario import Scenario
 from imdrive.config.sequence import sequence
@@ -264,8 +265,8 @@ def control_fields(sc: Scenario, D: Resolved, mh: dict, psi0: float) -> tuple[di
         ie_rate=ie_rate,
         ie_wc=2 * math.pi * ctl.current_bandwidth_Hz,
         ie_wmin=2 * math.pi * m.rated_frequency_Hz * ctl.inverter_error_adaptation_fmin_pu,
-        # the MRAS's standstill R1 identification absorbed the residual the scale learns
-        ie_r1=ie_rate > 0 and ctl.speed_feedback == "mras" and sc.mras.R1_standstill,
+        # the standstill R1 identification absorbed the residual the scale learns
+        ie_r1=ie_rate > 0 and sc.mras.R1_standstill,
         ie_veq=ctl.inverter_error_signal == "stator-voltage",
         fw=field_weakening_on(sc),
         fw_v=ctl.field_weakening_voltage,
@@ -278,6 +279,7 @@ def control_fields(sc: Scenario, D: Resolved, mh: dict, psi0: float) -> tuple[di
             2 * math.pi * m.rated_frequency_Hz * ORIENTATION_FROM_PU if ctl.reorientation else 0.0
         ),
         or_trip=ORIENTATION_TRIP_S,
+        **r1_standstill_fields(sc, mh["R1_hat"], mh["L2_hat"] / mh["R2_hat"]),
     )
     cm = sc.controller_model
     if D.model_inverter_error:  # the identified inverter-error table replaces dtc_u

@@ -181,8 +181,8 @@ def build_estimator(
     est = estimator_of(sc) if est is None else est
     er = sc.estimator_settings().records(ctx)
     try:
-        params = new_record(est.kernel.params, **er.params)
-        state = new_record(est.kernel.state, **er.state)
+        params = new_record(est.kernel.params, er.params)
+        state = new_record(est.kernel.state, er.state)
     except KeyError as exc:
         raise ConfigError(
             "control.speed_feedback",

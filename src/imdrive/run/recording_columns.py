@@ -30,6 +30,11 @@ COLUMNS = {
     "iq_ref_A": ("A", "the torque-current reference of the last period"),
     "w_ref_rad_s": ("rad/s", "the speed reference (mechanical)"),
     "hold_R1_flag": ("1", "1 where the estimator's R1 adaptation was held"),
+    "restart_flag": (
+        "1",
+        "1 where the drive's standstill R1 test set R1_hat at the last sample: the estimator "
+        "restarts what it integrated through the test",
+    ),
     "R1_hat_ohm": ("ohm", "the controller's R1_hat as the estimator read it"),
     "R2_hat_ohm": ("ohm", "the controller's R2_hat as the estimator read it"),
     "M_hat_H": ("H", "the controller's magnetising inductance as the estimator read it"),
@@ -49,6 +54,7 @@ CONTEXT_DEFAULTS = {
     "w_ref_rad_s": 0.0,
     "i_inj_A": 0.0,
     "hold_R1_flag": 1.0,  # an R1 law cannot tell regeneration without the references: held
+    "restart_flag": 0.0,  # no standstill test told the estimator to restart
 }
 
 #: the model columns: all or none (with them the replayed model follows the controller's)

@@ -252,7 +252,7 @@ def sequence_notes(sc, row: dict, t_end: float) -> str:
     out = ""
     # the standstill R1 test extends the premagnetisation until its window (the kernel's
     # t_hold, config/sequence.py): the note says so rather than a length it cannot know
-    test = sc.mras.R1_standstill and sc.control.speed_feedback == "mras"
+    test = sc.mras.R1_standstill
     if seq.delay_s > 0.0:
         out += (
             f"; premagnetised for {'at least ' if test else ''}{seq.premagnetise_s:.3g} s "

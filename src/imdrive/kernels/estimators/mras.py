@@ -141,10 +141,6 @@ from imdrive.kernels.estimators.common import (  # noqa: F401 (flux_frequency: a
     lowpass_coefficients,
     period_mean_offset,
 )
-from imdrive.kernels.estimators.mras_standstill import (  # noqa: F401 (also imported from here)
-    R1_DC_MIN_WINDOW,
-    mras_r1_standstill,
-)
 from imdrive.kernels.estimators.registry import register_kernel
 from imdrive.kernels.model import model_inductances
 from imdrive.kernels.records import b1, c16, f8, record_dtype
@@ -162,13 +158,6 @@ MRAS_PARAMS = record_dtype(
         ("R1_min", f8),  # clamps of R1_hat, ohm
         ("R1_max", f8),
         ("psi2_norm", f8),  # flux^2 the gains were designed for, Wb^2 (0: no normalisation)
-        ("R1_dc", b1),  # standstill R1 identification while magnetising (0: off)
-        ("R1_dc_settle", f8),  # shortest time from the start of a standstill run to its window, s
-        ("R1_dc_block", f8),  # block over which the measured build-up is compared, s
-        ("R1_dc_nT2", f8),  # the window opens this many measured rotor time constants in
-        ("R1_dc_levels", f8),  # 1 or 2 current levels (mras_standstill.py)
-        ("R1_dc_boost", f8),  # level A's flux reference is 1 + this times the reference's
-        ("R1_dc_hold", f8),  # the speed reference waits for the standstill test at most this, s
         ("bend", b1),  # the current model gets the current's mean over the period
         ("wc_k", f8),  # the corner follows wc_k |w_e| below wc (0: fixed at wc)
         ("wc_min", f8),  # and not below this, rad/s
@@ -191,29 +180,6 @@ MRAS_STATE = record_dtype(
         ("wc_now", f8),  # the filter's corner this period (p.wc_k > 0), rad/s
         ("w_flux", f8),  # the adjustable model's flux frequency, low-passed over p.wc_tau, rad/s
         ("dlam_i_ab", c16),  # adjustable model's change over the last period, Wb
-        ("dc_t", f8),  # standstill identification: time in the present standstill run, s
-        ("dc_vi", f8),  # its window's sums for the least squares: x1 y (x1 = |i|^2,
-        ("dc_ii", f8),  # x1 x1            y = Re(u conj i), x2 = Re(g conj i), see
-        ("dc_gi", f8),  # x1 x2            mras_r1_standstill)
-        ("dc_gg", f8),  # x2 x2
-        ("dc_gy", f8),  # x2 y
-        ("dc_n", f8),  # samples in the window
-        ("dc_by", f8),  # the present block's sum of y = Re(u conj i)
-        ("dc_bx", f8),  # and of |i|^2
-        ("dc_bt", f8),  # its duration so far, s
-        ("dc_r_prev", f8),  # apparent resistance of the last block (0: none yet), ohm
-        ("dc_r_prev2", f8),  # and of the one before (0: none yet), ohm
-        ("dc_r_first", f8),  # and of the run's first block (0: none yet), ohm
-        ("dc_T2", f8),  # the rotor time constant measured from the build-up's decay, s
-        ("dc_T2_sum", f8),  # sum of its block-wise measurements, s
-        ("dc_T2_n", f8),  # and their number
-        ("dc_open", b1),  # the window is open: the measured flux build-up is over
-        ("dc_status", f8),  # 0 no standstill run yet, 1 R1 identified, 2 could not, 3 one level
-        ("dc_run_t", f8),  # the standstill run's time, s
-        ("dc_phase", f8),  # the two-level test: 0 level A, 1 level B, 2 B's window, 3 done
-        ("dc_rA", f8),  # level A's apparent resistance, ohm
-        ("dc_iA", f8),  # and current, A
-        ("dc_T2A", f8),  # and the T2 measured on its build-up, s
     ]
     + stab.STABILISE_STATE
 )
@@ -338,7 +304,6 @@ def log_mras(row, s, n_p):
     row.lam_v_beta = s.lam_v_ab.imag
     row.lam_i_alpha = s.lam_f_ab.real
     row.lam_i_beta = s.lam_f_ab.imag
-    row.R1_id_status = s.dc_status
 
 
 @njit(cache=True)
@@ -376,19 +341,39 @@ def filter_corner(wc, wc_k, wc_min, w_e):
 OWN_LOG_FIELDS = LOG_FIELDS[3:]
 
 
+@njit(cache=True)
+def restart_after_test(s):
+    """The reference (voltage) model's flux restarts from the adjustable model's through the
+    same filter, and the speed adaptation's integrals from zero, as the drive's standstill
+    R1 test sets R1_hat (``EstimatorInput.restart``, :mod:`imdrive.kernels.r1_standstill`).
+    Integrated through the test with R1_hat(0) and the residual the voltage model
+    holds an error of about ``(dR1 |i| + u0)/wc``, which its filter forgets at ``wc`` (5 rad/s
+    at standstill with injection-robust's cut-off following the stator frequency): measured
+    on the envelope's bridge at 20 rpm from R1_hat(0) = 1.1 R1, the speed estimate then ran
+    10 rpm ahead as the ramp began, the rotor went back 29 rpm and stayed at 0 rpm with the
+    estimate at the reference (held, R2_hat -25 %). The drive is at standstill, so the
+    speed estimate's integral restarts at zero."""
+    s.lam_v_ab = s.lam_f_ab
+    s.int_e = 0.0
+    s.int_w = 0.0
+
+
 @njit(cache=True, inline="always")
 def mras_estimate(p, m, s, inp):
     """The MRAS in the estimator contract (:mod:`imdrive.kernels.estimators.registry`).
 
-    :func:`mras_step`, then the standstill R1 identification (``p.R1_dc``) and the online R1
-    law (``p.k_R1 > 0``, held while ``inp.hold_R1``, on the measured current less the
-    compensator's injected sinusoid). Returns the speed estimate of :func:`mras_step` (before
-    the R1 laws, which do not change it) and the flux error ``e_dq0``.
+    :func:`restart_after_test` where the drive's standstill R1 test has just set R1_hat
+    (``inp.restart``), :func:`mras_step`, then the online R1 law (``p.k_R1 > 0``, held while
+    ``inp.hold_R1``, on the measured current less the compensator's injected sinusoid).
+    Returns the speed estimate of :func:`mras_step` (before the R1 law, which does not change
+    it) and the flux error ``e_dq0``.
     """
     v = inp.v_ab
     i0 = inp.i_prev_ab
     i1 = inp.i_ab
     Ts = inp.Ts
+    if inp.restart:  # the drive's standstill test set R1_hat at the last sample
+        restart_after_test(s)
     # second integrator: on above b2_wmin, held only below half of it (hysteresis: module doc)
     if abs(inp.w_e) >= p.b2_wmin:
         s.int_w_run = True
@@ -396,10 +381,6 @@ def mras_estimate(p, m, s, inp):
         s.int_w_run = False
     mras_step(p, m, s, v.real, v.imag, i0.real, i0.imag, i1.real, i1.imag, inp.theta_e, Ts)
     w_hat = s.w_r_hat
-    if p.R1_dc:  # the DC test at every start
-        mras_r1_standstill(
-            p, m, s, v.real, v.imag, i0.real, i0.imag, i1.real, i1.imag, inp.w_ref, inp.w_e, Ts
-        )
     if p.k_R1 > 0.0 and not inp.hold_R1:
         # the injected sinusoid (flux-current axis) taken out of the current
         i_dc_alpha = i1.real - inp.i_inj * math.cos(inp.theta_e)
@@ -415,7 +396,6 @@ def log_mras_own(row, p, s, n_p):
     row.lam_v_beta = s.lam_v_ab.imag
     row.lam_i_alpha = s.lam_f_ab.real
     row.lam_i_beta = s.lam_f_ab.imag
-    row.R1_id_status = s.dc_status
 
 
 @njit(cache=True, inline="always")

@@ -17,7 +17,8 @@ The contract
     in it); ``s``: its state record (updated in place); ``inp``: an :class:`EstimatorInput`
     (the fields of :data:`ESTIMATOR_INPUT`, read-only: the last period's voltage, the last
     two current samples, the controller's angle, frequency and references, the R2
-    compensator's injected current; a step written for an ``ESTIMATOR_INPUT`` record reads
+    compensator's injected current, whether the drive's standstill R1 test has just set
+    ``R1_hat``; a step written for an ``ESTIMATOR_INPUT`` record reads
     the named tuple unchanged). Returns the electrical
     speed estimate, rad/s, and the rotor-flux error in the controller's frame, Wb (complex;
     ``0j`` if the estimator has none: the R2 compensator then sees no signal).
@@ -73,6 +74,10 @@ ESTIMATOR_INPUT = record_dtype(
         ("hold_R1", b1),  # R1 adaptation held (the compensator's gating asks for it)
         ("Ts", f8),  # control period, s
         ("t", f8),  # time of this sample, s
+        # the drive's standstill R1 test set R1_hat at the last sample: an estimator whose
+        # models integrated through the test with the old R1_hat restarts them
+        # (kernels/r1_standstill.py)
+        ("restart", b1),
     ]
 )
 
@@ -93,6 +98,7 @@ class EstimatorInput(NamedTuple):
     hold_R1: bool
     Ts: float
     t: float
+    restart: bool
 
 
 @dataclass(frozen=True)
