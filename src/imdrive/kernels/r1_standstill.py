@@ -248,8 +248,8 @@ def r1_standstill(
     a window of :data:`R1_DC_MIN_WINDOW` (the build-up was not over: a magnetisation too
     short for the machine's T2), R1_hat left as it was, 3 (two levels) only the first level
     was identified: R1_hat holds the inverter's residual as with one level (logged as
-    ``R1_id_status``). ``s.dc_restart`` is set for the one period after the two-level test set
-    R1_hat (the engine hands it to the estimator, ``EstimatorInput.restart``).
+    ``R1_id_status``). ``s.dc_restart`` is set for the one period after the test set R1_hat
+    (the engine hands it to the estimator, ``EstimatorInput.restart``).
     """
     s.dc_restart = False
     still = w_ref == 0.0 and abs(w_e) < math.pi
@@ -297,6 +297,7 @@ def r1_standstill(
         m.R1_hat = min(max(_window_solve(s), p.R1_dc_min), p.R1_dc_max)
         m.R1_id = True
         s.dc_status = 1.0
+        s.dc_restart = True
     elif s.dc_t > 0.0:  # a standstill run ended without its window: say so
         s.dc_status = 2.0
     _reset_level(s)

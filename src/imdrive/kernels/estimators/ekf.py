@@ -236,8 +236,23 @@ def ekf_step(p, m, s, v_prev_alpha, v_prev_beta, i_alpha, i_beta, Ts):
 
 
 @njit(cache=True)
+def ekf_restart(m, s, i_ab):
+    """Restart the state from the magnetised standstill (``EstimatorInput.restart``, as
+    :func:`imdrive.kernels.estimators.afo.afo_restart`): the current ``i_ab``, the rotor flux
+    ``M_hat i_ab``, the speed zero; the covariance is kept."""
+    s.x[0] = i_ab.real
+    s.x[1] = i_ab.imag
+    s.x[2] = m.M_hat * i_ab.real
+    s.x[3] = m.M_hat * i_ab.imag
+    s.x[4] = 0.0
+    s.w_r_hat = 0.0
+
+
+@njit(cache=True)
 def ekf_estimate(p, m, s, inp):
     """The extended Kalman filter in the estimator contract; it has no flux error (``0j``)."""
+    if inp.restart and s.started:
+        ekf_restart(m, s, inp.i_prev_ab)
     ekf_step(p, m, s, inp.v_ab.real, inp.v_ab.imag, inp.i_ab.real, inp.i_ab.imag, inp.Ts)
     return s.w_r_hat, 0j
 
