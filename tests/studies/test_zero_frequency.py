@@ -51,12 +51,24 @@ def test_a_frequency_no_speed_reaches_is_refused():
 
 def test_the_stored_runs_cover_the_study():
     t = pd.read_csv(DOCS / "data" / "zero_frequency.csv")
-    n = len(study.F_S_HZ) * len(study.R2_RATIOS) * len(envelope.DRIVES)
+    n = len(study.F_S_HZ) * len(study.R2_RATIOS) * len(study.DRIVES)
     assert (t.groupby("machine").size() == n).all()
     assert set(t["machine"]) == set(study.MACHINES)
     assert set(t["f_s_target_Hz"]) == set(study.F_S_HZ)
     # each run is at the frequency it is filed under
     assert (t["f_s_R2_Hz"] - t["f_s_target_Hz"]).abs().max() < 1e-6
+
+
+def test_the_observer_on_the_identified_R1_loses_no_run():
+    """``injection-robust`` on the adaptive observer, its R1 from the drive's standstill test
+    (R1_hat(0) = 1.1 R1): no loss of control at any stator frequency from -0.5 to 2 Hz,
+    regenerating the rated torque, on the four machines. Before the test served every
+    estimator the observer ran on 1.1 R1 and lost 81 of these 84 runs; the MRAS loses 20."""
+    t = pd.read_csv(DOCS / "data" / "zero_frequency.csv")
+    afo = t[t["drive"] == "injection-robust-afo"]
+    assert len(afo) == len(study.MACHINES) * len(study.F_S_HZ) * len(study.R2_RATIOS)
+    assert not afo["lost_control"].any()
+    assert (afo["verdict"] != "lost").all()
 
 
 @pytest.mark.slow
@@ -65,7 +77,7 @@ def test_reduced_run_reproduces_the_stored_runs():
     stored = pd.read_csv(DOCS / "data" / "zero_frequency.csv")
     keys = ["machine", "drive", "f_s_target_Hz", "R2_ratio"]
     both = t.merge(stored, on=keys, suffixes=("", "_stored"), validate="one_to_one")
-    assert len(both) == len(envelope.DRIVES)
+    assert len(both) == len(study.DRIVES)
     for _, row in both.iterrows():
         assert row["verdict"] == row["verdict_stored"]
         for col in ("speed_error_rpm", "R2_error_pct"):

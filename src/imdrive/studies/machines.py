@@ -69,6 +69,9 @@ GOAL_DRIVES = ("sensorless", "injection-robust")
 #: MRAS's, to show which of the misses are the MRAS's.
 DRIVE_ALIASES: dict[str, tuple[str, tuple[str, ...]]] = {
     "sensorless-afo": ("sensorless", ('control.speed_feedback="afo"',)),
+    # the R2-tracking preset on the observer, which the standstill R1 test now serves
+    # (kernels/r1_standstill.py): the zero-frequency study's fourth drive
+    "injection-robust-afo": ("injection-robust", ('control.speed_feedback="afo"',)),
 }
 #: What the grid adds to a drive's preset, the same on every machine: nothing now. The DC link
 #: is sqrt 2 x V_rated, no margin: at rated speed the rated flux needs 0.98-0.99 of the
