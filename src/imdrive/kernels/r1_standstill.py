@@ -216,9 +216,8 @@ def r1_standstill(
     :data:`R1_DC_MIN_WINDOW` from R2_hat(0) = 1.2 and 1.4 R2 (on the Aalto 2.2 kW machine at
     every R2_hat(0) from 0.6 to 1.4 R2); with the decay measured it opens near 0.3 s (the
     build-up left is fitted by the ``k x2`` term below). T2 is measured only while a block
-    moves by more than 1 % (above the
-    current ripple's noise on a switching bridge). When the run ends (the speed reference
-    leaves zero) and its window lasted at least
+    moves by more than 1 % (above the current ripple's noise on a switching bridge). When the
+    run ends (the speed reference leaves zero) and its window lasted at least
     :data:`R1_DC_MIN_WINDOW`, R1_hat is the least-squares solution over the window of::
 
         Re(u conj i) = R1 |i|^2 + k x2,   u = v - sigma L1 p i,
