@@ -34,7 +34,6 @@ VARIANTS = {
     "injection": [
         "compensator.enabled=true",
         "compensator.t_on_s=0.0",
-        'compensator.input="demodulated"',
         "compensator.gain_E_per_Wb=1000",
         "compensator.gain_DE_per_Wb=1000",
         "compensator.G_CR_ohm=0.02",

@@ -553,7 +553,6 @@ def test_a_profile_built_in_python_is_held_to_the_same_rules():
 
 INJECTING = [
     "compensator.enabled=true",
-    'compensator.input="demodulated"',
     "injection.amplitude_A=0.5",
     "injection.frequency_Hz=2",
 ]

@@ -82,7 +82,7 @@ def test_the_paper_presets_get_theirs_and_show_all_names_the_derived_ones():
     assert "# G_CR_ohm is unset (taken from its twin G_CR_pu: " in twin.to_toml()
 
 
-INJ = [*ON, 'compensator.input="demodulated"', "injection.amplitude_pu=0.075"]
+INJ = [*ON, "injection.amplitude_pu=0.075"]
 
 
 @pytest.mark.parametrize("machine", ["krause-50hp", "aalto-2.2kw", "krause-2250hp"])

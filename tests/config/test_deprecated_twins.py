@@ -15,7 +15,7 @@ from imdrive.config.scaled import flux_injection_frequency_Hz
 from imdrive.config.scenario import Scenario
 from imdrive.errors import ConfigWarning
 
-INJ = ["compensator.enabled=true", 'compensator.input="demodulated"']
+INJ = ["compensator.enabled=true"]  # the input is demodulated with the injection
 
 #: key=value -> (its per-unit twin, how the resolved scenario reads it)
 TWINS = {

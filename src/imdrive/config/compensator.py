@@ -8,7 +8,7 @@ from typing import Annotated, Literal
 
 from pydantic import model_validator
 
-from imdrive.config.deprecated_keys import deprecated_key, deprecated_twin, deprecated_value
+from imdrive.config import compensator_deprecated  # noqa: F401  (the deprecated keys register)
 from imdrive.config.r2_kalman import KalmanLawSettings  # noqa: F401  (the law registers)
 from imdrive.config.r2_laws import law_names
 from imdrive.config.validation import Bool, Float, setting, settings
@@ -35,7 +35,8 @@ class CompensatorSettings:
     these and the gate's thresholds are the paper's numbers on Table IV scaled to the machine
     (:mod:`imdrive.config.compensator_gains`). The clamps ``R2_min_ratio``, ``R2_max_ratio``
     default to 0.5 and 2 times the initial estimate. ``period_s`` defaults to 10 ms, or to one
-    injection period with ``input = "demodulated"``.
+    injection period with the injection. The input is e_d0 detected synchronously with the
+    injection whenever it runs, else e_d0 itself, the paper's (:func:`demodulated_input`).
 
     Each of these had an absolute spelling (``gain_E_per_Wb``, ``G_CR_ohm``, ``R2_min_ohm``,
     ``R2_max_ohm``; deprecated twins since round 7, they still act with a warning): the
@@ -62,7 +63,7 @@ class CompensatorSettings:
             "decision period",
             "s",
             gt=0.0,
-            default_doc='0.01; one injection period with input = "demodulated"',
+            default_doc="0.01; one injection period with the injection",
         ),
     ] = None
     gain_E_per_Wb: Annotated[
@@ -131,19 +132,12 @@ class CompensatorSettings:
         Literal["paper", "rules"],
         setting('"paper": the printed Table III; "rules": compiled from the fitted rule base'),
     ] = "paper"
-    input: Annotated[
-        Literal["e_d0", "demodulated"],
-        setting(
-            '"e_d0": the paper\'s input; "demodulated": e_d0 detected synchronously with the '
-            "injection ([injection])"
-        ),
-    ] = "e_d0"
     gating: Annotated[
         Bool | None,
         setting(
             "freeze R̂2 during speed and load transients and in voltage saturation, and move "
             "the injection frequency away from the stator frequency (kernels/compensator.py)",
-            default_doc='on with input = "demodulated", off with "e_d0"',
+            default_doc="on with the injection ([injection]), off without (the paper's e_d0 input)",
         ),
     ] = None
     gate_speed_rpm: Annotated[
@@ -271,10 +265,10 @@ class InjectionSettings:
     R2 identification from a low-frequency AC flux component is Kubota & Matsuse (IEEE Trans.
     Ind. Appl. 30(5), 1994); feeding its demodulated flux error to the paper's table is ours.
 
-    ``amplitude_pu`` unset or 0 switches it off. The compensator's ``input = "demodulated"``
-    feeds on e_d0 detected synchronously with this sinusoid; its period must be a whole number of
-    periods of every injection frequency it uses (the default compensator period for that
-    input is one; :func:`check_whole_injection_periods`).
+    ``amplitude_pu`` unset or 0 switches it off. While it runs the compensator feeds on e_d0
+    detected synchronously with this sinusoid (:func:`demodulated_input`); its period must be
+    a whole number of periods of every injection frequency it uses (the default compensator
+    period is one; :func:`check_whole_injection_periods`).
     """
 
     amplitude_A: Annotated[
@@ -374,6 +368,15 @@ def injection_amplitude_given(inj) -> float:
     return inj.amplitude_A if inj.amplitude_A is not None else 0.0
 
 
+def demodulated_input(inj, r=None) -> bool:
+    """Whether the compensator's input is e_d0 detected synchronously with the injection: exactly
+    when the injection runs (``compensator.input``, deprecated). Without the injection the
+    detected product is zero and R̂2 never moves; with it, e_d0 itself carries the injection's
+    ripple, which a 10 ms window does not average out: the paper's e_d0 is its input without
+    the injection. Every preset, sweep and study paired them so. ``r``: the resolved values."""
+    return (injection_amplitude_given(inj) if r is None else r.inj_amp) > 0.0
+
+
 def _first_frequency(inj) -> float:
     """The injection frequency without the scenario's machine (no resolved values at hand):
     as given, else Table IV's default."""
@@ -387,14 +390,14 @@ def decision_period_steps(
 ) -> int:
     """The compensator's decision period in control periods (at least one).
 
-    ``compensator.period_s`` if given, else one injection period with ``input =
-    "demodulated"``, else 10 ms; rounded to whole control periods of ``Ts`` s. ``r``: the
-    scenario's per-unit values resolved (:func:`imdrive.config.perunit.resolve`), whose
-    injection frequency is used when given.
+    ``compensator.period_s`` if given, else one injection period with the injection
+    (:func:`demodulated_input`), else 10 ms; rounded to whole control periods of ``Ts`` s.
+    ``r``: the scenario's per-unit values resolved (:func:`imdrive.config.perunit.resolve`),
+    whose injection frequency is used when given.
     """
     if comp.period_s is not None:
         period = comp.period_s
-    elif comp.input == "demodulated":
+    elif comp.enabled and demodulated_input(inj, r):
         period = 1.0 / (_first_frequency(inj) if r is None else r.inj_f1)
     else:
         period = 0.01
@@ -407,7 +410,7 @@ def injection_frequencies_in_use(
     """``(key, Hz)`` of each injection frequency the compensator's decision period must hold
     whole periods of, so that the synchronous detection averages over whole periods.
 
-    The injection frequency with the demodulated input; with the gating's frequency schedule
+    The injection frequency (the input is demodulated with it); with the gating's frequency schedule
     (a band ``compensator.gate_band_pu`` > 0) its harmonics 2 f and 3 f (:data:`HARMONICS`),
     named by the key that sets them. None without injection or without the compensator.
     ``r``: the resolved per-unit values (their frequency and amplitude replace the absolute
@@ -430,11 +433,8 @@ def injection_frequencies_in_use(
         from imdrive.config.compensator_gains import GATE_BAND_PU
 
         band = (comp.gate_band_pu if comp.gate_band_pu is not None else GATE_BAND_PU) * f1
-    out = []
-    demodulated = comp.input == "demodulated"
-    if demodulated:
-        out.append((key, f1))
-    gating = comp.gating if comp.gating is not None else demodulated
+    out = [(key, f1)]  # the input is demodulated with it (demodulated_input)
+    gating = comp.gating if comp.gating is not None else True
     if gating and band > 0.0:
         out += [(key, n * f1) for n in HARMONICS[1:]]
     return out
@@ -464,115 +464,3 @@ def check_whole_injection_periods(
                 f"number of periods of {f:g} Hz (got {cycles:g}), the injection frequency or a "
                 "harmonic of it in the gating's schedule",
             )
-
-
-#: The adaptive step law's keys (removed in 0.2, :mod:`imdrive.kernels.compensator`): what
-#: each patched, and what the model-based law does instead.
-_ADAPTIVE_LAW = {
-    "fine_gain": "the fine band's level per unit of scaled E; the Kalman law's gain (its "
-    "measurement noise [kalman] noise_pu against R2's uncertainty) sets the step",
-    "drift_gain": "the share of a fine step integrated into a drift rate; the Kalman law's "
-    "second state is R2's drift rate ([kalman] drift_pu)",
-    "overshoot_damping": "halving the table's steps after a reversal; the Kalman gain falls as "
-    "the measurements agree",
-    "drift_min_freq_Hz": "the stator frequency below which the drift rate was reset; the Kalman "
-    "law weighs every accepted window by its noise instead",
-    "drift_max_ohm": "the drift rate's bound; the Kalman law's drift rate is bounded by its "
-    "noise model ([kalman] drift_pu)",
-    "drift_unwind_factor": "how fast the drift unwound after a ramp stopped; the Kalman law's "
-    "innovation unwinds it",
-    "drift_shrink_margin": "the shrink of the error that stopped the drift's integration; the "
-    "Kalman law has no integrator to wind up",
-    "fine_gain_follows_R2": "the fine step's gain kept as R̂2 moved; the Kalman law divides each "
-    "window by its sensitivity at the R̂2 in use",
-}
-for _key, _why in _ADAPTIVE_LAW.items():
-    deprecated_key("compensator", _key, _why + ' (step_law = "adaptive" was removed)')
-deprecated_value(
-    "compensator",
-    "step_law",
-    "adaptive",
-    "kalman",
-    "the model-based law gives the adaptive law's step size, ramp following and damping from "
-    "one filter (the envelope sweep: 263 of 267 cells within goal against 259, off the grid "
-    "78 of 80 against 80; what it costs: CHANGELOG.md, docs/envelope.md)",
-)
-
-#: Keys of mechanisms that a law or a fixed rule replaced in round 4 (issue 38: few settings,
-#: each with a measurement of what it buys).
-_REPLACED = {
-    ("injection", "frequency2_Hz"): "the gating's schedule is the harmonics 1, 2, 3 of "
-    "injection.frequency (HARMONICS in config/compensator.py): every preset and study that set "
-    "the alternatives set 2 f and 3 f",
-    ("injection", "frequency3_Hz"): "as frequency2_Hz: the third frequency is always 3 f",
-    ("injection", "headroom_rate_per_s"): "the estimation headroom's loop samples the peak voltage "
-    "once per injection period, so its gain is set per period: 0.5 (Table IV's 1 /s at 2 Hz), "
-    "HEADROOM_GAIN_PER_PERIOD in run/compensator_blocks.py",
-    ("injection", "headroom_gain_per_period"): "as headroom_rate_per_s: the gain is 0.5 per "
-    "injection period on every machine",
-    ("injection", "compensate_filter"): "undoing the MRAS's comparison filter at the side bands "
-    "did not improve R2_hat: on injection-robust at 0.05, 0.1 and 0.2 x rated speed, rated "
-    "motoring and regenerating load, R2_hat(0) = 0.8, 1.2 R2 on Table IV, Aalto 2.2 kW and "
-    "Krause 50 hp, 31 of 36 runs ended within 0.1 % of R2 of each other, 4 ended farther with "
-    "it and 1 closer, and 34 of 36 within 2 % either way",
-    ("injection", "lowpass_rad_s"): "it filtered the detected product for display only; the "
-    "product is logged every sample (e_d0_demod): filter it where it is plotted",
-    ("injection", "t_on_s"): "the injection starts with the compensator, at compensator.t_on_s "
-    "(which moves with the drive's sequence as the profiles do): every preset, sweep and study "
-    "that set both set them equal",
-    ("compensator", "gain_DE_pu"): "the change of E per period (DE) is scaled as E, by gain_E_pu: "
-    "the paper's Tables I and II quantise both on the same micro-weber thresholds, and every "
-    "preset, sweep and study set the two equal (1e6 and 1000 /Wb)",
-    ("compensator", "gain_DE_per_Wb"): "as gain_DE_pu: DE is scaled as E (gain_E_pu)",
-    ("compensator", "average"): "the input is always its mean over the decision window (a "
-    "boxcar anti-aliasing filter; for the demodulated input it is the synchronous detection "
-    "itself), as every preset and study had it: a sample at the window's end left R2_hat at its "
-    "start on injection-fig5/6-realistic (+-20 %, 0.39 % with the mean), and with the paper's "
-    "e_d0 input neither converges (paper-fig5/6, 1000 and 150 rpm, average and realistic drive: "
-    "-50 ... +50 % either way)",
-    ("injection", "headroom"): "the injection's amplitude backs off near the voltage limit "
-    "exactly when the field weakening is on (its default; no preset or study set it): with the "
-    "field weakening on and it off, R2_hat ended 0.42 % and the speed 0.23 rpm off at 0.93 x "
-    "rated speed and load on Table IV (0.00 with it; Aalto 2.2 kW 0.48 rpm), without the field "
-    "weakening it changed nothing (R2_hat held at +20 % near base speed either way)",
-    ("compensator", "gate_hold_periods"): "one whole decision window after a gated one is held on "
-    "every drive (GATE_HOLD_PERIODS in run/compensator_blocks.py), the value every preset and "
-    "study used",
-}
-
-
-def _compensator_start(data: dict):
-    comp = data.get("compensator")
-    return comp.get("t_on_s", 0.0) if isinstance(comp, dict) else 0.0
-
-
-#: The values of a replaced key that ask for what its rule does (a scenario written out in
-#: full by an earlier release states every key): dropped without a warning.
-_ASKS_FOR_THE_RULE = {
-    ("injection", "t_on_s"): lambda data, v: v == _compensator_start(data),
-    ("compensator", "average"): lambda data, v: v is True,
-}
-for (_section, _key), _why in _REPLACED.items():
-    deprecated_key(_section, _key, _why, _ASKS_FOR_THE_RULE.get((_section, _key)))
-for _n in ("frequency2", "frequency3"):
-    deprecated_key("injection", f"{_n}_pu", f"as {_n}_Hz: the schedule is the harmonics of f")
-# The gate's thresholds in absolute units: no preset states them so (their defaults and the
-# recommended preset's values are per-unit of the machine).
-for _key in ("gate_speed", "gate_iq", "gate_band"):
-    _unit = {"gate_speed": "rpm", "gate_iq": "A", "gate_band": "Hz"}[_key]
-    deprecated_twin("compensator", f"{_key}_{_unit}", f"{_key}_pu")
-# The table law's scalings and step, the clamps, the injections' amplitude and frequency in
-# absolute units (round 7, issue 38): each is one setting with its per-unit twin
-# (config/pairs.py), and the presets state the twin with the value that gives the same float
-# on Table IV (or leave it to its default, which is the paper's number there).
-for _section, _key, _twin in (
-    ("compensator", "gain_E_per_Wb", "gain_E_pu"),
-    ("compensator", "G_CR_ohm", "G_CR_pu"),
-    ("compensator", "R2_min_ohm", "R2_min_ratio"),
-    ("compensator", "R2_max_ohm", "R2_max_ratio"),
-    ("injection", "frequency_Hz", "frequency_pu"),
-    ("flux_injection", "frequency_Hz", "frequency_pu"),  # (config/estimators.py's section)
-):
-    deprecated_twin(_section, _key, _twin)
-# 0 A was its default (the injection off): a scenario written out in full states it
-deprecated_twin("injection", "amplitude_A", "amplitude_pu", unset=0.0)

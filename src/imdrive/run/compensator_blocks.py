@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 
+from imdrive.config.compensator import demodulated_input
 from imdrive.config.field_weakening import field_weakening_on
 from imdrive.config.perunit import Resolved
 from imdrive.config.registry import ESTIMATOR_SETTINGS
@@ -42,7 +43,8 @@ def compensator_fields(sc: Scenario, D: Resolved) -> tuple[dict, dict]:
         G_CR=r.G_CR,
         R2_min=R2_min,
         R2_max=R2_max,
-        demodulated=comp.input == "demodulated",
+        # the compensator reads it alone: off, the record is as it always was
+        demodulated=comp.enabled and demodulated_input(inj, r),
         average=True,  # the window's mean, always (compensator.average: deprecated)
         inj_amp=r.inj_amp,
         inj_freq=r.inj_f1,
@@ -124,7 +126,7 @@ def headroom_rate_per_s(
 def _gating(sc, r) -> dict:
     """The compensator's gating and frequency-schedule parameters (off: zeros)."""
     comp = sc.compensator
-    on = comp.gating if comp.gating is not None else comp.input == "demodulated"
+    on = comp.gating if comp.gating is not None else demodulated_input(sc.injection, r)
     out = {}
     inj = sc.injection
     # the amplitude backs off near the voltage limit whenever the field weakening is on

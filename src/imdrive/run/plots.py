@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from imdrive.config.compensator import demodulated_input
 from imdrive.config.sequence import sequence
 from imdrive.run.columns import current_name
 from imdrive.run.export import unit_of
@@ -400,11 +401,10 @@ def compensation_figure(res) -> Figure:
     """The paper's Figs. 5/6 layout: e_d0 (whole run, then zoomed on the steady state after
     the compensator switches on), the R2 estimate against the plant's R2, and the speeds."""
     s = res.signals
-    comp = res.scenario.compensator
     fig, axes = _fig(
         4, f"{res.scenario.name}: rotor-resistance compensation", heights=[0.8, 1.3, 1, 1]
     )
-    if comp.input == "demodulated":
+    if demodulated_input(res.scenario.injection):
         shown = [("e_d0_Wb", {"lw": 0.6, "alpha": 0.6}), ("e_d0_demod_Wb", {"lw": 0.6})]
     else:
         shown = [("e_d0_Wb", {})]

@@ -27,6 +27,7 @@ import pandas as pd
 from imdrive import analysis
 from imdrive._figure import DisplayFigure as Figure
 from imdrive._progress import Progress
+from imdrive.config.compensator import demodulated_input
 from imdrive.config.machine import machine_preset
 from imdrive.config.scenario import Scenario
 from imdrive.run.metrics import steady_means
@@ -97,7 +98,7 @@ def compensation_table(out: Path | None = None, progress=None) -> pd.DataFrame:
         rows.append(
             {
                 "preset": name,
-                "compensator": "injection" if sc.compensator.input == "demodulated" else "paper",
+                "compensator": "injection" if demodulated_input(sc.injection) else "paper",
                 "speed_rpm": float(sc.control.speed_ref_rpm.final),
                 "R2_ratio_initial": m["R2_hat_initial_ohm"] / R2,
                 **m,

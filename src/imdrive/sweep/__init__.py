@@ -31,7 +31,7 @@ Sweep file (TOML)
     "load.torque_Nm.changes[0].at" = [1.5, 2.5]        # one element of a profile, as --set
     [axes.variant]                                     # named sets of overrides
     plain = {}
-    paper = { compensator.enabled = true, compensator.input = "e_d0" }
+    paper = { compensator.enabled = true, compensator.t_on_s = 4.0 }
 
     [[heatmap]]                        # figures (optional; a default is drawn without them)
     x = "R2_ratio"                     # two axes ...
