@@ -11,6 +11,7 @@ import warnings
 
 import pytest
 
+from imdrive.config.compensator import backoff_band
 from imdrive.config.scenario import Scenario
 from imdrive.run.build import build_arrays
 
@@ -43,4 +44,41 @@ def test_the_input_is_demodulated_exactly_with_the_injection(preset, asks, other
     (note,) = [n for n in notes if n.startswith("compensator.input")]
     assert "no longer has any effect" in note
     assert "exactly when the injection runs" in note
+    assert _comp(given) == _comp(plain)
+
+
+def test_the_back_off_band_is_the_old_defaults_to_the_bit():
+    assert backoff_band(0.88, 0.9) == (0.92, 0.98)  # the injection presets' band
+    assert backoff_band(None, 0.9) == (0.85, 0.95)  # the old defaults
+    record = build_arrays(_read("injection-robust")[0]).params.comp[0]
+    assert (record["inj_v_lo"], record["inj_v_hi"], record["inj_v_peak"]) == (0.92, 0.98, 0.88)
+
+
+@pytest.mark.parametrize(
+    ("overrides", "band"),
+    [((), (0.92, 0.98)), (("no estimation headroom",), (0.85, 0.95))],
+)
+def test_the_back_off_band_follows_the_voltage_the_field_weakening_holds(overrides, band):
+    def read(*more):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            sc = Scenario.read("injection-robust")
+            if overrides:  # the estimation headroom off (unset)
+                sc = sc.with_overrides({"injection.headroom_voltage": None})
+            sc = sc.with_overrides(list(more)) if more else sc
+        return sc, [str(w.message) for w in caught]
+
+    plain, notes = read()
+    assert notes == []
+    lo, hi = band
+    same, notes = read(f"injection.headroom_from={lo}", f"injection.headroom_to={hi}")
+    assert notes == [] and _comp(same) == _comp(plain)
+    given, notes = read(f"injection.headroom_from={lo - 0.02}", f"injection.headroom_to={hi}")
+    (note,) = notes
+    assert note.startswith("injection.headroom_from: deprecated, no longer has any effect")
+    assert "follows the voltage the field weakening holds" in note
+    assert _comp(given) == _comp(plain)
+    given, notes = read(f"injection.headroom_to={hi + 0.01}")
+    (note,) = notes
+    assert note.startswith("injection.headroom_to:") and "headroom_voltage" in note
     assert _comp(given) == _comp(plain)

@@ -10,6 +10,7 @@ import warnings
 
 import pytest
 
+from imdrive.config.compensator import backoff_band
 from imdrive.config.field_weakening import field_weakening_on
 from imdrive.config.scenario import Scenario
 from imdrive.run.build import build_arrays
@@ -54,9 +55,8 @@ def test_the_injection_backs_off_exactly_with_the_field_weakening(overrides, bac
     assert field_weakening_on(sc) == backs_off
     assert (comp["inj_v_hi"] > 0.0) == backs_off
     if backs_off:
-        assert (comp["inj_v_lo"], comp["inj_v_hi"]) == (
-            sc.injection.headroom_from,
-            sc.injection.headroom_to,
+        assert (comp["inj_v_lo"], comp["inj_v_hi"]) == backoff_band(
+            sc.injection.headroom_voltage, sc.control.field_weakening_voltage
         )
 
 

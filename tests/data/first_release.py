@@ -20,8 +20,6 @@ FIRST_RELEASE = {
     "mras.R1_standstill": False,
     "mras.R1_rate_per_s": 0.0,
     "injection.headroom_voltage": None,
-    "injection.headroom_from": 0.85,
-    "injection.headroom_to": 0.95,
     "compensator.step_law": "table",  # the paper's table with the first release's scaling
     "compensator.table": "paper",
     "compensator.gain_E_pu": 463.1158419669872,  # 1000 /Wb on Table IV (E and DE), to the bit

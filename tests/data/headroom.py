@@ -4,14 +4,11 @@ shared by the drive tests of the headroom and of the rotor thermal model."""
 HEADROOM = (
     "control.field_weakening=true",
     "injection.headroom_voltage=0.88",
-    "injection.headroom_from=0.92",
-    "injection.headroom_to=0.98",
     "compensator.gate_voltage=0.99",
 )
 # the injection preset's headroom undone: the injection backs off from 0.85 of the voltage
+# (config/compensator.py backoff_band: the band follows the estimation headroom)
 NO_HEADROOM = {
     "injection.headroom_voltage": None,
-    "injection.headroom_from": 0.85,
-    "injection.headroom_to": 0.95,
     "compensator.gate_voltage": 0.97,
 }

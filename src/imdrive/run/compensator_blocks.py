@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from imdrive.config.compensator import demodulated_input
+from imdrive.config.compensator import backoff_band, demodulated_input
 from imdrive.config.field_weakening import field_weakening_on
 from imdrive.config.perunit import Resolved
 from imdrive.config.registry import ESTIMATOR_SETTINGS
@@ -132,17 +132,14 @@ def _gating(sc, r) -> dict:
     # the amplitude backs off near the voltage limit whenever the field weakening is on
     # (injection.headroom, deprecated: config/compensator.py)
     headroom = field_weakening_on(sc)
+    fw_v = sc.control.field_weakening_voltage
     if headroom and r.inj_amp > 0.0:
-        if not inj.headroom_from < inj.headroom_to:
-            raise ConfigError("injection.headroom_from", "must be < injection.headroom_to")
-        out["inj_v_lo"] = inj.headroom_from
-        out["inj_v_hi"] = inj.headroom_to
+        # its band follows the voltage the field weakening holds (injection.headroom_from,
+        # headroom_to: deprecated)
+        out["inj_v_lo"], out["inj_v_hi"] = backoff_band(inj.headroom_voltage, fw_v)
     if inj.headroom_voltage is not None and r.inj_amp > 0.0:
-        fw_v = sc.control.field_weakening_voltage
         if not field_weakening_on(sc):
             raise ConfigError("injection.headroom_voltage", "needs control.field_weakening = true")
-        if not inj.headroom_voltage <= inj.headroom_from:
-            raise ConfigError("injection.headroom_voltage", "must be <= injection.headroom_from")
         out |= {
             "inj_fw": True,
             "inj_v_peak": inj.headroom_voltage,
