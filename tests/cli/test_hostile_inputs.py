@@ -551,35 +551,26 @@ def test_a_profile_built_in_python_is_held_to_the_same_rules():
         ControlSettings(speed_ref_rpm=Profile(((-1.0, 0.0), (1.0, 100.0))))
 
 
-INJECTING = [
-    "compensator.enabled=true",
-    "injection.amplitude_A=0.5",
-    "injection.frequency_Hz=2",
-]
+INJECTING = ["compensator.enabled=true", "injection.amplitude_A=0.5"]
 
 
-@pytest.mark.parametrize(
-    ("extra", "field"),
-    [
-        (["compensator.period_s=0.3"], "compensator.period_s"),  # 0.6 periods of 2 Hz
-        (["compensator.period_s=0.75"], "compensator.period_s"),  # 1.5 periods
-        # the schedule's harmonics (4, 6 Hz) fit any window of whole 2 Hz periods
-    ],
-)
-def test_the_compensator_period_must_hold_whole_injection_periods(extra, field):
+@pytest.mark.parametrize("hz", ["3", "7"])  # 1/3 s and 1/7 s: not whole periods of 100 us
+def test_the_compensator_period_must_hold_whole_injection_periods(hz):
+    """The window is one injection period (compensator.period_s is deprecated), rounded to
+    whole control periods: a frequency in Hz (a deprecated spelling) whose period is not whole
+    control periods is refused, naming it."""
     with pytest.raises(ConfigError, match="whole number of periods") as exc:
-        im.Scenario.read("sensorless", INJECTING + extra)
-    assert exc.value.field == field
+        im.Scenario.read("sensorless", [*INJECTING, f"injection.frequency_Hz={hz}"])
+    assert exc.value.field == "injection.frequency_Hz"
 
 
 def test_whole_injection_periods_are_accepted():
-    for extra in (
-        [],
-        ["compensator.period_s=1.0"],
-    ):
-        im.Scenario.read("sensorless", INJECTING + extra)
+    for hz in ("2", "2.5"):
+        im.Scenario.read("sensorless", [*INJECTING, f"injection.frequency_Hz={hz}"])
+    # the per-unit frequency is rounded to whole control periods
+    im.Scenario.read("sensorless", [*INJECTING, "injection.frequency_pu=1.37"])
     # the rule binds only what the compensator uses: no compensator, no rule
-    im.Scenario.read("sensorless", ["injection.amplitude_A=0.5", "compensator.period_s=0.3"])
+    im.Scenario.read("sensorless", ["injection.amplitude_A=0.5", "injection.frequency_Hz=3"])
 
 
 # ------------------------------------------------------------------------------------------

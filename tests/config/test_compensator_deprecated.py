@@ -82,3 +82,19 @@ def test_the_back_off_band_follows_the_voltage_the_field_weakening_holds(overrid
     (note,) = notes
     assert note.startswith("injection.headroom_to:") and "headroom_voltage" in note
     assert _comp(given) == _comp(plain)
+
+
+@pytest.mark.parametrize(
+    ("preset", "steps"), [("paper-fig5", 100), ("injection-fig5", 5000), ("injection-robust", 5000)]
+)
+def test_the_window_is_one_injection_period_or_10_ms(preset, steps):
+    plain, notes = _read(preset)
+    assert notes == [] and build_arrays(plain).params.comp[0]["n"] == steps  # Ts = 100 us
+    if preset == "paper-fig5":  # the paper presets stated the rule's 10 ms: no word
+        same, notes = _read(preset, "compensator.period_s=0.01")
+        assert notes == [] and _comp(same) == _comp(plain)
+    given, notes = _read(preset, "compensator.period_s=1.0")
+    (note,) = notes
+    assert note.startswith("compensator.period_s: deprecated, no longer has any effect")
+    assert "one injection period" in note and "10 ms" in note
+    assert _comp(given) == _comp(plain)

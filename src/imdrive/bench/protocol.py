@@ -24,7 +24,6 @@ DRIVES = {"average": "sensorless", "realistic": "sensorless-realistic"}
 _COMP_ON = [
     "compensator.enabled=true",
     "compensator.t_on_s=3.0",
-    "compensator.period_s=0.01",
     # the paper's scalings 1e6 /Wb and 1 mohm per output level: the defaults on Table IV,
     # scaled to the machine elsewhere (config/compensator_gains.py)
     # the clamps at 0.5 and 1.5 times the machine's R2 (0.408 and 1.224 ohm for Table IV), in

@@ -34,9 +34,10 @@ class CompensatorSettings:
     the change of R2_hat per output level and period in per-unit of the initial R̂2. Unset,
     these and the gate's thresholds are the paper's numbers on Table IV scaled to the machine
     (:mod:`imdrive.config.compensator_gains`). The clamps ``R2_min_ratio``, ``R2_max_ratio``
-    default to 0.5 and 2 times the initial estimate. ``period_s`` defaults to 10 ms, or to one
-    injection period with the injection. The input is e_d0 detected synchronously with the
-    injection whenever it runs, else e_d0 itself, the paper's (:func:`demodulated_input`).
+    default to 0.5 and 2 times the initial estimate. The input is e_d0 detected synchronously
+    with the injection whenever it runs, else e_d0 itself, the paper's
+    (:func:`demodulated_input`); the decision window is one injection period, or 10 ms without
+    the injection (:func:`decision_period_steps`).
 
     Each of these had an absolute spelling (``gain_E_per_Wb``, ``G_CR_ohm``, ``R2_min_ohm``,
     ``R2_max_ohm``; deprecated twins since round 7, they still act with a warning): the
@@ -57,15 +58,6 @@ class CompensatorSettings:
             ge=0.0,
         ),
     ] = 0.0
-    period_s: Annotated[
-        Float | None,
-        setting(
-            "decision period",
-            "s",
-            gt=0.0,
-            default_doc="0.01; one injection period with the injection",
-        ),
-    ] = None
     gain_E_per_Wb: Annotated[
         Float | None,
         setting(
@@ -410,14 +402,15 @@ def decision_period_steps(
 ) -> int:
     """The compensator's decision period in control periods (at least one).
 
-    ``compensator.period_s`` if given, else one injection period with the injection
-    (:func:`demodulated_input`), else 10 ms; rounded to whole control periods of ``Ts`` s.
-    ``r``: the scenario's per-unit values resolved (:func:`imdrive.config.perunit.resolve`),
-    whose injection frequency is used when given.
+    One injection period with the injection (:func:`demodulated_input`): the shortest window
+    that holds whole periods of it and of its harmonics (the synchronous detection's mean); else
+    10 ms, the paper's e_d0 input (the paper gives none); rounded to whole control periods of
+    ``Ts`` s (``compensator.period_s``, deprecated: a longer window bought nothing, see its
+    note in :mod:`imdrive.config.compensator_deprecated`). ``r``: the scenario's per-unit
+    values resolved (:func:`imdrive.config.perunit.resolve`), whose injection frequency is used
+    when given.
     """
-    if comp.period_s is not None:
-        period = comp.period_s
-    elif comp.enabled and demodulated_input(inj, r):
+    if comp.enabled and demodulated_input(inj, r):
         period = 1.0 / (_first_frequency(inj) if r is None else r.inj_f1)
     else:
         period = 0.01
@@ -470,16 +463,15 @@ def check_whole_injection_periods(
     Raises
     ------
     ConfigError
-        Naming the frequency (``compensator.period_s`` when it is the period that was set).
+        Naming the key that sets the injection frequency.
     """
     n_comp = decision_period_steps(comp, inj, Ts, r)
     T = n_comp * Ts
     for key, f in injection_frequencies_in_use(comp, inj, r):
         cycles = T * f
         if cycles < 1.0 - 1e-6 or abs(cycles - round(cycles)) > 1e-6 * max(cycles, 1.0):
-            field = "compensator.period_s" if comp.period_s is not None else key
             raise ConfigError(
-                field,
+                key,
                 f"the compensator period ({T:g} s, {n_comp} control periods) must hold a whole "
                 f"number of periods of {f:g} Hz (got {cycles:g}), the injection frequency or a "
                 "harmonic of it in the gating's schedule",
