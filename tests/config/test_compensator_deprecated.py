@@ -7,6 +7,7 @@ presets' kernel records are the same with and without the key.
 
 from __future__ import annotations
 
+import math
 import warnings
 
 import pytest
@@ -97,4 +98,17 @@ def test_the_window_is_one_injection_period_or_10_ms(preset, steps):
     (note,) = notes
     assert note.startswith("compensator.period_s: deprecated, no longer has any effect")
     assert "one injection period" in note and "10 ms" in note
+    assert _comp(given) == _comp(plain)
+
+
+def test_the_slip_decoupling_fades_in_from_0_3_of_the_rated_frequency():
+    plain, _ = _read("injection-robust")
+    f_rated = plain.machine.rated_frequency_Hz
+    assert build_arrays(plain).params.comp[0]["cpl_wmin"] == 2 * math.pi * f_rated * 0.3
+    same, notes = _read("injection-robust", "injection.decouple_slip_fmin_pu=0.3")
+    assert notes == [] and _comp(same) == _comp(plain)
+    given, notes = _read("injection-robust", "injection.decouple_slip_fmin_pu=0.15")
+    (note,) = notes
+    assert note.startswith("injection.decouple_slip_fmin_pu: deprecated, no longer has any")
+    assert "0.3 of the rated stator frequency" in note
     assert _comp(given) == _comp(plain)

@@ -323,19 +323,11 @@ class InjectionSettings:
         setting(
             "detection: subtract from e_d0 the part the slip couples in from the MRAS's "
             "q-axis flux error, w_s T2_hat/(1 + s T2_hat) e_q0 (kernels/detection.py, "
-            "slip_coupling); matters at large slip (full load above base speed)"
+            "slip_coupling); matters at large slip (full load above base speed); faded in from "
+            "0.3 of the rated stator frequency to 0.6 (run/compensator_blocks.py "
+            "SLIP_DECOUPLING_FROM_PU)"
         ),
     ] = True
-    decouple_slip_fmin_pu: Annotated[
-        Float,
-        setting(
-            "decouple_slip: the stator frequency, per-unit of the rated one, from which the "
-            "correction fades in (full at twice it); below it e_q0 is mostly the voltage "
-            "model's error (R1, inverter), not the rotor's q flux",
-            ge=0.0,
-            lt=1.0,
-        ),
-    ] = 0.3
 
 
 def injection_amplitude_given(inj) -> float:
