@@ -12,7 +12,7 @@ import warnings
 
 import pytest
 
-from imdrive.config.compensator import backoff_band
+from imdrive.config.injection_backoff import backoff_band
 from imdrive.config.scenario import Scenario
 from imdrive.run.build import build_arrays
 

@@ -10,8 +10,8 @@ import warnings
 
 import pytest
 
-from imdrive.config.compensator import backoff_band
 from imdrive.config.field_weakening import field_weakening_on
+from imdrive.config.injection_backoff import backoff_band
 from imdrive.config.scenario import Scenario
 from imdrive.run.build import build_arrays
 

@@ -7,7 +7,7 @@ HEADROOM = (
     "compensator.gate_voltage=0.99",
 )
 # the injection preset's headroom undone: the injection backs off from 0.85 of the voltage
-# (config/compensator.py backoff_band: the band follows the estimation headroom)
+# (config/injection_backoff.py: the band follows the estimation headroom)
 NO_HEADROOM = {
     "injection.headroom_voltage": None,
     "compensator.gate_voltage": 0.97,

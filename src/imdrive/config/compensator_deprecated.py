@@ -8,6 +8,7 @@ warning that says the rule or the mechanism that replaced it, with the measureme
 from __future__ import annotations
 
 from imdrive.config.deprecated_keys import deprecated_key, deprecated_twin, deprecated_value
+from imdrive.config.injection_backoff import backoff_band
 
 #: The adaptive step law's keys (removed in 0.2, :mod:`imdrive.kernels.compensator`): what
 #: each patched, and what the model-based law does instead.
@@ -89,7 +90,7 @@ _REPLACED = {
     "field weakening holds: with the estimation headroom from 0.04 to 0.10 above "
     "injection.headroom_voltage (0.92-0.98 at 0.88), without it 0.05 either side of "
     "control.field_weakening_voltage (0.85-0.95 at 0.9), as every preset, sweep, study and test "
-    "paired them (config/compensator.py backoff_band). With the estimation headroom, moving the "
+    "paired them (config/injection_backoff.py). With the estimation headroom, moving the "
     "band 0.02 either way moved R2_hat's end by at most 0.012 % (injection-robust, Table IV and "
     "Aalto 2.2 kW, 0.6-1.2 x rated speed, load steps); without it the band decided whether R2 "
     "was tracked near base speed at all (0.85 x rated speed, rated load: held at +20 % with "
@@ -129,8 +130,6 @@ def _injecting(data: dict) -> bool:
 
 def _backoff_edge(data: dict, edge: int, v) -> bool:
     """Whether ``v`` is the back-off band's edge ``edge`` (0: from, 1: to) the rule gives."""
-    from imdrive.config.compensator import backoff_band
-
     inj, ctl = (
         data.get(k) if isinstance(data.get(k), dict) else {} for k in ("injection", "control")
     )

@@ -10,8 +10,9 @@ import math
 
 import numpy as np
 
-from imdrive.config.compensator import backoff_band, demodulated_input
+from imdrive.config.compensator import demodulated_input
 from imdrive.config.field_weakening import field_weakening_on
+from imdrive.config.injection_backoff import backoff_band
 from imdrive.config.perunit import Resolved
 from imdrive.config.registry import ESTIMATOR_SETTINGS
 from imdrive.config.scenario import Scenario
