@@ -12,14 +12,13 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import subprocess
 import sys
-import warnings
 from pathlib import Path
 
 import numpy as np
 import pytest
+from data.inprocess import imdrive_here
 
 import imdrive
 from imdrive.cli import main
@@ -40,34 +39,6 @@ def _imdrive(*args, cwd=None, timeout=300):
         cwd=cwd,
         timeout=timeout,
     )
-
-
-def _imdrive_here(*args, cwd: Path) -> subprocess.CompletedProcess:
-    """``imdrive ARGS`` through ``main`` in this process, from ``cwd``, as a subprocess would
-    report it: the exit code, stdout and stderr, each warning shown as a line of stderr (with
-    Python's default filters, as the command's interpreter shows them)."""
-    from contextlib import redirect_stderr, redirect_stdout
-    from io import StringIO
-
-    out, err, here = StringIO(), StringIO(), Path.cwd()
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.resetwarnings()  # Python's defaults, not pytest's
-        for category in (DeprecationWarning, PendingDeprecationWarning, ImportWarning):
-            warnings.simplefilter("ignore", category)
-        warnings.simplefilter("ignore", ResourceWarning)
-        os.chdir(cwd)
-        try:
-            with redirect_stdout(out), redirect_stderr(err):
-                try:
-                    rc = main([str(a) for a in args])
-                except SystemExit as exc:  # argparse's usage errors
-                    rc = exc.code if isinstance(exc.code, int) else 1
-        finally:
-            os.chdir(here)
-    shown = "".join(
-        f"{w.filename}:{w.lineno}: {w.category.__name__}: {w.message}\n" for w in caught
-    )
-    return subprocess.CompletedProcess(args, rc, out.getvalue(), err.getvalue() + shown)
 
 
 def _nothing_written(out: Path) -> bool:
@@ -251,7 +222,7 @@ BAD_SET_SUBPROCESS = ("machine.R1_ohm=0", "simulation.substeps=abc", "nosection.
 @pytest.mark.parametrize(("setting", "field", "rule"), BAD_SET, ids=[b[0] for b in BAD_SET])
 def test_bad_set(tmp_path, setting, field, rule):
     out = tmp_path / "out"
-    proc = _imdrive_here("run", "free-acceleration", "--out", out, "--set", setting, cwd=tmp_path)
+    proc = imdrive_here("run", "free-acceleration", "--out", out, "--set", setting, cwd=tmp_path)
     _assert_bad_input(proc, out, field, rule)
     assert not (tmp_path / "out" / "free-acceleration").exists()
 
@@ -336,7 +307,7 @@ def _bad_file(tmp_path: Path, case: str) -> Path:
 def test_bad_scenario_file(tmp_path, case):
     _, field, rule = BAD_FILES[case]
     out = tmp_path / "out"
-    proc = _imdrive_here("run", _bad_file(tmp_path, case), "--out", out, cwd=tmp_path)
+    proc = imdrive_here("run", _bad_file(tmp_path, case), "--out", out, cwd=tmp_path)
     _assert_bad_input(proc, out, field, rule)
 
 

@@ -14,6 +14,7 @@ import numpy as np
 import pandas as pd
 import pytest
 from data.first_release import first_release
+from data.inprocess import imdrive_here
 
 from imdrive.config.perunit import resolve
 from imdrive.config.scenario import Scenario
@@ -283,18 +284,31 @@ BAD = [
 ]
 
 
-@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
-@pytest.mark.parametrize("label, axes, field", BAD, ids=[b[0] for b in BAD])
-def test_bad_sweep_file_names_the_field_and_runs_nothing(tmp_path, label, axes, field):
-    f = tmp_path / "bad.toml"
-    f.write_text(f'base = "sensorless"\n[axes]\n{axes}\n')
-    out = tmp_path / "store"
-    proc = _imdrive("sweep", f, "--out", out)
+def _assert_bad_sweep(proc, out: Path, field: str) -> None:
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in proc.stderr
     assert field in lines[0]
     assert not out.exists()
+
+
+@pytest.mark.parametrize("label, axes, field", BAD, ids=[b[0] for b in BAD])
+def test_bad_sweep_file_names_the_field_and_runs_nothing(tmp_path, label, axes, field):
+    """Through ``main`` in this process (``data.inprocess``: a traceback is an exception, a
+    warning a line of stderr); the next test runs one case through the real command."""
+    f = tmp_path / "bad.toml"
+    f.write_text(f'base = "sensorless"\n[axes]\n{axes}\n')
+    out = tmp_path / "store"
+    _assert_bad_sweep(imdrive_here("sweep", f, "--out", out, cwd=tmp_path), out, field)
+
+
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
+def test_a_bad_sweep_file_through_the_real_command(tmp_path):
+    _, axes, field = BAD[0]
+    f = tmp_path / "bad.toml"
+    f.write_text(f'base = "sensorless"\n[axes]\n{axes}\n')
+    out = tmp_path / "store"
+    _assert_bad_sweep(_imdrive("sweep", f, "--out", out), out, field)
 
 
 @pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
