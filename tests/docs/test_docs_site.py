@@ -187,6 +187,7 @@ def test_a_link_to_a_repository_file_becomes_its_path_and_a_missing_one_fails(tm
     assert "the layer test (<code>tests/test_layers.py</code>)" in html
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (5.8 s measured 2026-11-29)
 def test_strict_build_fails_on_a_broken_link(tmp_path):
     config = _mini_project(tmp_path, "# Home\n\nSee [the missing page](missing.md).\n")
     proc = _build(config, tmp_path / "site")
@@ -194,6 +195,7 @@ def test_strict_build_fails_on_a_broken_link(tmp_path):
     assert "missing.md" in proc.stdout + proc.stderr
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (4.5 s measured 2026-11-29)
 def test_strict_build_fails_on_a_broken_anchor(tmp_path):
     config = _mini_project(tmp_path, "# Home\n\nSee [below](#no-such-heading).\n")
     proc = _build(config, tmp_path / "site")
