@@ -49,19 +49,25 @@ def _nothing_written(out: Path) -> bool:
 # a run
 
 
-@pytest.fixture(scope="module")
-def short_run(tmp_path_factory):
-    tmp = tmp_path_factory.mktemp("run")
+def _short_run(tmp: Path, run=imdrive_here):
     out = tmp / "fa"
-    proc = _imdrive(
+    proc = run(
         "run", "free-acceleration", "--out", out, "--set", "simulation.t_end_s=0.05", cwd=tmp
     )
     return proc, out, tmp
 
 
+@pytest.fixture(scope="module")
+def short_run(tmp_path_factory):
+    """The run whose files the fast tests read, through ``main`` in this process
+    (``data.inprocess``: an interpreter's start and the cached drive's load are 5-9 s)."""
+    return _short_run(tmp_path_factory.mktemp("run"))
+
+
 @pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
-def test_run_exit_code_and_files(short_run):
-    proc, out, tmp = short_run
+def test_run_exit_code_and_files(tmp_path):
+    """The same run through the real command: exit code, files, nothing left behind."""
+    proc, out, tmp = _short_run(tmp_path, run=_imdrive)
     assert proc.returncode == 0, proc.stderr
     assert "Traceback" not in proc.stderr + proc.stdout
     names = {p.name for p in out.iterdir()}

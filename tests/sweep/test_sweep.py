@@ -257,11 +257,12 @@ def test_killed_sweep_resumes_without_loss_or_duplicates(tmp_path, local_run):
     assert proc.returncode == -signal.SIGKILL
     assert 2 <= done < 12, "the kill must land mid-way"
     assert not (store / "runs.parquet").exists()
-    # without --resume the store is not touched
-    again = _imdrive("sweep", f, "--out", store, "-q")
+    # without --resume the store is not touched (the next commands through main() in this
+    # process: only the killed one needs a process of its own)
+    again = imdrive_here("sweep", f, "--out", store, "-q", cwd=tmp_path)
     assert again.returncode == 2 and "--resume" in again.stderr
     assert len(list(chunks.glob("chunk-*.parquet"))) == done
-    resumed = _imdrive("sweep", f, "--out", store, "--resume", "-q")
+    resumed = imdrive_here("sweep", f, "--out", store, "--resume", "-q", cwd=tmp_path)
     assert resumed.returncode == 0, resumed.stderr
     df = pd.read_parquet(store / "runs.parquet")
     assert sorted(df["run"]) == list(range(12))
