@@ -2,7 +2,7 @@
 
 Bad input must give ONE line on stderr naming the field and the rule, exit code 2, no traceback,
 and nothing written to ``--out``. One case of each kind (a rule, a type, an unknown key, bad
-TOML, a binary file, bad syntax, a folder) runs the real command in a subprocess
+TOML, a binary file, bad syntax) runs the real command in a subprocess
 (``python -m imdrive``), the way a user meets them; the other values run the same ``main`` in
 this process (1.5-4 s less each on 2 cores: the interpreter's start and imports), where a
 traceback would be an exception and a warning a second line of stderr.
@@ -243,11 +243,12 @@ def test_bad_set_from_the_real_command(tmp_path, setting):
     assert not (tmp_path / "out" / "free-acceleration").exists()
 
 
-@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_bad_input_into_existing_empty_folder(tmp_path):
     out = tmp_path / "existing"
     out.mkdir()
-    proc = _imdrive("run", "free-acceleration", "--out", out, "--set", "machine.M_H=-1")
+    proc = imdrive_here(
+        "run", "free-acceleration", "--out", out, "--set", "machine.M_H=-1", cwd=tmp_path
+    )
     _assert_bad_input(proc, out, "machine.M_H", "> 0")
 
 
@@ -336,36 +337,43 @@ def test_good_scenario_file_runs(tmp_path):
     assert (out / "summary.json").exists()
 
 
-@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
-@pytest.mark.parametrize(
-    ("args", "field", "rule"),
-    [
-        (["run", "no-such-preset"], "scenario", "neither a preset"),
-        (["run", "./missing/file.toml"], "scenario", "neither a preset"),
-        (["run", "free-acceleration", "--set", "simulation.t_end_s"], "simulation.t_end_s", "="),
-        (["run", "free-acceleration", "--set", "=3"], "--set", "key before"),
-    ],
-)
+BAD_SYNTAX = [
+    (["run", "no-such-preset"], "scenario", "neither a preset"),
+    (["run", "./missing/file.toml"], "scenario", "neither a preset"),
+    (["run", "free-acceleration", "--set", "simulation.t_end_s"], "simulation.t_end_s", "="),
+    (["run", "free-acceleration", "--set", "=3"], "--set", "key before"),
+]
+
+
+@pytest.mark.parametrize(("args", "field", "rule"), BAD_SYNTAX)
 def test_bad_preset_or_override_syntax(tmp_path, args, field, rule):
+    out = tmp_path / "out"
+    proc = imdrive_here(*args, "--out", out, cwd=tmp_path)
+    _assert_bad_input(proc, out, field, rule)
+
+
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
+@pytest.mark.parametrize(("args", "field", "rule"), BAD_SYNTAX[::3])
+def test_bad_preset_or_override_syntax_from_the_real_command(tmp_path, args, field, rule):
     out = tmp_path / "out"
     proc = _imdrive(*args, "--out", out, cwd=tmp_path)
     _assert_bad_input(proc, out, field, rule)
 
 
-@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_scenario_path_is_a_folder(tmp_path):
     folder = tmp_path / "adir.toml"
     folder.mkdir()
     out = tmp_path / "out"
-    proc = _imdrive("run", folder, "--out", out, cwd=tmp_path)
+    proc = imdrive_here("run", folder, "--out", out, cwd=tmp_path)
     _assert_bad_input(proc, out, "scenario", "is a folder, not a regular file")
 
 
-@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_out_is_a_file(tmp_path):
     out = tmp_path / "afile"
     out.write_text("keep me")
-    proc = _imdrive("run", "free-acceleration", "--out", out, "--set", "simulation.t_end_s=0.01")
+    proc = imdrive_here(
+        "run", "free-acceleration", "--out", out, "--set", "simulation.t_end_s=0.01", cwd=tmp_path
+    )
     assert proc.returncode == 2, proc.stderr
     assert "Traceback" not in proc.stderr
     assert "--out" in proc.stderr
