@@ -312,12 +312,11 @@ def test_a_bad_sweep_file_through_the_real_command(tmp_path):
     _assert_bad_sweep(_imdrive("sweep", f, "--out", out), out, field)
 
 
-@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_existing_store_needs_resume(tmp_path, small_file):
     out = tmp_path / "store"
     out.mkdir()
     (out / "something").write_text("x")
-    proc = _imdrive("sweep", small_file, "--out", out)
+    proc = imdrive_here("sweep", small_file, "--out", out, cwd=tmp_path)
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and "--out" in lines[0] and "--resume" in lines[0]
