@@ -376,17 +376,19 @@ TAMPER = {
 
 
 @pytest.fixture(scope="module")
-def tiny_reference(tmp_path_factory):
+def tiny_store(tmp_path_factory):
+    """The uninterrupted sweep's table and its store (each test tampers with a copy)."""
     out = tmp_path_factory.mktemp("ref") / "store"
-    return run_sweep(parse_sweep(TINY), out, progress=False, figures=False, report=False)
+    return run_sweep(parse_sweep(TINY), out, progress=False, figures=False, report=False), out
 
 
 @pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 @pytest.mark.parametrize("how", TAMPER.values(), ids=TAMPER.keys())
-def test_resume_over_a_tampered_chunk_gives_the_uninterrupted_table(tmp_path, tiny_reference, how):
+def test_resume_over_a_tampered_chunk_gives_the_uninterrupted_table(tmp_path, tiny_store, how):
+    tiny_reference, done = tiny_store
     out = tmp_path / "store"
     sweep = parse_sweep(TINY)
-    run_sweep(sweep, out, progress=False, figures=False, report=False)
+    shutil.copytree(done, out)  # the same sweep run to its end: its store, not a new run
     chunk = out / "chunks" / "chunk-000001.parquet"
     how(pd.read_parquet(chunk)).to_parquet(chunk, index=False)
     notes: list[str] = []
