@@ -1,8 +1,11 @@
 """The ``imdrive`` command: outputs of a run, ``presets``, ``show``, and bad input.
 
 Bad input must give ONE line on stderr naming the field and the rule, exit code 2, no traceback,
-and nothing written to ``--out``. Those cases run the real command in a subprocess
-(``python -m imdrive``), the way a user meets them.
+and nothing written to ``--out``. One case of each kind (a rule, a type, an unknown key, bad
+TOML, a binary file, bad syntax) runs the real command in a subprocess
+(``python -m imdrive``), the way a user meets them; the other values run the same ``main`` in
+this process (1.5-4 s less each on 2 cores: the interpreter's start and imports), where a
+traceback would be an exception and a warning a second line of stderr.
 """
 
 from __future__ import annotations
@@ -15,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from data.inprocess import imdrive_here
 
 import imdrive
 from imdrive.cli import main
@@ -45,19 +49,25 @@ def _nothing_written(out: Path) -> bool:
 # a run
 
 
-@pytest.fixture(scope="module")
-def short_run(tmp_path_factory):
-    tmp = tmp_path_factory.mktemp("run")
+def _short_run(tmp: Path, run=imdrive_here):
     out = tmp / "fa"
-    proc = _imdrive(
+    proc = run(
         "run", "free-acceleration", "--out", out, "--set", "simulation.t_end_s=0.05", cwd=tmp
     )
     return proc, out, tmp
 
 
+@pytest.fixture(scope="module")
+def short_run(tmp_path_factory):
+    """The run whose files the fast tests read, through ``main`` in this process
+    (``data.inprocess``: an interpreter's start and the cached drive's load are 5-9 s)."""
+    return _short_run(tmp_path_factory.mktemp("run"))
+
+
 @pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
-def test_run_exit_code_and_files(short_run):
-    proc, out, tmp = short_run
+def test_run_exit_code_and_files(tmp_path):
+    """The same run through the real command: exit code, files, nothing left behind."""
+    proc, out, tmp = _short_run(tmp_path, run=_imdrive)
     assert proc.returncode == 0, proc.stderr
     assert "Traceback" not in proc.stderr + proc.stdout
     names = {p.name for p in out.iterdir()}
@@ -211,20 +221,34 @@ def _assert_bad_input(proc, out: Path, field: str, rule: str):
     assert _nothing_written(out), list(out.iterdir())
 
 
-@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
+#: the --set values also run in a subprocess: a rule, a type, an unknown key
+BAD_SET_SUBPROCESS = ("machine.R1_ohm=0", "simulation.substeps=abc", "nosection.key=1")
+
+
 @pytest.mark.parametrize(("setting", "field", "rule"), BAD_SET, ids=[b[0] for b in BAD_SET])
 def test_bad_set(tmp_path, setting, field, rule):
+    out = tmp_path / "out"
+    proc = imdrive_here("run", "free-acceleration", "--out", out, "--set", setting, cwd=tmp_path)
+    _assert_bad_input(proc, out, field, rule)
+    assert not (tmp_path / "out" / "free-acceleration").exists()
+
+
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
+@pytest.mark.parametrize("setting", BAD_SET_SUBPROCESS)
+def test_bad_set_from_the_real_command(tmp_path, setting):
+    _, field, rule = next(b for b in BAD_SET if b[0] == setting)
     out = tmp_path / "out"
     proc = _imdrive("run", "free-acceleration", "--out", out, "--set", setting, cwd=tmp_path)
     _assert_bad_input(proc, out, field, rule)
     assert not (tmp_path / "out" / "free-acceleration").exists()
 
 
-@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_bad_input_into_existing_empty_folder(tmp_path):
     out = tmp_path / "existing"
     out.mkdir()
-    proc = _imdrive("run", "free-acceleration", "--out", out, "--set", "machine.M_H=-1")
+    proc = imdrive_here(
+        "run", "free-acceleration", "--out", out, "--set", "machine.M_H=-1", cwd=tmp_path
+    )
     _assert_bad_input(proc, out, "machine.M_H", "> 0")
 
 
@@ -272,17 +296,34 @@ BAD_FILES = {
 }
 
 
-@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
-@pytest.mark.parametrize("case", list(BAD_FILES))
-def test_bad_scenario_file(tmp_path, case):
-    text, field, rule = BAD_FILES[case]
+#: the bad files also run in a subprocess: an unknown key, malformed TOML, a binary file
+BAD_FILES_SUBPROCESS = ("unknown-key", "malformed-toml", "not-utf8")
+
+
+def _bad_file(tmp_path: Path, case: str) -> Path:
+    text, _, _ = BAD_FILES[case]
     path = tmp_path / "scenario.toml"
     if isinstance(text, bytes):
         path.write_bytes(text)
     else:
         path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize("case", list(BAD_FILES))
+def test_bad_scenario_file(tmp_path, case):
+    _, field, rule = BAD_FILES[case]
     out = tmp_path / "out"
-    proc = _imdrive("run", path, "--out", out, cwd=tmp_path)
+    proc = imdrive_here("run", _bad_file(tmp_path, case), "--out", out, cwd=tmp_path)
+    _assert_bad_input(proc, out, field, rule)
+
+
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
+@pytest.mark.parametrize("case", BAD_FILES_SUBPROCESS)
+def test_bad_scenario_file_from_the_real_command(tmp_path, case):
+    _, field, rule = BAD_FILES[case]
+    out = tmp_path / "out"
+    proc = _imdrive("run", _bad_file(tmp_path, case), "--out", out, cwd=tmp_path)
     _assert_bad_input(proc, out, field, rule)
 
 
@@ -296,36 +337,43 @@ def test_good_scenario_file_runs(tmp_path):
     assert (out / "summary.json").exists()
 
 
-@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
-@pytest.mark.parametrize(
-    ("args", "field", "rule"),
-    [
-        (["run", "no-such-preset"], "scenario", "neither a preset"),
-        (["run", "./missing/file.toml"], "scenario", "neither a preset"),
-        (["run", "free-acceleration", "--set", "simulation.t_end_s"], "simulation.t_end_s", "="),
-        (["run", "free-acceleration", "--set", "=3"], "--set", "key before"),
-    ],
-)
+BAD_SYNTAX = [
+    (["run", "no-such-preset"], "scenario", "neither a preset"),
+    (["run", "./missing/file.toml"], "scenario", "neither a preset"),
+    (["run", "free-acceleration", "--set", "simulation.t_end_s"], "simulation.t_end_s", "="),
+    (["run", "free-acceleration", "--set", "=3"], "--set", "key before"),
+]
+
+
+@pytest.mark.parametrize(("args", "field", "rule"), BAD_SYNTAX)
 def test_bad_preset_or_override_syntax(tmp_path, args, field, rule):
+    out = tmp_path / "out"
+    proc = imdrive_here(*args, "--out", out, cwd=tmp_path)
+    _assert_bad_input(proc, out, field, rule)
+
+
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
+@pytest.mark.parametrize(("args", "field", "rule"), BAD_SYNTAX[::3])
+def test_bad_preset_or_override_syntax_from_the_real_command(tmp_path, args, field, rule):
     out = tmp_path / "out"
     proc = _imdrive(*args, "--out", out, cwd=tmp_path)
     _assert_bad_input(proc, out, field, rule)
 
 
-@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_scenario_path_is_a_folder(tmp_path):
     folder = tmp_path / "adir.toml"
     folder.mkdir()
     out = tmp_path / "out"
-    proc = _imdrive("run", folder, "--out", out, cwd=tmp_path)
+    proc = imdrive_here("run", folder, "--out", out, cwd=tmp_path)
     _assert_bad_input(proc, out, "scenario", "is a folder, not a regular file")
 
 
-@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
 def test_out_is_a_file(tmp_path):
     out = tmp_path / "afile"
     out.write_text("keep me")
-    proc = _imdrive("run", "free-acceleration", "--out", out, "--set", "simulation.t_end_s=0.01")
+    proc = imdrive_here(
+        "run", "free-acceleration", "--out", out, "--set", "simulation.t_end_s=0.01", cwd=tmp_path
+    )
     assert proc.returncode == 2, proc.stderr
     assert "Traceback" not in proc.stderr
     assert "--out" in proc.stderr

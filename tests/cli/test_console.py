@@ -57,6 +57,7 @@ def test_low_speed_loss_names_the_estimator_and_where_to_look(tmp_path, capsys):
     assert f"look at report.html in {tmp_path / 'r'} around t = 2.3" in line
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (3.6 s in the fast tier, 2026-11-29)
 def test_slow_speed_loop_is_named_as_the_likely_cause(tmp_path):
     res = im.simulate(
         im.Scenario.read("sensorless", ["control.speed_bandwidth_Hz=0.3", "simulation.t_end_s=4"])

@@ -30,6 +30,7 @@ def _with_stdout_closed(*argv) -> subprocess.CompletedProcess:
         os.close(write_end)
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (1.6-3.4 s measured 2026-11-29)
 @pytest.mark.parametrize("argv", [["presets"], ["show", "sensorless"], ["fuzzy-table"]])
 def test_a_closed_stdout_ends_quietly_with_141(argv):
     """``imdrive presets | head -2`` printed ``imdrive: error: I/O error: Broken pipe`` and

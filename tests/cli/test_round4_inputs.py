@@ -321,6 +321,7 @@ def test_commission_folder_is_replaced_whole_and_a_failed_write_keeps_the_old(
 # -- class 10: a summary.json path is checked before it is opened ---------------------------
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (a subprocess each: 1.7-4 s measured 2026-11-29)
 @pytest.mark.parametrize("kind", ["fifo", "dev-zero", "too-big"])
 def test_a_special_or_huge_summary_json_is_refused_without_reading_it(tmp_path, kind):
     import subprocess

@@ -229,6 +229,7 @@ def test_the_summary_records_module_hashes_and_a_rerun_warns_on_change(tmp_path)
         Scenario.read(str(summary))  # imported above: in this process it runs nothing new
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (3.7 s in the fast tier, 2026-11-29)
 def test_compare_of_a_result_naming_a_module_imports_nothing(tmp_path, capsys, monkeypatch):
     from imdrive import simulate
 

@@ -11,6 +11,7 @@ import pytest
 from imdrive.studies import envelope
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2.2 s measured 2026-11-29)
 def test_envelope_tables_are_the_rendering_of_the_csv():
     text = envelope.DOC_PATH.read_text(encoding="utf-8")
     assert text == envelope.page(text, pd.read_csv(envelope.CSV_PATH)), (

@@ -118,6 +118,7 @@ def test_speed_pi_anti_windup_restarts_from_the_limit():
     assert s["int_w"] == pytest.approx(iq_lim - kp * err + ki * TS * err, rel=1e-12)
 
 
+@pytest.mark.slow  # 1.5 s or more on 2 cores (5.6 s measured 2026-11-29)
 def test_field_weakening_integrates_the_voltage_headroom():
     p = _params(fw=True, fw_v=0.9, fw_rate=20.0, fw_min=0.3)
     s = np.zeros(1, dtype=CONTROL_STATE)[0]

@@ -13,6 +13,7 @@ import sys
 
 import numpy as np
 import pytest
+from data.inprocess import imdrive_here
 
 from imdrive.analysis.foc import foc_operating_point
 from imdrive.cli import main
@@ -220,19 +221,31 @@ def test_cli_writes_table_and_figures(tmp_path, capsys):
     assert {"speed_rpm", "torque_Nm", "max_real_1_per_s", "stable", "map"} <= set(df.columns)
 
 
-@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
-@pytest.mark.parametrize(
-    "args, field",
-    [
-        (["--speeds", "1500:0:10"], "--speeds"),
-        (["--speeds", "0:1500"], "--speeds"),
-        (["--torques", "a:b:3"], "--torques"),
-        (["--torques=-5:5:1"], "--torques"),
-        (["--r1-ratios", "1,-1"], "--r1-ratios"),
-        (["--set", "mras.wc_rad_s=-1"], "mras.wc_rad_s"),
-    ],
-)
+CLI_BAD = [
+    (["--speeds", "1500:0:10"], "--speeds"),
+    (["--speeds", "0:1500"], "--speeds"),
+    (["--torques", "a:b:3"], "--torques"),
+    (["--torques=-5:5:1"], "--torques"),
+    (["--r1-ratios", "1,-1"], "--r1-ratios"),
+    (["--set", "mras.wc_rad_s=-1"], "mras.wc_rad_s"),
+]
+
+
+@pytest.mark.parametrize("args, field", CLI_BAD)
 def test_cli_bad_input(tmp_path, args, field):
+    """Through ``main`` in this process (``data.inprocess``: a traceback is an exception, a
+    warning a line of stderr); the next test runs one case through the real command."""
+    out = tmp_path / "x"
+    p = imdrive_here("stability", "sensorless", *args, "--out", out, cwd=tmp_path)
+    assert p.returncode == 2
+    lines = p.stderr.strip().splitlines()
+    assert len(lines) == 1 and field in lines[0], p.stderr
+    assert not out.exists()
+
+
+@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
+def test_cli_bad_input_from_the_real_command(tmp_path):
+    args, field = CLI_BAD[0]
     out = tmp_path / "x"
     p = subprocess.run(
         [sys.executable, "-m", "imdrive", "stability", "sensorless", *args, "--out", str(out)],

@@ -4,6 +4,7 @@ traceback; a server that speaks HTTP or garbage never makes dask allocate its "l
 
 from __future__ import annotations
 
+import importlib.util
 import socket
 import struct
 import subprocess
@@ -16,7 +17,10 @@ from data.sweeps import TINY
 
 from imdrive.errors import ConfigError
 
-pytest.importorskip("distributed")
+# the module is looked for, not imported: importing dask.distributed is 1-2 s of every
+# worker's collection, and only these tests' worker needs it
+if importlib.util.find_spec("distributed") is None:
+    pytest.skip("could not import 'distributed'", allow_module_level=True)
 
 from imdrive.sweep.scheduler import (  # noqa: E402
     _handshake,

@@ -14,6 +14,7 @@ import numpy as np
 import pandas as pd
 import pytest
 from data.first_release import first_release
+from data.inprocess import imdrive_here
 
 from imdrive.config.perunit import resolve
 from imdrive.config.scenario import Scenario
@@ -256,11 +257,12 @@ def test_killed_sweep_resumes_without_loss_or_duplicates(tmp_path, local_run):
     assert proc.returncode == -signal.SIGKILL
     assert 2 <= done < 12, "the kill must land mid-way"
     assert not (store / "runs.parquet").exists()
-    # without --resume the store is not touched
-    again = _imdrive("sweep", f, "--out", store, "-q")
+    # without --resume the store is not touched (the next commands through main() in this
+    # process: only the killed one needs a process of its own)
+    again = imdrive_here("sweep", f, "--out", store, "-q", cwd=tmp_path)
     assert again.returncode == 2 and "--resume" in again.stderr
     assert len(list(chunks.glob("chunk-*.parquet"))) == done
-    resumed = _imdrive("sweep", f, "--out", store, "--resume", "-q")
+    resumed = imdrive_here("sweep", f, "--out", store, "--resume", "-q", cwd=tmp_path)
     assert resumed.returncode == 0, resumed.stderr
     df = pd.read_parquet(store / "runs.parquet")
     assert sorted(df["run"]) == list(range(12))
@@ -283,13 +285,7 @@ BAD = [
 ]
 
 
-@pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
-@pytest.mark.parametrize("label, axes, field", BAD, ids=[b[0] for b in BAD])
-def test_bad_sweep_file_names_the_field_and_runs_nothing(tmp_path, label, axes, field):
-    f = tmp_path / "bad.toml"
-    f.write_text(f'base = "sensorless"\n[axes]\n{axes}\n')
-    out = tmp_path / "store"
-    proc = _imdrive("sweep", f, "--out", out)
+def _assert_bad_sweep(proc, out: Path, field: str) -> None:
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in proc.stderr
@@ -297,12 +293,30 @@ def test_bad_sweep_file_names_the_field_and_runs_nothing(tmp_path, label, axes, 
     assert not out.exists()
 
 
+@pytest.mark.parametrize("label, axes, field", BAD, ids=[b[0] for b in BAD])
+def test_bad_sweep_file_names_the_field_and_runs_nothing(tmp_path, label, axes, field):
+    """Through ``main`` in this process (``data.inprocess``: a traceback is an exception, a
+    warning a line of stderr); the next test runs one case through the real command."""
+    f = tmp_path / "bad.toml"
+    f.write_text(f'base = "sensorless"\n[axes]\n{axes}\n')
+    out = tmp_path / "store"
+    _assert_bad_sweep(imdrive_here("sweep", f, "--out", out, cwd=tmp_path), out, field)
+
+
 @pytest.mark.slow  # 1.5 s or more on 2 cores (2026-11-28)
+def test_a_bad_sweep_file_through_the_real_command(tmp_path):
+    _, axes, field = BAD[0]
+    f = tmp_path / "bad.toml"
+    f.write_text(f'base = "sensorless"\n[axes]\n{axes}\n')
+    out = tmp_path / "store"
+    _assert_bad_sweep(_imdrive("sweep", f, "--out", out), out, field)
+
+
 def test_existing_store_needs_resume(tmp_path, small_file):
     out = tmp_path / "store"
     out.mkdir()
     (out / "something").write_text("x")
-    proc = _imdrive("sweep", small_file, "--out", out)
+    proc = imdrive_here("sweep", small_file, "--out", out, cwd=tmp_path)
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and "--out" in lines[0] and "--resume" in lines[0]

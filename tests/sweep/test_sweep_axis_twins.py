@@ -4,10 +4,8 @@ one line naming the axes (issue 40, class 8)."""
 
 from __future__ import annotations
 
-import subprocess
-import sys
-
 import pytest
+from data.inprocess import imdrive_here
 
 from imdrive.errors import ConfigError
 from imdrive.sweep import parse_sweep
@@ -76,16 +74,13 @@ def test_profiles_as_a_set_axis_work():
     assert ends == [600.0, 900.0]
 
 
-@pytest.mark.slow  # a subprocess: 1.5 s or more on 2 cores
 def test_cli_exit_2_one_line(tmp_path):
+    """Through ``main`` in this process (``data.inprocess``: a traceback is an exception, a
+    warning a line of stderr); tests/sweep/test_sweep.py runs a bad sweep file through the
+    real command."""
     f = tmp_path / "twins.toml"
     f.write_text(HEAD + TWINS["a variant's R2_ohm under R2_ratio"][0])
-    proc = subprocess.run(
-        [sys.executable, "-m", "imdrive", "sweep", f, "--out", tmp_path / "s", "--dry-run"],
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
+    proc = imdrive_here("sweep", f, "--out", tmp_path / "s", "--dry-run", cwd=tmp_path)
     assert proc.returncode == 2, proc.stderr
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and "R2_ratio" in lines[0] and "variant" in lines[0]

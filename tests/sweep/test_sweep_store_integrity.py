@@ -9,6 +9,7 @@ import json
 
 import pandas as pd
 import pytest
+from data.inprocess import imdrive_here
 from data.sweeps import TINY
 
 from imdrive.errors import ConfigError, EnvironmentFailure
@@ -99,20 +100,12 @@ def test_a_manifest_that_is_not_one_is_refused_naming_the_file(store, text):
     assert str(p) in str(exc.value) and "\n" not in str(exc.value)
 
 
-@pytest.mark.slow  # a subprocess: 1.5 s or more on 2 cores
 def test_cli_resume_over_a_list_manifest_exits_2_naming_it(store, tmp_path):
-    import subprocess
-    import sys
-
+    """Through ``main`` in this process (``data.inprocess``)."""
     f = tmp_path / "tiny.toml"
     f.write_text(TINY)
     (store / "manifest.json").write_text("[]")
-    proc = subprocess.run(
-        [sys.executable, "-m", "imdrive", "sweep", f, "--out", store, "--resume", "-q"],
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
+    proc = imdrive_here("sweep", f, "--out", store, "--resume", "-q", cwd=tmp_path)
     assert proc.returncode == 2, proc.stderr
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and "manifest.json" in lines[0]
