@@ -63,7 +63,7 @@ def test_the_observer_on_the_identified_R1_loses_no_run():
     """``injection-robust`` on the adaptive observer, its R1 from the drive's standstill test
     (R1_hat(0) = 1.1 R1): no loss of control at any stator frequency from -0.5 to 2 Hz,
     regenerating the rated torque, on the four machines. Before the test served every
-    estimator the observer ran on 1.1 R1 and lost 81 of these 84 runs; the MRAS loses 20."""
+    estimator the observer ran on 1.1 R1 and lost 81 of these 84 runs; the MRAS loses 19."""
     t = pd.read_csv(DOCS / "data" / "zero_frequency.csv")
     afo = t[t["drive"] == "injection-robust-afo"]
     assert len(afo) == len(study.MACHINES) * len(study.F_S_HZ) * len(study.R2_RATIOS)

@@ -46,7 +46,7 @@ LOAD_PU = -1.0
 #: The machine envelope's drives and ``injection-robust`` on the adaptive full-order
 #: observer (``injection-robust-afo``): since the standstill R1 test serves every estimator
 #: (kernels/r1_standstill.py) the observer runs on an identified R1, and it held all 84 runs
-#: where the MRAS lost 20 (2026-11-29).
+#: where the MRAS lost 19 (2026-11-29).
 DRIVES = (*envelope.DRIVES, "injection-robust-afo")
 #: The drives whose R2_hat error at the end the table gives.
 R2_DRIVES = ("injection-robust", "injection-robust-afo")
