@@ -112,3 +112,22 @@ def test_the_slip_decoupling_fades_in_from_0_3_of_the_rated_frequency():
     assert note.startswith("injection.decouple_slip_fmin_pu: deprecated, no longer has any")
     assert "0.3 of the rated stator frequency" in note
     assert _comp(given) == _comp(plain)
+
+
+def test_the_kalman_laws_prior_is_the_rotors_resistance_swing_over_its_temperature_rise():
+    plain, _ = _read("injection-robust")
+    comp = plain.compensator
+    p0 = build_arrays(plain).params.comp[0]["kf_p0"]
+    assert p0 == comp.thermal_alpha_per_K * comp.thermal_rise_K  # 0.00393 x 80 K
+    assert 0.31 < p0 < 0.32
+    # a hotter class moves it: 105 K (class F) -> 0.41
+    hot, _ = _read("injection-robust", "compensator.thermal_rise_K=105")
+    assert build_arrays(hot).params.comp[0]["kf_p0"] == pytest.approx(0.00393 * 105)
+    # the old default, as a summary.json states it, warns nothing; another value says why
+    same, notes = _read("injection-robust", "kalman.prior_pu=0.3")
+    assert notes == [] and _comp(same) == _comp(plain)
+    given, notes = _read("injection-robust", "kalman.prior_pu=0.1")
+    (note,) = notes
+    assert note.startswith("kalman.prior_pu: deprecated, no longer has any effect")
+    assert "thermal_alpha_per_K x thermal_rise_K" in note
+    assert _comp(given) == _comp(plain)

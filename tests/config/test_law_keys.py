@@ -36,9 +36,7 @@ def test_the_presets_warn_nothing_of_the_kind(preset):
     assert not [w for w in _warnings(preset) if "no effect" in w]
 
 
-@pytest.mark.parametrize(
-    ("key", "value"), [("noise_pu", 0.0), ("drift_pu", -1.0), ("prior_pu", float("nan"))]
-)
+@pytest.mark.parametrize(("key", "value"), [("noise_pu", 0.0), ("drift_pu", -1.0)])
 def test_the_kalman_settings_are_checked(key, value):
     with pytest.raises(ConfigError, match=rf"^kalman\.{key}: "):
         Scenario.read("injection-robust", [f"kalman.{key}={value}"])

@@ -144,7 +144,7 @@ def test_an_old_absolute_key_runs_on_a_per_unit_preset():
         "injection.amplitude_A: deprecated, refused from imdrive 0.3: state it per-unit of the "
         "machine as injection.amplitude_pu (it still acts until then)",
         'compensator.G_CR_ohm: has no effect with step_law = "kalman": the model-based law '
-        "reads its settings from [kalman] (noise_pu, drift_pu, prior_pu)",
+        "reads its settings from [kalman] (noise_pu, drift_pu)",
     ]
     from imdrive.config.perunit import resolve
 

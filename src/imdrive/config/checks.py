@@ -288,7 +288,7 @@ def law_keys_unread(sc) -> None:
         if getattr(given, key) != getattr(defaults, key):
             why = (
                 'has no effect with step_law = "kalman": the model-based law reads its '
-                "settings from [kalman] (noise_pu, drift_pu, prior_pu)"
+                "settings from [kalman] (noise_pu, drift_pu)"
                 if kalman
                 else f'has no effect: compensator.step_law is "{comp.step_law}", not "kalman"'
             )

@@ -228,7 +228,9 @@ class CompensatorSettings:
         setting(
             "thermal model: the rotor's temperature rise above ambient at the machine's rated "
             "rotor copper losses (its thermal resistance in per-unit of the machine: "
-            "config/perunit.py; 80 K: the class B limit of IEC 60034-1)",
+            "config/perunit.py; 80 K: the class B limit of IEC 60034-1); times "
+            "thermal_alpha_per_K, also the model-based law's prior (config/r2_kalman.py "
+            "prior_pu)",
             "K",
             gt=0.0,
         ),
@@ -236,7 +238,8 @@ class CompensatorSettings:
     thermal_alpha_per_K: Annotated[
         Float,
         setting(
-            "thermal model: temperature coefficient of R2 (copper 0.00393, aluminium 0.00403)",
+            "thermal model: temperature coefficient of R2 (copper 0.00393, aluminium 0.00403); "
+            "times thermal_rise_K, also the model-based law's prior",
             "1/K",
             gt=0.0,
         ),

@@ -1,8 +1,8 @@
-"""The deprecated keys of the R2-tracking sections ``[compensator]``, ``[injection]`` and
-``[flux_injection]`` (issue 38: "a handful of per-unit settings"): each is accepted with a
-warning that says the rule or the mechanism that replaced it, with the measurement behind it
-(:mod:`imdrive.config.deprecated_keys`), and listed apart in docs/scenarios.md. Registered when
-:mod:`imdrive.config.compensator` is imported.
+"""The deprecated keys of the R2-tracking sections ``[compensator]``, ``[injection]``,
+``[kalman]`` and ``[flux_injection]`` (issue 38: "a handful of per-unit settings"): each is
+accepted with a warning that says the rule or the mechanism that replaced it, with the
+measurement behind it (:mod:`imdrive.config.deprecated_keys`), and listed apart in
+docs/scenarios.md. Registered when :mod:`imdrive.config.compensator` is imported.
 """
 
 from __future__ import annotations
@@ -110,6 +110,11 @@ _REPLACED = {
     "moved R2_hat's end by at most 0.04 % on the ideal drive (3 machines, 0.1-2 x rated speed) "
     "and by one table step either way at 0.3-0.5 x rated speed on the realistic bridge, better "
     "at one point and worse at another",
+    ("kalman", "prior_pu"): "the model-based law's prior is the rotor's resistance swing between "
+    "ambient and its rated temperature rise, compensator.thermal_alpha_per_K x thermal_rise_K "
+    "(0.31 at their defaults; config/r2_kalman.py prior_pu): from R2_hat(0) = 0.7 and 1.2 R2 on "
+    "Table IV, the Aalto 2.2 kW machine and Krause 50 hp R2_hat entered 2 % at the same "
+    "instant as with 0.3 and ended within 0.04 % of it",
     ("injection", "headroom_to"): "as headroom_from: the band's top is 0.10 above "
     "injection.headroom_voltage, or 0.05 above control.field_weakening_voltage without it",
 }
@@ -147,6 +152,7 @@ _ASKS_FOR_THE_RULE = {
     ("compensator", "input"): lambda data, v: v == ("demodulated" if _injecting(data) else "e_d0"),
     ("compensator", "period_s"): lambda data, v: v == 0.01 and not _injecting(data),
     ("injection", "decouple_slip_fmin_pu"): lambda data, v: v == 0.3,
+    ("kalman", "prior_pu"): lambda data, v: v == 0.3,  # its default, stated by a summary.json
     ("injection", "headroom_from"): lambda data, v: _backoff_edge(data, 0, v),
     ("injection", "headroom_to"): lambda data, v: _backoff_edge(data, 1, v),
 }

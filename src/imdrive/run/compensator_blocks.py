@@ -14,6 +14,7 @@ from imdrive.config.compensator import demodulated_input
 from imdrive.config.field_weakening import field_weakening_on
 from imdrive.config.injection_backoff import backoff_band
 from imdrive.config.perunit import Resolved
+from imdrive.config.r2_kalman import prior_pu
 from imdrive.config.registry import ESTIMATOR_SETTINGS
 from imdrive.config.scenario import Scenario
 from imdrive.errors import ConfigError
@@ -211,7 +212,7 @@ def _kalman(sc, D: Resolved) -> dict:
         "kf": True,
         "kf_r": k.noise_pu,
         "kf_q": k.drift_pu,
-        "kf_p0": k.prior_pu,
+        "kf_p0": prior_pu(sc),
         "kf_R2": D.R2_hat,
         "kf_T": D.n_comp * sc.simulation.Ts_s,
     }

@@ -27,8 +27,9 @@ injection frequency, hence its decisions, scale with ``1/T2``). Its verdict (:fu
 * ``converged``: ``sensorless``: the steady speed error equals the detuning law's
   ``slip (R2_hat/R2 - 1)`` (:func:`imdrive.analysis.detuning_speed_error_rpm`) at the flux
   the field weakening settles at (:func:`detuning_law_rpm`) within the tolerance;
-  ``injection-robust``: R2_hat within 2 % of R2 at the end and over the final window
-  (``R2_error_window_pct``) and the speed error within the tolerance.
+  ``injection-robust`` and every drive made from it (:func:`tracks_r2`): R2_hat within 2 %
+  of R2 at the end and over the final window (``R2_error_window_pct``) and the speed error
+  within the tolerance.
   The tolerance is 1 rpm or 0.1 % of the rated speed, whichever is larger;
 * ``not converged``: stable, but outside those bounds at the end.
 
@@ -225,12 +226,19 @@ def scenarios(machines=None, drives=DRIVES, speeds=SPEEDS_PU, loads=LOADS_PU, ra
     return out, pd.DataFrame(rows)
 
 
+def tracks_r2(drive: str) -> bool:
+    """Whether ``drive`` tracks R2: ``injection-robust`` or a drive made from it
+    (:data:`DRIVE_ALIASES`, ``injection-robust-afo``), judged by its R2_hat error, not by the
+    detuning law of a drive that holds R2_hat."""
+    return DRIVE_ALIASES.get(drive, (drive,))[0] == "injection-robust"
+
+
 def verdict(row) -> str:
     """``lost``, ``converged`` or ``not converged`` for one run (module docstring)."""
     if row["status"] != 0 or row["lost_control"]:
         return "lost"
     tol = tolerance_rpm(row["rated_speed_rpm"])
-    if row["drive"] == "injection-robust":
+    if tracks_r2(row["drive"]):
         # older CSVs have no window column: the end alone
         r2 = r2_worst_pct(row["R2_error_pct"], row.get("R2_error_window_pct", math.nan))
         ok = r2 <= R2_BAND_PCT and abs(row["speed_error_rpm"]) <= tol
@@ -320,13 +328,13 @@ def measure(scs, table: pd.DataFrame) -> pd.DataFrame:
     table = pd.concat([table, m], axis=1)
     table["detuning_law_rpm"] = [
         detuning_law_rpm(sc, row.speed_rpm, row.load_Nm, row.R2_ratio)
-        if row.drive != "injection-robust"
+        if not tracks_r2(row.drive)
         else math.nan
         for sc, row in zip(scs, table.itertuples(), strict=True)
     ]
     table["law_flux_pu"] = [
         law_flux_Wb(sc, row.speed_rpm, row.load_Nm, row.R2_ratio) / sc.machine.rated_flux_Wb
-        if row.drive != "injection-robust"
+        if not tracks_r2(row.drive)
         else math.nan
         for sc, row in zip(scs, table.itertuples(), strict=True)
     ]

@@ -340,6 +340,29 @@ register(
 )
 
 
+def _zero_frequency_r1(df) -> list[str]:
+    from imdrive.studies.zero_frequency import r1_sensitivity_lines
+
+    return r1_sensitivity_lines(df)
+
+
+def _measure_zero_frequency_r1():
+    from imdrive.studies.zero_frequency import r1_sensitivity
+
+    return r1_sensitivity()
+
+
+register(
+    DocTable(
+        "zero-frequency-R1",
+        "machine-envelope.md",
+        "data/zero_frequency_R1.csv",
+        _zero_frequency_r1,
+        _measure_zero_frequency_r1,
+    )
+)
+
+
 from imdrive.studies import (  # noqa: E402, F401  (register theirs)
     compensator_tables,
     r2_law_tables,
