@@ -326,22 +326,17 @@ def measure(scs, table: pd.DataFrame) -> pd.DataFrame:
         res = simulate_batch(scs, errors="record")
     m = res.metrics.drop(columns=["drive"])
     table = pd.concat([table, m], axis=1)
-    table["detuning_law_rpm"] = [
-        detuning_law_rpm(sc, row.speed_rpm, row.load_Nm, row.R2_ratio)
-        if not tracks_r2(row.drive)
-        else math.nan
-        for sc, row in zip(scs, table.itertuples(), strict=True)
-    ]
-    table["law_flux_pu"] = [
-        law_flux_Wb(sc, row.speed_rpm, row.load_Nm, row.R2_ratio) / sc.machine.rated_flux_Wb
-        if not tracks_r2(row.drive)
-        else math.nan
-        for sc, row in zip(scs, table.itertuples(), strict=True)
-    ]
+    pairs = list(zip(scs, table.itertuples(), strict=True))
+    law, flux = [], []
+    for sc, r in pairs:  # the detuning law and its flux, for a drive that holds R2_hat
+        held = not tracks_r2(r.drive)
+        args = (sc, r.speed_rpm, r.load_Nm, r.R2_ratio)
+        law.append(detuning_law_rpm(*args) if held else math.nan)
+        flux.append(law_flux_Wb(*args) / sc.machine.rated_flux_Wb if held else math.nan)
+    table["detuning_law_rpm"], table["law_flux_pu"] = law, flux
     for col, ratio in (("f_s_Hz", None), ("f_s_R2_Hz", 1.0)):
         table[col] = [
-            stator_frequency_Hz(sc, row.speed_rpm, row.load_Nm, ratio or row.R2_ratio)
-            for sc, row in zip(scs, table.itertuples(), strict=True)
+            stator_frequency_Hz(sc, r.speed_rpm, r.load_Nm, ratio or r.R2_ratio) for sc, r in pairs
         ]
     table["verdict"] = [verdict(r) for _, r in table.iterrows()]
     return table
