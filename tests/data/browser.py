@@ -50,21 +50,29 @@ def render(path) -> str:
     return out.stdout
 
 
-def screenshot(path, out_png, width: int = 1200, height: int = 2400):
-    """A PNG of ``path`` as headless Chromium draws it (no network); returns its pixels
-    (height x width x channels, floats in 0..1)."""
-    import matplotlib.image
-
+def _shot(path, out_png, width: int, height: int, dom: bool):
+    """One start of headless Chromium (no network) that writes ``out_png``; with ``dom`` its
+    stdout is the DOM after the scripts ran. Returns the completed process."""
     browser = find_chromium()
     if browser is None:
         pytest.skip("no Chromium found: install Debian's chromium package")
     cmd = [
         browser, "--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
         "--proxy-server=127.0.0.1:9", "--hide-scrollbars", "--virtual-time-budget=30000",
-        f"--window-size={width},{height}", f"--screenshot={out_png}", path.resolve().as_uri(),
+        f"--window-size={width},{height}", f"--screenshot={out_png}",
+        *(["--dump-dom"] if dom else []), path.resolve().as_uri(),
     ]  # fmt: skip
     out = subprocess.run(cmd, capture_output=True, text=True, timeout=120, check=False)
     assert out.returncode == 0 and out_png.is_file(), out.stderr[-2000:]
+    return out
+
+
+def screenshot(path, out_png, width: int = 1200, height: int = 2400):
+    """A PNG of ``path`` as headless Chromium draws it (no network); returns its pixels
+    (height x width x channels, floats in 0..1)."""
+    import matplotlib.image
+
+    _shot(path, out_png, width, height, dom=False)
     return matplotlib.image.imread(out_png)
 
 
@@ -74,17 +82,7 @@ def render_and_screenshot(path, out_png, width: int = 1200, height: int = 2400):
     ``width`` x ``height``, and the PNG's pixels."""
     import matplotlib.image
 
-    browser = find_chromium()
-    if browser is None:
-        pytest.skip("no Chromium found: install Debian's chromium package")
-    cmd = [
-        browser, "--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
-        "--proxy-server=127.0.0.1:9", "--hide-scrollbars", "--virtual-time-budget=30000",
-        f"--window-size={width},{height}", f"--screenshot={out_png}", "--dump-dom",
-        path.resolve().as_uri(),
-    ]  # fmt: skip
-    out = subprocess.run(cmd, capture_output=True, text=True, timeout=120, check=False)
-    assert out.returncode == 0 and out_png.is_file(), out.stderr[-2000:]
+    out = _shot(path, out_png, width, height, dom=True)
     return out.stdout, matplotlib.image.imread(out_png)
 
 
