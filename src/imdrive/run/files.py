@@ -3,6 +3,7 @@ that refuses to replace a folder that is not a result."""
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 from pathlib import Path
@@ -93,7 +94,14 @@ def check_result_folder(folder, force: bool = False) -> None:
 
 
 def package_versions() -> dict[str, str]:
-    """The versions a result's ``summary.json`` records: imdrive, Python, numpy, scipy, numba."""
+    """The versions a result's ``summary.json`` records: imdrive, Python, numpy, scipy, numba
+    (a copy of :func:`_versions`, read once per process)."""
+    return dict(_versions())
+
+
+@functools.cache
+def _versions() -> dict[str, str]:
+    # reading the packages' metadata takes about 8 ms, on every save until it was kept
     import platform
     from importlib.metadata import version
 
