@@ -123,11 +123,13 @@ def test_the_kalman_laws_prior_is_the_rotors_resistance_swing_over_its_temperatu
     # a hotter class moves it: 105 K (class F) -> 0.41
     hot, _ = _read("injection-robust", "compensator.thermal_rise_K=105")
     assert build_arrays(hot).params.comp[0]["kf_p0"] == pytest.approx(0.00393 * 105)
-    # the old default, as a summary.json states it, warns nothing; another value says why
-    same, notes = _read("injection-robust", "kalman.prior_pu=0.3")
+    # the value the rule gives warns nothing; any other, the old default 0.3 included (the
+    # prior it states is no longer the one used), says why
+    same, notes = _read("injection-robust", f"kalman.prior_pu={0.00393 * 80.0!r}")
     assert notes == [] and _comp(same) == _comp(plain)
-    given, notes = _read("injection-robust", "kalman.prior_pu=0.1")
-    (note,) = notes
-    assert note.startswith("kalman.prior_pu: deprecated, no longer has any effect")
-    assert "thermal_alpha_per_K x thermal_rise_K" in note
-    assert _comp(given) == _comp(plain)
+    for old in (0.3, 0.1):
+        given, notes = _read("injection-robust", f"kalman.prior_pu={old}")
+        (note,) = notes
+        assert note.startswith("kalman.prior_pu: deprecated, no longer has any effect")
+        assert "thermal_alpha_per_K x thermal_rise_K" in note
+        assert _comp(given) == _comp(plain)

@@ -9,7 +9,11 @@ from typing import Annotated, Literal
 from pydantic import model_validator
 
 from imdrive.config import compensator_deprecated  # noqa: F401  (the deprecated keys register)
-from imdrive.config.r2_kalman import KalmanLawSettings  # noqa: F401  (the law registers)
+from imdrive.config.r2_kalman import (  # noqa: F401  (the law registers)
+    THERMAL_ALPHA_PER_K,
+    THERMAL_RISE_K,
+    KalmanLawSettings,
+)
 from imdrive.config.r2_laws import law_names
 from imdrive.config.validation import Bool, Float, setting, settings
 from imdrive.errors import ConfigError
@@ -234,7 +238,7 @@ class CompensatorSettings:
             "K",
             gt=0.0,
         ),
-    ] = 80.0
+    ] = THERMAL_RISE_K
     thermal_alpha_per_K: Annotated[
         Float,
         setting(
@@ -243,7 +247,7 @@ class CompensatorSettings:
             "1/K",
             gt=0.0,
         ),
-    ] = 0.00393
+    ] = THERMAL_ALPHA_PER_K
 
     @model_validator(mode="after")
     def _clamps_in_order(self):

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from imdrive.config.deprecated_keys import deprecated_key, deprecated_twin, deprecated_value
 from imdrive.config.injection_backoff import backoff_band
+from imdrive.config.r2_kalman import THERMAL_ALPHA_PER_K, THERMAL_RISE_K
 
 #: The adaptive step law's keys (removed in 0.2, :mod:`imdrive.kernels.compensator`): what
 #: each patched, and what the model-based law does instead.
@@ -125,6 +126,16 @@ def _compensator_start(data: dict):
     return comp.get("t_on_s", 0.0) if isinstance(comp, dict) else 0.0
 
 
+def _thermal_prior(data: dict, v) -> bool:
+    """Whether ``v`` is the prior the thermal constants give (``kalman.prior_pu``'s rule):
+    0.3, its old default, is not, and says so."""
+    comp = data.get("compensator")
+    comp = comp if isinstance(comp, dict) else {}
+    alpha = comp.get("thermal_alpha_per_K", THERMAL_ALPHA_PER_K)
+    rise = comp.get("thermal_rise_K", THERMAL_RISE_K)
+    return all(isinstance(x, (int, float)) for x in (v, alpha, rise)) and v == alpha * rise
+
+
 def _injecting(data: dict) -> bool:
     inj = data.get("injection")
     inj = inj if isinstance(inj, dict) else {}
@@ -152,7 +163,7 @@ _ASKS_FOR_THE_RULE = {
     ("compensator", "input"): lambda data, v: v == ("demodulated" if _injecting(data) else "e_d0"),
     ("compensator", "period_s"): lambda data, v: v == 0.01 and not _injecting(data),
     ("injection", "decouple_slip_fmin_pu"): lambda data, v: v == 0.3,
-    ("kalman", "prior_pu"): lambda data, v: v == 0.3,  # its default, stated by a summary.json
+    ("kalman", "prior_pu"): _thermal_prior,
     ("injection", "headroom_from"): lambda data, v: _backoff_edge(data, 0, v),
     ("injection", "headroom_to"): lambda data, v: _backoff_edge(data, 1, v),
 }

@@ -8,6 +8,12 @@ from typing import Annotated
 from imdrive.config.r2_laws import r2_law
 from imdrive.config.validation import Float, setting, settings
 
+#: The rotor thermal model's defaults (``compensator.thermal_alpha_per_K``: copper;
+#: ``compensator.thermal_rise_K``: the class B limit of IEC 60034-1), of which a scenario that
+#: leaves them makes the law's prior (:func:`prior_pu`).
+THERMAL_ALPHA_PER_K = 0.00393
+THERMAL_RISE_K = 80.0
+
 
 @r2_law("kalman", "kalman", "model-based R2 law: a Kalman filter on R2 and its drift rate")
 @settings("kalman")
