@@ -151,7 +151,7 @@ def _gating(sc, r) -> dict:
         # headroom_to: deprecated)
         out["inj_v_lo"], out["inj_v_hi"] = backoff_band(inj.headroom_voltage, fw_v)
     if inj.headroom_voltage is not None and r.inj_amp > 0.0:
-        if not field_weakening_on(sc):
+        if not headroom:
             raise ConfigError("injection.headroom_voltage", "needs control.field_weakening = true")
         out |= {
             "inj_fw": True,
