@@ -126,6 +126,7 @@ INTRA = {
         "circuit_from_tests",
         "commissioning",
         "headroom",
+        "observability",
     ),
 }
 

@@ -113,29 +113,44 @@ def _r1_table():
     return pd.read_csv(DOCS / "data" / "zero_frequency_R1.csv")
 
 
-def test_near_zero_stator_frequency_R2_hat_follows_an_R1_hat_error_a_hundredfold():
-    """The R1-sensitivity table (docs/machine-envelope.md): at 0 Hz an R1_hat error of 0.1 %
-    moves R2_hat's end by more than 5 % on every machine (R1 and R2 cannot be told apart
-    there), where at +2 Hz it moves it by less than 1 % on Table IV and the Aalto machine; with
-    R1_hat = R1 the observer drive ends within 2 % at 0 Hz on all three."""
+def test_the_MRAS_drives_R2_hat_follows_R1_hat_as_the_voltage_model_says():
+    """The R1-sensitivity table (docs/machine-envelope.md): on the MRAS drive a 1 % R1_hat
+    error moves R2_hat's end by eq. (1)'s ``g`` to within a factor 2.5 at 2 Hz on every
+    machine and at 1 Hz on all but Krause 50 hp (where the MRAS's correction is weakest, 6.1
+    against 1.14); with R1_hat = R1 it ends within 1 % from +0.5 Hz up."""
     t = _r1_table()
     assert set(t["machine"]) == set(study.R1_MACHINES)
     assert set(t["f_s_target_Hz"]) == set(study.R1_F_S_HZ)
     assert set(t["R1_ratio"]) == set(study.R1_RATIOS)
-    for m, g in t.groupby("machine"):
-        at0 = g[g["f_s_target_Hz"] == 0.0].set_index("R1_ratio")["R2_error_pct"]
-        assert abs(at0[1.0]) < 2.0, m
-        assert max(abs(at0[0.999] - at0[1.0]), abs(at0[1.001] - at0[1.0])) > 5.0, m
-    for m in ("paper-table-iv", "aalto-2.2kw"):
-        g = t[(t["machine"] == m) & (t["f_s_target_Hz"] == 2.0)]
-        assert g["R2_error_pct"].abs().max() < 1.0, m
+    mras = t[t["estimator"] == "mras"]
+    for (m, f), g in mras.groupby(["machine", "f_s_target_Hz"]):
+        if f == 2.0 or (f == 1.0 and m != "krause-50hp"):
+            ratio = study.moved_pct(g) / float(g["g_predicted"].iloc[0])
+            assert 1 / 2.5 < ratio < 2.5, (m, f, ratio)
+    exact = mras[(mras["R1_ratio"] == 1.0) & (mras["f_s_target_Hz"] >= 0.5)]
+    assert exact["R2_error_pct"].abs().max() < 1.0
+
+
+def test_the_observers_R2_hat_follows_R1_hat_further_than_the_voltage_model_says():
+    """On the observer's drive a 1 % R1_hat error moves R2_hat by more than 10 % at 0 Hz on
+    every machine it keeps control of, and by more than eq. (1)'s ``g`` at 2 Hz on three of
+    the four machines: its detection's current model runs at the observer's speed, which
+    R1_hat moves too."""
+    afo = _r1_table().query("estimator == 'afo'")
+    moved0 = [study.moved_pct(g) for _, g in afo[afo["f_s_target_Hz"] == 0.0].groupby("machine")]
+    assert all(x > 10.0 for x in moved0 if x == x) and sum(x == x for x in moved0) >= 3
+    at2 = afo[afo["f_s_target_Hz"] == 2.0]
+    over = [study.moved_pct(g) > 2 * g["g_predicted"].iloc[0] for _, g in at2.groupby("machine")]
+    assert sum(over) >= 3
 
 
 @pytest.mark.slow
 def test_reduced_run_reproduces_the_stored_R1_sensitivity():
-    t = study.r1_sensitivity(["paper-table-iv"], frequencies=(0.0,), ratios=(0.999, 1.0))
+    t = study.r1_sensitivity(
+        ["paper-table-iv"], frequencies=(1.0,), ratios=(0.99, 1.0), estimators=("mras",)
+    )
     stored = _r1_table()
-    keys = ["machine", "f_s_target_Hz", "R1_ratio"]
+    keys = ["machine", "f_s_target_Hz", "R1_ratio", "estimator"]
     both = t.merge(stored, on=keys, suffixes=("", "_stored"), validate="one_to_one")
     assert len(both) == 2
     for _, row in both.iterrows():

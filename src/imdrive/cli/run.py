@@ -102,6 +102,8 @@ def _cmd_run(args) -> int:
         )
     if s["verdict"].get("R2_held_note"):  # with -q too: a hold is part of the status
         print(f"imdrive: {s['verdict']['R2_held_note']}", file=sys.stderr)
+    if s["verdict"].get("R2_R1_note"):  # with -q too: so is R2's observability
+        print(f"imdrive: {s['verdict']['R2_R1_note']}", file=sys.stderr)
     if s["verdict"]["verdict"] != "ok":  # completed, but R2_hat or the speed is not right
         from imdrive.run.diagnosis import closing_line
 

@@ -393,6 +393,32 @@ def held_shares(res) -> dict[str, float]:
     return dict(sorted(shares.items(), key=lambda kv: -kv[1]))
 
 
+def r1_sensitivity(res, window_s: float = DEFAULT_WINDOW_S) -> float | None:
+    """How far an R1_hat error moves R2_hat at the run's final operating point: ``g`` of
+    :func:`imdrive.analysis.observability.r2_r1_sensitivity` (R2_hat's relative change per
+    relative R1_hat error) from the means over the last ``window_s`` of the controller's
+    stator frequency (the slope of ``theta_e``), the stator current ``|i_dq|``, the rotor
+    flux and the final R1_hat. None without a compensator or a diverged run; ``inf`` at zero
+    stator frequency."""
+    from imdrive.analysis.observability import r2_r1_sensitivity
+    from imdrive.config.perunit import resolve
+
+    s = res.signals
+    if not res.scenario.compensator.enabled or res.diverged or "theta_e_rad" not in s:
+        return None
+    t = s["time_s"]
+    win = t >= t[-1] - window_s
+    if win.sum() < 2:
+        return None
+    theta = np.unwrap(s["theta_e_rad"][win])
+    w_e = (theta[-1] - theta[0]) / (t[win][-1] - t[win][0])
+    i_s = float(np.mean(np.hypot(s["i_d_A"][win], s["i_q_A"][win])))
+    psi = float(np.mean(s["flux_Wb"][win]))
+    D = resolve(res.scenario)
+    R1 = float(s["R1_hat_ohm"][-1]) if "R1_hat_ohm" in s else D.R1_hat
+    return r2_r1_sensitivity(R1, D.M_hat, D.M_hat + D.Ll2_hat, i_s, w_e, psi)
+
+
 def compensation_metrics(
     res, tol: float = CONVERGENCE_BAND, window_s: float = DEFAULT_WINDOW_S
 ) -> dict | None:

@@ -115,7 +115,10 @@ SUMMARY_DOCS = {
     "stator frequency band, gated transient), `R2_held_by_cause_pct` the share per cause, and "
     "`R2_held_note`, the sentence the console prints whenever R2_hat was held more than 10 % "
     "of the time; `R2_observable`: estimated at the end, or not "
-    "observable here and why",
+    "observable here and why; `R2_R1_sensitivity`, how many % R2_hat moves per % of R1_hat "
+    "error at the final operating point (imdrive.analysis.observability), and `R2_R1_note`, "
+    "the sentence the console prints when a 1 % R1 error would move R2_hat beyond the R2 "
+    "tolerance",
     "plugins": "each module of `[plugins] modules` (a file's path relative to the result "
     "folder) -> the sha256 of its file (null: not readable); a rerun of this summary.json warns "
     "when a module has changed since",

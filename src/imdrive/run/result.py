@@ -49,6 +49,7 @@ from imdrive.run.metrics import (
     drive_metrics,
     held_shares,
     lost_control_at,
+    r1_sensitivity,
 )
 from imdrive.run.status import run_status
 
@@ -403,7 +404,9 @@ class SimulationResult:
     def verdict(self) -> dict:
         """This run's status: ``"ok"`` or why not (:func:`imdrive.run.status.run_status`)."""
         if "_verdict" not in self.__dict__:
-            self.__dict__["_verdict"] = run_status(self.metrics(), held_shares(self))
+            self.__dict__["_verdict"] = run_status(
+                self.metrics(), held_shares(self), r1_sensitivity(self)
+            )
         return dict(self.__dict__["_verdict"])
 
     def metrics(self, window_s: float = DEFAULT_WINDOW_S) -> dict:

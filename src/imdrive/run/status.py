@@ -412,7 +412,25 @@ def held_note(held_pct: float, shares: dict[str, float] | None) -> str | None:
     )
 
 
-def run_status(m: dict, shares: dict[str, float] | None = None) -> dict:
+def r1_note(g: float | None) -> str | None:
+    """The sentence a run's status carries when R2_hat at its final operating point depends
+    on R1_hat more than the R2 tolerance allows: ``g`` times
+    :data:`~imdrive.analysis.observability.R1_UNCERTAINTY` above :data:`R2_TOLERANCE`
+    (``g``: :func:`imdrive.run.metrics.r1_sensitivity`). None otherwise."""
+    from imdrive.analysis.observability import R1_UNCERTAINTY
+
+    if g is None or not g * R1_UNCERTAINTY > R2_TOLERANCE:
+        return None
+    d1 = 100 * R1_UNCERTAINTY
+    if math.isinf(g):
+        return "R2 not observable here: at zero stator frequency R2_hat follows R1_hat's error"
+    return (
+        f"R2 weakly observable here: at this low stator frequency a {d1:g} % error of R1_hat "
+        f"moves R2_hat by about {g * d1:.1f} %, beyond the {100 * R2_TOLERANCE:g} % tolerance"
+    )
+
+
+def run_status(m: dict, shares: dict[str, float] | None = None, g_R1: float | None = None) -> dict:
     """``summary.json``'s ``"verdict"`` from a run's metrics (:func:`drive_metrics`): the
     status columns, the R̂2 tolerance, how long and why R̂2 was held (the gating masks as
     their groups, :func:`held_reasons`; None without a compensator), and ``R2_observable``:
@@ -426,6 +444,9 @@ def run_status(m: dict, shares: dict[str, float] | None = None) -> dict:
     shares : dict of str to float, optional
         :func:`imdrive.run.metrics.held_shares` of the run: ``R2_held_by_cause_pct``, and the
         ``R2_held_note`` (:func:`held_note`) names them.
+    g_R1 : float, optional
+        :func:`imdrive.run.metrics.r1_sensitivity` of the run: ``R2_R1_sensitivity``, and
+        the ``R2_R1_note`` (:func:`r1_note`) when it exceeds the tolerance.
 
     Returns
     -------
@@ -438,6 +459,8 @@ def run_status(m: dict, shares: dict[str, float] | None = None) -> dict:
     got["R2_held_by_cause_pct"] = shares if _finite(m["R2_held_pct"]) else None
     got["R2_held_note"] = held_note(m["R2_held_pct"], shares)
     got["R2_tolerance_pct"] = 100.0 * R2_TOLERANCE
+    got["R2_R1_sensitivity"] = g_R1 if g_R1 is None or math.isfinite(g_R1) else "inf"
+    got["R2_R1_note"] = r1_note(g_R1)
     since = m["R2_held_since_s"]
     if not _finite(m["R2_held_pct"]):
         got["R2_observable"] = None  # no compensator: R2_hat is not estimated at all
