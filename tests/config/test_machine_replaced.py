@@ -80,8 +80,21 @@ def test_a_key_set_in_the_same_layer_is_not_stale():
     assert "control.speed_ref_rpm" in msg
 
 
-def test_commissioned_tables_are_named():
-    (msg,) = _machine_warnings("sensorless-realistic", ['machine.preset="krause-3hp"'])
+def _measured_tables(tmp_path) -> str:
+    """sensorless-realistic with its tables stated (a commissioning run's, ``ideal = false``)."""
+    from imdrive.analysis.commissioning import ideal_commissioning, section_toml
+    from imdrive.config.presets import scenario_text
+
+    tables = section_toml(ideal_commissioning(Scenario.read("sensorless-realistic")))
+    text = scenario_text("sensorless-realistic")
+    assert "[controller_model]\nideal = true\n" in text
+    path = tmp_path / "measured.toml"
+    path.write_text(text.replace("[controller_model]\nideal = true\n", tables))
+    return str(path)
+
+
+def test_commissioned_tables_are_named(tmp_path):
+    (msg,) = _machine_warnings(_measured_tables(tmp_path), ['machine.preset="krause-3hp"'])
     assert "controller_model tables" in msg and "magnetising_Lm_H" in msg
     assert "imdrive commission" in msg
     # its sensor range and sign band are derived now: not among the stale settings
@@ -107,8 +120,8 @@ def test_with_overrides_and_a_sweep_axis_warn_too():
         sc.with_overrides(['machine.preset="krause-3hp"'])
 
 
-@pytest.mark.parametrize("preset", ["sensorless", "injection-robust"])
-def test_a_scenario_written_out_in_full_is_not_stale(preset):
+@pytest.mark.parametrize("preset", ["sensorless", "injection-robust", "sensorless-realistic"])
+def test_a_scenario_written_out_in_full_is_not_stale(preset, tmp_path):
     # with_overrides on a read scenario layers on its full dictionary: its defaults (the
     # controller model's mode keys, empty tables, per-unit settings) were stated for no machine
     with warnings.catch_warnings(record=True) as caught:
@@ -118,5 +131,5 @@ def test_a_scenario_written_out_in_full_is_not_stale(preset):
     # a commissioned table written out in full still is
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        Scenario.read("sensorless-realistic").with_overrides(['machine.preset="krause-3hp"'])
+        Scenario.read(_measured_tables(tmp_path)).with_overrides(['machine.preset="krause-3hp"'])
     assert [w for w in caught if "controller_model tables" in str(w.message)]

@@ -1,82 +1,23 @@
-"""What an ideal commissioning run identifies: the controller's tables from the plant's model.
+"""What an ideal commissioning run identifies, printed as a ``[controller_model]`` section.
 
-A real drive identifies its magnetising curve in a rotating no-load test at several flux levels
-and its inverter's voltage error in a standstill DC test at several currents (IEC 60034-28
-describes the no-load test; the DC test with the inverter's error as a function of current is
-the standard self-commissioning practice). This module computes what such tests find on the
-simulated plant when they are *ideal* -- no noise, no sensor error, every test settled -- from
-the plant's own models. The realistic presets take their ``[controller_model]`` from it:
-
-* **magnetising curve**: the plant's curve (:mod:`imdrive.kernels.saturation`)
-  ``i_m = (psi_m/Lm0)(1 + (psi_m/psi_sat)^S)`` sampled at magnetising fluxes
-  ``flux_pu`` times the rated flux (default 0.2-1.4 in steps of 0.05: the no-load test's flux
-  levels, denser than a real drive's so the incremental inductance between them is accurate
-  to about 1 %), ``Lm = psi_m/i_m`` at each;
-* **inverter error**: the loss per phase the dead time and the device drop cause,
-  ``u = t_d f_sw Vdc + V_drop`` for a current of either sign (:mod:`imdrive.kernels.inverter`:
-  one delayed edge per carrier period and leg, the drop of the conducting device), reached at
-  the current ``inverter.sign_band_A`` (below it the current's ripple and the sensors' noise
-  make the sign uncertain; the DC test's smallest current) and constant beyond.
-
-Regenerate a preset's section with ``python -m imdrive.analysis.commissioning PRESET``.
+The tables themselves are computed in :mod:`imdrive.config.commissioning_ideal` (a scenario's
+``controller_model.ideal = true`` resolves them when it is read); this module keeps their
+import path and prints them. Regenerate a section with
+``python -m imdrive.analysis.commissioning PRESET``.
 """
 
 from __future__ import annotations
 
 import sys
 
-import numpy as np
-
-from imdrive.config.perunit import sign_band_A
+from imdrive.config.commissioning_ideal import (  # noqa: F401  (their import path)
+    FLUX_PU,
+    ideal_commissioning,
+    plant_inverter_error,
+    plant_magnetising_curve,
+    plant_secant_inductance,
+)
 from imdrive.config.scenario import Scenario
-
-#: The no-load test's flux levels, per unit of the rated flux.
-FLUX_PU = tuple(np.round(np.arange(0.2, 1.4001, 0.05), 4))
-
-
-def plant_magnetising_curve(sc: Scenario) -> tuple[float, float, float]:
-    """``(Lm0, psi_sat, S)`` of the plant's magnetising curve (``[plant.saturation]``; the
-    defaults through the machine's ``M_H`` at its rated flux, as the plant builds them)."""
-    return sc.plant.saturation.curve(sc.machine)
-
-
-def plant_secant_inductance(sc: Scenario, psi_m) -> np.ndarray:
-    """The plant's secant magnetising inductance ``Lm(psi_m) = Lm0/(1 + (psi_m/psi_sat)^S)``,
-    H (``M_H`` everywhere without saturation)."""
-    psi_m = np.asarray(psi_m, dtype=float)
-    if not sc.plant.saturation.enabled:
-        return np.full_like(psi_m, sc.machine.M_H)
-    Lm0, psi_sat, S = plant_magnetising_curve(sc)
-    return Lm0 / (1.0 + (psi_m / psi_sat) ** S)
-
-
-def plant_inverter_error(sc: Scenario) -> float:
-    """The loss per phase of the plant's inverter for a current well away from zero, V:
-    ``t_d f_sw Vdc + V_drop``."""
-    inv = sc.inverter
-    return inv.dead_time_s * inv.switching_frequency_Hz * inv.Vdc_V + inv.device_drop_V
-
-
-def ideal_commissioning(sc: Scenario, flux_pu=FLUX_PU) -> dict[str, list[float]]:
-    """The ``[controller_model]`` tables an ideal commissioning identifies on ``sc``'s plant.
-
-    Returns the section's keys: ``magnetising_psi_Wb``, ``magnetising_Lm_H`` (omitted without
-    saturation: the constant ``M̂`` is then the plant's), ``inverter_error_i_A`` and
-    ``inverter_error_u_V`` (omitted when the inverter loses nothing).
-    """
-    out: dict[str, list[float]] = {}
-    if sc.plant.saturation.enabled:
-        psi = np.asarray(flux_pu, dtype=float) * sc.machine.rated_flux_Wb
-        out["magnetising_psi_Wb"] = [float(f"{v:.6g}") for v in psi]
-        out["magnetising_Lm_H"] = [float(f"{v:.6g}") for v in plant_secant_inductance(sc, psi)]
-    u = plant_inverter_error(sc)
-    if u > 0.0:
-        band = sign_band_A(sc)
-        i_top = 2.0 * sc.control.current_limit_A if sc.control.current_limit_A else 0.0
-        i_top = max(i_top, 4.0 * sc.machine.rated_current_A, 2.0 * band)
-        out["inverter_error_i_A"] = [0.0, float(f"{band:.6g}"), float(f"{i_top:.6g}")]
-        out["inverter_error_u_V"] = [0.0, float(f"{u:.6g}"), float(f"{u:.6g}")]
-    return out
 
 
 def section_toml(tables: dict[str, list[float]]) -> str:

@@ -51,8 +51,8 @@ class ControllerModelSettings:
     from ``i = 0`` (``u = 0`` there), or over both signs odd-symmetrically; linear between the
     nodes, held past the last. It replaces the feed-forward of
     ``control.dead_time_compensation`` and is subtracted from the commanded voltage the
-    estimators use. ``analysis/commissioning.py`` (``ideal_commissioning``) computes the
-    tables an ideal commissioning run identifies.
+    estimators use. ``ideal = true`` takes the tables an ideal commissioning run identifies
+    on the scenario's plant (:mod:`imdrive.config.commissioning_ideal`).
     """
 
     magnetising_psi_Wb: Annotated[
@@ -87,6 +87,16 @@ class ControllerModelSettings:
             "V",
         ),
     ] = ()
+    ideal: Annotated[
+        bool,
+        setting(
+            "true: the tables are what an ideal commissioning run identifies on this "
+            "scenario's own plant (config/commissioning_ideal.py), derived when the scenario "
+            "is read, so they follow a change of machine or inverter (given tables are "
+            "replaced). The realistic presets use it: with Table IV's tables kept, "
+            "sensorless-realistic on the Aalto 2.2 kW machine lost control at 0.65 s"
+        ),
+    ] = False
     saturation: Annotated[
         Literal["table", "none"],
         setting(

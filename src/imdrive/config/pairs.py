@@ -276,6 +276,8 @@ def _warn_machine_replaced(data: dict, before: tuple, here: set[str]) -> None:
             if _is_set(key, node[name]):
                 stale.append((key, node[name], twin))
     model = data.get("controller_model")
+    if isinstance(model, dict) and model.get("ideal") is True:
+        model = None  # derived from the new machine when the scenario is read
     # the measured tables themselves (a scenario written out in full states the mode keys and
     # empty tables too: those were not commissioned on anything)
     tables = sorted(

@@ -32,6 +32,7 @@ from imdrive.config.checks import (
     per_unit_warnings,
     plugin_rules,
 )
+from imdrive.config.commissioning_ideal import resolve_ideal
 from imdrive.config.compensator import (
     CompensatorSettings,
     InjectionSettings,
@@ -322,6 +323,7 @@ class Scenario:
 
     def _rules_between_sections(self):
         self._machine_defaults()
+        resolve_ideal(self)  # controller_model.ideal: its tables from this plant
         check_pairs(self)  # before the per-unit values are resolved
         est, m = self.estimator, self.machine
         if (est.Ll1_H, est.Ll2_H, est.M_H) != (None, None, None):  # the controller's model
