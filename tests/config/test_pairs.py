@@ -44,7 +44,8 @@ def test_every_declared_pair_is_an_absolute_and_a_per_unit_key_of_one_section(pa
         assert a.rsplit(".", 1)[0] == u.rsplit(".", 1)[0]  # same section
         assert _unit(a), f"{a} has no unit: not an absolute value"
         assert _unit(u) is None, f"{u} has a unit: not per-unit"
-        assert _PU.search(u) or u == "smo_mras.speed_error_pu"
+        # (a run's length in R2 tracking's decision windows is a count, named as one)
+        assert _PU.search(u) or u in ("smo_mras.speed_error_pu", "simulation.tracking_windows")
         # a member with a default of None is unset by default; the others default to a number
         # (a profile: the constant profile 0)
         for k in (a, u):

@@ -70,9 +70,9 @@ def machine_defaults(sc) -> None:
     the rated voltage is refused below half of it, else warned about."""
     inv = sc.inverter
     V_rated = sc.machine.rated_voltage_V
-    if inv.Vdc_V is None or getattr(inv, "_Vdc_auto", False):
+    if inv.Vdc_V is None or getattr(inv, "_Vdc_V_auto", False):
         inv = replace(inv, Vdc_V=V_rated * math.sqrt(2.0))
-        object.__setattr__(inv, "_Vdc_auto", True)
+        object.__setattr__(inv, "_Vdc_V_auto", True)
         object.__setattr__(sc, "inverter", inv)
         return
     reach = inv.Vdc_V / math.sqrt(2.0)  # the line voltage the SVM's linear range reaches
@@ -296,12 +296,28 @@ def law_keys_unread(sc) -> None:
             warnings.warn(ConfigWarning(field, why), stacklevel=4)
 
 
+def tracking_end(sc, r) -> None:
+    """``simulation.tracking_windows``: ``t_end_s`` is ``compensator.t_on_s`` plus that many
+    decision windows of the compensator (``r.n_comp`` control periods each), counted in
+    control periods; with the compensator off too (a scenario that switches it off runs as
+    long as the one that tracks)."""
+    sim = sc.simulation
+    if sim.tracking_windows is None:
+        return
+    Ts = sim.Ts_s
+    n = round(sc.compensator.t_on_s / Ts) + sim.tracking_windows * int(r.n_comp)
+    sim = replace(sim, t_end_s=n * Ts)
+    object.__setattr__(sim, "_t_end_s_auto", True)
+    object.__setattr__(sc, "simulation", sim)
+
+
 def compensator_rules(sc) -> None:
     """The R̂2 clamps in order, given or default (one given clamp against the other's
     default: ``R2_min_ohm`` above the default ``R2_max_ohm`` made R̂2 jump); the decision
     period and the injection against the run and the machine."""
     comp = sc.compensator
     r = resolve(sc)
+    tracking_end(sc, r)
     R2h, lo, hi = r.R2_hat, r.R2_min, r.R2_max
     if not lo < hi:
         field = (

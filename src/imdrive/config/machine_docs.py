@@ -22,6 +22,10 @@ from imdrive.config.machine import (
 __all__ = ["main", "markdown"]
 
 DOC_PATH = Path(__file__).resolve().parents[3] / "docs" / "machines.md"
+#: Where the page's generated library ends: the library tour that follows is
+#: ``python -m imdrive.studies.doctables``'s (library-tour), kept as it is when the page is
+#: rewritten.
+TOUR_HEADING = "\n## Library tour\n"
 
 _INTRO = """\
 # Machines
@@ -161,16 +165,17 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--path", type=Path, default=DOC_PATH, help=f"default: {DOC_PATH}")
     args = ap.parse_args(argv)
     text = markdown()
+    current = args.path.read_text(encoding="utf-8") if args.path.exists() else ""
+    head, tour, tail = current.partition(TOUR_HEADING)
     if args.check:
-        current = args.path.read_text(encoding="utf-8") if args.path.exists() else ""
-        if current != text:
+        if head != text:
             print(
                 f"{args.path} is stale: run 'python -m imdrive.config.machine_docs'",
                 file=sys.stderr,
             )
             return 1
         return 0
-    args.path.write_text(text, encoding="utf-8")
+    args.path.write_text(text + tour + tail, encoding="utf-8")  # the tour: doctables
     print(f"wrote {args.path}", file=sys.stderr)
     return 0
 

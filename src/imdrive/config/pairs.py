@@ -54,6 +54,10 @@ class Pair:
     quiet : bool
         An override of one member clears the other without a warning: a profile, which an
         override restates whole (the speed reference, the load).
+    machine_bound : bool
+        The absolute member is a value of the machine it was stated for, named when the
+        machine is replaced under it (:func:`_warn_machine_replaced`); false for a run's
+        length, which suits any machine as the duty cycle it states.
     """
 
     absolute: tuple[str, ...]
@@ -61,6 +65,7 @@ class Pair:
     base: str
     both: Literal["error", "per_unit", "absolute"] = "error"
     quiet: bool = False
+    machine_bound: bool = True
 
     @property
     def keys(self) -> tuple[str, ...]:
@@ -71,14 +76,23 @@ class Pair:
         return self.per_unit if key in self.absolute else self.absolute
 
 
-def _pair(absolute: str, per_unit: str, base: str, both: str = "error", quiet=False) -> Pair:
-    return Pair((absolute,), (per_unit,), base, both, quiet)
+def _pair(
+    absolute: str, per_unit: str, base: str, both: str = "error", quiet=False, bound=True
+) -> Pair:
+    return Pair((absolute,), (per_unit,), base, both, quiet, bound)
 
 
 #: Every absolute / per-unit pair of the scenario file.
 PAIRS: tuple[Pair, ...] = (
     _pair("control.speed_ref_rpm", "control.speed_ref_pu", "the machine's rated speed", quiet=True),
     _pair("load.torque_Nm", "load.torque_pu", "the machine's rated torque", quiet=True),
+    _pair(
+        "simulation.t_end_s",
+        "simulation.tracking_windows",
+        "R2 tracking's decision window, from compensator.t_on_s",
+        quiet=True,
+        bound=False,
+    ),
     _pair("estimator.R1_ohm", "estimator.R1_ratio", "the plant's R1"),
     _pair("estimator.R2_ohm", "estimator.R2_ratio", "the plant's R2"),
     _pair("estimator.M_H", "estimator.M_ratio", "the plant's M"),
@@ -268,7 +282,7 @@ def _warn_machine_replaced(data: dict, before: tuple, here: set[str]) -> None:
     if after == before or before == (None, None):
         return
     stale = []
-    for p in PAIRS:
+    for p in (p for p in PAIRS if p.machine_bound):
         for key, twin in zip(p.absolute, p.per_unit, strict=True):
             node, name = _section(data, key)
             if key in here or node is None or name not in node:
@@ -316,10 +330,12 @@ def apply_overrides(data: dict, overrides, where: str = "--set") -> None:
 
 
 def _value(sc, key: str):
+    """``key``'s value in ``sc``; None where it was derived (``_<name>_auto``, a twin's)."""
     node = sc
-    for p in key.split("."):
+    *head, name = key.split(".")
+    for p in head:
         node = getattr(node, p)
-    return node
+    return None if getattr(node, f"_{name}_auto", False) else getattr(node, name)
 
 
 def check_pairs(sc) -> None:

@@ -361,12 +361,8 @@ class Scenario:
                 "must be < half a switching period, 0.5/inverter.switching_frequency_Hz",
             )
         self._compensator_rules()
-        self._plugin_rules()
+        plugin_rules(self)  # [plugins] checked and completed
         return self
-
-    def _plugin_rules(self) -> None:
-        """``[plugins]`` checked and completed (:func:`imdrive.config.checks.plugin_rules`)."""
-        plugin_rules(self)
 
     def estimator_settings(self):
         """The settings object of the estimator ``control.speed_feedback`` selects.
@@ -587,8 +583,10 @@ class Scenario:
         out["machine"] = m
         for key in SECTIONS:
             out[key] = _to_plain(getattr(self, key))
-        if getattr(self.inverter, "_Vdc_auto", False):  # derived from the machine: unset
+        if getattr(self.inverter, "_Vdc_V_auto", False):  # derived from the machine: unset
             out["inverter"]["Vdc_V"] = None
+        if getattr(self.simulation, "_t_end_s_auto", False):  # from tracking_windows: unset
+            del out["simulation"]["t_end_s"]
         return out
 
 

@@ -363,6 +363,29 @@ register(
 )
 
 
+def _library_tour(df) -> list[str]:
+    from imdrive.studies.tour import lines
+
+    return lines(df)
+
+
+def _measure_library_tour():
+    from imdrive.studies.tour import run
+
+    return run()
+
+
+register(
+    DocTable(
+        "library-tour",
+        "machines.md",
+        "data/library_tour.csv",
+        _library_tour,
+        _measure_library_tour,
+    )
+)
+
+
 from imdrive.studies import (  # noqa: E402, F401  (register theirs)
     compensator_tables,
     r2_law_tables,
