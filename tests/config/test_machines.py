@@ -98,7 +98,9 @@ def test_geyer_machine_is_its_per_unit_table():
 
 def test_machines_md_is_generated_from_the_library():
     committed = (ROOT / "docs" / "machines.md").read_text(encoding="utf-8")
-    assert committed == machine_docs.markdown(), (
+    # the library tour that follows is doctables' (library-tour), kept when the page is written
+    head, tour, _ = committed.partition(machine_docs.TOUR_HEADING)
+    assert tour and head == machine_docs.markdown(), (
         "docs/machines.md is stale: run 'PYTHONPATH=src python -m imdrive.config.machine_docs'"
     )
     for name in LIBRARY:

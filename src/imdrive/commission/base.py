@@ -242,7 +242,11 @@ def test_scenario(sc: Scenario, test: str, t_end: float, **sections) -> Scenario
         d["estimator"][key] = None
     d["estimator"]["R2_adaptation"] = "compensator"
     d["simulation"].update(
-        t_end_s=t_end, log_every=1, lost_control_rpm=0.0, divergence_current_A=None
+        t_end_s=t_end,
+        tracking_windows=None,  # a test's length is its own
+        log_every=1,
+        lost_control_rpm=0.0,
+        divergence_current_A=None,
     )
     for section, values in sections.items():
         d.setdefault(section, {}).update(values)

@@ -33,7 +33,15 @@ index  field                          block
 17, 18 ``lam_f_ab``                   MRAS adjustable model, filtered, Wb
 19     ``int_e``                      MRAS integral of the error, Wb^2 s
 20     ``w_r_hat``                    MRAS speed estimate, electrical rad/s
+21     ``int_w``                      type-2 MRAS's second integrator, rad (0 while it
+                                      is held, below its stator frequency, or type 1)
 ====== ============================== =================================================
+
+The type-2 MRAS (``mras.acceleration_tracking``) adds its second integrator to the state
+where it runs; where it is held (below ``b2_wmin`` of stator frequency) its value is a
+constant offset of the speed estimate that does not change the small-signal model, and the
+state is held at 0 (its row of the Jacobian is zero: an eigenvalue 0, not the neutral 1 of a
+value that never moves).
 
 The two inputs are the speed reference (mechanical rad/s) and the load torque (N m), slots 0
 of the profiles ``PR_SPEED_REF`` and ``PR_LOAD`` (the caller makes both profiles constant).
@@ -49,7 +57,7 @@ from numba import njit, prange
 from imdrive.kernels.engine import LOG, S_OK, run_drive
 from imdrive.kernels.profiles import PR_LOAD, PR_SPEED_REF
 
-N_Z = 21
+N_Z = 22
 N_U = 2
 
 # status of a point (also used by imdrive.stability)
@@ -63,7 +71,7 @@ Z_SCALE = np.array(
         0.1, 0.1, 0.1, 0.1, 1.0,  # plant
         1.0, 1.0, 0.1, 0.1,  # sample
         0.1, 1.0, 1.0, 0.1,  # control
-        0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 1e-4, 1.0,  # mras
+        0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 1e-4, 1.0, 1.0,  # mras
     ]
 )  # fmt: skip
 
@@ -75,8 +83,9 @@ def _rot(c, a, b):
 
 
 @njit(cache=True)
-def pack_state(S, i, z):
-    """Write the reduced state of drive ``i`` (rotated into the controller's frame) into ``z``."""
+def pack_state(S, i, z, b2=0.0):
+    """Write the reduced state of drive ``i`` (rotated into the controller's frame) into ``z``;
+    ``b2``: its MRAS's second-integrator corner (``P.est[i].b2``; 0: type 1)."""
     x = S.plant[i]
     smp = S.sample[i]
     ctl = S.control[i]
@@ -97,6 +106,8 @@ def pack_state(S, i, z):
     z[17], z[18] = _rot(c, est.lam_f_ab.real, est.lam_f_ab.imag)
     z[19] = est.int_e
     z[20] = est.w_r_hat
+    # the second integrator where it runs (type 2, above its stator frequency), else held at 0
+    z[21] = est.int_w if est.int_w_run and b2 > 0.0 else 0.0
 
 
 @njit(cache=True)
@@ -120,6 +131,7 @@ def unpack_state(z, S, i):
     est.lam_f_ab = complex(z[17], z[18])
     est.int_e = z[19]
     est.w_r_hat = z[20]
+    est.int_w = z[21]
 
 
 @njit(cache=True)
@@ -148,7 +160,7 @@ def rotated_map(P, S, i, z, zout, th1, th2):
     x.theta1 = th1
     x.theta2 = th2
     status, _ = _engine(P, S, i, 1, 0)
-    pack_state(S, i, zout)
+    pack_state(S, i, zout, P.est[i].b2)
     return status
 
 
@@ -294,7 +306,7 @@ def propagate(P, S, i, z, n_steps, th1, th2, zout):
     x.theta1 = th1
     x.theta2 = th2
     status, _ = _engine(P, S, i, n_steps, 0)
-    pack_state(S, i, zout)
+    pack_state(S, i, zout, P.est[i].b2)
     return status
 
 
@@ -324,7 +336,7 @@ def step_check(P, S, Z0, Z1, TH, n_steps, n_win, peaks, status):
             st, _ = _engine(P, S, i, 1, k)
             if st != S_OK:
                 break
-            pack_state(S, i, z)
+            pack_state(S, i, z, P.est[i].b2)
             e = 0.0
             for j in range(N_Z):
                 e = max(e, abs(z[j] - Z1[i, j]) / (abs(Z1[i, j]) + Z_SCALE[j]))

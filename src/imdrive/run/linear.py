@@ -114,14 +114,8 @@ def stationary_drive(sc: Scenario, speeds_rad_s, torques_Nm) -> StationaryDrive:
         raise ConfigError(
             "control.delay_periods", "stability maps model the drive without computation delay"
         )
-    a = build_arrays(replace(sc, simulation=replace(sc.simulation, t_end_s=sc.simulation.Ts_s)))
-    est = a.params.est
-    if "b2" in (est.dtype.names or ()) and np.any(est["b2"] > 0.0):
-        # the reduced state carries the type-1 MRAS (no second integrator)
-        raise ConfigError(
-            "mras.acceleration_tracking",
-            "stability maps linearise the type-1 MRAS: set it to false",
-        )
+    one = replace(sc.simulation, t_end_s=sc.simulation.Ts_s, tracking_windows=None)
+    a = build_arrays(replace(sc, simulation=one))
     n = len(speeds_rad_s)
     rep = lambda arr: np.repeat(arr, n, axis=0)  # noqa: E731
     pv = a.params.prof_v[0]
@@ -173,5 +167,7 @@ def model_coefficients(P: DriveParams, S: DriveState) -> dict:
     c["wc_k"] = float(P.est[0]["wc_k"])
     c["wc_min"] = float(P.est[0]["wc_min"])
     c["K2"] = float(P.est[0]["K2"])
+    c["b2"] = float(P.est[0]["b2"])  # the type-2 MRAS's second integrator (0: type 1)
+    c["b2_wmin"] = float(P.est[0]["b2_wmin"])
     c["decouple"] = bool(P.control[0]["decouple"])
     return c

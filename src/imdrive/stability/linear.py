@@ -58,6 +58,7 @@ from imdrive.stability.steady import (  # noqa: F401  (re-exported: old path)
     _initial_state,
     _plant_in_frame,
     continuous_steady_state,
+    second_integrator_runs,
 )
 
 _Drive = StationaryDrive  # the 0.2 private names, kept for callers that reached in
@@ -72,6 +73,7 @@ STATE_NAMES = (
     "v_prev_d", "v_prev_q", "i_prev_d", "i_prev_q",
     "int_w", "int_d", "int_q", "psi_hat",
     "lam_v_d", "lam_v_q", "lam_i_d", "lam_i_q", "lam_f_d", "lam_f_q", "int_e", "w_r_hat",
+    "int_w2",
 )  # fmt: skip
 INPUT_NAMES = ("speed_ref_rpm", "load_torque_Nm")
 OUTPUT_NAMES = ("speed_rpm", "speed_est_rpm", "i_d_A", "i_q_A")
@@ -224,14 +226,21 @@ def solve_operating_points(sc: Scenario, speeds_rpm, torques_Nm) -> OperatingPoi
     its = np.zeros(n, dtype=np.int64)
     idx = np.flatnonzero(good)
     if len(idx):
-        sub_P = rl.DriveParams(*(f[idx] if f.ndim >= 1 and f.shape[0] == n else f for f in d.P))
-        sub_S = rl.DriveState(*(f[idx].copy() for f in d.S))
-        if "w_flux" in sub_S.est.dtype.names:
+        # the hidden states the reduced map does not carry, at the operating point's values, in
+        # the drive itself (its propagate() runs from them too)
+        if "w_flux" in d.S.est.dtype.names:
             # the flux frequency the MRAS filter's cut-off follows (mras.wc_per_stator_frequency)
             # at the operating point's, and held there (an infinite time constant): a low-pass
             # over 0.5 s whose own slow mode is not in the reduced state
-            sub_S.est["w_flux"] = w_e[idx]
-            sub_P.est["wc_tau"] = np.inf
+            d.S.est["w_flux"][idx] = w_e[idx]
+            d.P.est["wc_tau"][idx] = np.inf
+        if "int_w_run" in d.S.est.dtype.names:
+            # the type-2 MRAS's second integrator runs at the operating point's stator
+            # frequency, read from the controller's (not a state of the reduced map)
+            d.S.est["int_w_run"][idx] = second_integrator_runs(c, w_e[idx])
+            d.S.control["w_e"][idx] = w_e[idx]
+        sub_P = rl.DriveParams(*(f[idx] if f.ndim >= 1 and f.shape[0] == n else f for f in d.P))
+        sub_S = rl.DriveState(*(f[idx].copy() for f in d.S))
         Zs = np.ascontiguousarray(Z[idx])
         As = np.empty((len(idx), rl.N_Z, rl.N_Z))
         Bs = np.empty((len(idx), rl.N_Z, rl.N_U))

@@ -123,4 +123,14 @@ def _initial_state(c: dict, Ts: float, iq, w_m, w_ref) -> np.ndarray:
         z[:, k + 1] = val.imag
     z[:, 19] = w_r_hat / c["K2"] if c["K2"] != 0 else 0.0
     z[:, 20] = w_r_hat
+    run = second_integrator_runs(c, w_e)  # type 2: the PI's output 0, the estimate its own
+    z[run, 19] = 0.0
+    z[run, 21] = w_r_hat[run] / c["b2"] if np.ndim(w_r_hat) else w_r_hat / c["b2"]
     return z
+
+
+def second_integrator_runs(c: dict, w_e) -> np.ndarray:
+    """Where the type-2 MRAS's second integrator runs at the stator frequency ``w_e`` (rad/s):
+    ``b2 > 0`` and ``|w_e| >= b2_wmin`` (kernels/estimators/mras.py; its hysteresis below is
+    the held state's, which the steady state does not reach from above)."""
+    return (c.get("b2", 0.0) > 0.0) & (np.abs(w_e) >= c.get("b2_wmin", 0.0))

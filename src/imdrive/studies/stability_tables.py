@@ -28,8 +28,9 @@ BISECTION_STEPS = 12
 
 
 def _sensorless(overrides=()) -> Scenario:
-    # the maps linearise the type-1 MRAS; at a 10 Hz bandwidth the machine-dependent default
-    # would turn the type-2 adaptation on (config/perunit.py mras_ramp_lag_pu)
+    # these tables are the type-1 MRAS's (the maps linearise the type-2 one too since round 4);
+    # at a 10 Hz bandwidth the machine-dependent default would turn the type-2 adaptation on
+    # (config/perunit.py mras_ramp_lag_pu)
     return Scenario.read("sensorless", ["mras.acceleration_tracking=false", *overrides])
 
 
