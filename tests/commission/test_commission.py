@@ -90,6 +90,25 @@ def test_random_plants_are_identified_within_the_goals():
             assert abs(row[q]) <= goal / 100.0, (row["machine"], q, row[q])
 
 
+@pytest.mark.slow
+def test_a_level_that_has_not_settled_is_measured_longer():
+    """Krause 50 hp's plant 1 of the docs' accuracy table: its 0.8 x rated flux level moved L1
+    3.6 % between the two halves of a 10 T2 dwell and the commissioning stopped (exit 6); the
+    test now runs again with twice the dwell and identifies within the goals."""
+    import imdrive.commission.noload as nl
+    from imdrive.commission.accuracy import GOALS, accuracy_row
+
+    row = accuracy_row("krause-50hp", 1)
+    assert not row["failed"], row["failed"]
+    for q, goal in GOALS.items():
+        assert abs(row[q]) <= goal / 100.0, (q, row[q])
+    doublings, nl.DWELL_DOUBLINGS = nl.DWELL_DOUBLINGS, 0
+    try:
+        assert "did not settle in" in accuracy_row("krause-50hp", 1)["failed"]
+    finally:
+        nl.DWELL_DOUBLINGS = doublings
+
+
 # --- what the drive knows: the nameplate, never the plant ---------------------------------
 
 
