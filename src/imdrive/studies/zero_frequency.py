@@ -102,18 +102,31 @@ def run(machines=MACHINES, frequencies=F_S_HZ, ratios=R2_RATIOS) -> pd.DataFrame
 def markdown_lines(df: pd.DataFrame) -> list[str]:
     """The table: per machine and stator frequency, the speed reference and, per drive, the
     runs converged / not converged / lost over the starting R2_hat; for each drive of
-    :data:`R2_DRIVES` the R2_hat error at the end, lowest to highest."""
+    :data:`R2_DRIVES` the R2_hat error at the end, lowest to highest; ``g`` of eq. (1)
+    (:func:`predicted_sensitivity`), and below the table, per drive that tracks R2, how many
+    of its runs outside "converged" are at points where eq. (1) puts a 1 % R1_hat error
+    beyond the R2 tolerance (such a run's status says "R2 weakly observable here",
+    :func:`imdrive.run.status.r1_note`, from its own final operating point)."""
+    from imdrive.analysis.observability import R1_UNCERTAINTY
+    from imdrive.run.status import R2_TOLERANCE
+
     drives = list(dict.fromkeys(df["drive"]))
     r2_drives = [d for d in R2_DRIVES if d in drives]
-    head = "| machine | f_s, Hz | speed, rpm (% rated) | " + " | ".join(
+    g_of = {
+        key: predicted_sensitivity(*key)
+        for key in dict.fromkeys(zip(df["machine"], df["f_s_target_Hz"], strict=True))
+    }
+    head = "| machine | f_s, Hz | speed, rpm (% rated) | g, eq. (1) | " + " | ".join(
         f"{d}: converged / not / lost" for d in drives
     )
     head += "".join(f" | {d}: R̂2 error at the end, %" for d in r2_drives)
     lines = [head + " |"]
-    lines.append("|---|---|---|" + "---|" * (len(drives) + len(r2_drives)))
+    lines.append("|---|---|---|---|" + "---|" * (len(drives) + len(r2_drives)))
     for (m, f), g in df.groupby(["machine", "f_s_target_Hz"], sort=False):
         n, rated = float(g["speed_rpm"].iloc[0]), float(g["rated_speed_rpm"].iloc[0])
+        gp = g_of[m, f]
         cells = [m, f"{f:+.2f}", f"{n:.1f} ({100 * n / rated:.1f} %)"]
+        cells.append(f"{gp:.2f}" if math.isfinite(gp) else "∞")
         for d in drives:
             v = g[g["drive"] == d]["verdict"]
             c, nc, lost = ((v == k).sum() for k in ("converged", "not converged", "lost"))
@@ -122,6 +135,19 @@ def markdown_lines(df: pd.DataFrame) -> list[str]:
             r2 = g[g["drive"] == d]["R2_error_pct"]
             cells.append(f"{r2.min():+.1f} … {r2.max():+.1f}" if len(r2) else "–")
         lines.append("| " + " | ".join(cells) + " |")
+    noted = [
+        g_of[k] * R1_UNCERTAINTY > R2_TOLERANCE
+        for k in zip(df["machine"], df["f_s_target_Hz"], strict=True)
+    ]
+    df = df.assign(noted=noted)
+    lines.append("")
+    for d in r2_drives:  # (a drive that does not track R2 gives no such note)
+        miss = df[(df["drive"] == d) & (df["verdict"] != "converged")]
+        lines.append(
+            f'- `{d}`: {int(miss["noted"].sum())} of its {len(miss)} runs outside "converged" '
+            f"are at points where g × {100 * R1_UNCERTAINTY:g} % > {100 * R2_TOLERANCE:g} % "
+            '(such a run\'s status says "R2 weakly observable here").'
+        )
     return lines
 
 
