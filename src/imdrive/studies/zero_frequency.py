@@ -105,8 +105,9 @@ def markdown_lines(df: pd.DataFrame) -> list[str]:
     :data:`R2_DRIVES` the R2_hat error at the end, lowest to highest; ``g`` of eq. (1)
     (:func:`predicted_sensitivity`), and below the table, per drive that tracks R2, how many
     of its runs outside "converged" are at points where eq. (1) puts a 1 % R1_hat error
-    beyond the R2 tolerance (such a run's status says "R2 weakly observable here",
-    :func:`imdrive.run.status.r1_note`, from its own final operating point)."""
+    beyond the R2 tolerance (a run's status says "R2 weakly observable here",
+    :func:`imdrive.run.status.r1_note`, from its own final operating point, or that it lost
+    control near zero stator frequency, :func:`imdrive.run.status.low_frequency_note`)."""
     from imdrive.analysis.observability import R1_UNCERTAINTY
     from imdrive.run.status import R2_TOLERANCE
 
@@ -146,7 +147,8 @@ def markdown_lines(df: pd.DataFrame) -> list[str]:
         lines.append(
             f'- `{d}`: {int(miss["noted"].sum())} of its {len(miss)} runs outside "converged" '
             f"are at points where g × {100 * R1_UNCERTAINTY:g} % > {100 * R2_TOLERANCE:g} % "
-            '(such a run\'s status says "R2 weakly observable here").'
+            "(R2 weakly observable there: a run's status says so, or that it lost control "
+            "near zero stator frequency)."
         )
     return lines
 
