@@ -29,6 +29,19 @@ def test_predicted_sensitivity_is_the_voltage_models_flux_error():
     assert r2_r1_sensitivity(R1, M, L2, abs(i_dq), 0.0, psi) == math.inf
 
 
+def test_the_status_reads_no_flux_as_no_figure():
+    from imdrive.run.status import run_status
+
+    m = {k: None for k in ("speed_error_pu_slip", "speed_tolerance_rpm", "verdict", "verdict_ok")}
+    m |= {"verdict_text": "", "verdict_at_s": None, "R2_held_pct": 0.0, "R2_held_since_s": None}
+    m |= {"R2_held_causes": None, "R2_held_end_causes": None}
+    for g, want in ((math.nan, None), (math.inf, "inf"), (3.5, 3.5)):
+        v = run_status(m, {}, g)
+        assert v["R2_R1_sensitivity"] == want
+        assert (v["R2_R1_note"] is None) is (want is None)
+    assert math.isnan(r2_r1_sensitivity(0.4, 0.07, 0.072, 10.0, 3.0, 0.0))  # no flux
+
+
 def test_the_note_speaks_where_a_1_percent_R1_error_exceeds_the_tolerance():
     edge = R2_TOLERANCE / R1_UNCERTAINTY
     assert r1_note(None) is None and r1_note(0.99 * edge) is None

@@ -459,6 +459,8 @@ def run_status(m: dict, shares: dict[str, float] | None = None, g_R1: float | No
     got["R2_held_by_cause_pct"] = shares if _finite(m["R2_held_pct"]) else None
     got["R2_held_note"] = held_note(m["R2_held_pct"], shares)
     got["R2_tolerance_pct"] = 100.0 * R2_TOLERANCE
+    if g_R1 is not None and math.isnan(g_R1):
+        g_R1 = None  # no flux to read it from
     got["R2_R1_sensitivity"] = g_R1 if g_R1 is None or math.isfinite(g_R1) else "inf"
     got["R2_R1_note"] = r1_note(g_R1)
     since = m["R2_held_since_s"]
