@@ -73,3 +73,23 @@ def test_the_map_agrees_with_the_time_domain_at_the_rated_point_of_each_machine(
         ok = table[table["status"] == "ok"]
         assert len(ok) >= 1, machine
         assert (ok["stable"] == ok["sim_stable"]).all(), (machine, ok)
+
+
+def test_the_map_says_what_its_voltage_limit_means_with_field_weakening():
+    """Above base speed a drive with field weakening reaches what the map calls
+    ``voltage_limit`` (it maps the loop at the reference flux); the map says so, and says
+    nothing for a drive without field weakening."""
+    from imdrive.stability.maps import stability_map
+
+    for fw, noted in ((True, True), (False, False)):
+        sc = Scenario.read(
+            "sensorless",
+            ['machine.preset="krause-50hp"', f"control.field_weakening={str(fw).lower()}"],
+        )
+        rp = rated_point(sc.machine)
+        m = stability_map(sc, [0.5 * rp.speed_rpm, 1.5 * rp.speed_rpm], [0.5 * rp.torque_Nm])
+        assert (m["status"] == "voltage_limit").any()
+        note = m.attrs["note"]
+        assert (note is not None) is noted
+        if noted:
+            assert "field_weakening" in note and "does not linearise" in note

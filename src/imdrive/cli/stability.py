@@ -125,6 +125,8 @@ def _cmd_stability(args) -> int:
         for name, over in (("stability_R1.png", over_r1), ("stability_R2.png", over_r2)):
             if over:
                 plot_overlay({"as configured": base, **over}, staging / name)
+    if base.attrs.get("note"):  # with -q too: it says what part of the map means
+        print(f"imdrive: {base.attrs['note']}", file=sys.stderr)
     if not args.quiet:
         ok = base["status"] == "ok"
         print(

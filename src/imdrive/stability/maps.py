@@ -133,7 +133,26 @@ def stability_map(
         }
     )
     df.attrs["Ts_s"] = ops.Ts
+    df.attrs["note"] = field_weakening_note(scenario, df)
     return df
+
+
+def field_weakening_note(scenario: Scenario, df) -> str | None:
+    """What the map's ``voltage_limit`` points mean for a drive with field weakening
+    (``control.field_weakening``, on by default where the speed reaches the inverter's voltage
+    at rated torque): it reaches them in simulation with a lowered flux, which the map does
+    not linearise (its reduced state holds the loop at the reference flux). None where the
+    drive has no field weakening or the map no such point."""
+    from imdrive.config.field_weakening import field_weakening_on
+
+    n = int((df["status"] == "voltage_limit").sum())
+    if not n or not field_weakening_on(scenario):
+        return None
+    return (
+        f"{n} point(s) need more than the inverter's voltage at the reference flux "
+        "(voltage_limit): with control.field_weakening the drive reaches them in simulation "
+        "with a lowered flux, which the map does not linearise"
+    )
 
 
 def boundary_neighbours(stable: np.ndarray) -> np.ndarray:
