@@ -125,7 +125,7 @@ def _initial_state(c: dict, Ts: float, iq, w_m, w_ref) -> np.ndarray:
     z[:, 20] = w_r_hat
     run = second_integrator_runs(c, w_e)  # type 2: the PI's output 0, the estimate its own
     z[run, 19] = 0.0
-    z[run, 21] = w_r_hat[run] / c["b2"] if np.ndim(w_r_hat) else w_r_hat / c["b2"]
+    z[run, 21] = np.broadcast_to(w_r_hat, (n,))[run] / max(c.get("b2", 0.0), 1e-300)
     return z
 
 

@@ -109,7 +109,7 @@ def markdown_lines(df: pd.DataFrame) -> list[str]:
     :func:`imdrive.run.status.r1_note`, from its own final operating point, or that it lost
     control near zero stator frequency, :func:`imdrive.run.status.low_frequency_note`)."""
     from imdrive.analysis.observability import R1_UNCERTAINTY
-    from imdrive.run.status import R2_TOLERANCE
+    from imdrive.run.status import R2_TOLERANCE, r1_note
 
     drives = list(dict.fromkeys(df["drive"]))
     r2_drives = [d for d in R2_DRIVES if d in drives]
@@ -136,9 +136,9 @@ def markdown_lines(df: pd.DataFrame) -> list[str]:
             r2 = g[g["drive"] == d]["R2_error_pct"]
             cells.append(f"{r2.min():+.1f} … {r2.max():+.1f}" if len(r2) else "–")
         lines.append("| " + " | ".join(cells) + " |")
+    # the run status's own criterion (r1_note), at the study's target point
     noted = [
-        g_of[k] * R1_UNCERTAINTY > R2_TOLERANCE
-        for k in zip(df["machine"], df["f_s_target_Hz"], strict=True)
+        r1_note(g_of[k]) is not None for k in zip(df["machine"], df["f_s_target_Hz"], strict=True)
     ]
     df = df.assign(noted=noted)
     lines.append("")
