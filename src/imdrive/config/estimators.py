@@ -155,12 +155,16 @@ class AfoSettings:
     """
 
     gain: Annotated[
-        Literal["regeneration", "fixed"],
+        Literal["regeneration", "scheduled", "fixed"],
         setting(
-            'observer gain: "regeneration" g2 = -rho (R̂1 + σL1 g1) L2/M, for stable '
-            'low-speed regeneration; "fixed" g1, g2 as given (g1 = g2 = 0: the plain observer)'
+            "observer gain: \"scheduled\" g2 = -rho' (R̂1 + σL1 g1) L2/M with rho' the share "
+            "the operating point needs for stable regeneration, 0 motoring, up to rho near "
+            "zero stator frequency (kernels/estimators/afo.py, scheduled_rho; the default "
+            "since 2026-11-29: on the realistic drive at 45-100 rpm the constant gain lost "
+            'control regenerating the rated torque at 70 rpm); "regeneration" the same with '
+            'rho throughout; "fixed" g1, g2 as given (g1 = g2 = 0: the plain observer)'
         ),
-    ] = "regeneration"
+    ] = "scheduled"
     rho: Annotated[
         Float,
         setting(
@@ -255,7 +259,7 @@ class AfoSettings:
             sc.flux_injection.amplitude,
             2 * math.pi * flux_injection_frequency_Hz(sc),
         )
-        regen = self.gain == "regeneration"
+        regen = self.gain in ("regeneration", "scheduled")
         g2 = self.g2_ohm
         if regen:
             g2 = afo_regeneration_gain(
@@ -264,7 +268,7 @@ class AfoSettings:
         Kp = self.Kp if self.Kp is not None else Kp
         Ki = self.Ki if self.Ki is not None else Ki
         params = dict(
-            gain_mode=1 if regen else 0,
+            gain_mode={"regeneration": 1, "scheduled": 2}.get(self.gain, 0),
             rho=self.rho,
             g1=self.g1_per_s,
             g2=self.g2_ohm,

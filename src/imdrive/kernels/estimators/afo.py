@@ -39,8 +39,10 @@ zero stator frequency (the flux equation becomes the pure voltage model); ``rho 
 some damping and shrinks the unstable band tenfold
 (:func:`imdrive.design.estimators.afo_regeneration_gain`). The closed form is derived in this
 project, not Hinkkanen & Luomi's published expression; its linearised stability (error
-dynamics with the speed adaptation) is checked by a test. ``gain_mode = 0`` uses ``g1``,
-``g2`` as given.
+dynamics with the speed adaptation) is checked by a test. ``gain_mode = 2`` (the default)
+schedules ``rho`` with the operating point (:func:`scheduled_rho`): no more than the band's
+edge at the observer's stator frequency needs, so 0 in motoring, where the plain observer is
+stable and damps best. ``gain_mode = 0`` uses ``g1``, ``g2`` as given.
 
 **R1 adaptation** (Kubota et al. 1993, eq. 19): ``p R1_hat = -k_R1 Re(conj(e) i_hat)``.
 **R2 adaptation** (after Kubota & Matsuse 1994): ``p R2_hat = k_R2 Re(conj(e) d)`` with
@@ -67,7 +69,8 @@ from imdrive.kernels.records import c16, f8, i8, record_dtype
 #: Parameters (defaults from :mod:`imdrive.design.estimators`).
 AFO_PARAMS = record_dtype(
     [
-        ("gain_mode", i8),  # 0: g1, g2 as given; 1: g2 = -rho (R1_hat + sigma L1 g1)/k
+        ("gain_mode", i8),  # 0: g1, g2 as given; 1: g2 = -rho (R1_hat + sigma L1 g1) L2/M;
+        # 2: the same with rho scheduled by the operating point (scheduled_rho)
         ("rho", f8),  # share of the regeneration gain (gain_mode 1), 0..1
         ("g1", f8),  # current-equation gain, 1/s
         ("g2", f8),  # flux-equation gain, ohm (gain_mode 0)
@@ -105,12 +108,60 @@ def _deriv(v, i, lam, w, R1, R2, M, L2, sigma_L1, corr_i, corr_l):
     return di, dl
 
 
+#: The scheduled gain's margin (``gain_mode = 2``): the plain observer's unstable band is
+#: shrunk until its edge lies at ``1/SCHEDULE_MARGIN`` of the stator frequency the observer runs
+#: at. Measured on the realistic drive (docs/estimators.md's low-speed grid, 15 points): 2 and 4
+#: lost control at 70 rpm regenerating the rated torque (-0.3 Hz), 8 held every point (14 within
+#: 3 rpm), 16 and larger moved that point and 45 rpm regenerating 6 N m further off (+50 ... +89
+#: and -2.7 ... -6.4 rpm); on the ideal drive's zero-frequency study 4 and 8 alike.
+SCHEDULE_MARGIN = 8.0
+
+
 @njit(cache=True)
-def afo_gain(p, m):
+def scheduled_rho(p, m, s):
+    """The share ``rho`` the operating point needs (``gain_mode = 2``), capped at ``p.rho``.
+
+    With ``g2 = -rho R' L2/M`` (``R' = R1_hat + sigma L1 g1``) the steady-state speed sensitivity
+    keeps the sign of ``w_e`` where ``w_e^2 (A + rho R') + w_e w_s R' (1 - rho) > 0``, ``A =
+    sigma L1/T2 + k^2 R2`` (the module docstring's ``Im D``); ``rho`` is the smallest value
+    that holds this at ``w_e/SCHEDULE_MARGIN``, so 0 in motoring and without load, rising
+    to ``p.rho`` as a regenerating drive nears zero stator frequency. ``w_s`` and ``w_e`` are
+    the observer's own: the current model's slip ``(M/T2) Im(conj(lam) i)/|lam|^2`` and
+    ``w_r_hat + w_s``.
+
+    Why: ``rho`` near 1 makes the flux equation nearly the open voltage model, whose error
+    mode the observer then barely damps; on the realistic drive the constant gain
+    (``gain_mode = 1``) lost control at 70 rpm regenerating the rated torque and ended 4.5 rpm
+    off at 45 rpm regenerating, which the scheduled gain holds within 3 rpm
+    (docs/estimators.md).
+    """
+    M, L1, L2, sigma_L1 = model_inductances(m)
+    lam = s.lam_ab
+    l2 = lam.real * lam.real + lam.imag * lam.imag
+    if l2 <= 0.0:
+        return p.rho
+    i = s.i_hat_ab
+    T2 = L2 / m.R2_hat
+    w_s = (M / T2) * (lam.real * i.imag - lam.imag * i.real) / l2
+    w_e = (s.w_r_hat + w_s) / SCHEDULE_MARGIN
+    k = M / L2
+    R_p = m.R1_hat + sigma_L1 * p.g1
+    A = sigma_L1 / T2 + k * k * m.R2_hat
+    den = R_p * (w_e * w_e - w_e * w_s)
+    if den <= 0.0:  # w_e = 0, or motoring with w_e w_s >= w_e^2: no band
+        return p.rho if w_e == 0.0 and w_s != 0.0 else 0.0
+    r = -(w_e * w_e * A + w_e * w_s * R_p) / den
+    return min(max(r, 0.0), p.rho)
+
+
+@njit(cache=True)
+def afo_gain(p, m, s):
     """``(g1, g2)`` in use: 1/s and ohm (see the module docstring)."""
     M, L1, L2, sigma_L1 = model_inductances(m)
     if p.gain_mode == 1:
         return p.g1, -p.rho * (m.R1_hat + sigma_L1 * p.g1) * L2 / M
+    if p.gain_mode == 2:
+        return p.g1, -scheduled_rho(p, m, s) * (m.R1_hat + sigma_L1 * p.g1) * L2 / M
     return p.g1, p.g2
 
 
@@ -141,7 +192,7 @@ def afo_step(p, m, s, v_prev_alpha, v_prev_beta, i_alpha, i_beta, Ts):
         s.R1_0 = m.R1_hat
         s.R2_0 = m.R2_hat
     M, L1, L2, sigma_L1 = model_inductances(m)
-    g1, g2 = afo_gain(p, m)
+    g1, g2 = afo_gain(p, m, s)
     v = complex(v_prev_alpha, v_prev_beta)
     i0 = s.i_hat_ab
     l0 = s.lam_ab
