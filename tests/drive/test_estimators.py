@@ -6,6 +6,9 @@ published or analytic property each.
   outputs for two R1_hat, and the closed loop with R1_hat = 1.3 R1 stays accurate;
 * the full-order observer with the regeneration gain is stable (linearised error dynamics with
   the speed adaptation) at a low-speed regenerating point where the plain one is not;
+* the scheduled gain (the default) is 0 motoring and without load and, regenerating, exactly
+  what puts the unstable band's edge at 1/8 of the stator frequency; it keeps the linearised
+  error dynamics stable there;
 * the EKF's R2 converges under excitation and its covariance shrinks.
 """
 
@@ -23,6 +26,12 @@ from imdrive.design.estimators import (
     default_afo_gains,
 )
 from imdrive.kernels.engine import run_drive
+from imdrive.kernels.estimators.afo import (
+    AFO_PARAMS,
+    AFO_STATE,
+    SCHEDULE_MARGIN,
+    scheduled_rho,
+)
 from imdrive.kernels.estimators.reactive_mras import (
     REACTIVE_MRAS_PARAMS,
     REACTIVE_MRAS_STATE,
@@ -153,6 +162,48 @@ def test_afo_dc_sensitivity_keeps_the_sign_of_the_stator_frequency_with_rho_1():
         for w_s in (-8.0, -1.0, 1.0, 8.0):
             assert afo_dc_sensitivity(R1, R2, sL1, M, L2, w_e, w_s, 0.0, g2) > 0
     assert afo_dc_sensitivity(R1, R2, sL1, M, L2, 2.0, -8.0) < 0  # plain: wrong sign
+
+
+def _scheduled(w_e, w_s, rho_max=0.9):
+    """scheduled_rho at the steady state (w_e, w_s) of M_, the observer exact there."""
+    R1, R2, Ll1, Ll2, M = M_.values()
+    L2 = Ll2 + M
+    psi = 0.75
+    m = new_record(MODEL_STATE, R1_hat=R1, R2_hat=R2, Ll1_hat=Ll1, Ll2_hat=Ll2, M_hat=M)[0]
+    p = new_record(AFO_PARAMS, gain_mode=2, rho=rho_max)[0]
+    s = np.zeros(1, dtype=AFO_STATE)[0]
+    # rotor flux on the real axis, stator current from the flux equation's steady state
+    s["lam_ab"] = complex(psi, 0.0)
+    s["i_hat_ab"] = (1.0 / (L2 / R2) + 1j * w_s) * psi / (M * R2 / L2)
+    s["w_r_hat"] = w_e - w_s
+    return scheduled_rho(p, m, s)
+
+
+def test_afo_scheduled_gain_follows_the_unstable_band():
+    R1, R2, Ll1, Ll2, M = M_.values()
+    L2 = Ll2 + M
+    sL1 = Ll1 + M - M * M / L2
+    for w_e in (1.0, 5.0, 50.0, 300.0):  # motoring, both directions, and without load
+        for w_s in (0.0, 3.0, 6.0):
+            assert _scheduled(w_e, w_s) == 0.0
+            assert _scheduled(-w_e, -w_s) == 0.0
+    band = 0
+    for w_s in (-1.0, -3.0, -6.0):  # regenerating
+        for w_e in (0.5, 2.0, 5.0, 10.0, 40.0):
+            rho = _scheduled(w_e, w_s)
+            assert rho == pytest.approx(_scheduled(-w_e, -w_s), abs=1e-12)
+            g2 = afo_regeneration_gain(R1, sL1, M, L2, rho=rho)
+            edge = w_e / SCHEDULE_MARGIN
+            if 0.0 < rho < 0.9:  # the band's edge exactly at w_e/8 (design's own sensitivity)
+                band += 1
+                s_edge = afo_dc_sensitivity(R1, R2, sL1, M, L2, edge, w_s, 0.0, g2)
+                s_scale = afo_dc_sensitivity(R1, R2, sL1, M, L2, w_e, w_s, 0.0, g2)
+                assert abs(s_edge) < 1e-9 * abs(s_scale)
+            assert afo_dc_sensitivity(R1, R2, sL1, M, L2, w_e, w_s, 0.0, g2) > 0
+            assert max(_afo_eigs(w_e, w_s, regen=True, rho=rho).real) < 0
+    assert band >= 5  # points between the two ends were checked
+    assert _scheduled(300.0, -3.0) == 0.0  # well above the band, regenerating
+    assert _scheduled(0.2, -6.0) == 0.9  # the cap near zero stator frequency
 
 
 # -- the EKF's R2 --------------------------------------------------------------------------

@@ -9,7 +9,12 @@ import math
 import numpy as np
 import pytest
 
-from imdrive.kernels.ifoc import CONTROL_PARAMS, commutation_ripple, dead_time_feedforward
+from imdrive.kernels.ifoc import (
+    CONTROL_PARAMS,
+    _bridge_loss_sign,
+    commutation_ripple,
+    dead_time_feedforward,
+)
 from imdrive.kernels.inverter import clarke, duty_cycles, phase_values
 from imdrive.kernels.records import new_record
 
@@ -92,4 +97,41 @@ def test_far_from_zero_the_shapes_agree_to_the_bit():
     args = (3.0, 6.0, 19.6, 0.0)
     assert dead_time_feedforward(_params(VDC * TS / SIGMA_L1), *args) == dead_time_feedforward(
         _params(0.0), *args
+    )
+
+
+def _table_params(ripple, i_nodes, u_nodes):
+    p = _params(ripple)
+    p["dtc_u"] = 0.0  # the identified table replaces the assumed dead time
+    p["ie_n"] = len(i_nodes)
+    p["ie_i"][: len(i_nodes)] = i_nodes
+    p["ie_u"][: len(u_nodes)] = u_nodes
+    return p
+
+
+@pytest.mark.parametrize("i_a", [0.12, 0.0, -0.01, 0.03, -0.2, 0.5, 3.0])
+def test_an_identified_table_keeps_the_bridge_loss_shape(i_a):
+    # a commissioned drive: the ideal table (5 V reached at the 0.2 A band) on the switching
+    # bridge gives the ripple's shape with the table's magnitude, exactly the sign model's
+    args = (i_a, 6.0, 19.6, 0.0)
+    with_table = _table_params(VDC * TS / SIGMA_L1, [0.0, 0.2, 40.0], [0.0, 5.0, 5.0])
+    assert dead_time_feedforward(with_table, *args) == pytest.approx(
+        dead_time_feedforward(_params(VDC * TS / SIGMA_L1), *args), abs=1e-12
+    )
+    # a measured table whose loss grows with the current (an on-state slope): the magnitude
+    # is the table's at the phase current, the shape the ripple's
+    grows = _table_params(VDC * TS / SIGMA_L1, [0.0, 0.1, 10.0], [0.0, 4.0, 6.0])
+    got = dead_time_feedforward(grows, *args)
+    ia, ib, ic = phase_values(i_a, 6.0)
+    r = commutation_ripple(19.6, 0.0, VDC, VDC * TS / SIGMA_L1)
+    assert r[0] > 0.1  # phase a's ripple exceeds the table's first node
+    mags = [np.interp(max(abs(x), 0.1), [0.0, 0.1, 10.0], [0.0, 4.0, 6.0]) for x in (ia, ib, ic)]
+    signs = [_bridge_loss_sign(x, rx, 0.2) for x, rx in zip((ia, ib, ic), r, strict=True)]
+    want = clarke(*(sg * mg for sg, mg in zip(signs, mags, strict=True)))
+    assert got == pytest.approx(want, abs=1e-9)
+    # without the ripple (the average inverter model) the table alone, as before
+    plain = _table_params(0.0, [0.0, 0.2, 40.0], [0.0, 5.0, 5.0])
+    share = min(max(ia / 0.2, -1.0), 1.0)
+    assert dead_time_feedforward(plain, *args) == pytest.approx(
+        clarke(share * 5.0, math.copysign(5.0, ib), math.copysign(5.0, ic)), abs=1e-12
     )
