@@ -231,6 +231,10 @@ def test_no_low_frequency_note_where_it_explains_nothing():
     row = _row(off, R2_hat_final_ohm=1.2 * off.machine.R2_ohm)
     assert low_frequency_note(off, row, lost=False) == ""
     assert "near zero stator frequency" in low_frequency_note(off, row, lost=True)
+    # with R2_hat right the speed error is the estimator's: said, lost or not
+    exact = _row(off, R2_hat_final_ohm=off.machine.R2_ohm, speed_error_rpm=40.0)
+    assert "near zero stator frequency" in low_frequency_note(off, exact, lost=False)
+    assert "near zero stator frequency" in verdict(off, exact)["verdict_text"]
     # a measured speed is observable at any stator frequency
     enc = _regenerating("paper-table-iv", 0.05, feedback="measured")
     assert low_frequency_note(enc, _row(enc), lost=True) == ""

@@ -36,8 +36,8 @@ over, or the drive was not still) says so in ``verdict_text`` whatever its verdi
 the second level's window was too short) says so too (:data:`R1_ONE_LEVEL`): R̂1 then holds
 the inverter's residual voltage over the current, as the one-level test's does.
 
-A sensorless run that failed (lost control or diverged, or its compensator did not track R2)
-and whose steady state at the end runs within :data:`LOW_FREQUENCY_PU` of the rated frequency
+A sensorless run that failed (lost control or diverged, its compensator did not track R2, or
+it missed its speed with R2_hat right) and whose steady state at the end runs within :data:`LOW_FREQUENCY_PU` of the rated frequency
 of zero stator frequency says so last in ``verdict_text`` (:func:`low_frequency_note`): at
 0 Hz the speed and R2 are not observable from the fundamental-frequency signals, and beside
 it the MRAS loses its stability margin.
@@ -114,6 +114,14 @@ R1_ONE_LEVEL = (
 LOW_FREQUENCY_PU = 0.02
 
 
+def _r2_exact(sc, row: dict) -> bool:
+    """Whether the run ends with R2_hat within :data:`R2_TOLERANCE` of R2 (its speed error,
+    if any, then not the detuning's)."""
+    r2_hat, r2 = row.get("R2_hat_final_ohm", math.nan), row.get("R2_final_ohm", math.nan)
+    r2 = float(r2) if _finite(r2) and float(r2) > 0.0 else sc.machine.R2_ohm
+    return _finite(r2_hat) and abs(float(r2_hat) / r2 - 1.0) <= R2_TOLERANCE
+
+
 def low_frequency_note(sc, row: dict, lost: bool) -> str:
     """``"; near zero stator frequency ..."`` for a sensorless run whose steady state at the
     end runs within :data:`LOW_FREQUENCY_PU` of the rated frequency of zero, else ``""``;
@@ -121,8 +129,11 @@ def low_frequency_note(sc, row: dict, lost: bool) -> str:
 
     The steady state is the field-oriented one (:func:`imdrive.analysis.foc_operating_point`)
     at the final speed reference, the final load (its profile, viscous and fan terms at that
-    speed) and the final ``R2_hat/R2``; only for a run that lost control or diverged, or
-    whose compensator failed (an R2 left detuned explains its own error). At ``f_s = 0``
+    speed) and the final ``R2_hat/R2``; only for a run that lost control or diverged, whose
+    compensator failed, or whose R2_hat is right (an R2 left detuned explains its own error;
+    with R2_hat right, a speed error near 0 Hz is the estimator's: the adaptive observer 104
+    rpm off at 70 rpm regenerating the rated torque on the realistic drive, -0.3 Hz,
+    docs/estimators.md). At ``f_s = 0``
     neither the speed nor R2 can be told from the fundamental-frequency voltages and currents
     (Holtz, "Sensorless control of induction motor drives", Proc. IEEE 90(8), 2002), and
     beside it the MRAS loses its stability where the adaptive full-order observer with its
@@ -131,8 +142,8 @@ def low_frequency_note(sc, row: dict, lost: bool) -> str:
     """
     if sc.control.speed_feedback == "measured" or sc.drive.mode != "vector":
         return ""
-    if not (lost or sc.compensator.enabled):  # a detuned drive's error is the detuning's
-        return ""
+    if not (lost or sc.compensator.enabled or _r2_exact(sc, row)):
+        return ""  # a detuned drive's error is the detuning's
     from imdrive.analysis.foc import foc_operating_point
 
     try:

@@ -133,7 +133,13 @@ def scheduled_rho(p, m, s):
     mode the observer then barely damps; on the realistic drive the constant gain
     (``gain_mode = 1``) lost control at 70 rpm regenerating the rated torque and ended 4.5 rpm
     off at 45 rpm regenerating, which the scheduled gain holds within 3 rpm
-    (docs/estimators.md).
+    (docs/estimators.md). Tried and not kept: ``rho`` rising with the stator frequency as well
+    (from 0.1 to 0.2 of the rated, whatever the load, for the voltage model's independence of
+    R2_hat at speed): on the machine envelope it held Krause 3 and 50 hp at half speed from
+    R2_hat(0) = 1.3 R2 (three runs that lose control without it) but moved four of the Aalto
+    machine's half-speed runs from 1.2 and 1.3 R2 out of the converged column (325 of 336
+    converged either way), and the observer with R1 adaptation lost control in 4 of the 10
+    cases of the realistic drive's bench (none without it).
     """
     M, L1, L2, sigma_L1 = model_inductances(m)
     lam = s.lam_ab
