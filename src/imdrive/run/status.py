@@ -37,10 +37,10 @@ the second level's window was too short) says so too (:data:`R1_ONE_LEVEL`): R̂
 the inverter's residual voltage over the current, as the one-level test's does.
 
 A sensorless run that failed (lost control or diverged, its compensator did not track R2, or
-it missed its speed with R2_hat right) and whose steady state at the end runs within :data:`LOW_FREQUENCY_PU` of the rated frequency
-of zero stator frequency says so last in ``verdict_text`` (:func:`low_frequency_note`): at
-0 Hz the speed and R2 are not observable from the fundamental-frequency signals, and beside
-it the MRAS loses its stability margin.
+it missed its speed with R2_hat right) and whose steady state at the end runs within
+:data:`LOW_FREQUENCY_PU` of the rated frequency of zero stator frequency says so last in
+``verdict_text`` (:func:`low_frequency_note`): at 0 Hz the speed and R2 are not observable
+from the fundamental-frequency signals, and beside it the MRAS loses its stability margin.
 
 The failures are listed in time order (a loss of control before the divergence it led to, a
 hold before the R̂2 error it left at the end) and the verdict is the first; ``verdict_text``
