@@ -131,7 +131,9 @@ def test_gating_mask_reads_as_reasons():
     assert held_reasons(1 | 32) == ["voltage limit", "gated transient"]
     assert held_reasons(2) == ["gated transient"]
     assert held_reasons(16) == ["gated transient"]
-    assert held_reasons(64 | 8) == ["stator frequency band", "gating bit 64"]
+    assert held_reasons(64 | 16) == ["injection start"]  # the Kalman law's start, settling
+    assert held_reasons(64 | 8) == ["stator frequency band", "injection start"]
+    assert held_reasons(128 | 8) == ["stator frequency band", "gating bit 128"]
     assert held_reasons(NAN) == [] and held_reasons(0) == []
 
 

@@ -16,8 +16,11 @@ the period that ends
 * ``2`` the mean iq* changed from the previous period by more than ``p.gate_diq`` (A): a load
   step or removal;
 * ``4`` the voltage reached ``p.gate_v`` times the inverter's limit ``Vdc/sqrt 3``;
-* ``8`` the injection frequency was switched (the flux response to the new sinusoid settles),
-  or, with the Kalman law, the injection started;
+* ``8`` the injection frequency was switched (the flux response to the new sinusoid settles);
+* ``64`` with the Kalman law, the injection started (its first windows hold a fraction of a
+  period and the flux's start-up transient); until 2026-11-29 this was bit 8, and the status
+  named the stator frequency band as the cause (a 22 kW catalogue motor at 1000 rpm: "stator
+  frequency near the injection frequency" at 34 Hz against a 0.35 Hz injection);
 * ``16`` within ``p.gate_hold`` periods after any of the above (the flux and the MRAS settle);
 * ``32`` the injection's amplitude was backed off below half (voltage headroom, field
   weakening: :func:`imdrive.kernels.compensator_range.injection_headroom`); a smaller
@@ -142,7 +145,7 @@ def _gate_decide(p, s, w_e):
         # and the flux's start-up transient (measured on injection-fig6: the first two
         # decisions stepped R2_hat 0.5 % the wrong way); settle as after a frequency switch
         s.inj_new = False
-        flags |= 8
+        flags |= 64
     if flags != 0:
         s.g_hold = p.gate_hold
     elif s.g_hold > 0.0:

@@ -48,8 +48,9 @@ names every one. Why R̂2 was held comes from the compensator's gating mask (the
 ``comp_frozen_flags``, :mod:`imdrive.kernels.compensator`), grouped as a drive engineer reads
 it (:data:`HELD_CAUSES`): the voltage limit (the injection backed off for headroom or in field
 weakening, or the voltage at the inverter's limit), the stator frequency band (the stator
-frequency near the injection's, where the injected signal is not detectable), or a gated
-transient (a speed or load change, and the settling after it).
+frequency near the injection's, where the injected signal is not detectable), the injection's
+start (the model-based law waits for the flux response to settle), or a gated transient (a
+speed or load change, and the settling after it).
 
 Speed accuracy is also given in per-unit of the machine's rated slip speed
 (``speed_error_pu_slip``): the slip error a wrong R̂2 causes scales with it, so the same
@@ -79,6 +80,7 @@ HELD_CAUSES = {
     32: ("voltage limit", "injection backed off for voltage headroom / field weakening"),
     4: ("voltage limit", "voltage at the gating's limit"),
     8: ("stator frequency band", "stator frequency near the injection frequency"),
+    64: ("injection start", "the injection started: the flux response to it settles"),
     1: ("gated transient", "speed reference or speed error moving"),
     2: ("gated transient", "load step"),
     16: ("gated transient", "settling after a gated event"),
