@@ -419,9 +419,9 @@ def dead_time_feedforward(p, i_alpha, i_beta, v_alpha=0.0, v_beta=0.0):
     replaced the ripple shape, so a commissioned drive compensated with the table's fixed
     band (the ideal table's first node, 0.2 A on Table IV): a voltage error across the
     current of 0.3-0.5 V at no load on the realistic drive at 45-100 rpm, which the adaptive
-    observer read as a speed error (lost control at 11 of 15 points of docs/estimators.md's
-    low-speed table, the EKF 3-8 rpm off at light load). With the shape: AFO, EKF and MRAS
-    within 0.4 rpm at every motoring point there.
+    observer read as a speed error (lost control at 12 of 15 points of docs/estimators.md's
+    low-speed table, the EKF 3.8-8 rpm off at light load). With the shape: AFO, EKF and MRAS
+    within 0.4 rpm at every motoring point and at no load there.
     """
     ia, ib, ic = phase_values(i_alpha, i_beta)
     if p.ie_n > 0 and p.dtc_ripple > 0.0:

@@ -111,7 +111,7 @@ def _deriv(v, i, lam, w, R1, R2, M, L2, sigma_L1, corr_i, corr_l):
 #: The scheduled gain's margin (``gain_mode = 2``): the plain observer's unstable band is
 #: shrunk until its edge lies at ``1/SCHEDULE_MARGIN`` of the stator frequency the observer runs
 #: at. Measured on the realistic drive (docs/estimators.md's low-speed grid, 15 points): 2 and 4
-#: lost control at 70 rpm regenerating the rated torque (-0.3 Hz), 8 held every point (14 within
+#: lost control at 70 rpm regenerating the rated torque (-0.3 Hz), 8 held every point (13 within
 #: 3 rpm), 16 and larger moved that point and 45 rpm regenerating 6 N m further off (+50 ... +89
 #: and -2.7 ... -6.4 rpm); on the ideal drive's zero-frequency study 4 and 8 alike.
 SCHEDULE_MARGIN = 8.0
