@@ -13,6 +13,7 @@ is used (IPython asks type-registered formatters first), so the image is never s
 from __future__ import annotations
 
 import io
+from pathlib import Path
 
 from matplotlib.figure import Figure
 
@@ -33,3 +34,18 @@ class DisplayFigure(Figure):
 def new_figure(**kwargs) -> DisplayFigure:
     """A :class:`DisplayFigure` (``Figure``'s keyword arguments: ``figsize``, ``layout``...)."""
     return DisplayFigure(**kwargs)
+
+
+def save_png(fig: Figure, path, dpi: int) -> Path:
+    """Write ``fig`` as a PNG at ``path`` by the package's output rule for one file
+    (:func:`imdrive._io.output_file`): the path checked first (a folder, a device node, a FIFO,
+    a link to nothing or a missing folder is refused with a :class:`~imdrive.errors.ConfigError`
+    naming it), a symbolic link written through, the file written under a temporary name and
+    renamed, so a failed or killed writer leaves no half-written image. Returns ``path``."""
+    from imdrive._io import output_file
+    from imdrive.errors import ConfigError
+
+    path = Path(path)
+    with output_file(path, refuse=lambda problem: ConfigError("out_dir", problem)) as tmp:
+        fig.savefig(tmp, dpi=dpi, format="png")
+    return path

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from imdrive._figure import new_figure
+from imdrive._figure import new_figure, save_png
 
 
 def save_figures(res, out) -> list[Path]:
@@ -70,5 +70,4 @@ def save_figures(res, out) -> list[Path]:
 
 
 def _save(fig, path: Path) -> Path:
-    fig.savefig(path, dpi=100)
-    return path
+    return save_png(fig, path, dpi=100)  # by the output rule for one file

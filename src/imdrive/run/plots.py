@@ -431,7 +431,12 @@ def compensation_figure(res) -> Figure:
 
 
 def save_figures(res, out_dir) -> list[Path]:
-    """Write the run's PNG figures into ``out_dir``; returns their paths."""
+    """Write the run's PNG figures into the existing folder ``out_dir``; returns their paths.
+
+    Each file by the output rule (:func:`imdrive._figure.save_png`): a path that is not a
+    file to write (a missing folder, a device node, a FIFO in the figure's place) is refused
+    with a :class:`~imdrive.errors.ConfigError` before that figure is written, and none is
+    left half-written."""
     out = Path(out_dir)
     figs = {
         "speed.png": speed_figure(res),
@@ -442,11 +447,9 @@ def save_figures(res, out_dir) -> list[Path]:
         figs["estimator.png"] = estimator_figure(res)
         if res.scenario.compensator.enabled:
             figs["compensation.png"] = compensation_figure(res)
-    paths = []
-    for name, fig in figs.items():
-        fig.savefig(out / name, dpi=110)
-        paths.append(out / name)
-    return paths
+    from imdrive._figure import save_png
+
+    return [save_png(fig, out / name, dpi=110) for name, fig in figs.items()]
 
 
 def _default_groups(res) -> list[list[str]]:
