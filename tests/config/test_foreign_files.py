@@ -101,3 +101,31 @@ def test_a_saved_run_holds_no_absolute_path_and_reruns_where_it_is_moved(tmp_pat
     rerun = json.loads((again / "summary.json").read_text())
     assert rerun["scenario"]["machine"] == summary["scenario"]["machine"]
     assert rerun["final"] == summary["final"]
+
+
+#: the foreign files that are not scenario-shaped: "[machine] of a text value" is a scenario
+#: section with a machine setting, i.e. an imdrive scenario file, whose wrong value its
+#: validation names as it would for its author
+NOT_SCENARIOS = {k: v for k, v in FOREIGN.items() if not v.startswith("[machine]")}
+
+
+@pytest.mark.parametrize("text", NOT_SCENARIOS.values(), ids=NOT_SCENARIOS.keys())
+@pytest.mark.parametrize(
+    "command",
+    [["run", "{f}", "-q"], ["show", "{f}"], ["sweep", "{sweep}", "--dry-run"]],
+    ids=["run", "show", "sweep-base"],
+)
+def test_a_scenario_path_or_sweep_base_never_prints_a_foreign_files_values(tmp_path, text, command):
+    # a received sweep file whose base names someone's credentials, or such a file given as
+    # the scenario: refused (exit 2), naming the file, not its keys or values
+    f = tmp_path / "secrets.toml"
+    f.write_text(text)
+    sweep = tmp_path / "sweep.toml"
+    sweep.write_text(f'name = "x"\nbase = "{f.name}"\n[axes]\nload_Nm = [0, 1]\n')
+    args = [a.format(f=f, sweep=sweep) for a in command]
+    out, err = io.StringIO(), io.StringIO()
+    with redirect_stdout(out), redirect_stderr(err):
+        code = main(args)
+    message = out.getvalue() + err.getvalue()
+    assert code == 2, message
+    assert SECRET not in message and "hunter2" not in message, message

@@ -38,7 +38,35 @@ def scenario_text(preset_or_path: str) -> str:
             "scenario",
             f"{_short(preset_or_path)!r} is neither a preset (see 'imdrive presets') nor a file",
         )
-    return read_user_text(preset_or_path, "scenario", MAX_TOML_BYTES, "scenario file")
+    text = read_user_text(preset_or_path, "scenario", MAX_TOML_BYTES, "scenario file")
+    _refuse_a_foreign_file(preset_or_path, text)
+    return text
+
+
+def _refuse_a_foreign_file(path, text: str) -> None:
+    """Refuse a file none of whose top-level keys is a scenario's, naming neither its keys nor
+    its values: a sweep's ``base`` or a command's scenario path may name someone's
+    credentials or another program's configuration (issue 40, class 15; as ``machine.file``,
+    :func:`imdrive.config.machine.machine_file_values`). A misspelt section is still named by
+    the validation that follows."""
+    import tomllib
+    from dataclasses import fields
+
+    from imdrive.config.scenario import Scenario
+    from imdrive.config.user_files import strange_keys
+
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError:
+        return  # the scenario's own reader reports it, with the line
+    known = {f.name for f in fields(Scenario)} - {"machine_preset"}
+    typos, n_foreign = strange_keys(list(data), known)
+    if data and n_foreign and not typos and not set(data) & known:
+        raise ConfigError(
+            "scenario",
+            f"{path} is not an imdrive scenario file: none of its {len(data)} keys is a "
+            "scenario section or setting (such as [machine], [control] or name)",
+        )
 
 
 def _short(text) -> str:
