@@ -24,8 +24,10 @@ def preset_text(name: str) -> str:
     return resources.files("imdrive.config").joinpath(f"presets/{name}.toml").read_text()
 
 
-def scenario_text(preset_or_path: str) -> str:
-    """Text of a preset by name, else of the file at that path."""
+def scenario_text(preset_or_path: str, known=None) -> str:
+    """Text of a preset by name, else of the file at that path; with ``known`` (a scenario's
+    top-level keys) a file none of whose keys is among them is refused without printing its
+    keys or values (:func:`_refuse_a_foreign_file`)."""
     if preset_or_path in preset_names():
         return preset_text(preset_or_path)
     from imdrive.config.user_files import path_form_problem, read_user_text
@@ -39,27 +41,25 @@ def scenario_text(preset_or_path: str) -> str:
             f"{_short(preset_or_path)!r} is neither a preset (see 'imdrive presets') nor a file",
         )
     text = read_user_text(preset_or_path, "scenario", MAX_TOML_BYTES, "scenario file")
-    _refuse_a_foreign_file(preset_or_path, text)
+    if known is not None:
+        _refuse_a_foreign_file(preset_or_path, text, known)
     return text
 
 
-def _refuse_a_foreign_file(path, text: str) -> None:
+def _refuse_a_foreign_file(path, text: str, known) -> None:
     """Refuse a file none of whose top-level keys is a scenario's, naming neither its keys nor
     its values: a sweep's ``base`` or a command's scenario path may name someone's
     credentials or another program's configuration (issue 40, class 15; as ``machine.file``,
     :func:`imdrive.config.machine.machine_file_values`). A misspelt section is still named by
     the validation that follows."""
     import tomllib
-    from dataclasses import fields
 
-    from imdrive.config.scenario import Scenario
     from imdrive.config.user_files import strange_keys
 
     try:
         data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError:
+    except (tomllib.TOMLDecodeError, RecursionError):
         return  # the scenario's own reader reports it, with the line
-    known = {f.name for f in fields(Scenario)} - {"machine_preset"}
     typos, n_foreign = strange_keys(list(data), known)
     if data and n_foreign and not typos and not set(data) & known:
         raise ConfigError(

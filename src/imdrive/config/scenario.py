@@ -18,7 +18,7 @@ constructors, ``dataclasses.replace``).
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import fields, replace
 from os import PathLike
 from pathlib import Path
 from typing import Annotated
@@ -501,7 +501,7 @@ class Scenario:
             apply_overrides(data, overrides)
             return cls.from_dict(data, allow_plugins=allow_plugins)
         base_dir = None if preset_or_path in preset_names() else Path(preset_or_path).parent
-        text = scenario_text(preset_or_path)
+        text = scenario_text(preset_or_path, {f.name for f in fields(cls)} - {"machine_preset"})
         return cls.from_toml(text, overrides, base_dir=base_dir, allow_plugins=allow_plugins)
 
     def with_(self, **changes) -> Scenario:

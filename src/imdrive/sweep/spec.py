@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from dataclasses import replace
+from dataclasses import fields, replace
 from importlib import resources
 from pathlib import Path
 
@@ -234,7 +234,8 @@ def _base_data(data: dict, folder: Path | None) -> dict:
     if folder is not None and not Path(base_ref).is_absolute() and lexists(folder / base_ref):
         base_ref = str(folder / base_ref)
     try:
-        base_data = parse_toml(scenario_text(base_ref), "base", base_ref)
+        keys = {f.name for f in fields(Scenario)} - {"machine_preset"}  # a foreign file: refused
+        base_data = parse_toml(scenario_text(base_ref, keys), "base", base_ref)
     except ConfigError as exc:
         raise ConfigError("base", exc.rule) from None
     if Path(base_ref).suffix == ".toml":  # a file: its plug-in paths from its folder
