@@ -37,7 +37,7 @@ from imdrive.kernels.estimators.reactive_mras import (
     REACTIVE_MRAS_STATE,
     reactive_mras_step,
 )
-from imdrive.kernels.model import MODEL_STATE
+from imdrive.kernels.model import MODEL_STATE, model_inductances
 from imdrive.kernels.records import new_record
 from imdrive.run.build import build_arrays, copy_state
 from imdrive.run.simulate import new_log, simulate
@@ -176,7 +176,8 @@ def _scheduled(w_e, w_s, rho_max=0.9):
     s["lam_ab"] = complex(psi, 0.0)
     s["i_hat_ab"] = (1.0 / (L2 / R2) + 1j * w_s) * psi / (M * R2 / L2)
     s["w_r_hat"] = w_e - w_s
-    return scheduled_rho(p, m, s)
+    M_h, _, L2_h, sL1_h = model_inductances(m)
+    return scheduled_rho(p, m, s, M_h, L2_h, sL1_h)
 
 
 def test_afo_scheduled_gain_follows_the_unstable_band():

@@ -501,7 +501,7 @@ class Scenario:
             apply_overrides(data, overrides)
             return cls.from_dict(data, allow_plugins=allow_plugins)
         base_dir = None if preset_or_path in preset_names() else Path(preset_or_path).parent
-        text = scenario_text(preset_or_path, {f.name for f in fields(cls)} - {"machine_preset"})
+        text = scenario_text(preset_or_path, FILE_KEYS)
         return cls.from_toml(text, overrides, base_dir=base_dir, allow_plugins=allow_plugins)
 
     def with_(self, **changes) -> Scenario:
@@ -596,3 +596,5 @@ _FOUR = "mras, reactive_mras, afo, ekf"
 assert Scenario.__doc__ and _FOUR in Scenario.__doc__
 Scenario.__doc__ = Scenario.__doc__.replace(_FOUR, ", ".join(package_sections() | law_sections()))
 del _FOUR
+#: a scenario file's top-level keys (a file with none of them is refused unread, presets.py)
+FILE_KEYS = frozenset(f.name for f in fields(Scenario)) - {"machine_preset"}

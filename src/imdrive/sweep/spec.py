@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from dataclasses import fields, replace
+from dataclasses import replace
 from importlib import resources
 from pathlib import Path
 
@@ -34,7 +34,7 @@ from imdrive.config.overrides import parse_toml
 from imdrive.config.pairs import set_layer
 from imdrive.config.plugins import allowing_plugins, resolve_plugin_paths
 from imdrive.config.presets import scenario_text
-from imdrive.config.scenario import Scenario
+from imdrive.config.scenario import FILE_KEYS, Scenario
 from imdrive.config.validation import check_name, slug
 from imdrive.errors import ConfigError, check_argument
 from imdrive.sweep.axes import _axes, _flatten, _heatmaps, _int
@@ -234,8 +234,7 @@ def _base_data(data: dict, folder: Path | None) -> dict:
     if folder is not None and not Path(base_ref).is_absolute() and lexists(folder / base_ref):
         base_ref = str(folder / base_ref)
     try:
-        keys = {f.name for f in fields(Scenario)} - {"machine_preset"}  # a foreign file: refused
-        base_data = parse_toml(scenario_text(base_ref, keys), "base", base_ref)
+        base_data = parse_toml(scenario_text(base_ref, FILE_KEYS), "base", base_ref)
     except ConfigError as exc:
         raise ConfigError("base", exc.rule) from None
     if Path(base_ref).suffix == ".toml":  # a file: its plug-in paths from its folder

@@ -118,7 +118,7 @@ SCHEDULE_MARGIN = 8.0
 
 
 @njit(cache=True)
-def scheduled_rho(p, m, s):
+def scheduled_rho(p, m, s, M, L2, sigma_L1):
     """The share ``rho`` the operating point needs (``gain_mode = 2``), capped at ``p.rho``.
 
     With ``g2 = -rho R' L2/M`` (``R' = R1_hat + sigma L1 g1``) the steady-state speed sensitivity
@@ -127,7 +127,7 @@ def scheduled_rho(p, m, s):
     that holds this at ``w_e/SCHEDULE_MARGIN``, so 0 in motoring and without load, rising
     to ``p.rho`` as a regenerating drive nears zero stator frequency. ``w_s`` and ``w_e`` are
     the observer's own: the current model's slip ``(M/T2) Im(conj(lam) i)/|lam|^2`` and
-    ``w_r_hat + w_s``.
+    ``w_r_hat + w_s``. ``M, L2, sigma_L1``: the model's inductances this step (H).
 
     Why: ``rho`` near 1 makes the flux equation nearly the open voltage model, whose error
     mode the observer then barely damps; on the realistic drive the constant gain
@@ -141,7 +141,6 @@ def scheduled_rho(p, m, s):
     converged either way), and the observer with R1 adaptation lost control in 4 of the 10
     cases of the realistic drive's bench (none without it).
     """
-    M, L1, L2, sigma_L1 = model_inductances(m)
     lam = s.lam_ab
     l2 = lam.real * lam.real + lam.imag * lam.imag
     if l2 <= 0.0:
@@ -161,14 +160,13 @@ def scheduled_rho(p, m, s):
 
 
 @njit(cache=True)
-def afo_gain(p, m, s):
-    """``(g1, g2)`` in use: 1/s and ohm (see the module docstring)."""
-    M, L1, L2, sigma_L1 = model_inductances(m)
-    if p.gain_mode == 1:
-        return p.g1, -p.rho * (m.R1_hat + sigma_L1 * p.g1) * L2 / M
-    if p.gain_mode == 2:
-        return p.g1, -scheduled_rho(p, m, s) * (m.R1_hat + sigma_L1 * p.g1) * L2 / M
-    return p.g1, p.g2
+def afo_gain(p, m, s, M, L2, sigma_L1):
+    """``(g1, g2)`` in use: 1/s and ohm (see the module docstring); ``M, L2, sigma_L1`` the
+    model's inductances this step, H."""
+    if p.gain_mode == 0:
+        return p.g1, p.g2
+    rho = p.rho if p.gain_mode == 1 else scheduled_rho(p, m, s, M, L2, sigma_L1)
+    return p.g1, -rho * (m.R1_hat + sigma_L1 * p.g1) * L2 / M
 
 
 @njit(cache=True)
@@ -198,7 +196,7 @@ def afo_step(p, m, s, v_prev_alpha, v_prev_beta, i_alpha, i_beta, Ts):
         s.R1_0 = m.R1_hat
         s.R2_0 = m.R2_hat
     M, L1, L2, sigma_L1 = model_inductances(m)
-    g1, g2 = afo_gain(p, m, s)
+    g1, g2 = afo_gain(p, m, s, M, L2, sigma_L1)
     v = complex(v_prev_alpha, v_prev_beta)
     i0 = s.i_hat_ab
     l0 = s.lam_ab
