@@ -272,7 +272,8 @@ def _locator_class():
         """numba cache locator for the functions of ``imdrive.kernels``: the module's folder,
         stamped with its key (a cache entry is stale exactly when the key changes)."""
 
-        def __init__(self, py_func, module: str):
+        def __init__(self, py_func, py_file: str, module: str):
+            self._py_file = py_file  # numba names it in its "cannot cache" warning
             self._lineno = py_func.__code__.co_firstlineno
             self._key = module_keys()[module]
             self._path = _used(module_folder(module))
@@ -292,7 +293,7 @@ def _locator_class():
             if module is None or module not in module_keys():
                 return None
             try:
-                return cls(py_func, module)
+                return cls(py_func, py_file, module)
             except OSError:  # not writable: numba's own locators decide
                 return None
 

@@ -140,6 +140,24 @@ def test_the_engine_caches_in_its_module_folder():
     assert where.parent == _cache.cache_root()
 
 
+def test_a_function_numba_cannot_cache_gets_numba_s_warning_not_a_crash():
+    # numba refuses to cache code with dynamic globals (a ctypes pointer, or what NUMBA_OPT=0
+    # leaves unoptimised) and names the source file in its warning: the locator must know it
+    from types import SimpleNamespace
+
+    from numba.core.errors import NumbaWarning
+
+    impl = run_drive._cache._impl
+    cres = SimpleNamespace(
+        lifted=(),
+        library=SimpleNamespace(has_dynamic_globals=True),
+        fndesc=SimpleNamespace(qualname="run_drive"),
+    )
+    with pytest.warns(NumbaWarning, match="Cannot cache compiled function"):
+        assert impl.check_cachable(cres) is False
+    assert impl.locator._py_file.endswith("engine.py")
+
+
 RUN = textwrap.dedent("""
     import sys
     from numba.core import event
