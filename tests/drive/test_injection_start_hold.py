@@ -7,9 +7,11 @@ injection)."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from imdrive.config.scenario import Scenario
 from imdrive.run.simulate import simulate
+from imdrive.run.metrics import compensator_start_s, held_shares
 from imdrive.run.status import held_reasons
 
 
@@ -24,3 +26,12 @@ def test_the_injection_start_is_its_own_cause():
     assert "injection start" in held_reasons(m["R2_held_causes"])
     assert "stator frequency band" not in held_reasons(m["R2_held_causes"])
     assert abs(m["R2_error_pct"]) < 0.1  # and R2_hat is tracked as before
+    # the settling after the start (bit 16 alone, once bit 64 has cleared) is the start's
+    # share, not a "gated transient": the load is constant after the start
+    settling = (flags == 16) & (res.signals["time_s"] > res.signals["time_s"][flags == 64][-1])
+    assert settling.any()
+    shares = held_shares(res)
+    assert "gated transient" not in shares
+    active = res.signals["time_s"] >= compensator_start_s(res)
+    held = flags[active] != 0  # every hold of this run is the start's or its settling
+    assert shares["injection start"] == pytest.approx(100.0 * held.mean())

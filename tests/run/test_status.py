@@ -7,6 +7,8 @@ from __future__ import annotations
 import json
 import math
 
+import numpy as np
+
 import pytest
 
 from imdrive.cli import main
@@ -346,3 +348,21 @@ def test_the_premagnetisation_note_says_the_standstill_test_extends_it():
     assert "premagnetised for 4 s (control.premagnetise_T2 = 3 rotor time constants)" in (
         sequence_notes(plain, {}, 20.0)
     )
+
+
+def test_a_settling_hold_belongs_to_the_event_it_follows_after_that_event_clears():
+    from imdrive.run.metrics import _settling_with_its_event
+
+    # a load step (2) then its settling, later the injection's start (64) then its settling,
+    # a voltage-limit hold (32) with its settling, and settling from the very first sample
+    flags = np.array([16, 0, 2, 16, 16, 0, 64, 16, 0, 32, 48, 16, 16, 0])
+    got = _settling_with_its_event(flags)
+    assert [held_reasons(m) for m in got[[0, 3, 4, 7, 11, 12]]] == [
+        ["gated transient"],
+        ["gated transient"],
+        ["gated transient"],
+        ["injection start"],
+        ["voltage limit"],
+        ["voltage limit"],
+    ]
+    assert (got[flags != 16] == flags[flags != 16]).all()

@@ -368,13 +368,23 @@ def held_metrics(res) -> dict:
     }
 
 
+def _settling_with_its_event(flags: np.ndarray, settling: int = 16) -> np.ndarray:
+    """Each sample's gating mask with a settling-only hold (``settling`` alone) given the bits
+    of the last event before it (the gating settles after the event's own bit clears)."""
+    event = flags & ~settling
+    last = np.maximum.accumulate(np.where(event != 0, np.arange(flags.size), -1))
+    owner = np.where(last >= 0, event[np.maximum(last, 0)], 0)
+    return np.where(flags == settling, flags | owner, flags)
+
+
 def held_shares(res) -> dict[str, float]:
     """The share of time R̂2 was held for each cause, % of the samples from the compensator's
     enable time (``t >=`` its start, :func:`compensator_start_s`), by the groups of
     :data:`imdrive.run.status.HELD_CAUSES` (a sample held for two causes counts in both; a
     settling bit, 16, counts with the event it follows, as in
-    :func:`imdrive.run.status.held_reasons`). Empty without a compensator or when R̂2 was never
-    held."""
+    :func:`imdrive.run.status.held_reasons`, also once the event's own bit has cleared: the
+    settling after the injection's start is the start's, not a transient). Empty without a
+    compensator or when R̂2 was never held."""
     from imdrive.run.status import held_reasons
 
     comp = res.scenario.compensator
@@ -382,7 +392,7 @@ def held_shares(res) -> dict[str, float]:
     if not comp.enabled or "comp_frozen_flags" not in s:
         return {}
     active = s["time_s"] >= compensator_start_s(res)
-    flags = s["comp_frozen_flags"][active].astype(np.int64)
+    flags = _settling_with_its_event(s["comp_frozen_flags"].astype(np.int64))[active]
     if not flags.size:
         return {}
     masks, counts = np.unique(flags[flags != 0], return_counts=True)
