@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from imdrive.config.scenario import Scenario
-from imdrive.run.simulate import simulate
 from imdrive.run.metrics import compensator_start_s, held_shares
+from imdrive.run.simulate import simulate
 from imdrive.run.status import held_reasons
 
 
