@@ -16,6 +16,7 @@ from imdrive.config.compensator import check_whole_injection_periods
 from imdrive.config.overrides import _to_plain
 from imdrive.config.perunit import resolve  # noqa: F401  (for callers' convenience)
 from imdrive.config.plugins import PluginSettings, module_spec_of
+from imdrive.config.r2_laws import R2_LAW_SETTINGS
 from imdrive.config.registry import ESTIMATOR_SETTINGS, package_sections
 from imdrive.config.validation import validate
 from imdrive.errors import ConfigError, ConfigWarning
@@ -34,7 +35,7 @@ VECTOR_ONLY = (
 
 def vector_only_sections() -> tuple[str, ...]:
     """The sections an open-loop drive ignores: :data:`VECTOR_ONLY` and each estimator's."""
-    from imdrive.config.r2_laws import law_sections
+    from imdrive.config.r2_laws import law_sections  # noqa: F811
 
     return (*VECTOR_ONLY, *package_sections(), *law_sections())
 
@@ -239,29 +240,40 @@ def profile_time_notes_for(sc, m) -> list[tuple[str, str]]:
     return out
 
 
+def _plugin_settings_class(name: str):
+    """The settings class of the plug-in estimator or plug-in R2 law ``name``, or None."""
+    cls = ESTIMATOR_SETTINGS.get(name)
+    if cls is not None:
+        return cls if cls.estimator_section is None else None
+    cls = R2_LAW_SETTINGS.get(name)
+    return cls if cls is not None and cls.law_section is None else None
+
+
 def plugin_rules(sc) -> None:
-    """Each ``[plugins.settings.NAME]`` table valid for its estimator's settings class
-    (stored back with its defaults filled in); the module of a plug-in estimator in use
-    listed in ``plugins.modules``, so a rerun or a worker process imports it again."""
+    """Each ``[plugins.settings.NAME]`` table valid for its plug-in estimator's or R2 law's
+    settings class (stored back with its defaults filled in); the module of a plug-in
+    estimator or law in use listed in ``plugins.modules``, so a rerun or a worker process
+    imports it again."""
     from imdrive.config.plugins import looked_past
 
     tables = {}
     for name, table in sc.plugins.settings.items():
-        cls = ESTIMATOR_SETTINGS.get(name)
+        cls = _plugin_settings_class(name)
         if cls is None and looked_past():  # shown, not run: left as given
             tables[name] = table
             continue
-        if cls is None or cls.estimator_section is not None:
+        if cls is None:
             known = [n for n, c in ESTIMATOR_SETTINGS.items() if c.estimator_section is None]
+            known += [n for n, c in R2_LAW_SETTINGS.items() if c.law_section is None]
             raise ConfigError(
                 f"plugins.settings.{name}",
-                f"no plug-in estimator of that name is registered (plug-ins: {known})",
+                f"no plug-in estimator or R2 law of that name is registered (plug-ins: {known})",
             )
         tables[name] = _to_plain(validate(cls, table, f"plugins.settings.{name}"))
     modules = list(sc.plugins.modules)
-    cls = ESTIMATOR_SETTINGS.get(sc.control.speed_feedback)
-    if cls is not None and cls.estimator_section is None:
-        spec = module_spec_of(cls)
+    for used in (sc.control.speed_feedback, sc.compensator.step_law):
+        cls = _plugin_settings_class(used)
+        spec = module_spec_of(cls) if cls is not None else None
         if spec is not None and spec not in modules:
             modules.append(spec)
     if tables != sc.plugins.settings or modules != list(sc.plugins.modules):

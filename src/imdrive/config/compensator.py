@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import model_validator
+from pydantic import AfterValidator, model_validator
 
 from imdrive.config import compensator_deprecated  # noqa: F401  (the deprecated keys register)
 from imdrive.config.r2_kalman import (  # noqa: F401  (the law registers)
@@ -15,7 +15,7 @@ from imdrive.config.r2_kalman import (  # noqa: F401  (the law registers)
     KalmanLawSettings,
 )
 from imdrive.config.r2_laws import law_names
-from imdrive.config.validation import Bool, Float, setting, settings
+from imdrive.config.validation import Bool, Float, Str, setting, settings
 from imdrive.errors import ConfigError
 
 #: The gating's frequency schedule: these multiples of the injection frequency f. Near the
@@ -24,6 +24,18 @@ from imdrive.errors import ConfigError
 #: whole periods of each. Every preset and study used 1, 2, 3 f when they could be set apart
 #: (``injection.frequency2_*``, ``frequency3_*``: deprecated).
 HARMONICS = (1, 2, 3)
+
+
+def _known_law(name: str) -> str:
+    """A registered R2 law, the package's or a plug-in's
+    (:func:`imdrive.config.r2_laws.law_names`)."""
+    if name not in law_names():
+        from imdrive.config.plugins import looked_past
+
+        if looked_past():  # shown, not run: the unimported plug-in may define it
+            return name
+        raise ConfigError("", "must be one of " + ", ".join(repr(n) for n in law_names()))
+    return name
 
 
 @settings("compensator")
@@ -206,12 +218,14 @@ class CompensatorSettings:
         ),
     ] = None
     step_law: Annotated[
-        Literal[law_names()],  # the paper's table and every registered law (config/r2_laws.py)
+        Str,
+        AfterValidator(_known_law),  # the paper's table and every registered law (r2_laws.py)
         setting(
             '"table": R̂2 changes by G_CR_ohm × the table\'s level (the paper); "kalman": the '
             "detected error over its analytic sensitivity, filtered by a Kalman filter on R2 "
             "and its drift rate (section [kalman], kernels/r2_kalman.py); the table's gains "
-            'then have no effect. "adaptive" (deprecated) runs as "kalman"'
+            'then have no effect. "adaptive" (deprecated) runs as "kalman"; or a law '
+            "registered by a module of [plugins] modules (docs/architecture.md)"
         ),
     ] = "table"
 

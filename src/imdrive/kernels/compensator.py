@@ -59,7 +59,14 @@ from imdrive.kernels.gating import (  # noqa: F401  (compensator_gate_sample: ol
     _gate_decide,
     compensator_gate_sample,
 )
-from imdrive.kernels.r2_kalman import kalman_decision, kalman_hold
+from imdrive.kernels.r2_kalman import kalman_decision, kalman_hold, relative_error
+from imdrive.kernels.r2_law_registry import (
+    NO_LAW_PARAMS,
+    NO_LAW_STATE,
+    LawWindow,
+    law_decide,
+    law_hold,
+)
 from imdrive.kernels.records import b1, c16, f8, record_dtype
 from imdrive.kernels.sensitivity import (  # noqa: F401  (in_phase_sensitivity: old path)
     in_phase_sensitivity,
@@ -114,6 +121,8 @@ COMPENSATOR_PARAMS = record_dtype(
         ("kf_R2", f8),  # R2_hat(0), ohm
         ("kf_T", f8),  # the decision period, s
         ("det", b1),  # the estimator gives no flux error: the detector's own (flux_detector.py)
+        ("plugin", b1),  # a registered plug-in law decides (r2_law_registry.py; kf_T its period)
+        ("law", NO_LAW_PARAMS),  # that law's parameter record (the placeholder's otherwise)
     ]
 )
 
@@ -160,6 +169,7 @@ COMPENSATOR_STATE = record_dtype(
         ("dt_lam_f", c16),  # its filtered current model, Wb
         ("on", b1),  # the compensator has started (its start in the duty cycle's time)
         ("t_start", f8),  # the run's time it started, s
+        ("law", NO_LAW_STATE),  # the plug-in law's state record (the placeholder's otherwise)
     ]
 )
 
@@ -225,6 +235,8 @@ def compensator_update(p, s, m, table, E):
     """
     if p.kf:  # the model-based law (r2_kalman.py)
         return kalman_decision(p, s, m, E)
+    if p.plugin:  # a registered law (r2_law_registry.py)
+        return plugin_decision(p, s, m, E)
     if not s.started:
         s.started = True
         s.E_prev = E  # no change is known at the first sample
@@ -251,6 +263,23 @@ def compensator_update(p, s, m, table, E):
 
 
 @njit(cache=True)
+def plugin_decision(p, s, m, E):
+    """A decision of the plug-in law in the compensator's ``law`` slot: the window's detected
+    error ``E`` (Wb) and the relative R2 error it measures go to
+    :func:`~imdrive.kernels.r2_law_registry.law_decide`; its answer, clamped, becomes
+    ``m.R2_hat``. A window that measured R2 within 5 % recalibrates the rotor thermal model
+    (``p.th_on``), as with the package's laws. Returns 0 (no table level)."""
+    r = relative_error(p, s, m, E)
+    w = LawWindow(E, r, p.kf_T, p.R2_min, p.R2_max)
+    R2 = law_decide(p.law, s.law, m, w)
+    m.R2_hat = min(max(R2, p.R2_min), p.R2_max)
+    s.live = True
+    if p.th_on and abs(r) < 0.05:
+        thermal_recalibrate(p, s, m)
+    return 0.0
+
+
+@njit(cache=True)
 def compensator_step(p, s, m, table, e_d0, t, k, w_e=0.0):
     """Called every control period ``k`` at time ``t`` after the MRAS update (``e_d0``, Wb).
 
@@ -263,7 +292,7 @@ def compensator_step(p, s, m, table, e_d0, t, k, w_e=0.0):
     s.acc += x
     if k % n != 0:
         return
-    if p.average and (s.started or p.kf):  # (the Kalman law: always the window's mean)
+    if p.average and (s.started or p.kf or p.plugin):  # (a model-based law: always the mean)
         E = s.acc / n
     else:
         E = x
@@ -276,6 +305,8 @@ def compensator_step(p, s, m, table, e_d0, t, k, w_e=0.0):
             s.live = False
             if p.kf:
                 kalman_hold(p, s, m, p.kf_T)
+            elif p.plugin:
+                law_hold(p.law, s.law, m, LawWindow(0.0, 0.0, p.kf_T, p.R2_min, p.R2_max))
             return
     compensator_update(p, s, m, table, E)
 

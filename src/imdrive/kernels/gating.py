@@ -17,10 +17,11 @@ the period that ends
   step or removal;
 * ``4`` the voltage reached ``p.gate_v`` times the inverter's limit ``Vdc/sqrt 3``;
 * ``8`` the injection frequency was switched (the flux response to the new sinusoid settles);
-* ``64`` with the Kalman law, the injection started (its first windows hold a fraction of a
-  period and the flux's start-up transient); until 2026-11-29 this was bit 8, and the status
-  named the stator frequency band as the cause (a 22 kW catalogue motor at 1000 rpm: "stator
-  frequency near the injection frequency" at 34 Hz against a 0.35 Hz injection);
+* ``64`` with the Kalman law or a plug-in law, the injection started (its first windows hold
+  a fraction of a period and the flux's start-up transient); until 2026-11-29 this was bit
+  8, and the status named the stator frequency band as the cause (a 22 kW catalogue motor at
+  1000 rpm: "stator frequency near the injection frequency" at 34 Hz against a 0.35 Hz
+  injection);
 * ``16`` within ``p.gate_hold`` periods after any of the above (the flux and the MRAS settle);
 * ``32`` the injection's amplitude was backed off below half (voltage headroom, field
   weakening: :func:`imdrive.kernels.compensator_range.injection_headroom`); a smaller
@@ -140,7 +141,7 @@ def _gate_decide(p, s, w_e):
             flags |= 8
     if s.inj_back > 0.5:  # the injection backed off (voltage headroom, field weakening)
         flags |= 32
-    if p.kf and s.inj_new:
+    if (p.kf or p.plugin) and s.inj_new:  # a model-based law (the table keeps the paper's)
         # the injection started in this period: its first windows held a fraction of a period
         # and the flux's start-up transient (measured on injection-fig6: the first two
         # decisions stepped R2_hat 0.5 % the wrong way); settle as after a frequency switch

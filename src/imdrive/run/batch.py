@@ -289,10 +289,10 @@ def _run_block(block, offset, logs, log_every, window_s, parallel, errors):
             e_blk[i] = sc.message if isinstance(sc, FailedRun) else str(exc)
             continue
         le = (log_every or a.log_every) if logs else 1
-        # one kernel call per number of periods, decimation and estimator (its records)
-        key = (a.n_steps, int(le), a.params.est.dtype)
+        # one kernel call per number of periods, decimation, estimator and R2 law (records)
+        key = (a.n_steps, int(le), a.params.est.dtype, a.params.comp.dtype)
         groups.setdefault(key, []).append((i, sc, a))
-    for (n_steps, le, _), items in groups.items():
+    for (n_steps, le, _, _), items in groups.items():
         n_rows = n_steps // le + 1 if logs else 0
         params, state, log, out, wall = _stack(items, le, n_rows, window_s, parallel)
         kernel_wall += wall

@@ -33,6 +33,7 @@ from imdrive.kernels.ifoc import CONTROL_PARAMS, CONTROL_STATE
 from imdrive.kernels.inverter import INVERTER_CODES, INVERTER_PARAMS, INVERTER_STATE
 from imdrive.kernels.machine import PLANT_PARAMS, initial_plant_state, saturation_table
 from imdrive.kernels.model import MODEL_STATE, MODEL_TABLE_POINTS
+from imdrive.kernels.r2_law_registry import compensator_dtypes
 from imdrive.kernels.records import new_records
 from imdrive.kernels.sensors import SENSOR_PARAMS
 from imdrive.run._profiles import profiles_to_arrays
@@ -41,6 +42,7 @@ from imdrive.run.compensator_blocks import (  # noqa: F401  (re-exported: old pa
     fuzzy_lookup_table,
     gives_flux_error,
     headroom_rate_per_s,
+    law_slot,
 )
 
 RPM = 2.0 * math.pi / 60.0  # rad/s per rpm
@@ -329,9 +331,14 @@ def profile_arrays(sc: Scenario, D: Resolved | None = None):
     return profiles_to_arrays(profile_list(sc, D))
 
 
-def _compensator_state(D: Resolved) -> np.ndarray:
-    """Initial COMPENSATOR_STATE: zeros (no previous iq* yet), the injection frequency in use."""
-    st = np.zeros(1, dtype=COMPENSATOR_STATE)
+def _compensator_state(
+    D: Resolved, dtype: np.dtype = COMPENSATOR_STATE, law_state: np.ndarray | None = None
+) -> np.ndarray:
+    """Initial COMPENSATOR_STATE (``dtype``: with a plug-in law's state in its ``law`` slot,
+    ``law_state``): zeros (no previous iq* yet), the injection frequency in use."""
+    st = np.zeros(1, dtype=dtype)
+    if law_state is not None:
+        st["law"] = law_state
     f1 = D.inj_f1
     st[0]["inj_f"] = f1
     st[0]["inj_f_prev"] = f1
@@ -339,7 +346,11 @@ def _compensator_state(D: Resolved) -> np.ndarray:
 
 
 def initial_state(
-    sc: Scenario, D: Resolved, model: np.ndarray, est_state: np.ndarray
+    sc: Scenario,
+    D: Resolved,
+    model: np.ndarray,
+    est_state: np.ndarray,
+    comp: np.ndarray | None = None,
 ) -> DriveState:
     """The drive's initial state: plant at rest (or at the imposed speed), the controller's
     model, the estimator's initial state, the rest zeros."""
@@ -351,7 +362,7 @@ def initial_state(
         model=model,
         control=np.zeros(1, dtype=CONTROL_STATE),
         est=est_state,
-        comp=_compensator_state(D),
+        comp=_compensator_state(D) if comp is None else comp,
         inverter=np.zeros(1, dtype=INVERTER_STATE),
     )
 
@@ -399,6 +410,10 @@ def drive_records(
     """
     control, gains = control_fields(sc, D, mh, psi0)
     comp, comp_derived = compensator_fields(sc, D)
+    law, law_params, law_state = law_slot(sc, D)
+    comp_params, comp_state = compensator_dtypes(COMPENSATOR_PARAMS, COMPENSATOR_STATE, law)
+    if law is not None:
+        comp["law"] = law_params
     records = new_records(
         {
             "sim": (SIM_PARAMS, sim_fields(sc, D)),
@@ -406,8 +421,9 @@ def drive_records(
             "inverter": (INVERTER_PARAMS, inverter_fields(sc)),
             "sensor": (SENSOR_PARAMS, sensor_fields(sc)),
             "control": (CONTROL_PARAMS, control),
-            "comp": (COMPENSATOR_PARAMS, comp),
+            "comp": (comp_params, comp),
             "model": (MODEL_STATE, model),
         }
     )
+    records["comp_state"] = _compensator_state(D, comp_state, law_state)
     return records, gains, comp_derived

@@ -245,7 +245,7 @@ def _build_arrays(sc: Scenario) -> DriveArrays:
         tables=np.ascontiguousarray(blocks.fuzzy_lookup_table(sc)[None]),
         table_idx=np.zeros(1, dtype=np.int64),
     )
-    state0 = blocks.initial_state(sc, D, rec["model"], est_state)
+    state0 = blocks.initial_state(sc, D, rec["model"], est_state, rec["comp_state"])
 
     derived = dict(gains)
     derived.update(blocks.drive_derived(sc, D, psi0, mh))

@@ -15,10 +15,14 @@ from imdrive.config.field_weakening import field_weakening_on
 from imdrive.config.injection_backoff import backoff_band
 from imdrive.config.perunit import Resolved
 from imdrive.config.r2_kalman import prior_pu
+from imdrive.config.r2_laws import LawContext, plugin_law
 from imdrive.config.registry import ESTIMATOR_SETTINGS
 from imdrive.config.scenario import Scenario
+from imdrive.config.validation import validate
 from imdrive.errors import ConfigError
 from imdrive.fuzzy import fuzzy_table
+from imdrive.kernels.r2_law_registry import law_kernel
+from imdrive.kernels.records import new_record
 
 RPM = 2.0 * math.pi / 60.0  # rad/s per rpm
 
@@ -57,6 +61,7 @@ def compensator_fields(sc: Scenario, D: Resolved) -> tuple[dict, dict]:
         **_gating(sc, r),
         **_thermal(sc, D),
         **_kalman(sc, D),
+        **_plugin(sc, D),
         det=comp.enabled and not gives_flux_error(sc.control.speed_feedback),
     )
     derived = {
@@ -216,6 +221,51 @@ def _kalman(sc, D: Resolved) -> dict:
         "kf_R2": D.R2_hat,
         "kf_T": D.n_comp * sc.simulation.Ts_s,
     }
+
+
+def _plugin(sc, D: Resolved) -> dict:
+    """A plug-in law's flag and decision period (``compensator.step_law`` names one)."""
+    if not sc.compensator.enabled or plugin_law(sc.compensator.step_law) is None:
+        return {}
+    return {"plugin": True, "kf_T": D.n_comp * sc.simulation.Ts_s}
+
+
+def law_slot(sc: Scenario, D: Resolved):
+    """The plug-in law's compiled half and its records for the compensator's ``law`` slot.
+
+    Returns
+    -------
+    tuple
+        ``(kernel, params, state)``: the :class:`~imdrive.kernels.r2_law_registry.LawKernel`
+        and ``(1,)`` records of its dtypes, built by its settings class's ``records`` from
+        its ``[plugins.settings.NAME]`` table; ``(None, None, None)`` for the package's laws
+        and without a compensator (the stability maps': one compiled map for every law).
+    """
+    name = sc.compensator.step_law
+    cls = plugin_law(name)
+    if cls is None or not sc.compensator.enabled:
+        return None, None, None
+    try:
+        kernel = law_kernel(name)
+    except KeyError:
+        raise ConfigError(
+            "compensator.step_law",
+            f'"{name}" has settings but no kernel: its module must call '
+            "imdrive.kernels.r2_law_registry.register_law",
+        ) from None
+    own = validate(cls, sc.plugins.settings.get(name, {}), f"plugins.settings.{name}")
+    ctx = LawContext(
+        scenario=sc,
+        R2_hat=D.R2_hat,
+        T=D.n_comp * sc.simulation.Ts_s,
+        R2_min=D.R2_min,
+        R2_max=D.R2_max,
+    )
+    recs = own.records(ctx)
+    try:
+        return kernel, new_record(kernel.params, recs.params), new_record(kernel.state, recs.state)
+    except KeyError as exc:
+        raise ConfigError(f"plugins.settings.{name}", f"its records: {exc.args[0]}") from None
 
 
 def fuzzy_lookup_table(sc: Scenario) -> np.ndarray:
