@@ -27,6 +27,7 @@ RELAX_STATE = record_dtype(
         ("decisions", f8),  # windows that measured R2
         ("held", f8),  # windows the gating rejected
         ("r_last", f8),  # the last relative error measured
+        ("R2_meas", f8),  # the R2 it measured, ohm
     ]
 )
 
@@ -35,8 +36,10 @@ RELAX_STATE = record_dtype(
 def relax_decide(p, s, m, w):
     """One accepted window: a share ``gain`` of the way to the measured R2 (ohm)."""
     s.decisions += 1.0
-    s.r_last = w.r
-    return m.R2_hat / (1.0 + p.gain * max(w.r, -0.9))
+    r = max(w.r, -0.9)
+    s.r_last = r
+    s.R2_meas = m.R2_hat / (1.0 + r)
+    return m.R2_hat / (1.0 + p.gain * r)
 
 
 @njit(cache=True)
@@ -45,10 +48,29 @@ def relax_hold(p, s, m, w):
     s.held += 1.0
 
 
-KERNEL = register_law("relax", RELAX_PARAMS, RELAX_STATE, relax_decide, relax_hold)
+@njit(cache=True)
+def relax_log(row, s):
+    """Its own log field: the R2 the last window measured."""
+    row.relax_R2_meas = s.R2_meas
 
 
-@r2_law("relax", None, "relaxation on the measured relative error")
+KERNEL = register_law(
+    "relax",
+    RELAX_PARAMS,
+    RELAX_STATE,
+    relax_decide,
+    relax_hold,
+    log_fields=("relax_R2_meas",),
+    log=relax_log,
+)
+
+
+@r2_law(
+    "relax",
+    None,
+    "relaxation on the measured relative error",
+    log_units={"relax_R2_meas": ("ohm", 1.0)},
+)
 class RelaxSettings:
     """Relaxation R2 law (``[plugins.settings.relax]``)."""
 

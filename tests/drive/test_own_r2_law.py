@@ -44,6 +44,9 @@ def test_the_plug_in_law_tracks_R2_on_four_machines(machine, ratio):
     assert law["decisions"] >= 5
     assert law["held"] >= 1
     assert abs(law["r_last"]) < 0.01  # the last window measured R2_hat within 1 %
+    # its own log column, in the unit it declared: the R2 each window measured
+    R2 = res.scenario.machine.R2_ohm
+    assert res.signals["relax_R2_meas_ohm"][-1] == pytest.approx(R2, rel=0.01)
 
 
 @pytest.mark.slow

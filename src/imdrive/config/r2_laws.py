@@ -58,7 +58,7 @@ class LawRecords:
     state: dict = field(default_factory=dict)
 
 
-def r2_law(name: str, section: str | None, description: str):
+def r2_law(name: str, section: str | None, description: str, *, log_units: dict | None = None):
     """Class decorator: register an R2 law's settings class.
 
     Parameters
@@ -71,6 +71,9 @@ def r2_law(name: str, section: str | None, description: str):
         must define ``records(self, ctx: LawContext) -> LawRecords``.
     description : str
         One line for the section's documentation.
+    log_units : dict, optional
+        ``{log field: (unit, scale)}`` for each log field a plug-in law's kernel adds (the
+        exported column is ``f"{field}_{unit}"``, the value times ``scale``).
     """
 
     def wrap(cls):
@@ -79,6 +82,7 @@ def r2_law(name: str, section: str | None, description: str):
                 raise TypeError(f"R2 law settings class {cls.__name__} must define records(ctx)")
             cls = settings(f"plugins.settings.{name}")(cls)
         cls.law_name = name
+        cls.law_log_units = dict(log_units or {})
         cls.law_section = section
         cls.law_description = description
         R2_LAW_SETTINGS[name] = cls

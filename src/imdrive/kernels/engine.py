@@ -96,15 +96,17 @@ BASE_LOG_FIELDS = (
 )
 
 
-def log_dtype(estimator: str | registry.EstimatorKernel = "mras") -> np.dtype:
+def log_dtype(estimator: str | registry.EstimatorKernel = "mras", law=None) -> np.dtype:
     """The log record of a drive with ``estimator``: the base fields, then the estimator's own
     (in the order of the MRAS log of 0.2 for the MRAS, so its columns keep their place: a base
-    field the estimator also declares, ``R1_id_status``, is placed among its own)."""
+    field the estimator also declares, ``R1_id_status``, is placed among its own), then those
+    of the plug-in R2 ``law`` (a :class:`~imdrive.kernels.r2_law_registry.LawKernel`), if any."""
     k = registry.kernel(estimator) if isinstance(estimator, str) else estimator
     base = list(BASE_LOG_FIELDS)
     at = base.index("e_q0") + 1
     own = list(k.log_fields)
     names = [f for f in base[:at] if f not in own] + own + [f for f in base[at:] if f not in own]
+    names += [f for f in (law.log_fields if law is not None else ()) if f not in names]
     return record_dtype([(name, f8) for name in names])
 
 

@@ -27,7 +27,9 @@ The contract
 ``hold(p, s, m, w)`` (optional)
     A decision window the gating rejected (a transient, the voltage limit, the injection's
     start): no measurement. ``w.E`` and ``w.r`` are 0.
-``log(row, p, s)`` is not part of the contract yet: ``R2_hat`` is logged by the controller.
+``log(row, s)`` (optional)
+    Writes the law's own ``log_fields`` (float64) into the log record ``row`` at every logged
+    sample (their units are declared with the settings half, ``log_units``).
 
 A user's law is a module outside the package that registers its kernel here and its settings
 class with :func:`imdrive.config.r2_laws.r2_law` (no section: its table is
@@ -94,8 +96,10 @@ class LawKernel:
         Its record dtypes, as registered: each with a tag field that makes it unique (and,
         for a law outside the package, carries a hash of its module's name and text, so an
         edited law is compiled afresh).
-    decide, hold : numba dispatcher
-        See the module docstring (``hold`` may be None).
+    decide, hold, log : numba dispatcher
+        See the module docstring (``hold`` and ``log`` may be None).
+    log_fields : tuple of str
+        Its own log fields, written by ``log``.
     """
 
     name: str
@@ -103,6 +107,8 @@ class LawKernel:
     state: np.dtype
     decide: object
     hold: object = None
+    log_fields: tuple[str, ...] = ()
+    log: object = None
     source: str = field(default="", compare=False)
 
 
@@ -110,7 +116,9 @@ _BY_NAME: dict[str, LawKernel] = {}
 _BY_STATE: dict[np.dtype, LawKernel] = {}
 
 
-def register_law(name: str, params: np.dtype, state: np.dtype, decide, hold=None) -> LawKernel:
+def register_law(
+    name: str, params: np.dtype, state: np.dtype, decide, hold=None, log_fields=(), log=None
+) -> LawKernel:
     """Register an R2 law's compiled half under ``name`` and return it.
 
     Parameters
@@ -121,6 +129,8 @@ def register_law(name: str, params: np.dtype, state: np.dtype, decide, hold=None
         Its record dtypes (fields by name; :mod:`imdrive.kernels.records`).
     decide, hold : numba dispatcher
         ``decide(p, s, m, w) -> R2`` and, optional, ``hold(p, s, m, w)`` (module docstring).
+    log_fields : sequence of str
+        Its own log fields (float64), written by ``log(row, s)``.
 
     Returns
     -------
@@ -135,13 +145,17 @@ def register_law(name: str, params: np.dtype, state: np.dtype, decide, hold=None
         state=_tagged(np.dtype(state), f"law_{name}_state", tag),
         decide=decide,
         hold=hold,
+        log_fields=tuple(log_fields),
+        log=log,
         source=tag,
     )
     old = _BY_NAME.pop(name, None)
     if old is not None:
         _BY_STATE.pop(old.state, None)
+        _BY_STATE.pop(old.params, None)
     _BY_NAME[name] = kernel
     _BY_STATE[kernel.state] = kernel
+    _BY_STATE[kernel.params] = kernel
     return kernel
 
 
@@ -151,6 +165,12 @@ def law_kernel(name: str) -> LawKernel:
         return _BY_NAME[name]
     except KeyError:
         raise KeyError(f"no R2 law {name!r} is registered (known: {sorted(_BY_NAME)})") from None
+
+
+def law_of_records(comp_dtype: np.dtype) -> LawKernel | None:
+    """The plug-in law in the ``law`` slot of a compensator record dtype (None: the
+    placeholder, the package's laws)."""
+    return _BY_STATE.get(np.dtype(comp_dtype.fields["law"][0]))
 
 
 def law_kernel_names() -> tuple[str, ...]:
@@ -193,6 +213,11 @@ def law_hold(p, s, m, w):
     raise NotImplementedError("law_hold is called from compiled code only")
 
 
+def law_log(row, s):
+    """Write the law's own log fields (compiled code only)."""
+    raise NotImplementedError("law_log is called from compiled code only")
+
+
 @overload(law_decide, inline="always", jit_options={"cache": True})
 def _law_decide(p, s, m, w):
     if _is_placeholder(s):
@@ -223,5 +248,24 @@ def _law_hold(p, s, m, w):
 
     def impl(p, s, m, w):
         hold(p, s, m, w)
+
+    return impl
+
+
+@overload(law_log, inline="always", jit_options={"cache": True})
+def _law_log(row, s):
+    k = None if _is_placeholder(s) else _lookup(s)
+    if k is None or k.log is None:
+        if _is_placeholder(s) or k is not None:
+
+            def nothing(row, s):
+                pass
+
+            return nothing
+        return None
+    log = k.log
+
+    def impl(row, s):
+        log(row, s)
 
     return impl

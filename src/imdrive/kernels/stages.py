@@ -79,6 +79,7 @@ from imdrive.kernels.profiles import (
     profile_at,
 )
 from imdrive.kernels.r1_standstill import r1_standstill
+from imdrive.kernels.r2_law_registry import law_log
 from imdrive.kernels.records import f8, record_dtype
 from imdrive.kernels.sensors import NOISE_FIELDS, measure_current_drawn
 from imdrive.kernels.speed_control import speed_loop_gain
@@ -440,6 +441,7 @@ def log_row(row, pp, pe, x, mdl, ctl, est, cmp, prof, smpl, estm, cmd, v_app_ab)
     row.R2_hat = mdl.R2_hat
     row.R1_hat = mdl.R1_hat
     log_compensator(row, cmp)
+    law_log(row, cmp.law)
 
 
 @njit(cache=True, inline="always")

@@ -66,6 +66,7 @@ from imdrive.kernels.batch import (
 from imdrive.kernels.engine import S_OK, DriveParams, DriveState, log_dtype
 from imdrive.kernels.estimators.registry import kernel_of_state
 from imdrive.kernels.profiles import N_PROF
+from imdrive.kernels.r2_law_registry import law_of_records
 from imdrive.run.metrics import lost_control_check, steady_window_periods
 from imdrive.run.status import STATUS_COLUMNS
 
@@ -224,7 +225,7 @@ def _stack(items, log_every: int, n_rows: int, window_s: float, parallel: bool):
     lc_n = np.array(
         [int(round(d / a.Ts)) for (_, d), a in zip(lc, arrays, strict=True)], dtype=np.int64
     )
-    dtype = log_dtype(kernel_of_state(params.est.dtype))
+    dtype = log_dtype(kernel_of_state(params.est.dtype), law_of_records(params.comp.dtype))
     log = np.full((G, n_rows), np.nan, dtype=dtype)
     out = BatchOut(
         metrics=np.empty(G, dtype=BATCH_METRICS),

@@ -15,12 +15,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from imdrive.config.perunit import resolve
+from imdrive.config.r2_laws import plugin_law
 from imdrive.config.scenario import Scenario
 from imdrive.config.sequence import sequence
 from imdrive.errors import ConfigError
 from imdrive.kernels.engine import DriveParams, DriveState, log_dtype
 from imdrive.run import blocks
 from imdrive.run.blocks import RPM, saturation_curve  # noqa: F401  (re-exported: old path)
+from imdrive.run.compensator_blocks import plugin_law_kernel
 from imdrive.run.estimators import EstimatorContext, build_estimator, estimator_of
 
 MAX_LOG_BYTES = 2 * 2**30  # a log larger than this is refused before anything runs
@@ -35,7 +37,7 @@ def check_log_size(sc: Scenario, log: np.dtype | None = None, n_steps: int | Non
     """
     sim = sc.simulation
     if log is None:
-        log = log_dtype(estimator_of(sc).kernel)
+        log = log_dtype(estimator_of(sc).kernel, plugin_law_kernel(sc))
     n_steps = sequence(sc).n_steps(sim.Ts_s) if n_steps is None else n_steps
     log_bytes = (n_steps // sim.log_every + 1) * log.itemsize
     if log_bytes > MAX_LOG_BYTES:
@@ -211,7 +213,8 @@ def build_arrays(sc: Scenario) -> DriveArrays:
 def _build_arrays(sc: Scenario) -> DriveArrays:
     """Every block's records from its own builder (:mod:`imdrive.run.blocks`)."""
     est = estimator_of(sc)  # once: its kernel gives the log, its settings the gains and units
-    log = log_dtype(est.kernel)
+    law = plugin_law_kernel(sc)  # a plug-in R2 law's log fields follow the estimator's
+    log = log_dtype(est.kernel, law)
     n_steps = sequence(sc).n_steps(sc.simulation.Ts_s)  # the premagnetisation's delay too
     check_log_size(sc, log, n_steps)
     D = resolve(sc)  # every machine-dependent value, once
@@ -228,6 +231,8 @@ def _build_arrays(sc: Scenario) -> DriveArrays:
     )
     est, est_params, est_state, er = build_estimator(sc, ctx, est)
     log_units = dict(est.log_units)
+    if law is not None:
+        log_units.update(plugin_law(law.name).law_log_units)
     rec, gains, comp_derived = blocks.drive_records(sc, D, model, mh, psi0)
     gains.update(er.derived)
     prof_t, prof_v, prof_n = blocks.profile_arrays(sc, D)

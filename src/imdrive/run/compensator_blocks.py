@@ -230,6 +230,23 @@ def _plugin(sc, D: Resolved) -> dict:
     return {"plugin": True, "kf_T": D.n_comp * sc.simulation.Ts_s}
 
 
+def plugin_law_kernel(sc: Scenario):
+    """The compiled half of the plug-in law ``compensator.step_law`` names, or None (one of
+    the package's laws, or no compensator: the stability maps' drive, one compiled map for
+    every law)."""
+    name = sc.compensator.step_law
+    if not sc.compensator.enabled or plugin_law(name) is None:
+        return None
+    try:
+        return law_kernel(name)
+    except KeyError:
+        raise ConfigError(
+            "compensator.step_law",
+            f'"{name}" has settings but no kernel: its module must call '
+            "imdrive.kernels.r2_law_registry.register_law",
+        ) from None
+
+
 def law_slot(sc: Scenario, D: Resolved):
     """The plug-in law's compiled half and its records for the compensator's ``law`` slot.
 
@@ -239,21 +256,13 @@ def law_slot(sc: Scenario, D: Resolved):
         ``(kernel, params, state)``: the :class:`~imdrive.kernels.r2_law_registry.LawKernel`
         and ``(1,)`` records of its dtypes, built by its settings class's ``records`` from
         its ``[plugins.settings.NAME]`` table; ``(None, None, None)`` for the package's laws
-        and without a compensator (the stability maps': one compiled map for every law).
+        and without a compensator (:func:`plugin_law_kernel`).
     """
-    name = sc.compensator.step_law
-    cls = plugin_law(name)
-    if cls is None or not sc.compensator.enabled:
+    kernel = plugin_law_kernel(sc)
+    if kernel is None:
         return None, None, None
-    try:
-        kernel = law_kernel(name)
-    except KeyError:
-        raise ConfigError(
-            "compensator.step_law",
-            f'"{name}" has settings but no kernel: its module must call '
-            "imdrive.kernels.r2_law_registry.register_law",
-        ) from None
-    own = validate(cls, sc.plugins.settings.get(name, {}), f"plugins.settings.{name}")
+    name = kernel.name
+    own = validate(plugin_law(name), sc.plugins.settings.get(name, {}), f"plugins.settings.{name}")
     ctx = LawContext(
         scenario=sc,
         R2_hat=D.R2_hat,
