@@ -56,7 +56,7 @@ def compensator_fields(sc: Scenario, D: Resolved) -> tuple[dict, dict]:
         inj_freq=r.inj_f1,
         inj_t_on=t_on,  # the injection starts with the compensator
         slip_decouple=inj.decouple_slip,
-        cpl_wc=sc.mras.wc_rad_s,
+        cpl_wc=flux_filter_rad_s(sc),
         cpl_wmin=2 * math.pi * sc.machine.rated_frequency_Hz * SLIP_DECOUPLING_FROM_PU,
         **_gating(sc, r),
         **_thermal(sc, D),
@@ -205,6 +205,22 @@ def gives_flux_error(speed_feedback: str) -> bool:
         return True
     cls = ESTIMATOR_SETTINGS.get(speed_feedback)
     return cls is not None and bool(cls.estimator_flux_error)
+
+
+def flux_filter_rad_s(sc: Scenario) -> float:
+    """The corner of the ``1/(s + wc)`` filter behind the flux error the detection reads,
+    rad/s: the running estimator's own (``wc_rad_s`` of its section: the MRAS's, the
+    sliding-mode MRAS's) where it hands the detection its flux error, else the detector's
+    (:mod:`imdrive.kernels.flux_detector`, Schauder's two models, built with ``[mras]
+    wc_rad_s``). The slip decoupling undoes this filter. Until 2026-11-29 ``[mras]
+    wc_rad_s`` was read for every estimator: a sliding-mode MRAS with its own ``wc_rad_s``
+    had its flux error decoupled with the MRAS's filter."""
+    fb = sc.control.speed_feedback
+    if fb != "measured" and gives_flux_error(fb):
+        wc = getattr(sc.estimator_settings(), "wc_rad_s", None)
+        if wc is not None:
+            return float(wc)
+    return sc.mras.wc_rad_s
 
 
 def _kalman(sc, D: Resolved) -> dict:
