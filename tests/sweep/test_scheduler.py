@@ -5,6 +5,7 @@ traceback; a server that speaks HTTP or garbage never makes dask allocate its "l
 from __future__ import annotations
 
 import importlib.util
+import os
 import socket
 import struct
 import subprocess
@@ -111,6 +112,7 @@ SERVERS = {
 @pytest.fixture
 def server(request):
     s = _Server(SERVERS[request.param])
+    s.name = request.param
     yield s
     s.close()
 
@@ -193,3 +195,48 @@ def test_sweep_on_a_server_that_is_not_a_scheduler_exits_2_with_one_line(tmp_pat
     assert len(lines) == 1 and lines[0].startswith("imdrive: error: --scheduler: "), lines
     assert "out of memory" not in proc.stderr
     assert not (tmp_path / "s").exists()
+
+
+@pytest.mark.parametrize("scheme", ["tls", "wss"])
+def test_a_tls_address_without_dask_s_tls_configuration_is_refused_naming_it(scheme, monkeypatch):
+    # before: dask's own "TLS expects a `ssl_context` argument", after connecting
+    for key in [k for k in os.environ if k.startswith("DASK_DISTRIBUTED__COMM__TLS")]:
+        monkeypatch.delenv(key)
+    with pytest.raises(ConfigError, match=r"--scheduler: .* needs dask's TLS configuration") as e:
+        check_scheduler_address(f"{scheme}://127.0.0.1:1")
+    assert "distributed.comm.tls.ca-file" in str(e.value)
+
+
+WS_EXPECTED = {
+    "http": "answers HTTP 400",
+    "http-first": "answers HTTP 200",
+    "small-garbage": "greets as a TCP dask scheduler: use tcp://",
+    "silent": "did not answer a WebSocket upgrade within 1 s",
+    "huge-length": "its answer is no HTTP",
+}
+
+
+@pytest.mark.parametrize("server", list(WS_EXPECTED), indirect=True)
+def test_a_ws_address_whose_server_grants_no_websocket_upgrade_is_refused(server):
+    # before: dask's "Timed out trying to connect" whatever answered
+    address = server.address.replace("tcp://", "ws://")
+    t0 = time.perf_counter()
+    with pytest.raises(ConfigError, match=r"--scheduler") as exc:
+        connect(address, timeout_s=1.0)
+    assert time.perf_counter() - t0 < 5.0
+    assert WS_EXPECTED[server.name] in str(exc.value)
+
+
+@pytest.mark.slow  # a scheduler in this process: about 2 s
+def test_a_real_websocket_scheduler_passes_the_probe_and_connects():
+    distributed = pytest.importorskip("dask.distributed")
+    with distributed.LocalCluster(
+        n_workers=0, processes=False, protocol="ws", host="127.0.0.1", dashboard_address=None
+    ) as cluster:
+        assert cluster.scheduler_address.startswith("ws://")
+        probe_scheduler(cluster.scheduler_address, 5.0)
+        client = connect(cluster.scheduler_address, 5.0)
+        try:
+            assert client.status == "running"
+        finally:
+            client.close()

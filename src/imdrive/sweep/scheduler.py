@@ -17,15 +17,21 @@ finaliser's traceback 20 s later. So the address is settled before a client is m
 4. the client itself, made with the same timeout; any failure is one line on
    ``--scheduler`` and the half-made client is closed quietly.
 
-TLS and WebSocket addresses get the TCP port check only (their handshake needs the security
-configuration the client holds).
+For ``tls://`` and ``wss://`` the client needs dask's TLS configuration (the certificate
+authority, this client's certificate and key): without it every such address is refused at
+once, naming the settings, instead of dask's "TLS expects a `ssl_context` argument" after the
+connection. Their own handshake is left to the client (it holds the security configuration).
+For ``ws://``, the probe asks for the WebSocket upgrade a dask client asks for and refuses a
+server that does not grant it (a TCP scheduler, a dashboard, a silent port) within the
+timeout, with what it saw, instead of dask's "Timed out trying to connect".
 
 Functions
 ---------
 check_scheduler_address
     The address's form and protocol; for TCP and TLS, a port that answers.
 probe_scheduler
-    Whether a dask scheduler greets on a TCP address.
+    Whether a dask scheduler greets on a TCP address, or grants a WebSocket upgrade on a
+    ``ws://`` one.
 connect
     A connected ``dask.distributed.Client``, or :class:`~imdrive.errors.ConfigError`.
 """
@@ -81,6 +87,8 @@ def check_scheduler_address(address, timeout_s: float = PROBE_TIMEOUT_S) -> tupl
         raise ConfigError(
             "--scheduler", f"unknown protocol {scheme!r} in {address!r} (known: {sorted(backends)})"
         )
+    if scheme in ("tls", "wss"):
+        _check_tls_configured(address)
     if scheme in ("tcp", "tls", "ws", "wss"):
         host, port = _host_port(address, loc, parse_host_port)
         try:
@@ -103,6 +111,26 @@ def check_scheduler_address(address, timeout_s: float = PROBE_TIMEOUT_S) -> tupl
                 "reach only a cluster started in the same Python process)",
             )
     return scheme, loc
+
+
+def _check_tls_configured(address: str) -> None:
+    """Refuse a TLS address when dask has no TLS configuration for a client."""
+    from distributed.security import Security
+
+    try:
+        ctx = Security().get_connection_args("client").get("ssl_context")
+    except (OSError, ValueError) as exc:  # a configured file missing or unreadable
+        raise ConfigError(
+            "--scheduler", f"{address}: dask's TLS configuration cannot be loaded: {_reason(exc)}"
+        ) from None
+    if ctx is None:
+        raise ConfigError(
+            "--scheduler",
+            f"{address} needs dask's TLS configuration, and none is set: the certificate "
+            "authority and this client's certificate and key (distributed.comm.tls.ca-file, "
+            ".client.cert and .client.key in a dask config file, or "
+            "DASK_DISTRIBUTED__COMM__TLS__CA_FILE and the like in the environment)",
+        )
 
 
 def _host_port(address, loc, parse_host_port) -> tuple[str, int]:
@@ -201,6 +229,8 @@ def probe_scheduler(address: str, timeout_s: float = CONNECT_TIMEOUT_S) -> None:
     from distributed.comm.addressing import parse_address, parse_host_port
 
     scheme, loc = parse_address(address, strict=False)
+    if scheme == "ws":
+        return _probe_websocket(address, *_host_port(address, loc, parse_host_port), timeout_s)
     if scheme != "tcp":
         return
     host, port = _host_port(address, loc, parse_host_port)
@@ -234,6 +264,49 @@ def probe_scheduler(address: str, timeout_s: float = CONNECT_TIMEOUT_S) -> None:
         raise ConfigError(
             "--scheduler", f"cannot connect to {address}: {_reason(exc)} (not a dask scheduler?)"
         ) from None
+
+
+def _probe_websocket(address: str, host: str, port: int, timeout_s: float) -> None:
+    """Refuse a ``ws://`` address whose server does not grant a WebSocket upgrade on ``/`` (what
+    a dask client asks for, RFC 6455 section 4.1) within ``timeout_s``."""
+    import base64
+    import os
+
+    key = base64.b64encode(os.urandom(16)).decode()
+    request = (
+        f"GET / HTTP/1.1\r\nHost: {host}:{port}\r\nUpgrade: websocket\r\n"
+        f"Connection: Upgrade\r\nSec-WebSocket-Key: {key}\r\nSec-WebSocket-Version: 13\r\n\r\n"
+    ).encode()
+    not_ws = f"{address} answers but is not a WebSocket dask scheduler"
+    deadline = time.monotonic() + timeout_s
+    try:
+        with socket.create_connection((host, port), timeout=timeout_s) as sock:
+            sock.sendall(request)
+            head = _recv_exactly(sock, 8, deadline)
+            if head.startswith(b"HTTP/"):  # its status code follows
+                head += _recv_exactly(sock, 4, deadline)
+    except TimeoutError:
+        raise ConfigError(
+            "--scheduler",
+            f"{address} did not answer a WebSocket upgrade within {timeout_s:g} s (not a "
+            "WebSocket scheduler, or an overloaded one: --connect-timeout)",
+        ) from None
+    except OSError as exc:
+        raise ConfigError(
+            "--scheduler", f"cannot connect to {address}: {_reason(exc)} (not a dask scheduler?)"
+        ) from None
+    if head.startswith((b"HTTP/1.1 101", b"HTTP/1.0 101")):
+        return
+    if head.startswith(b"HTTP/"):
+        status = head[9:12].decode("ascii", "replace")
+        raise ConfigError(
+            "--scheduler", f"{not_ws} (it answers HTTP {status}, no upgrade: a dashboard?)"
+        )
+    if 16 <= struct.unpack("<Q", head[:8])[0] <= GREETING_MAX_BYTES:
+        raise ConfigError(
+            "--scheduler", f"{not_ws} (it greets as a TCP dask scheduler: use tcp://{host}:{port})"
+        )
+    raise ConfigError("--scheduler", f"{not_ws} (its answer is no HTTP)")
 
 
 def connect(address, timeout_s: float = CONNECT_TIMEOUT_S):
