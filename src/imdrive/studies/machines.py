@@ -62,7 +62,7 @@ from imdrive.run.batch import simulate_batch
 from imdrive.run.status import r2_worst_pct
 
 #: The drives of the grid: the goal's two presets, and ``sensorless-afo`` for comparison.
-DRIVES = ("sensorless", "injection-robust", "sensorless-afo")
+DRIVES = ("sensorless", "injection-robust", "sensorless-afo", "injection-robust-afo")
 #: The drives the goal (at least Table IV's share converged on every machine) is read over.
 GOAL_DRIVES = ("sensorless", "injection-robust")
 #: A drive that is a preset with overrides: ``sensorless`` with the adaptive full-order
@@ -556,14 +556,16 @@ def page_with_table(text: str, table_md: str) -> str:
 
 
 def update_drive(drive: str) -> pd.DataFrame:
-    """Measure ``drive``'s rows of the docs' CSV again (the other drives' rows kept, in their
-    order), write it and refresh the page's table; returns the new rows. For a change that
+    """Measure ``drive``'s rows of the docs' CSV again, or for the first time (the other
+    drives' rows kept, in the order of :data:`DRIVES`), write it and refresh the page's
+    table; returns the new rows. For a change that
     touches one drive only (a preset's law), so the others need not run again."""
     old = pd.read_csv(CSV)
     new = measure(*scenarios(drives=(drive,)))
     rows = []
+    drives = [d for d in DRIVES if d in set(old["drive"]) | {drive}]  # a new one: its place
     for m in old["machine"].unique():
-        for d in old["drive"].unique():
+        for d in drives:
             src = new if d == drive else old
             rows.append(src[(src["machine"] == m) & (src["drive"] == d)])
     pd.concat(rows, ignore_index=True)[old.columns].to_csv(CSV, index=False, float_format="%.9g")
