@@ -1,4 +1,5 @@
-"""Where a cold start's time goes: each compiled function's share, and the command as a whole.
+"""Where a cold start's time goes: each compiled function's share, each compiler pass's, and
+the command as a whole.
 
 Runs an imdrive command in a fresh process with an empty kernel cache (a temporary
 ``IMDRIVE_CACHE_DIR``; with ``--warm-first CMD``, that command runs first in the same cache, so
@@ -46,6 +47,41 @@ class Listener(event.Listener):
         rows.append((name, len(stack), dt, dt - inner))
 
 event.register("numba:compile", Listener())
+
+passes, pstack = {}, []
+
+class Passes(event.Listener):  # each compiler pass's own time (nested compilations removed)
+    def on_start(self, ev):
+        pstack.append([ev.data["name"].split(" [")[0], time.perf_counter(), 0.0])
+
+    def on_end(self, ev):
+        name, t0, inner = pstack.pop()
+        dt = time.perf_counter() - t0
+        if pstack:
+            pstack[-1][2] += dt
+        passes[name] = passes.get(name, 0.0) + dt - inner
+
+event.register("numba:run_pass", Passes())
+
+from numba.core import codegen
+
+llvm = {"s": 0.0}
+
+def _timed(cls, name):  # LLVM's optimisation passes and machine-code generation
+    f = getattr(cls, name)
+
+    def g(self, *a, **k):
+        t0 = time.perf_counter()
+        try:
+            return f(self, *a, **k)
+        finally:
+            llvm["s"] += time.perf_counter() - t0
+
+    setattr(cls, name, g)
+
+_timed(codegen.CPUCodeLibrary, "_optimize_functions")
+_timed(codegen.CPUCodeLibrary, "_optimize_final_module")
+_timed(codegen.JITCodeLibrary, "_finalize_specific")
 from imdrive.cli import main
 t0 = time.perf_counter()
 try:
@@ -53,7 +89,8 @@ try:
 except SystemExit as e:
     code = e.code
 wall = time.perf_counter() - t0
-json.dump({"code": code, "wall": wall, "rows": rows}, open(sys.argv[1], "w"))
+json.dump({"code": code, "wall": wall, "rows": rows, "passes": passes,
+           "llvm": llvm["s"]}, open(sys.argv[1], "w"))
 """
 
 
@@ -75,7 +112,7 @@ def main() -> None:
     ap.add_argument("--top", type=int, default=20)
     args = ap.parse_args()
     print(machine_line())
-    totals, walls, own = [], [], {}
+    totals, walls, own, by_pass, llvm = [], [], {}, {}, []
     for _ in range(args.repeat):
         with tempfile.TemporaryDirectory() as tmp:
             cache, res_file = str(Path(tmp) / "cache"), str(Path(tmp) / "r.json")
@@ -88,6 +125,9 @@ def main() -> None:
         totals.append(sum(r[2] for r in res["rows"] if r[1] == 0))
         for name, _, _, self_s in res["rows"]:
             own.setdefault(name, []).append(self_s)
+        llvm.append(res.get("llvm", 0.0))
+        for name, t in res.get("passes", {}).items():
+            by_pass[name] = by_pass.get(name, 0.0) + t
     print(f"imdrive {args.cmd}" + (f" after {args.warm_first}" if args.warm_first else ""))
     print(f"  whole process: {span(walls)}")
     print(f"  compilation:   {span(totals)}")
@@ -101,6 +141,21 @@ def main() -> None:
         print(f"| `{name}` | {mean:.2f} | {100 * mean / total:.0f} % |")
     rest = sum(sum(v) / n for _, v in ranked[args.top :])
     print(f"| {len(ranked) - args.top} others | {rest:.2f} | {100 * rest / total:.0f} % |")
+    # by compiler stage: numba's own passes in Python (typing, rewrites) against the lowering,
+    # which holds LLVM's optimisation and code generation
+    print(f"\n| numba pass (all functions) | own time, s (mean of {n}) | share |")
+    print("|---|---|---|")
+    whole = sum(by_pass.values()) / n
+    top = sorted(by_pass.items(), key=lambda kv: -kv[1])
+    for name, t in top[:6]:
+        print(f"| `{name}` | {t / n:.2f} | {100 * t / n / whole:.0f} % |")
+    rest = sum(t for _, t in top[6:]) / n
+    print(f"| {len(top) - 6} other passes | {rest:.2f} | {100 * rest / whole:.0f} % |")
+    t_llvm = sum(llvm) / n
+    print(
+        f"\nof which LLVM (optimisation and machine code, inside the lowering): {t_llvm:.2f} s "
+        f"({100 * t_llvm / whole:.0f} %); numba's own Python: {whole - t_llvm:.2f} s"
+    )
 
 
 if __name__ == "__main__":
