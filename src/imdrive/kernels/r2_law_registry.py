@@ -47,7 +47,7 @@ from numba import types
 from numba.extending import overload
 from numba.np.numpy_support import as_dtype
 
-from imdrive.kernels.estimators.registry import _source_tag, _tagged
+from imdrive.kernels.plugin_registry import Registry, source_tag, tagged
 from imdrive.kernels.records import record_dtype
 
 #: The generic entry points below compile the decision of whichever law registered here, so
@@ -112,8 +112,8 @@ class LawKernel:
     source: str = field(default="", compare=False)
 
 
-_BY_NAME: dict[str, LawKernel] = {}
-_BY_STATE: dict[np.dtype, LawKernel] = {}
+_REGISTRY = Registry("R2 law")
+_BY_STATE = _REGISTRY.by_record
 
 
 def register_law(
@@ -138,33 +138,23 @@ def register_law(
         With ``params`` and ``state`` extended by a tag field. Registering a name again
         replaces the entry (a re-imported user module).
     """
-    tag = _source_tag(decide)
+    tag = source_tag(decide)
     kernel = LawKernel(
         name=name,
-        params=_tagged(np.dtype(params), f"law_{name}", tag),
-        state=_tagged(np.dtype(state), f"law_{name}_state", tag),
+        params=tagged(np.dtype(params), f"law_{name}", tag),
+        state=tagged(np.dtype(state), f"law_{name}_state", tag),
         decide=decide,
         hold=hold,
         log_fields=tuple(log_fields),
         log=log,
         source=tag,
     )
-    old = _BY_NAME.pop(name, None)
-    if old is not None:
-        _BY_STATE.pop(old.state, None)
-        _BY_STATE.pop(old.params, None)
-    _BY_NAME[name] = kernel
-    _BY_STATE[kernel.state] = kernel
-    _BY_STATE[kernel.params] = kernel
-    return kernel
+    return _REGISTRY.add(kernel)
 
 
 def law_kernel(name: str) -> LawKernel:
     """The registered law ``name`` (``KeyError`` naming the registered ones)."""
-    try:
-        return _BY_NAME[name]
-    except KeyError:
-        raise KeyError(f"no R2 law {name!r} is registered (known: {sorted(_BY_NAME)})") from None
+    return _REGISTRY[name]
 
 
 def law_of_records(comp_dtype: np.dtype) -> LawKernel | None:
@@ -175,7 +165,7 @@ def law_of_records(comp_dtype: np.dtype) -> LawKernel | None:
 
 def law_kernel_names() -> tuple[str, ...]:
     """Names of every registered plug-in law, in registration order."""
-    return tuple(_BY_NAME)
+    return _REGISTRY.names()
 
 
 def compensator_dtypes(base_params: np.dtype, base_state: np.dtype, law: LawKernel | None):

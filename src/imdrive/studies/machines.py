@@ -556,10 +556,8 @@ def page_with_table(text: str, table_md: str) -> str:
 
 
 def update_drive(drive: str) -> pd.DataFrame:
-    """Measure ``drive``'s rows of the docs' CSV again, or for the first time (the other
-    drives' rows kept, in the order of :data:`DRIVES`), write it and refresh the page's
-    table; returns the new rows. For a change that
-    touches one drive only (a preset's law), so the others need not run again."""
+    """Measure ``drive``'s rows of the docs' CSV again or for the first time (the others kept,
+    in :data:`DRIVES`' order), write it, refresh the page's table; return the new rows."""
     old = pd.read_csv(CSV)
     new = measure(*scenarios(drives=(drive,)))
     rows = []

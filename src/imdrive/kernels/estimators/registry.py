@@ -41,11 +41,7 @@ loaded as another module does not find a loop compiled against the first).
 
 from __future__ import annotations
 
-import hashlib
-import inspect
-import re
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
@@ -53,6 +49,7 @@ from numba import types
 from numba.extending import overload
 from numba.np.numpy_support import as_dtype
 
+from imdrive.kernels.plugin_registry import Registry, source_tag, tagged
 from imdrive.kernels.records import b1, c16, f8, record_dtype
 
 #: The generic entry points below compile the step of whichever estimator registered here, so
@@ -133,30 +130,10 @@ class EstimatorKernel:
     source: str = field(default="", compare=False)
 
 
-_BY_NAME: dict[str, EstimatorKernel] = {}
-_BY_STATE: dict[np.dtype, EstimatorKernel] = {}
-
-
-def _source_tag(func) -> str:
-    """A short hash of the module defining ``func``: its name and its file's text ('' for the
-    package's own files). The name counts too: a cached loop refers to the estimator's module
-    by name, so the same text loaded under another name must not find it."""
-    py = getattr(func, "py_func", func)
-    try:
-        path = Path(inspect.getsourcefile(py) or "")
-        text = path.read_bytes()
-    except (TypeError, OSError):
-        return "nosource"
-    if Path(__file__).resolve().parents[2] in path.resolve().parents:
-        return ""  # the package's cache folder already follows its sources
-    return hashlib.sha256(py.__module__.encode() + b"\0" + text).hexdigest()[:12]
-
-
-def _tagged(state: np.dtype, name: str, tag: str) -> np.dtype:
-    ident = re.sub(r"\W", "_", name)
-    fields = [(n, state.fields[n][0]) for n in state.names]
-    fields.append((f"est_{ident}_{tag}" if tag else f"est_{ident}", np.uint8))
-    return np.dtype(fields)
+_REGISTRY = Registry("estimator")
+_BY_STATE = _REGISTRY.by_record
+_source_tag = source_tag
+_tagged = tagged
 
 
 def register_kernel(
@@ -206,27 +183,17 @@ def register_kernel(
         reduced_state=reduced_state,
         source=tag,
     )
-    old = _BY_NAME.pop(name, None)
-    if old is not None:
-        _BY_STATE.pop(old.state, None)
-        _BY_STATE.pop(old.params, None)
-    _BY_NAME[name] = kernel
-    _BY_STATE[kernel.state] = kernel
-    _BY_STATE[kernel.params] = kernel
-    return kernel
+    return _REGISTRY.add(kernel)
 
 
 def kernel(name: str) -> EstimatorKernel:
     """The registered estimator ``name`` (``KeyError`` naming the registered ones)."""
-    try:
-        return _BY_NAME[name]
-    except KeyError:
-        raise KeyError(f"no estimator {name!r} is registered (known: {sorted(_BY_NAME)})") from None
+    return _REGISTRY[name]
 
 
 def kernel_names() -> tuple[str, ...]:
     """Names of every registered estimator, in registration order."""
-    return tuple(_BY_NAME)
+    return _REGISTRY.names()
 
 
 def kernel_of_state(dtype: np.dtype) -> EstimatorKernel:
