@@ -67,3 +67,29 @@ def test_a_deprecated_key_in_a_file_is_dropped_not_refused(tmp_path):
         warnings.simplefilter("always")
         sc = Scenario.read(str(f))
     assert not hasattr(sc.compensator, "fine_gain")
+
+
+def test_a_model_based_law_without_the_injection_says_r2_is_not_tracked():
+    # the Kalman law's only measurement is the injected flux response: on the paper's drive
+    # (no injection) it would leave R2_hat where it starts, 20 % off, with no word until the end
+    got = _warnings("paper-fig5", 'compensator.step_law="kalman"')
+    got = [w for w in got if "not tracked" in w]
+    assert len(got) == 1 and got[0].startswith("compensator.step_law:")
+    assert not [w for w in _warnings("injection-robust") if "not tracked" in w]
+
+
+def test_the_package_s_laws_keys_under_a_plug_in_law_say_they_have_no_effect():
+    from pathlib import Path
+
+    module = Path(__file__).parents[1] / "data" / "own_r2_law.py"
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        Scenario.read(
+            "injection-robust",
+            [f'plugins.modules=["{module}"]', 'compensator.step_law="relax"']
+            + ["compensator.G_CR_pu=0.01", "kalman.noise_pu=0.05"],
+            allow_plugins=True,
+        )
+    got = sorted(str(w.message) for w in rec if "no effect" in str(w.message))
+    assert [g.split(":")[0] for g in got] == ["compensator.G_CR_pu", "kalman.noise_pu"]
+    assert 'step_law = "relax"' in got[0] and '"relax", not "kalman"' in got[1]

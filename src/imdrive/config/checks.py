@@ -16,7 +16,7 @@ from imdrive.config.compensator import check_whole_injection_periods
 from imdrive.config.overrides import _to_plain
 from imdrive.config.perunit import resolve  # noqa: F401  (for callers' convenience)
 from imdrive.config.plugins import PluginSettings, module_spec_of
-from imdrive.config.r2_laws import R2_LAW_SETTINGS
+from imdrive.config.r2_laws import FUZZY_LAWS, R2_LAW_SETTINGS
 from imdrive.config.registry import ESTIMATOR_SETTINGS, package_sections
 from imdrive.config.validation import validate
 from imdrive.errors import ConfigError, ConfigWarning
@@ -288,24 +288,39 @@ FUZZY_LAW_KEYS = (
 
 
 def law_keys_unread(sc) -> None:
-    """A warning per key of the R2 law not selected, set away from its default: the fuzzy
-    law's keys under ``step_law = "kalman"`` (the model-based law has no table and no output
-    level; ``[kalman]`` holds its settings), and ``[kalman]``'s under the fuzzy law.
+    """A warning per key of an R2 law not selected, set away from its default: the fuzzy
+    law's keys under any other law (the model-based laws have no table and no output level;
+    ``[kalman]`` holds the Kalman law's settings, ``[plugins.settings.NAME]`` a plug-in's), and
+    ``[kalman]``'s under any law but ``"kalman"``; and one when a model-based law runs
+    without the injection, whose flux response is its only measurement of R2.
     """
     comp = sc.compensator
-    kalman = comp.step_law == "kalman"
-    keys = FUZZY_LAW_KEYS if kalman else tuple(sc.kalman.__dataclass_fields__)
-    given, defaults = (comp, type(comp)()) if kalman else (sc.kalman, type(sc.kalman)())
-    for key in keys:
-        if getattr(given, key) != getattr(defaults, key):
+    law = comp.step_law
+    if comp.enabled and law not in FUZZY_LAWS:
+        if not (sc.injection.amplitude_pu or sc.injection.amplitude_A):
+            why = (
+                f'"{law}" measures R2 from the injection\'s flux response, and the injection '
+                "is off (injection.amplitude_pu): R2_hat is not tracked"
+            )
+            warnings.warn(ConfigWarning("compensator.step_law", why), stacklevel=4)
+    unread = [] if law in FUZZY_LAWS else [("compensator", FUZZY_LAW_KEYS)]
+    if law != "kalman":
+        unread.append(("kalman", tuple(sc.kalman.__dataclass_fields__)))
+    for section, keys in unread:
+        given = getattr(sc, section)
+        defaults = type(given)()
+        if section == "kalman":
+            why = f'has no effect: compensator.step_law is "{law}", not "kalman"'
+        elif law == "kalman":
             why = (
                 'has no effect with step_law = "kalman": the model-based law reads its '
                 "settings from [kalman] (noise_pu, drift_pu)"
-                if kalman
-                else f'has no effect: compensator.step_law is "{comp.step_law}", not "kalman"'
             )
-            field = f"compensator.{key}" if kalman else f"kalman.{key}"
-            warnings.warn(ConfigWarning(field, why), stacklevel=4)
+        else:
+            why = f'has no effect with step_law = "{law}": only the paper\'s table law reads it'
+        for key in keys:
+            if getattr(given, key) != getattr(defaults, key):
+                warnings.warn(ConfigWarning(f"{section}.{key}", why), stacklevel=4)
 
 
 def tracking_end(sc, r) -> None:

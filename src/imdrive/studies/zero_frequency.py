@@ -43,11 +43,10 @@ F_S_HZ = (-0.5, -0.25, 0.0, 0.25, 0.5, 1.0, 2.0)
 R2_RATIOS = (0.8, 1.0, 1.2)
 #: Load in per-unit of the rated torque (negative: regenerating).
 LOAD_PU = -1.0
-#: The machine envelope's drives and ``injection-robust`` on the adaptive full-order
-#: observer (``injection-robust-afo``): since the standstill R1 test serves every estimator
-#: (kernels/r1_standstill.py) the observer runs on an identified R1, and it held all 84 runs
-#: where the MRAS lost 19 (2026-11-29).
-DRIVES = (*envelope.DRIVES, "injection-robust-afo")
+#: The machine envelope's drives, ``injection-robust`` on the adaptive full-order observer
+#: (``injection-robust-afo``) among them: since the standstill R1 test serves every estimator
+#: (kernels/r1_standstill.py) the observer runs on an identified R1 (measured here first).
+DRIVES = envelope.DRIVES
 #: The drives whose R2_hat error at the end the table gives.
 R2_DRIVES = ("injection-robust", "injection-robust-afo")
 
