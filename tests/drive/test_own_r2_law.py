@@ -50,9 +50,11 @@ def test_the_plug_in_law_tracks_R2_on_four_machines(machine, ratio):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("estimator", ["afo", "ekf", "smo-mras"])
-def test_the_plug_in_law_runs_with_other_estimators(estimator):
-    sc = _scenario(f'control.speed_feedback="{estimator}"', "estimator.R2_ratio=1.2")
+def test_the_plug_in_law_runs_with_an_estimator_that_gives_no_flux_error():
+    # the observer hands the detection no flux error: the detector forms its own, and the law
+    # reads it as with the MRAS (measured 2026-11-29 with the EKF and the sliding-mode MRAS too:
+    # within 1 %; each is one more compilation of the drive, 40-90 s, so the suite keeps one)
+    sc = _scenario('control.speed_feedback="afo"', "estimator.R2_ratio=1.2")
     m = simulate(sc).metrics()
     assert m["verdict"] == "ok", m["verdict_text"]
     assert abs(m["R2_error_pct"]) < 1.0
