@@ -218,7 +218,9 @@ def test_ekf_R2_converges_under_excitation_and_covariance_shrinks():
     )
     a = build_arrays(sc)
     S = copy_state(a.state0)
-    status, _ = run_drive(a.params, S, 0, a.n_steps, new_log(0), 1)
+    # simulate()'s argument types (an omitted default is a type of its own: a whole engine
+    # compiled for this test alone)
+    status, _ = run_drive(a.params, S, 0, a.n_steps, new_log(0), 1, 0, True, None)
     assert status == 0
     R2_hat = S.est["x"][0][5]
     assert abs(R2_hat - 0.816) / 0.816 < 0.02

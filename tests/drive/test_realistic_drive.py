@@ -213,7 +213,8 @@ def test_current_ripple_at_standstill_matches_the_svpwm_formula():
     from imdrive.kernels.engine import run_drive
     from imdrive.run.simulate import new_log
 
-    run_drive(a.params, S, 0, a.n_steps, new_log(0), 1)  # to the DC steady state
+    # to the DC steady state, with simulate()'s argument types (no engine of this test's own)
+    run_drive(a.params, S, 0, a.n_steps, new_log(0), 1, 0, True, None)
     m = sc.machine
     Ts, Vdc = sc.simulation.Ts_s, sc.inverter.Vdc_V
     sigma_L1 = m.L1_H - m.M_H**2 / m.L2_H

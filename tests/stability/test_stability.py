@@ -50,7 +50,7 @@ def _long_run(preset, speed, torque, t_end=6.0, extra=()):
     sc = Scenario.read(preset, ov)
     a = build_arrays(sc)
     S = copy_state(a.state0)
-    st, _ = run_drive(a.params, S, 0, a.n_steps, np.empty(0, dtype=LOG), 0, 0, False)
+    st, _ = run_drive(a.params, S, 0, a.n_steps, np.empty(0, dtype=LOG), 0, 0, False, None)
     assert st == S_OK
     z = np.empty(kl.N_Z)
     kl.pack_state(S, 0, z)
