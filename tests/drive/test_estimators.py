@@ -38,12 +38,17 @@ from imdrive.kernels.estimators.reactive_mras import (
     reactive_mras_step,
 )
 from imdrive.kernels.model import MODEL_STATE, model_inductances
+from imdrive.kernels.recording import RECORDING
 from imdrive.kernels.records import new_record
 from imdrive.run.build import build_arrays, copy_state
 from imdrive.run.simulate import new_log, simulate
 
 ESTIMATORS = ("mras", "reactive-mras", "afo", "ekf")
 RATED_LOAD = 12.0  # N m (the sensorless preset's)
+
+
+#: simulate()'s "no recording" (a zero-length array: the engine run shares its type)
+NO_REC = np.zeros(0, dtype=RECORDING)
 
 
 def _steady(est, rpm, *extra):
@@ -220,7 +225,7 @@ def test_ekf_R2_converges_under_excitation_and_covariance_shrinks():
     S = copy_state(a.state0)
     # simulate()'s argument types (an omitted default is a type of its own: a whole engine
     # compiled for this test alone)
-    status, _ = run_drive(a.params, S, 0, a.n_steps, new_log(0), 1, 0, True, None)
+    status, _ = run_drive(a.params, S, 0, a.n_steps, new_log(0), 1, 0, True, NO_REC)
     assert status == 0
     R2_hat = S.est["x"][0][5]
     assert abs(R2_hat - 0.816) / 0.816 < 0.02

@@ -18,6 +18,7 @@ from scipy.optimize import brentq
 from imdrive.config.scenario import Scenario
 from imdrive.errors import ConfigError
 from imdrive.kernels.engine import MAX_EVENTS, switching_period
+from imdrive.kernels.recording import RECORDING
 from imdrive.run.build import build_arrays, copy_state
 from imdrive.run.simulate import simulate
 
@@ -214,7 +215,7 @@ def test_current_ripple_at_standstill_matches_the_svpwm_formula():
     from imdrive.run.simulate import new_log
 
     # to the DC steady state, with simulate()'s argument types (no engine of this test's own)
-    run_drive(a.params, S, 0, a.n_steps, new_log(0), 1, 0, True, None)
+    run_drive(a.params, S, 0, a.n_steps, new_log(0), 1, 0, True, np.zeros(0, dtype=RECORDING))
     m = sc.machine
     Ts, Vdc = sc.simulation.Ts_s, sc.inverter.Vdc_V
     sigma_L1 = m.L1_H - m.M_H**2 / m.L2_H

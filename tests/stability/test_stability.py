@@ -20,6 +20,7 @@ from imdrive.cli import main
 from imdrive.config.scenario import Scenario
 from imdrive.kernels import linearise as kl
 from imdrive.kernels.engine import LOG, S_OK, run_drive
+from imdrive.kernels.recording import RECORDING
 from imdrive.run.build import build_arrays, copy_state
 from imdrive.stability.linear import (
     INPUT_NAMES,
@@ -30,6 +31,9 @@ from imdrive.stability.linear import (
     operating_point,
 )
 from imdrive.stability.maps import MAP_COLUMNS, stability_map, validate_map
+
+#: simulate()'s "no recording" (a zero-length array: the engine run shares its type)
+NO_REC = np.zeros(0, dtype=RECORDING)
 
 
 @pytest.fixture(scope="module")
@@ -50,7 +54,7 @@ def _long_run(preset, speed, torque, t_end=6.0, extra=()):
     sc = Scenario.read(preset, ov)
     a = build_arrays(sc)
     S = copy_state(a.state0)
-    st, _ = run_drive(a.params, S, 0, a.n_steps, np.empty(0, dtype=LOG), 0, 0, False, None)
+    st, _ = run_drive(a.params, S, 0, a.n_steps, np.empty(0, dtype=LOG), 0, 0, False, NO_REC)
     assert st == S_OK
     z = np.empty(kl.N_Z)
     kl.pack_state(S, 0, z)

@@ -14,6 +14,7 @@ import numpy as np
 from numba import njit, prange
 
 from imdrive.kernels.engine import LOG, S_OK, DriveParams, DriveState, run_drive
+from imdrive.kernels.recording import RECORDING
 from imdrive.kernels.records import b1, f8, i8, record_dtype
 
 RPM = 2.0 * math.pi / 60.0
@@ -327,6 +328,7 @@ def run_one(P, S, i, n_steps, n_win, log_out, log_every, metrics, scratch, lc_bo
     t_on = np.inf  # the compensator's start in the run's time, once it has started
     i_max = P.control[i].i_max  # torque-limited following is not a loss of control
     k0 = 0
+    no_rec = np.zeros(0, dtype=RECORDING)  # simulate()'s type for "no recording"
     while True:
         steps = min(chunk, n_steps - k0)
         final = k0 + steps == n_steps
@@ -335,7 +337,7 @@ def run_one(P, S, i, n_steps, n_win, log_out, log_every, metrics, scratch, lc_bo
         # and every first batch compiled the whole engine again instead of loading run's
         status, ke = run_drive(
             P, S, np.int64(i), np.int64(steps), scratch, np.int64(1), np.int64(k0),
-            np.bool_(final), None,
+            np.bool_(final), no_rec,
         )  # fmt: skip
         ok = status == S_OK
         rows = ke + 1 if (ok and final) else ke

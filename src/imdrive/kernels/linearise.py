@@ -56,6 +56,7 @@ from numba import njit, prange
 
 from imdrive.kernels.engine import LOG, S_OK, run_drive
 from imdrive.kernels.profiles import PR_LOAD, PR_SPEED_REF
+from imdrive.kernels.recording import RECORDING
 
 N_Z = 22
 N_U = 2
@@ -137,7 +138,8 @@ def unpack_state(z, S, i):
 @njit(cache=True)
 def _engine(P, S, i, n_steps, k0):
     """``run_drive`` for ``n_steps`` periods of drive ``i`` from period ``k0``, nothing logged,
-    with the argument types of ``simulate()``'s call (int64, bool, ``rec`` None).
+    with the argument types of ``simulate()``'s call (int64, bool, ``rec`` a zero-length
+    recording).
 
     A constant argument written in the call would reach the engine as a numba literal
     (``Literal[int](1)``): a signature of its own, and the whole engine compiled again for the
@@ -145,7 +147,7 @@ def _engine(P, S, i, n_steps, k0):
     """
     return run_drive(
         P, S, i, np.int64(n_steps), np.empty(0, dtype=LOG), np.int64(0), np.int64(k0),
-        np.bool_(False), None,
+        np.bool_(False), np.zeros(0, dtype=RECORDING),
     )  # fmt: skip
 
 

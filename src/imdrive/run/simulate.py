@@ -98,7 +98,10 @@ def simulate(
     state = copy_state(a.state0)
     if record is None:
         record = bool(scenario.output.recording)
-    rec = np.zeros(a.n_steps + 1, dtype=RECORDING) if record else None
+    # an array either way (zero-length when not recording: the engine records only below its
+    # length), so a recording run and a plain one share one compiled engine; with None the
+    # recording was a signature of its own, a whole engine compiled again per estimator
+    rec = np.zeros(a.n_steps + 1 if record else 0, dtype=RECORDING)
     # a zero-length call loads (or compiles) the kernel, so wall_time_s measures the run alone
     t0 = time.perf_counter()
     run_drive(a.params, copy_state(a.state0), 0, 0, log[:0], 1, 0, True, rec)
@@ -116,7 +119,7 @@ def simulate(
         if status == S_OK:
             tail = new_log(2, a.log)
             rest = a.n_steps - n_main
-            rec_rest = None if rec is None else rec[n_main:]
+            rec_rest = rec[n_main:]
             status, k_rest = run_drive(a.params, state, 0, rest, tail, rest, n_main, True, rec_rest)
             log[-1] = tail[0]
             k_end = n_main + k_rest
@@ -142,7 +145,7 @@ def simulate(
             for k, v in columns_from_log(end_row, res.vector, res.extra_units).items()
         }
     res.startup_s = startup
-    if rec is not None:
+    if record:
         from imdrive.run.recording import recording_columns
 
         rows = rec[: k_end + 1 if status == S_OK else k_end]
