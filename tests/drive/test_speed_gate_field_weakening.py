@@ -23,7 +23,7 @@ from imdrive.kernels.compensator import (
     COMPENSATOR_STATE,
     compensator_gate_sample,
 )
-from imdrive.kernels.ifoc import CONTROL_PARAMS, CONTROL_STATE
+from imdrive.kernels.ifoc import CONTROL_PARAMS
 from imdrive.kernels.speed_control import speed_loop_gain
 
 RPM = np.pi / 30.0
@@ -31,13 +31,11 @@ RPM = np.pi / 30.0
 
 def test_loop_gain_is_one_at_rated_flux_and_k_or_k_squared_below():
     p = np.zeros(1, CONTROL_PARAMS).view(np.recarray)[0]
-    s = np.zeros(1, CONTROL_STATE).view(np.recarray)[0]
     p.w_fw_sched = True
-    assert speed_loop_gain(p, s) == 1.0  # rated flux: the gate as it was, bit for bit
-    s.fw_cut = 0.6
-    assert speed_loop_gain(p, s) == pytest.approx(0.16)
+    assert speed_loop_gain(p, 1.0) == 1.0  # rated flux: the gate as it was, bit for bit
+    assert speed_loop_gain(p, 1.0 - 0.6) == pytest.approx(0.16)  # fw_cut 0.6
     p.w_fw_sched = False  # unscaled gains: only the torque constant falls
-    assert speed_loop_gain(p, s) == pytest.approx(0.4)
+    assert speed_loop_gain(p, 0.4) == pytest.approx(0.4)
 
 
 def test_weighted_error_flags_only_above_the_rated_flux_threshold():

@@ -47,6 +47,13 @@ CONTEXT = {
     "M_hat_H": "M",
     "R1_hat_after_ohm": "R1a",
     "R2_hat_after_ohm": "R2a",
+    "t_hold_s": "thold",
+    "v_use_pu": "vuse",
+    "k_flux_pu": "kflux",
+    "w_sl_rad_s": "wsl",
+    "iq_meas_A": "iq",
+    "L_inc_hat_H": "Linc",
+    "w_fb_rad_s": "wfb",
 }
 
 MAP_TOML = """
@@ -154,6 +161,26 @@ def test_csv_with_other_names_and_units_through_a_map(run, tmp_path):
     assert rep.summary["mapping"]["voltage"]["kind"] == "measured-phase-to-phase"
     t = pq.read_table(out / "timeseries.parquet")
     assert rel_err(t["speed_est_afo_rpm"].to_numpy(), ref.signals["speed_est_afo_rpm"]) <= 1e-9
+
+
+@pytest.mark.slow
+def test_the_r2_law_replays_the_same_through_a_map(tmp_path):
+    """An R2-tracking drive's recording as the foreign CSV: each estimator's law gives the
+    R2_hat of the recording's own replay to 1e-9."""
+    sc = im.Scenario.read("injection-robust").with_overrides({"simulation.t_end_s": 6.0})
+    res = simulate(sc, record=True)
+    res.save(tmp_path / "run", formats=["recording"])
+    ref = replay(tmp_path / "run", estimators=ESTIMATORS)
+    csv = tmp_path / "scope.csv"
+    write_csv(csv, foreign_columns(res.recording))
+    mp = tmp_path / "map.toml"
+    mp.write_text(MAP_TOML)
+    rep = replay(csv, sc, ESTIMATORS, mapping=mp)
+    for name in ESTIMATORS:
+        assert rep.summary["estimators"][name]["R2_law"]
+        R2 = rep.signals[f"R2_hat_{name}_ohm"]
+        assert R2[-1] < 0.9 * R2[0]  # the law moved it (from 1.2 R2)
+    assert_same(rep, ref)
 
 
 @pytest.mark.parametrize("layout", ["variables", "struct"])

@@ -43,6 +43,7 @@ def _cmd_replay(args) -> int:
         args.estimators,
         out,
         controller_period=args.controller_period,
+        r2_law=args.r2_law,
         force=args.force,
         progress=None if not args.quiet else False,
     )
@@ -52,6 +53,8 @@ def _cmd_replay(args) -> int:
         for name, e in s["estimators"].items():
             err = e["speed_error_rpm"]
             how = e["status"] if err is None else f"{e['status']}, RMS error {err['rms']:.3g} rpm"
+            if e["R2_law"] and e["R2_hat_end_ohm"] is not None:
+                how += f", R2_hat {e['R2_hat_end_ohm']:.4g} ohm"
             parts.append(f"{name} ({how})")
         print(
             f"imdrive: replayed {s['rows_replayed']} rows "
@@ -59,6 +62,7 @@ def _cmd_replay(args) -> int:
             f"{', '.join(parts)}; {s['real_time_factor']:.0f}x real time -> {out}",
             file=sys.stderr,
         )
+        print(f"imdrive: R2 law: {s['R2_law']}", file=sys.stderr)
     return EXIT_OK
 
 
@@ -80,8 +84,9 @@ def add_parser(sub) -> None:
         "status), replay.png and report.html into out/replay-NAME unless --out says "
         "otherwise. A recording from elsewhere (CSV, Parquet or MAT) is read through a "
         "mapping file (--map, docs/replay.md); one sampled faster than the controller is "
-        "decimated to its period. The file is streamed in chunks. The R2-tracking law is "
-        "not replayed: R2_hat follows the recorded controller's writes. Exit codes: "
+        "decimated to its period. The file is streamed in chunks. Where the scenario runs "
+        "an R2 law and the recording carries its excitation, each estimator runs the law "
+        "too (R2_hat_<estimator>_ohm; --r2-law). Exit codes: "
         "imdrive --help (2: bad input, nothing written).",
         epilog=_examples(
             "imdrive run sensorless --format recording --out out/run1",
@@ -107,6 +112,14 @@ def add_parser(sub) -> None:
         default="scenario",
         help="run the estimators at the scenario's simulation.Ts_s (default; a faster "
         "recording is decimated to it) or at the recording's own sample period",
+    )
+    r.add_argument(
+        "--r2-law",
+        choices=("auto", "on", "off"),
+        default="auto",
+        help="run the scenario's R2 law on each estimator's flux error: where the scenario "
+        "runs one and the recording carries its excitation (auto, default), always (on: "
+        "refused where it cannot), never (off: R2_hat as the recorded controller wrote it)",
     )
     r.add_argument(
         "--scenario",

@@ -244,7 +244,7 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True, rec=None):
         smpl = measure(pp, psen, x, ctl, prof, t, k0 + k, i_next_ab, have_next, scratch[0])
         if rec is not None:  # pruned at compile time without a recording
             if k < rec.shape[0]:
-                record_before(rec[k], smpl, mdl, ctl)
+                record_before(rec[k], smpl, mdl, ctl, smp)
         estm = NO_ESTIMATE
         if foc:
             estm = estimate(
@@ -254,7 +254,8 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True, rec=None):
         mod = modulate(pinv, pc, smp, smpl, cmd, switching, Vdc_meas, scratch[0], Ts)
         if rec is not None:
             if k < rec.shape[0]:
-                record_after(rec[k], x, smp, mdl, prof, estm, foc)
+                w_fb = estm.w_r_hat / pp.n_p if sim.sensorless else x.w_m
+                record_after(rec[k], x, smp, mdl, prof, estm, foc, w_fb)
 
         logged = log_every > 0 and k % log_every == 0 and k // log_every < n_rows
         if logged:

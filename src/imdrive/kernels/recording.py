@@ -14,11 +14,17 @@ closed loop did, :mod:`imdrive.kernels.replay`):
   estimator then restarts), and the model's ``R1_hat``, ``R2_hat``, ``M_hat`` as the estimator read
   them and ``R1_hat``, ``R2_hat`` right after its step (so a replay can tell the controller's
   writes to its model, by the R2 compensator or the magnetising curve, from the estimator's
-  own adaptation).
+  own adaptation);
+* what the R2 law reads of the controller besides: the standstill test's hold of the duty
+  cycle, the voltage use, the field weakening's flux factor, the slip command, the measured
+  torque current, the model's incremental magnetising inductance, the speed loop's feedback
+  (the gate watches the drive's transients, whichever estimator replays)
+  (:class:`~imdrive.kernels.r2_tracking.TrackingInput`).
 
 :func:`imdrive.kernels.engine.run_drive` fills it through :func:`record_before` (before the
 estimator's step) and :func:`record_after` (once the period's voltage is commanded) when it is
-given a ``rec`` array; without one the two calls are compiled out.
+given a ``rec`` array of at least one row per period; with fewer rows (none when not
+recording) the rows beyond are not written.
 """
 
 from __future__ import annotations
@@ -48,14 +54,23 @@ RECORDING = record_dtype(
         ("R1_after", f8),  # R1_hat and R2_hat right after the estimator's step, ohm
         ("R2_after", f8),
         ("w_r_hat", f8),  # the estimator's speed estimate, electrical rad/s
+        # what the R2 law reads of the controller besides (kernels/r2_tracking.py)
+        ("t_hold", f8),  # the time the standstill R1 test held the duty cycle back, s
+        ("v_use", f8),  # the last commanded voltage over Vdc_meas/sqrt 3
+        ("k_flux", f8),  # the field weakening's flux factor 1 - fw_cut
+        ("w_sl", f8),  # the slip command of the last period, electrical rad/s
+        ("iq_meas", f8),  # the measured torque current of the last control period, A
+        ("L_inc_hat", f8),  # the model's incremental magnetising inductance, H
+        ("w_fb", f8),  # the speed loop's feedback (the estimate or the encoder), mech. rad/s
     ]
 )
 
 
 @njit(cache=True, inline="always")
-def record_before(row, smpl, mdl, ctl):
+def record_before(row, smpl, mdl, ctl, smp):
     """Before the estimator's step: the controller's values it reads at this sample."""
     row.time = smpl.t
+    row.v_use = smp.v_use
     row.i_ab = smpl.i_meas_ab
     row.theta_e = smpl.theta_k
     row.w_e = ctl.w_e
@@ -64,18 +79,25 @@ def record_before(row, smpl, mdl, ctl):
     row.R2_hat = mdl.R2_hat
     row.M_hat = mdl.M_hat
     row.restart = ctl.dc_restart
+    row.t_hold = mdl.t_hold
+    row.k_flux = 1.0 - ctl.fw_cut
+    row.w_sl = ctl.w_sl
+    row.iq_meas = ctl.i_s_dq.imag
+    row.L_inc_hat = mdl.L_inc_hat
 
 
 @njit(cache=True, inline="always")
-def record_after(row, x, smp, mdl, prof, estm, foc):
+def record_after(row, x, smp, mdl, prof, estm, foc, w_fb):
     """Once the period's voltage is commanded (``smp.v_prev_ab``, which the next estimator
-    step reads): the command, the speed, the estimator's outputs and hold."""
+    step reads): the command, the speed, the estimator's outputs and hold, the speed loop's
+    feedback ``w_fb`` (mechanical rad/s)."""
     row.v_cmd_ab = smp.v_prev_ab
     row.w_m = x.w_m
     row.i_inj = estm.i_inj
     row.w_ref = prof.w_ref
     row.hold_R1 = estm.hold_R1
     row.w_r_hat = estm.w_r_hat
+    row.w_fb = w_fb
     if foc:
         row.R1_after = estm.R1_after
         row.R2_after = estm.R2_after

@@ -1,4 +1,4 @@
-"""Replay: a registered speed estimator run open loop on recorded signals.
+"""Replay: a registered speed estimator, and the R2 law, run open loop on recorded signals.
 
 The closed loop hands its estimator, each control period, an
 :class:`~imdrive.kernels.estimators.registry.EstimatorInput` and the controller's machine
@@ -23,6 +23,20 @@ adaptation carries on). ``M_hat`` is the controller's alone: it is taken as reco
 run's own estimator this reproduces the closed loop's model exactly; a recording without the
 model leaves the estimator the scenario's, adapted by itself alone.
 
+The R2 law
+----------
+Where the replay runs the scenario's R2 law (``trk``'s ``law``), each estimator carries a
+compensator of its own and calls :func:`~imdrive.kernels.r2_tracking.excitation` before its
+step and :func:`~imdrive.kernels.r2_tracking.track` after it, as the closed loop does, with
+the :class:`~imdrive.kernels.r2_tracking.TrackingInput` built from the recorded context; the
+law, not the recording, then writes ``R2_hat``. The estimator reads the injected current the
+recording holds (what the drive injected); the law's detection demodulates with its own
+phase, and the largest difference of its injection from the recorded one is kept: a
+scenario whose injection is not the recorded drive's shows there. The law's gate watches
+the drive's transients, so it reads the recorded speed loop's feedback, not the replayed
+estimate (which differs from it by the two estimators' disagreement, and held the EKF's law
+on the Aalto machine for the whole replay: R2_hat stayed 20 % off).
+
 Both functions release the GIL (``nogil``): the estimators of one chunk run in parallel
 threads, each on its own records and output arrays, reading the same rows.
 """
@@ -39,7 +53,9 @@ from imdrive.kernels.estimators.registry import (
     estimator_finite,
     estimator_step,
 )
+from imdrive.kernels.r2_tracking import TrackingInput, excitation, track
 from imdrive.kernels.records import b1, c16, f8, record_dtype
+from imdrive.kernels.speed_control import speed_loop_gain
 
 #: One period of a replay: the estimator's input and the controller's model (SI units).
 REPLAY_ROW = record_dtype(
@@ -60,6 +76,15 @@ REPLAY_ROW = record_dtype(
         ("M_hat", f8),  # H
         ("R1_prev", f8),  # the model the run's estimator left at the last sample, ohm
         ("R2_prev", f8),
+        # what the R2 law reads of the controller besides (kernels/r2_tracking.py)
+        ("t_hold", f8),  # the standstill test's hold of the duty cycle, s
+        ("v_use", f8),  # the last commanded voltage over Vdc_meas/sqrt 3
+        ("k_flux", f8),  # the field weakening's flux factor
+        ("w_sl", f8),  # the slip command, electrical rad/s
+        ("iq_meas", f8),  # the measured torque current of the last control period, A
+        ("L_inc_hat", f8),  # the model's incremental magnetising inductance, H (0: not given)
+        ("w_fb", f8),  # the speed loop's feedback, mechanical rad/s (NaN: not given)
+        ("w_m", f8),  # the encoder's speed, mechanical rad/s (0 without one)
     ]
 )
 
@@ -79,10 +104,13 @@ def fill_rows(rows, t, i_a, i_b, v_a, v_b, ctx, model, prev):
     t, i_a, i_b, v_a, v_b : float64[n]
         ``time_s``, ``i_alpha_meas_A``, ``i_beta_meas_A``, ``v_alpha_cmd_V``,
         ``v_beta_cmd_V``.
-    ctx : float64[8, n] or float64[8, 1]
+    ctx : float64[16, n] or float64[16, 1]
         The context: ``theta_e_rad``, ``w_e_rad_s``, ``id_ref_A``, ``iq_ref_A``,
-        ``w_ref_rad_s``, ``i_inj_A``, ``hold_R1_flag``, ``restart_flag``; a row of length 1
-        is a constant (a column the recording lacks, at its default).
+        ``w_ref_rad_s``, ``i_inj_A``, ``hold_R1_flag``, ``restart_flag``, ``t_hold_s``,
+        ``v_use_pu``, ``k_flux_pu``, ``w_sl_rad_s``, ``iq_meas_A``, ``L_inc_hat_H``,
+        ``w_fb_rad_s`` and the encoder's speed,
+        mechanical rad/s; a row of length 1 is a constant (a column the recording lacks, at
+        its default).
     model : float64[5, n] or float64[5, 0]
         ``R1_hat_ohm``, ``R2_hat_ohm``, ``M_hat_H``, ``R1_hat_after_ohm``,
         ``R2_hat_after_ohm``; empty where the recording lacks the model (those fields zero).
@@ -119,6 +147,14 @@ def fill_rows(rows, t, i_a, i_b, v_a, v_b, ctx, model, prev):
         r.i_inj = ctx[5, c]
         r.hold_R1 = ctx[6, c] != 0.0
         r.restart = ctx[7, c] != 0.0
+        r.t_hold = ctx[8, c]
+        r.v_use = ctx[9, c]
+        r.k_flux = ctx[10, c]
+        r.w_sl = ctx[11, c]
+        r.iq_meas = ctx[12, c]
+        r.L_inc_hat = ctx[13, c]
+        r.w_fb = ctx[14, c]
+        r.w_m = ctx[15, c]
         if given:
             r.R1_hat = model[0, k]
             r.R2_hat = model[1, k]
@@ -140,8 +176,9 @@ def fill_rows(rows, t, i_a, i_b, v_a, v_b, ctx, model, prev):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def replay_estimator(pe, mdl, est, rows, Ts, model_given, w_out, R2_out):
-    """Run one estimator over the recording's ``rows`` (its records updated in place).
+def replay_estimator(pe, mdl, est, rows, Ts, model_given, w_out, R2_out, trk, k0):
+    """Run one estimator, and the R2 law where ``trk`` says so, over the recording's
+    ``rows`` (the records updated in place).
 
     Parameters
     ----------
@@ -160,6 +197,16 @@ def replay_estimator(pe, mdl, est, rows, Ts, model_given, w_out, R2_out):
         Receives the speed estimate after each row, electrical rad/s.
     R2_out : float64[n]
         Receives the model's ``R2_hat`` after each row, ohm.
+    trk : tuple
+        ``(law, pk, cmp, table, pc, sensorless, n_p, inj_err)``: whether the R2 law runs
+        (it then writes ``R2_hat``, not the recording), the compensator's params and state
+        record arrays (state updated), its decision table, the control params record array,
+        whether the drive's speed feedback is the estimate (the gate's speed) and the pole
+        pairs; ``inj_err`` (float64[1]) keeps the largest difference of the law's injected
+        current from the recorded one, A.
+    k0 : int
+        Rows replayed before these (the sample index of the first, the law's decision
+        periods count from the recording's first row).
 
     Returns
     -------
@@ -171,21 +218,43 @@ def replay_estimator(pe, mdl, est, rows, Ts, model_given, w_out, R2_out):
     p = pe[0]
     m = mdl[0]
     s = est[0]
+    law, pk_a, cmp_a, table, pc_a, sensorless, n_p, inj_err = trk
+    pk = pk_a[0]
+    cmp = cmp_a[0]
+    pc = pc_a[0]
     for k in range(rows.shape[0]):
         r = rows[k]
         if model_given:
             if r.R1_hat != r.R1_prev:  # the controller wrote R1_hat (inverter-error scale)
                 m.R1_hat = r.R1_hat
-            # R2_hat as the run's controller wrote it (its R2 compensator). This is where an
-            # R2-tracking law run on the recording would write its own estimate instead.
-            if r.R2_hat != r.R2_prev:
+            # R2_hat as the run's R2 law wrote it, where the replay does not run the law
+            if not law and r.R2_hat != r.R2_prev:
                 m.R2_hat = r.R2_hat
             m.M_hat = r.M_hat
+        if r.L_inc_hat > 0.0:  # the controller's magnetising curve, where recorded
+            m.L_inc_hat = r.L_inc_hat
+        t_cyc = r.t - r.t_hold
+        sine = 0.0
+        if law:  # the law's excitation, checked against the recorded injection
+            sine, i_inj = excitation(pk, cmp, t_cyc, r.v_use, r.k_flux, Ts)
+            inj_err[0] = max(inj_err[0], abs(i_inj - r.i_inj))
         inp = EstimatorInput(
             r.v_ab, r.i_prev_ab, r.i_ab, r.theta_e, r.w_e, r.i_ref_dq, r.w_ref, r.i_inj,
             r.hold_R1, Ts, r.t, r.restart,
         )  # fmt: skip
         w_r_hat, e_dq0 = estimator_step(p, m, s, inp)
+        if law:
+            # the gate watches the drive's transients: its speed loop's recorded feedback;
+            # without one the closed loop's rule (this estimate, or the encoder)
+            w_fb = r.w_fb
+            if math.isnan(w_fb):
+                w_fb = w_r_hat / n_p if sensorless else r.w_m
+            ti = TrackingInput(
+                r.t, t_cyc, k0 + k, sine, r.w_ref, w_fb,
+                r.i_ref_dq.imag * r.k_flux, r.v_use, r.w_e, r.w_sl,
+                speed_loop_gain(pc, r.k_flux), r.iq_meas, Ts,
+            )  # fmt: skip
+            track(pk, cmp, m, table, e_dq0, inp, w_r_hat, ti)
         w_out[k] = w_r_hat
         R2_out[k] = m.R2_hat
         ok = math.isfinite(w_r_hat) and cmath.isfinite(e_dq0) and estimator_finite(s)

@@ -47,12 +47,12 @@ def speed_pi_gains(p, s):
 
 
 @njit(cache=True)
-def speed_loop_gain(p, s):
+def speed_loop_gain(p, k):
     """The speed loop's gain over its rated-flux value (dimensionless, <= 1): the torque
-    constant's flux factor ``k = 1 - s.fw_cut``, times ``k`` again with ``p.w_fw_sched``
-    (the PI's proportional gain scaled by :func:`speed_pi_gains`); 1 at rated flux. The
-    speed error's area after a disturbance scales with its inverse (module docstring)."""
-    if s.fw_cut > 0.0:
-        k = 1.0 - s.fw_cut
+    constant's flux factor ``k = 1 - fw_cut`` (CONTROL_STATE), times ``k`` again with
+    ``p.w_fw_sched`` (the PI's proportional gain scaled by :func:`speed_pi_gains`); 1 at
+    rated flux. The speed error's area after a disturbance scales with its inverse (module
+    docstring)."""
+    if k < 1.0:
         return k * k if p.w_fw_sched else k
     return 1.0

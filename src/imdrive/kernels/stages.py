@@ -33,25 +33,14 @@ from typing import NamedTuple
 from numba import njit
 
 from imdrive.kernels.bridge import CARRY_FIELDS, bridge_period
-from imdrive.kernels.compensator import (
-    compensator_gate_sample,
-    compensator_step,
-    demodulate,
-    injection_sine,
-    log_compensator,
-)
-from imdrive.kernels.compensator_range import (
-    headroom_weakening_input,
-    injection_headroom,
-    thermal_step,
-)
+from imdrive.kernels.compensator import log_compensator
+from imdrive.kernels.compensator_range import headroom_weakening_input
 from imdrive.kernels.estimators.registry import (
     EstimatorInput,
     estimator_finite,
     estimator_log,
     estimator_step,
 )
-from imdrive.kernels.flux_detector import detector_flux_error
 from imdrive.kernels.ifoc import (
     dead_time_advance,
     field_weakening,
@@ -66,7 +55,7 @@ from imdrive.kernels.ifoc import (
 from imdrive.kernels.inverter import MAX_EVENTS, MAX_SEGMENTS, inverter_segments, limit_magnitude
 from imdrive.kernels.inverter_scale import start_from_identified, stator_residual
 from imdrive.kernels.machine import integrate_segment, log_plant, stator_current
-from imdrive.kernels.model import incremental_L2, model_inductances
+from imdrive.kernels.model import model_inductances
 from imdrive.kernels.profiles import (
     PR_FLUX_REF,
     PR_FREQ,
@@ -80,6 +69,7 @@ from imdrive.kernels.profiles import (
 )
 from imdrive.kernels.r1_standstill import r1_standstill
 from imdrive.kernels.r2_law_registry import law_log
+from imdrive.kernels.r2_tracking import TrackingInput, excitation, track
 from imdrive.kernels.records import f8, record_dtype
 from imdrive.kernels.sensors import NOISE_FIELDS, measure_current_drawn
 from imdrive.kernels.speed_control import speed_loop_gain
@@ -233,21 +223,13 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc
     # the dead-time bridge the compensation's few percent pushed the sum into the limit)
     v_use = smp.v_use
     v_fw = v_use
-    sine = 0.0
-    i_inj = 0.0
-    if pk.inj_amp != 0.0:
-        ph0 = cmp.inj_phase
-        sine = injection_sine(pk, cmp, t_cyc, Ts)
-        a_inj = 1.0
-        if pk.inj_v_hi > 0.0:  # the injection backs off near the voltage limit
-            wrapped = cmp.inj_phase < ph0
-            a_inj = injection_headroom(pk, cmp, v_use, 1.0 - ctl.fw_cut, wrapped)
-        i_inj = a_inj * pk.inj_amp * sine
-        if pk.inj_fw and cmp.v_peak_last > 0.0:  # the field weakening leaves it headroom
-            i_ref = ctl.i_ref_dq  # the speed loop's torque current at its limit
-            iq_max = math.sqrt(max(pc.i_max * pc.i_max - i_ref.real * i_ref.real, 0.0))
-            lim = abs(i_ref.imag) >= 0.99 * iq_max
-            v_fw = headroom_weakening_input(pk, cmp, v_use, lim, 1.0 - ctl.fw_cut)
+    sine, i_inj = excitation(pk, cmp, t_cyc, v_use, 1.0 - ctl.fw_cut, Ts)
+    if pk.inj_amp != 0.0 and pk.inj_fw and cmp.v_peak_last > 0.0:
+        # the field weakening leaves the injection headroom
+        i_ref = ctl.i_ref_dq  # the speed loop's torque current at its limit
+        iq_max = math.sqrt(max(pc.i_max * pc.i_max - i_ref.real * i_ref.real, 0.0))
+        lim = abs(i_ref.imag) >= 0.99 * iq_max
+        v_fw = headroom_weakening_input(pk, cmp, v_use, lim, 1.0 - ctl.fw_cut)
     w_ref = prof.w_ref
 
     # R1 adaptation held from the compensator's start until it first updates and whenever
@@ -275,28 +257,16 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc
         r1_standstill(
             pc, mdl, ctl, v.real, v.imag, i0.real, i0.imag, i1.real, i1.imag, w_ref, ctl.w_e, Ts
         )
-    if pk.det:  # the estimator gives no flux error: the detection forms its own
-        e_dq0 = detector_flux_error(pk, cmp, mdl, inp, w_r_hat)
-
-    if pk.inj_amp != 0.0:
-        T2_hat = incremental_L2(mdl) / mdl.R2_hat
-        demodulate(pk, cmp, e_dq0, sine, ctl.w_e, ctl.w_sl, T2_hat, Ts)
-    if pk.enabled:
-        if t_cyc >= pk.t_on and not cmp.on:  # its start, in the run's time (the metrics')
-            cmp.on = True
-            cmp.t_start = t
-        if pk.gate and t_cyc >= pk.t_on:  # the compensator's gating signals
-            w_fb_g = w_r_hat / pp.n_p if sim.sensorless else x.w_m
-            # the load-transient gate compares torques: iq* at the reference flux, scaled by
-            # the field weakening's flux factor (in deep field weakening the speed loop's iq*
-            # swings by 1/k more for the same torque, and the gate held R2_hat 80 % of the time
-            # at 2 x rated speed)
-            iq_torque = ctl.i_ref_dq.imag * (1.0 - ctl.fw_cut)
-            g_w = speed_loop_gain(pc, ctl)  # the speed error weighted by the loop's gain
-            compensator_gate_sample(pk, cmp, w_ref, w_fb_g, iq_torque, v_use, ctl.w_e, g_w)
-        compensator_step(pk, cmp, mdl, table, e_dq0.real, t_cyc, smpl.k, ctl.w_e)
-        if pk.th_on:  # the rotor thermal model carries R2_hat while it is held
-            thermal_step(pk, cmp, mdl, ctl.i_s_dq.imag, t_cyc, Ts)
+    # the gate compares torques: iq* at the reference flux, scaled by the field weakening's
+    # flux factor (in deep field weakening the speed loop's iq* swings by 1/k more for the
+    # same torque, and the gate held R2_hat 80 % of the time at 2 x rated speed), and the
+    # speed error weighted by the loop's gain
+    ti = TrackingInput(
+        t, t_cyc, smpl.k, sine, w_ref, w_r_hat / pp.n_p if sim.sensorless else x.w_m,
+        ctl.i_ref_dq.imag * (1.0 - ctl.fw_cut), v_use, ctl.w_e, ctl.w_sl,
+        speed_loop_gain(pc, 1.0 - ctl.fw_cut), ctl.i_s_dq.imag, Ts,
+    )  # fmt: skip
+    e_dq0 = track(pk, cmp, mdl, table, e_dq0, inp, w_r_hat, ti)
     return Estimate(w_r_hat, e_dq0, i_inj, v_use, v_fw, hold_R1, R1_after, R2_after)
 
 

@@ -93,6 +93,13 @@ def recording_columns(rec: np.ndarray, n_p: float, vdc_meas: float) -> dict[str,
         "M_hat_H": rec["M_hat"],
         "R1_hat_after_ohm": rec["R1_after"],
         "R2_hat_after_ohm": rec["R2_after"],
+        "t_hold_s": rec["t_hold"],
+        "v_use_pu": rec["v_use"],
+        "k_flux_pu": rec["k_flux"],
+        "w_sl_rad_s": rec["w_sl"],
+        "iq_meas_A": rec["iq_meas"],
+        "L_inc_hat_H": rec["L_inc_hat"],
+        "w_fb_rad_s": rec["w_fb"],
     }
     return {k: np.ascontiguousarray(v, dtype=np.float64) for k, v in cols.items()}
 

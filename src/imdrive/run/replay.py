@@ -16,11 +16,15 @@ next), the chunk's estimates written out; the memory is bounded by the chunk, no
 The stages overlap in threads (:mod:`imdrive.run.replay_stream`): the next chunk is read
 while the estimators run, each in a thread of its own, and the last one is written.
 
-R2_hat: the R2-tracking law is not replayed yet. With a recording that carries the
-controller's model, an estimator's ``R2_hat`` follows what the recorded controller wrote (its
-R2 compensator) besides its own adaptation; without, it starts from the scenario's and only the
-estimator adapts it (the AFO's and the EKF's own laws). An R2 law run on the recording belongs
-where :func:`imdrive.kernels.replay.replay_estimator` writes the recorded R2_hat.
+R2_hat: where the scenario runs an R2 law (``compensator.enabled``; the package's laws or a
+plug-in) and the recording carries its excitation (the injected current, where the law
+injects), each estimator runs the law too, on its own flux error, through the closed loop's
+code (:mod:`imdrive.kernels.r2_tracking`): ``R2_hat_<estimator>_ohm`` is then that law's
+estimate on the recorded signals, and the run's own estimator and law give back the run's
+R2_hat. Otherwise (``r2_law="off"``, no law, no excitation), with a recording that carries
+the controller's model, an estimator's ``R2_hat`` follows what the recorded controller wrote
+besides its own adaptation; without, it starts from the scenario's and only the estimator
+adapts it (the AFO's and the EKF's own laws).
 """
 
 from __future__ import annotations
@@ -30,12 +34,13 @@ import contextlib
 import math
 import os
 import time
+import warnings
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
 
-from imdrive.errors import ConfigError
+from imdrive.errors import ConfigError, ConfigWarning
 from imdrive.kernels.replay import R_OK, REPLAY_ROW, fill_rows, replay_estimator
 from imdrive.run.recording import CONTEXT_DEFAULTS, MODEL_COLUMNS, REQUIRED, Recording
 from imdrive.run.recording_read import CHUNK_ROWS, open_recording
@@ -46,7 +51,9 @@ from imdrive.run.replay_inputs import (
     _scenario_of,
     check_units,
     decimation,
+    law_replayed,
 )
+from imdrive.run.replay_stats import ErrorStats, R2Spread
 from imdrive.run.replay_stream import EstimateWriter, read_ahead
 
 #: the files a replay folder holds
@@ -56,6 +63,11 @@ RPM = 30.0 / math.pi
 
 #: points per signal kept for the figures at most
 PLOT_POINTS = 20000
+
+#: the largest difference of the replayed law's injection from the recorded one, over its
+#: amplitude, that passes without a warning: the synchronous detection's gain falls as the
+#: cosine of the phase error, 5 % of the amplitude is a phase error of 3 degrees (0.1 %)
+INJECTION_TOLERANCE = 0.05
 
 
 def column_name(estimator: str, quantity: str, unit: str) -> str:
@@ -165,9 +177,11 @@ def replay_rows(cols: dict, prev: np.ndarray, rows: np.ndarray | None = None):
     n = len(c["time_s"])
     rows = np.empty(n, dtype=REPLAY_ROW) if rows is None or len(rows) < n else rows[:n]
     defaulted = [name for name in CONTEXT_DEFAULTS if name not in c]
-    ctx = np.empty((len(CONTEXT_DEFAULTS), n))
+    ctx = np.empty((len(CONTEXT_DEFAULTS) + 1, n))
     for j, name in enumerate(CONTEXT_DEFAULTS):
-        ctx[j] = c.get(name, CONTEXT_DEFAULTS[name])
+        ctx[j] = _context(c, name)
+    enc = c.get("speed_enc_rpm")  # the encoder, for the R2 law's gate on a sensored drive
+    ctx[-1] = 0.0 if enc is None else np.asarray(enc, dtype=float) / RPM
     model_given = all(m in c for m in MODEL_COLUMNS)
     model = np.empty((len(MODEL_COLUMNS), n if model_given else 0))
     if model_given:
@@ -182,34 +196,26 @@ def replay_rows(cols: dict, prev: np.ndarray, rows: np.ndarray | None = None):
     return rows, model_given, defaulted
 
 
+def _context(c: dict, name: str):
+    """A context column's values, or its default: a number or another column's
+    (:data:`CONTEXT_DEFAULTS`)."""
+    while name not in c:
+        d = CONTEXT_DEFAULTS[name]
+        if not isinstance(d, str):
+            return d
+        name = d
+    return c[name]
+
+
 def _prev_row(sample0) -> np.ndarray:
     """:func:`replay_rows`'s ``prev`` before the first row: the drive's initial samples."""
     return np.array([sample0["i_prev_ab"], sample0["v_prev_ab"], np.nan, np.nan], complex)
 
 
-class _Errors:
-    """The speed-estimate error against the encoder, accumulated chunk by chunk."""
-
-    def __init__(self):
-        self.n, self.s, self.s2, self.mx = 0, 0.0, 0.0, 0.0
-
-    def add(self, e: np.ndarray) -> None:
-        if e.size:
-            self.n += e.size
-            self.s += float(np.sum(e))
-            self.s2 += float(np.sum(e * e))
-            self.mx = max(self.mx, float(np.max(np.abs(e))))
-
-    def stats(self) -> dict | None:
-        if self.n == 0:
-            return None
-        return {"mean": self.s / self.n, "rms": math.sqrt(self.s2 / self.n), "max": self.mx}
-
-
 class _Estimator:
     """One estimator's records and what it has given so far."""
 
-    def __init__(self, name: str, a, Ts: float, model_given: bool):
+    def __init__(self, name: str, a, Ts: float, model_given: bool, law: bool, n_rows: int):
         self.name = name
         self.a = a
         self.mdl = a.state0.model.copy()
@@ -217,16 +223,28 @@ class _Estimator:
         self.n_p = float(a.params.plant[0]["n_p"])
         self.Ts = Ts
         self.model_given = model_given
+        P = a.params
+        # the R2 law on this estimator's flux error (its own compensator records), where
+        # the replay runs one and the scenario gives this estimator one
+        self.law = law and bool(P.comp[0]["enabled"])
+        self.inj_err = np.zeros(1)  # A, the law's injection against the recorded one
+        self.inj_amp = float(P.comp[0]["inj_amp"])
+        self.trk = (
+            self.law, P.comp, a.state0.comp.copy(), P.tables[int(P.table_idx[0])], P.control,
+            bool(P.sim[0]["sensorless"]), self.n_p, self.inj_err,
+        )  # fmt: skip
+        self.k = 0  # rows replayed
+        self.R2 = R2Spread(n_rows)
         self.status = R_OK
         self.n_ok = 0  # rows replayed with every state finite
         self.diverged_at = None
-        self.errors = _Errors()
+        self.errors = ErrorStats()
         self.R2_end = None
         self.wall = 0.0  # s, its kernel's wall time (in a thread: waits for a core count)
         self.cpu = 0.0  # s, its kernel's CPU time
         w, R2 = np.zeros(0), np.zeros(0)  # compile (or load from the cache) before timing
         none = np.zeros(0, REPLAY_ROW)
-        replay_estimator(a.params.est, self.mdl, self.est, none, Ts, model_given, w, R2)
+        replay_estimator(P.est, self.mdl, self.est, none, Ts, model_given, w, R2, self.trk, 0)
 
     def run(self, rows: np.ndarray, enc) -> tuple[np.ndarray, np.ndarray]:
         """The estimator over ``rows`` (its records carried on): its speed estimate, rpm, and
@@ -240,8 +258,10 @@ class _Estimator:
         R2 = np.empty(n)
         t0, c0 = time.perf_counter(), time.thread_time()
         status, k_end = replay_estimator(
-            self.a.params.est, self.mdl, self.est, rows, self.Ts, self.model_given, w, R2
-        )
+            self.a.params.est, self.mdl, self.est, rows, self.Ts, self.model_given, w, R2,
+            self.trk, self.k,
+        )  # fmt: skip
+        self.k += n
         self.wall += time.perf_counter() - t0
         self.cpu += time.thread_time() - c0
         w[k_end:] = np.nan
@@ -254,6 +274,7 @@ class _Estimator:
         w *= RPM
         if n_ok:
             self.R2_end = float(R2[n_ok - 1])
+            self.R2.add(R2[:n_ok])
             if enc is not None:
                 self.errors.add(w[:n_ok] - enc[:n_ok])
         self.n_ok += n_ok
@@ -265,6 +286,18 @@ class _Estimator:
             s["diverged_at_s"] = self.diverged_at
         s["speed_error_rpm"] = self.errors.stats()
         s["R2_hat_end_ohm"] = self.R2_end
+        s["R2_hat_ohm"] = self.R2.stats()
+        s["R2_law"] = self.law
+        if self.law:
+            d = float(self.inj_err[0])
+            s["injection_difference_A"] = d
+            if self.inj_amp > 0.0 and d > INJECTION_TOLERANCE * self.inj_amp:
+                s["R2_warning"] = (
+                    f"the scenario's injection differs from the recorded i_inj_A by up to "
+                    f"{d:.3g} A ({100.0 * d / self.inj_amp:.0f} % of its amplitude): the law "
+                    "demodulates out of step with the drive's injection, and its R2_hat means "
+                    "little; give the drive's injection settings"
+                )
         return s
 
 
@@ -286,6 +319,7 @@ def replay(
     *,
     mapping=None,
     controller_period: str = "scenario",
+    r2_law: str = "auto",
     force: bool = False,
     progress: bool | None = False,
     chunk_rows: int = CHUNK_ROWS,
@@ -315,6 +349,10 @@ def replay(
         ``"scenario"``: the estimators run at ``simulation.Ts_s``, a faster recording is
         decimated to it (an integer ratio, :mod:`imdrive.run.decimate`); ``"file"``: at the
         recording's own sample period.
+    r2_law : {"auto", "on", "off"}
+        Run the scenario's R2 law on each estimator (module docstring): ``"auto"`` where
+        the scenario's compensator is on and the recording carries its excitation, ``"on"``
+        or refuse, ``"off"`` never (``R2_hat`` as the recorded controller wrote it).
     force : bool
         Replace a folder of other files.
     progress : bool or None
@@ -353,8 +391,9 @@ def replay(
     Ts = float(first.params.sim[0]["Ts"])
     q = decimation(rec, Ts)
     model_given = all(m in rec.columns for m in MODEL_COLUMNS)
-    ests = [_Estimator(n, drives[n], Ts, model_given) for n in names]
+    law, law_note = law_replayed(r2_law, sc, first.params.comp, rec.columns)
     n_rows = rec.rows // q
+    ests = [_Estimator(n, drives[n], Ts, model_given, law, n_rows) for n in names]
     # fill_rows compiled (or loaded from the cache) before the clock starts
     replay_rows({k: np.zeros(0) for k in REQUIRED}, _prev_row(first.state0.sample[0]))
     t0 = time.perf_counter()
@@ -368,30 +407,50 @@ def replay(
                 sink.emit(cols)
                 bar.advance(n_read)
         res = sink.result(out)
-        elapsed = time.perf_counter() - t0
-        res.summary = {
-            "recording": str(rec.path),
-            "rows": rec.rows,
-            "sample_period_s": rec.period_s,
+        elapsed = time.perf_counter() - t0  # the figures and the folder not counted
+        how = {
             "period_replayed_s": Ts,
             "controller_period": controller_period,
             "decimation": q,
-            "rows_replayed": sink.done,
-            "scenario_name": sc.name,
-            "mapping": None if rec.mapping is None else rec.mapping.describe(),
-            "context_defaulted": sink.defaulted,
             "model": "the recorded controller's writes" if model_given else "the scenario's",
-            "R2_law": "none: R2_hat as the recorded controller wrote it, or the estimator's own",
-            "wall_time_s": sum(e.wall for e in ests),  # in parallel: may exceed elapsed_s
-            "estimators_cpu_s": {e.name: e.cpu for e in ests},
-            "elapsed_s": elapsed,
-            "real_time_factor": sink.done * Ts / elapsed if elapsed > 0 else None,
-            "estimators": {e.name: e.summary() for e in ests},
-            "scenario": sc.to_dict(),  # as a run's summary.json: Scenario.read takes it
+            "R2_law": law_note,
         }
+        res.summary = _summary(rec, sc, how, sink, ests, elapsed)
+        for w in res.summary["warnings"]:
+            warnings.warn(ConfigWarning("injection", w), stacklevel=2)
         if staging is not None:
             _finish(staging, res)
     return res
+
+
+def _summary(rec, sc, how: dict, sink, ests, elapsed: float) -> dict:
+    """``summary.json``: the recording, ``how`` it was replayed, each estimator's summary, the
+    warnings (each estimator's law demodulating out of step with the recorded injection)."""
+    Ts = how["period_replayed_s"]
+    s = {
+        "recording": str(rec.path),
+        "rows": rec.rows,
+        "sample_period_s": rec.period_s,
+        "period_replayed_s": Ts,
+        "controller_period": how["controller_period"],
+        "decimation": how["decimation"],
+        "rows_replayed": sink.done,
+        "scenario_name": sc.name,
+        "mapping": None if rec.mapping is None else rec.mapping.describe(),
+        "context_defaulted": sink.defaulted,
+        "model": how["model"],
+        "R2_law": how["R2_law"],
+        "wall_time_s": sum(e.wall for e in ests),  # in parallel: may exceed elapsed_s
+        "estimators_cpu_s": {e.name: e.cpu for e in ests},
+        "elapsed_s": elapsed,
+        "real_time_factor": sink.done * Ts / elapsed if elapsed > 0 else None,
+        "estimators": {e.name: e.summary() for e in ests},
+        "scenario": sc.to_dict(),  # as a run's summary.json: Scenario.read takes it
+    }
+    s["warnings"] = [
+        f"{n}: {e['R2_warning']}" for n, e in s["estimators"].items() if "R2_warning" in e
+    ]
+    return s
 
 
 def _chunks(rec, chunk_rows: int, q: int, limits: dict):

@@ -37,10 +37,54 @@ def _scenario(rec, scenario):
     return Scenario.read(str(scenario))
 
 
+#: ``replay(r2_law=...)``: run the scenario's R2 law where it can, always (or refuse), never
+R2_LAW_CHOICES = ("auto", "on", "off")
+
+
+def law_replayed(r2_law: str, sc, comp, columns) -> tuple[bool, str]:
+    """Whether the replay runs the scenario's R2 law, and a line saying what ``R2_hat`` is.
+
+    Parameters
+    ----------
+    r2_law : {"auto", "on", "off"}
+        ``"auto"``: where the scenario's compensator is on and the recording carries its
+        excitation (``i_inj_A`` where the law injects); ``"on"``: refused where it cannot;
+        ``"off"``: ``R2_hat`` as the recorded controller wrote it.
+    sc : Scenario
+    comp : numpy.ndarray
+        The compensator's params records of the scenario's drive (``inj_amp``).
+    columns : collection of str
+        The recording's columns.
+
+    Raises
+    ------
+    ConfigError
+        ``--r2-law`` not a choice; ``"on"`` where the law cannot run.
+    """
+    if r2_law not in R2_LAW_CHOICES:
+        raise ConfigError("--r2-law", f"must be one of {', '.join(R2_LAW_CHOICES)}, got {r2_law!r}")
+    recorded = "R2_hat as the recorded controller wrote it, or the estimator's own"
+    if r2_law == "off":
+        return False, f"not replayed (--r2-law off): {recorded}"
+    why = None
+    if not sc.compensator.enabled:
+        why = "the scenario runs no R2 law (compensator.enabled = false)"
+    elif float(comp[0]["inj_amp"]) != 0.0 and "i_inj_A" not in columns:
+        why = "the recording lacks its excitation: the injected current i_inj_A"
+    if why is not None:
+        if r2_law == "on":
+            raise ConfigError("--r2-law", f"cannot replay the R2 law: {why}")
+        return False, f"not replayed: {why}; {recorded}"
+    law = sc.compensator.step_law
+    excitation = "the injection" if float(comp[0]["inj_amp"]) != 0.0 else "the fundamental"
+    return True, f"{law!r} law on each estimator's flux error, excited by {excitation}"
+
+
 def _scenario_of(sc, name: str):
     """The scenario with ``name`` as its estimator: ``sc`` itself for the run's own (its records
-    exactly as the run's); another with the compensator off where the estimator gives no flux
-    error for it (the compensator is not replayed: its R2_hat comes from the recording)."""
+    exactly as the run's); another with the compensator off where the scenario refuses the
+    estimator with it (its R2 law then does not run on that estimator, which says so in its
+    summary's ``R2_law``)."""
     own = sc.control.speed_feedback
     if own == name or (own == "measured" and name == "mras"):
         return sc
