@@ -3,7 +3,8 @@
 The targets (issue 41): a 10^7-row recording replayed in under 1 GiB, at least 100 x real
 time for three estimators.
 
-The file: the ``sensorless`` preset is simulated and recorded for 11 s under a speed cycle
+The file: the ``sensorless`` preset (``--preset``; ``injection-robust``: each estimator runs
+the R2 law too) is simulated and recorded for 11 s under a speed cycle
 (0 -> +900 rpm -> -900 rpm -> 0); the 10 s from t = 1 s (magnetised, at rest) to 11 s (at
 rest again) are written again and again, time continued, until the file has ``--rows`` rows
 (10^7 at Ts = 100 us: 1000 s of drive). The tiles join where the drive is at rest and
@@ -25,7 +26,7 @@ own).
 Usage::
 
     python benchmarks/bench_replay.py [--rows 10000000] [--estimators mras,afo,ekf]
-        [--repeat 3] [--csv] [--keep DIR] [--stages]
+        [--repeat 3] [--preset sensorless] [--csv] [--keep DIR] [--stages]
 
 ``--stages`` also runs the replay's stages one after the other in this process and prints
 each one's CPU time (:func:`stages`): where the time goes, whatever the machine's load.
@@ -54,7 +55,7 @@ CYCLE = {
 }
 
 
-def make_file(path: Path, rows: int, csv: bool) -> float:
+def make_file(path: Path, rows: int, csv: bool, preset: str = "sensorless") -> float:
     """Write the recording (module docstring); return the seconds it took."""
     import numpy as np
     import pyarrow as pa
@@ -66,7 +67,7 @@ def make_file(path: Path, rows: int, csv: bool) -> float:
     from imdrive.run.simulate import simulate
 
     t0 = time.perf_counter()
-    sc = im.Scenario.read("sensorless").with_overrides(
+    sc = im.Scenario.read(preset).with_overrides(
         {"simulation.t_end_s": 11.0, "control.speed_ref_rpm": CYCLE}
     )
     res = simulate(sc, record=True)
@@ -96,7 +97,7 @@ def make_file(path: Path, rows: int, csv: bool) -> float:
     return time.perf_counter() - t0
 
 
-def replay_once(path: Path, estimators: str, out: Path) -> dict:
+def replay_once(path: Path, estimators: str, out: Path, preset: str = "sensorless") -> dict:
     """One replay in a fresh child process: its wall time and peak RSS."""
     code = (
         "import resource, subprocess, sys, time; t0 = time.perf_counter(); "
@@ -106,7 +107,7 @@ def replay_once(path: Path, estimators: str, out: Path) -> dict:
         "resource.getrusage(resource.RUSAGE_CHILDREN).ru_utime "
         "+ resource.getrusage(resource.RUSAGE_CHILDREN).ru_stime)"
     )
-    cmd = [sys.executable, "-m", "imdrive", "replay", str(path), "--scenario", "sensorless"]
+    cmd = [sys.executable, "-m", "imdrive", "replay", str(path), "--scenario", preset]
     cmd += ["--estimators", estimators, "--out", str(out), "--force", "-q"]
     line = subprocess.run(
         [sys.executable, "-c", code, *cmd], capture_output=True, text=True, check=True
@@ -127,7 +128,7 @@ def replay_once(path: Path, estimators: str, out: Path) -> dict:
     }
 
 
-def stages(path: Path, estimators: str, chunk_rows: int) -> dict:
+def stages(path: Path, estimators: str, chunk_rows: int, preset: str = "sensorless") -> dict:
     """The replay's stages one after the other in this process, one thread, each stage's CPU
     time (``time.process_time``): the pass over the time column, reading and checking the
     chunks, the unit check, building the rows, each estimator, writing the estimates. What
@@ -145,12 +146,14 @@ def stages(path: Path, estimators: str, chunk_rows: int) -> dict:
     c = clock()
     rec = open_recording(path)
     cpu = {"time_pass": clock() - c, "read_check": 0.0, "units": 0.0, "rows": 0.0}
-    sc = _scenario(rec, "sensorless")
+    sc = _scenario(rec, preset)
     limits = _limits(sc)
     names = estimators.split(",")
     drives = {n: build_arrays(_scenario_of(sc, n)) for n in names}
     Ts = float(drives[names[0]].params.sim[0]["Ts"])
-    ests = [rp._Estimator(n, drives[n], Ts, True) for n in names]  # compiled before timing
+    law, _ = rp.law_replayed("auto", sc, drives[names[0]].params.comp, rec.columns)
+    # compiled before timing
+    ests = [rp._Estimator(n, drives[n], Ts, True, law, rec.rows) for n in names]
     prev = rp._prev_row(drives[names[0]].state0.sample[0])
     rp.replay_rows({k: np.zeros(0) for k in rp.REQUIRED}, prev.copy())
     cpu.update({n: 0.0 for n in names}, write=0.0)
@@ -190,6 +193,11 @@ def main() -> None:
     ap.add_argument("--rows", type=int, default=10_000_000)
     ap.add_argument("--estimators", default="mras,afo,ekf")
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument(
+        "--preset",
+        default="sensorless",
+        help="the drive recorded and replayed (injection-robust: each estimator runs the R2 law)",
+    )
     ap.add_argument("--csv", action="store_true", help="a CSV file instead of Parquet")
     ap.add_argument("--keep", metavar="DIR", help="write the file there and keep it")
     ap.add_argument(
@@ -202,15 +210,17 @@ def main() -> None:
         folder.mkdir(parents=True, exist_ok=True)
         path = folder / ("recording.csv" if args.csv else "big.parquet")
         if not path.exists():
-            took = make_file(path, args.rows, args.csv)
+            took = make_file(path, args.rows, args.csv, args.preset)
             print(f"wrote {path} ({os.path.getsize(path) / 2**20:.0f} MiB) in {took:.0f} s")
         out = Path(tmp) / "replay"
-        replay_once(path, args.estimators, out)  # warm-up: the numba cache
-        runs = [replay_once(path, args.estimators, out) for _ in range(args.repeat)]
+        replay_once(path, args.estimators, out, args.preset)  # warm-up: the numba cache
+        runs = [replay_once(path, args.estimators, out, args.preset) for _ in range(args.repeat)]
         if args.stages:
             from imdrive.run.recording_read import CHUNK_ROWS
 
-            parts = [stages(path, args.estimators, CHUNK_ROWS) for _ in range(args.repeat)]
+            parts = [
+                stages(path, args.estimators, CHUNK_ROWS, args.preset) for _ in range(args.repeat)
+            ]
     r = runs[0]
     print(f"{r['rows']} rows ({r['rows'] * 1e-4:g} s of drive), estimators {args.estimators}:")
     cpu = [(k, "s") for k in r if k.startswith("cpu_")]

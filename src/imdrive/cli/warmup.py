@@ -1,10 +1,12 @@
 """``imdrive warm-up``: compile every kernel entry point into the cache, on every core.
 
 Each compiled entry point is a job: the drive once per registered estimator (the engine is
-specialised by the estimator's records), the batch kernels (sweeps; parallel and, for dask,
-serial) and the stability map's. The first job compiles the MRAS drive, which every other entry
-point links in; the others then run in parallel processes (numba compiles one function at a time
-per process). A job whose kernels are cached takes the time to load them (about 1 s).
+specialised by the estimator's records), the batch kernels (sweeps; parallel once per
+estimator and, for dask, serial), the replay once per estimator (the estimator and its R2 law
+on a recording) and the stability map's. The first job compiles the MRAS drive, which every
+other entry point links in; the others then run in parallel processes (numba compiles one
+function at a time per process). A job whose kernels are cached takes the time to load them
+(about 1 s).
 
 The test suite runs it before its workers start (``tests/conftest.py``), so that two workers do
 not compile the same kernel side by side.
@@ -28,12 +30,21 @@ T_END_S = 0.002
 
 
 def jobs() -> list[str]:
-    """Every job name, the MRAS drive first: ``drive:<estimator>``, ``batch``,
-    ``batch-serial``, ``stability``."""
+    """Every job name, the MRAS drive first: ``drive:<estimator>``, ``batch`` (the MRAS's),
+    ``batch:<estimator>``, ``batch-serial``, ``replay:<estimator>``, ``stability``."""
     from imdrive.run.estimators import estimator_names
 
     names = [n for n in estimator_names() if n != "mras"]
-    return ["drive:mras", *(f"drive:{n}" for n in names), "batch", "batch-serial", "stability"]
+    replayed = [n for n in estimator_names() if n != "measured"]
+    return [
+        "drive:mras",
+        *(f"drive:{n}" for n in names),
+        "batch",
+        *(f"batch:{n}" for n in names if n != "measured"),
+        "batch-serial",
+        *(f"replay:{n}" for n in replayed),
+        "stability",
+    ]
 
 
 def _scenario(estimator: str = "mras"):
@@ -54,7 +65,16 @@ def run_job(name: str) -> None:
     elif kind in ("batch", "batch-serial"):
         from imdrive.run.batch import simulate_batch
 
-        simulate_batch([_scenario()] * 2, parallel=kind == "batch")
+        simulate_batch([_scenario(estimator or "mras")] * 2, parallel=kind == "batch")
+    elif kind == "replay":
+        import tempfile
+
+        from imdrive.run.replay import replay
+        from imdrive.run.simulate import simulate
+
+        with tempfile.TemporaryDirectory() as d:
+            simulate(_scenario(estimator), record=True).save(f"{d}/run", formats=["recording"])
+            replay(f"{d}/run", estimators=estimator)
     elif kind == "stability":
         from imdrive.stability.maps import stability_map
 
@@ -90,7 +110,7 @@ def _stamp(names) -> Path:
 
 
 #: The kernel modules whose keys cover every job's entry point (each imports the engine).
-_STAMPED = ("engine", "batch", "linearise")
+_STAMPED = ("engine", "batch", "linearise", "replay")
 
 
 def warm_up(names=None, processes: int | None = None, log=None) -> dict[str, float]:
