@@ -121,6 +121,9 @@ COMPENSATOR_PARAMS = record_dtype(
         ("kf_R2", f8),  # R2_hat(0), ohm
         ("kf_T", f8),  # the decision period, s
         ("det", b1),  # the estimator gives no flux error: the detector's own (flux_detector.py)
+        ("det_K1", f8),  # its speed adaptation's PI, 1/(Wb^2 s) (0: the estimator's speed)
+        ("det_K2", f8),  # 1/(Wb^2 s^2)
+        ("det_wmin", f8),  # held while regenerating below this |w_e| (rated slip), rad/s
         ("plugin", b1),  # a registered plug-in law decides (r2_law_registry.py; kf_T its period)
         ("law", NO_LAW_PARAMS),  # that law's parameter record (the placeholder's otherwise)
     ]
@@ -167,6 +170,8 @@ COMPENSATOR_STATE = record_dtype(
         ("dt_lam_i", c16),  # flux detector: current model, Wb (stationary frame)
         ("dt_lam_v", c16),  # its filtered voltage model, Wb
         ("dt_lam_f", c16),  # its filtered current model, Wb
+        ("dt_w", f8),  # its speed adaptation: the correction to the estimator's, rad/s
+        ("dt_int", f8),  # the adaptation error's integral, Wb^2 s
         ("on", b1),  # the compensator has started (its start in the duty cycle's time)
         ("t_start", f8),  # the run's time it started, s
         ("law", NO_LAW_STATE),  # the plug-in law's state record (the placeholder's otherwise)

@@ -63,6 +63,7 @@ def compensator_fields(sc: Scenario, D: Resolved) -> tuple[dict, dict]:
         **_kalman(sc, D),
         **_plugin(sc, D),
         det=comp.enabled and not gives_flux_error(sc.control.speed_feedback),
+        **_detector_adaptation(sc, D),
     )
     derived = {
         "compensator_period_steps": n_comp,
@@ -70,6 +71,24 @@ def compensator_fields(sc: Scenario, D: Resolved) -> tuple[dict, dict]:
         "R2_hat_max_ohm": R2_max,
     }
     return record, derived
+
+
+def _detector_adaptation(sc: Scenario, D: Resolved) -> dict:
+    """The detector's speed adaptation (kernels/flux_detector.py): Schauder's PI at the gains
+    the MRAS of this drive would have (``det_K1``, ``det_K2``: its bandwidth, pole-zero
+    cancellation at ``T2_hat``), held below the rated slip frequency while regenerating
+    (``det_wmin``, electrical rad/s). Zero where the detection is not the law's."""
+    from imdrive.config.mras_bandwidth import mras_bandwidth_Hz
+    from imdrive.config.rated import rated_point
+    from imdrive.design.gains import default_mras_gains
+
+    if not (sc.compensator.enabled and not gives_flux_error(sc.control.speed_feedback)):
+        return {"det_K1": 0.0, "det_K2": 0.0, "det_wmin": 0.0}
+    a = 2 * math.pi * mras_bandwidth_Hz(sc, sc.mras)
+    T2_hat = (D.M_hat + D.Ll2_hat) / D.R2_hat
+    K1, K2 = default_mras_gains(sc.machine.rated_flux_Wb, T2_hat, a)
+    w_sl = 2 * math.pi * sc.machine.rated_frequency_Hz * rated_point(sc.machine).slip
+    return {"det_K1": K1, "det_K2": K2, "det_wmin": w_sl}
 
 
 def tracking_start_s(sc: Scenario) -> float:
