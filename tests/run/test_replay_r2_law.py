@@ -137,3 +137,31 @@ def test_an_injection_not_the_drives_is_said(tmp_path, capsys):
     )
     assert rc == 0
     assert "imdrive: warning:" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_a_plug_in_recording_replays_only_with_allow_plugins(tmp_path):
+    """The recording of a run with a plug-in law names the module relative to its folder;
+    ``imdrive replay`` from another folder imports it only with ``--allow-plugins`` (a fresh
+    process: in this one the module is imported already, which runs nothing and passes)."""
+    import subprocess
+    import sys
+
+    recorded(tmp_path, "injection-robust", *LAW, "simulation.t_end_s=5.0", plugins=True)
+    elsewhere = tmp_path / "a" / "b"
+    elsewhere.mkdir(parents=True)
+
+    def cli(*extra):
+        cmd = [sys.executable, "-m", "imdrive", "replay", str(tmp_path / "run"), "-q"]
+        return subprocess.run(
+            [*cmd, "--out", str(tmp_path / "rep"), *extra],
+            cwd=elsewhere, capture_output=True, text=True, timeout=600,
+        )  # fmt: skip
+
+    refused = cli()
+    assert refused.returncode == 2 and "--allow-plugins" in refused.stderr
+    assert "own_r2_law.py" in refused.stderr and "Traceback" not in refused.stderr
+    assert not (tmp_path / "rep").exists()
+    ok = cli("--allow-plugins")
+    assert ok.returncode == 0, ok.stderr
+    assert (tmp_path / "rep" / "summary.json").exists()

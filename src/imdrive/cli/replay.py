@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from imdrive.cli._common import EXIT_OK, _examples, output_folder
+from imdrive.cli._common import EXIT_OK, _examples, add_allow_plugins, output_folder
 
 
 def _default_name(recording: str) -> str:
@@ -135,5 +135,6 @@ def add_parser(sub) -> None:
     r.add_argument(
         "--force", action="store_true", help="replace an --out folder holding other files"
     )
+    add_allow_plugins(r)
     r.add_argument("-q", "--quiet", action="store_true")
     r.set_defaults(func=_cmd_replay)

@@ -321,6 +321,7 @@ def replay(
     controller_period: str = "scenario",
     r2_law: str = "auto",
     force: bool = False,
+    allow_plugins: bool | None = None,
     progress: bool | None = False,
     chunk_rows: int = CHUNK_ROWS,
 ) -> ReplayResult:
@@ -355,6 +356,9 @@ def replay(
         or refuse, ``"off"`` never (``R2_hat`` as the recorded controller wrote it).
     force : bool
         Replace a folder of other files.
+    allow_plugins : bool, optional
+        Import the plug-in modules (an estimator, an R2 law) the scenario lists: importing
+        runs their code, so only where allowed (True, or ``IMDRIVE_ALLOW_PLUGINS=1``).
     progress : bool or None
         A progress bar on stderr: True, False, or None (only on a terminal).
     chunk_rows : int
@@ -373,27 +377,30 @@ def replay(
     """
     from imdrive._io import replace_folder
     from imdrive._progress import Progress
+    from imdrive.config.plugins import allowing_plugins
     from imdrive.run.build import build_arrays
 
-    rec = _source(recording, mapping)
-    sc = _scenario(rec, scenario)
-    if controller_period == "file":
-        sc = sc.with_overrides({"simulation.Ts_s": float(rec.period_s)})
-    elif controller_period != "scenario":
-        raise ConfigError(
-            "--controller-period", f"must be scenario or file, got {controller_period!r}"
-        )
-    names = _estimator_names(estimators, rec)
-    if out is not None:  # refused before anything runs
-        _check_out(out, force)
-    drives = {name: build_arrays(_scenario_of(sc, name)) for name in names}
-    first = drives[names[0]]
-    Ts = float(first.params.sim[0]["Ts"])
-    q = decimation(rec, Ts)
-    model_given = all(m in rec.columns for m in MODEL_COLUMNS)
-    law, law_note = law_replayed(r2_law, sc, first.params.comp, rec.columns)
-    n_rows = rec.rows // q
-    ests = [_Estimator(n, drives[n], Ts, model_given, law, n_rows) for n in names]
+    # a plug-in module in the scenario is imported only where allowed (config/plugins.py)
+    with allowing_plugins(allow_plugins):
+        rec = _source(recording, mapping)
+        sc = _scenario(rec, scenario)
+        if controller_period == "file":
+            sc = sc.with_overrides({"simulation.Ts_s": float(rec.period_s)})
+        elif controller_period != "scenario":
+            raise ConfigError(
+                "--controller-period", f"must be scenario or file, got {controller_period!r}"
+            )
+        names = _estimator_names(estimators, rec)
+        if out is not None:  # refused before anything runs
+            _check_out(out, force)
+        drives = {name: build_arrays(_scenario_of(sc, name)) for name in names}
+        first = drives[names[0]]
+        Ts = float(first.params.sim[0]["Ts"])
+        q = decimation(rec, Ts)
+        model_given = all(m in rec.columns for m in MODEL_COLUMNS)
+        law, law_note = law_replayed(r2_law, sc, first.params.comp, rec.columns)
+        n_rows = rec.rows // q
+        ests = [_Estimator(n, drives[n], Ts, model_given, law, n_rows) for n in names]
     # fill_rows compiled (or loaded from the cache) before the clock starts
     replay_rows({k: np.zeros(0) for k in REQUIRED}, _prev_row(first.state0.sample[0]))
     t0 = time.perf_counter()

@@ -10,6 +10,7 @@ the controller's (:func:`decimation`), its magnitudes against the machine's rate
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 
@@ -31,6 +32,13 @@ def _scenario(rec, scenario):
                 f"{rec.path} has no recording.toml naming its scenario: give the drive's "
                 "scenario (its machine and controller model set the estimators' records)",
             )
+        import copy
+
+        from imdrive.config.plugins import resolve_plugin_paths
+
+        # its plug-in modules are named relative to the recording's folder (portable)
+        data = copy.deepcopy(data)
+        resolve_plugin_paths(data, Path(rec.path).parent)
         return Scenario.from_dict(data)
     if isinstance(scenario, Scenario):
         return scenario
