@@ -23,21 +23,23 @@ rated torque the AFO's R2_hat ran from 1.2 R2 to the clamp at 3 R2 (and from R2 
 still climbing). The MRAS cannot have this error: its speed is the one that zeroes the two
 models' cross product, and what is left is the R2 signal. So the detector adapts ``dw`` as
 Schauder's MRAS adapts its speed (the PI ``det_K1 + det_K2/s`` on the cross product, the
-gains this drive's MRAS would have), with the estimator's speed as a feed-forward: R2_hat then
-ends -0.14, -0.01 and +0.00 % off from 0.8, 1.0 and 1.2 R2 there. Where that adaptation is unstable,
-regenerating at low stator frequency (Harnefors, IEEE Trans. Power Electron. 15(4), 2000:
-``w_r_hat iq* < 0`` and ``|w_e|`` below the rated slip frequency ``det_wmin``), ``dw`` and
-its integral decay to zero at the filter's rate, back to the estimator's own speed.
+gains this drive's MRAS would have), with the estimator's speed as a feed-forward: R2_hat
+then ends -0.14, -0.01 and +0.00 % off from 0.8, 1.0 and 1.2 R2 there. Where that
+adaptation is unstable, regenerating at low stator frequency (Harnefors, IEEE Trans. Power
+Electron. 15(4), 2000: ``w_r_hat iq* < 0`` and ``|w_e|`` below the rated slip frequency
+``det_wmin``), ``dw`` and its integral decay to zero at the filter's rate, back to the
+estimator's own speed.
 
 Measured on ``injection-robust-afo`` (the recommended drive on the observer), against the
 detector without the correction: the machine envelope (7 machines x 48 runs) 321 converged and
 7 lost of 336 against 278 and 14 (4 of the 7 on Krause 2250 hp at rated speed regenerating,
 lost by the observer itself without R2 tracking, ``sensorless-afo``); the zero-frequency
-study (4 machines, -0.5 ... +2 Hz, 84 runs) 51 converged and 1 lost against 46 and 1. Held
-regenerating below twice the rated slip instead, or with ``dw`` frozen rather than decayed,
-it was worse than without (40 converged and 3 lost; a frozen correction carries the slip of
-another load); held only where ``w_e iq* < 0`` it kept adapting at negative stator
-frequencies (plugging) and lost 3.
+study (4 machines, -0.5 ... +2 Hz, 84 runs) 51 converged and 1 lost against 46 and 1. The
+hold's alternatives measured: below twice the rated slip, 49 and 1 (envelope 312 and 7);
+regeneration told by ``w_e iq* < 0`` instead, which keeps adapting at negative stator
+frequencies (plugging), 42 and 3; with that, ``dw`` frozen instead of decayed and twice the
+rated slip, 40 and 3 (a frozen correction carries the slip of another load); adapting
+everywhere, 38 and 2 (envelope 320 and 7).
 
 The voltage model carries R1_hat, and an R1 error enters the detected error with it; the
 estimators that give no flux error do not adapt R1 either (docs/estimators.md). Running the
