@@ -257,16 +257,17 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc
         r1_standstill(
             pc, mdl, ctl, v.real, v.imag, i0.real, i0.imag, i1.real, i1.imag, w_ref, ctl.w_e, Ts
         )
-    # the gate compares torques: iq* at the reference flux, scaled by the field weakening's
-    # flux factor (in deep field weakening the speed loop's iq* swings by 1/k more for the
-    # same torque, and the gate held R2_hat 80 % of the time at 2 x rated speed), and the
-    # speed error weighted by the loop's gain
-    ti = TrackingInput(
-        t, t_cyc, smpl.k, sine, w_ref, w_r_hat / pp.n_p if sim.sensorless else x.w_m,
-        ctl.i_ref_dq.imag * (1.0 - ctl.fw_cut), v_use, ctl.w_e, ctl.w_sl,
-        speed_loop_gain(pc, 1.0 - ctl.fw_cut), ctl.i_s_dq.imag, Ts,
-    )  # fmt: skip
-    e_dq0 = track(pk, cmp, mdl, table, e_dq0, inp, w_r_hat, ti)
+    if pk.enabled or pk.det or pk.inj_amp != 0.0:  # R2 tracking (not built without it)
+        # the gate compares torques: iq* at the reference flux, scaled by the field
+        # weakening's flux factor (in deep field weakening the speed loop's iq* swings by 1/k
+        # more for the same torque, and the gate held R2_hat 80 % of the time at 2 x rated
+        # speed), and the speed error weighted by the loop's gain
+        ti = TrackingInput(
+            t, t_cyc, smpl.k, sine, w_ref, w_r_hat / pp.n_p if sim.sensorless else x.w_m,
+            ctl.i_ref_dq.imag * (1.0 - ctl.fw_cut), v_use, ctl.w_e, ctl.w_sl,
+            speed_loop_gain(pc, 1.0 - ctl.fw_cut), ctl.i_s_dq.imag, Ts,
+        )  # fmt: skip
+        e_dq0 = track(pk, cmp, mdl, table, e_dq0, inp, w_r_hat, ti)
     return Estimate(w_r_hat, e_dq0, i_inj, v_use, v_fw, hold_R1, R1_after, R2_after)
 
 
