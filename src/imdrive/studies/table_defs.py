@@ -17,42 +17,36 @@ def _pair(a: float, b: float, digits: int = 2) -> str:
     return f"{_signed(a, digits)} / {_signed(b, digits)}"
 
 
+def _lazy(module: str, attr: str):
+    """``imdrive.studies.<module>.<attr>``, imported when called (a study's module imports the
+    kernels and the runs: listing or checking the tables does not need them)."""
+
+    def call(*args, **kwargs):
+        import importlib
+
+        return getattr(importlib.import_module(f"imdrive.studies.{module}"), attr)(*args, **kwargs)
+
+    call.__qualname__ = call.__name__ = f"{module}.{attr}"
+    return call
+
+
+def study_table(name: str, page: str, data: str, module: str, render: str, measure: str) -> None:
+    """Register the table ``name`` of ``docs/<page>`` whose renderer (``df -> lines``) and
+    measurement are the functions ``render`` and ``measure`` of ``imdrive.studies.<module>``."""
+    register(DocTable(name, page, data, _lazy(module, render), _lazy(module, measure)))
+
+
 # ---------------------------------------------------------------------------------------------
 # docs/paper-reproduction.md, "On a realistic drive" (imdrive.studies.realistic)
 
 
-def _realistic_compensation(df) -> list[str]:
-    from imdrive.studies.realistic import compensation_markdown
-
-    return compensation_markdown(df)
-
-
-def _realistic_detuning(df) -> list[str]:
-    from imdrive.studies.realistic import detuning_markdown
-
-    return detuning_markdown(df)
-
-
-def _measure_realistic_compensation():
-    from imdrive.studies.realistic import compensation_runs
-
-    return compensation_runs()
-
-
-def _measure_realistic_detuning():
-    from imdrive.studies.realistic import detuning_runs
-
-    return detuning_runs()
-
-
-register(
-    DocTable(
-        "realistic-compensation",
-        "paper-reproduction.md",
-        "data/realistic_compensation.csv",
-        _realistic_compensation,
-        _measure_realistic_compensation,
-    )
+study_table(
+    "realistic-compensation",
+    "paper-reproduction.md",
+    "data/realistic_compensation.csv",
+    "realistic",
+    "compensation_markdown",
+    "compensation_runs",
 )
 
 
@@ -77,14 +71,14 @@ register(
         _measure_realistic_saturation_bias,
     )
 )
-register(
-    DocTable(
-        "realistic-detuning",
-        "paper-reproduction.md",
-        "data/realistic_detuning.csv",
-        _realistic_detuning,
-        _measure_realistic_detuning,
-    )
+
+study_table(
+    "realistic-detuning",
+    "paper-reproduction.md",
+    "data/realistic_detuning.csv",
+    "realistic",
+    "detuning_markdown",
+    "detuning_runs",
 )
 
 
@@ -214,49 +208,23 @@ register(
 # docs/nameplate.md: nameplate -> circuit on the library (imdrive.studies.nameplate_check)
 
 
-def _nameplate_check(df) -> list[str]:
-    from imdrive.studies.nameplate_check import markdown
-
-    return markdown(df)
-
-
-def _measure_nameplate_check():
-    from imdrive.studies.nameplate_check import run
-
-    return run()
-
-
-register(
-    DocTable(
-        "nameplate-check",
-        "nameplate.md",
-        "data/nameplate_check.csv",
-        _nameplate_check,
-        _measure_nameplate_check,
-    )
+study_table(
+    "nameplate-check",
+    "nameplate.md",
+    "data/nameplate_check.csv",
+    "nameplate_check",
+    "markdown",
+    "run",
 )
 
 
-def _nameplate_published(df) -> list[str]:
-    from imdrive.studies.nameplate_published import markdown
-
-    return markdown(df)
-
-
-def _measure_nameplate_published():
-    from imdrive.studies.nameplate_published import run
-
-    return run()
-
-
-register(
-    DocTable(
-        "nameplate-published",
-        "nameplate.md",
-        "data/nameplate_published.csv",
-        _nameplate_published,
-        _measure_nameplate_published,
-    )
+study_table(
+    "nameplate-published",
+    "nameplate.md",
+    "data/nameplate_published.csv",
+    "nameplate_published",
+    "markdown",
+    "run",
 )
 
 
@@ -264,52 +232,26 @@ register(
 # (imdrive.studies.inertia_catalogue)
 
 
-def _inertia_catalogue(df) -> list[str]:
-    from imdrive.studies.inertia_catalogue import markdown
-
-    return markdown(df)
-
-
-def _measure_inertia_catalogue():
-    from imdrive.studies.inertia_catalogue import run
-
-    return run()
-
-
-register(
-    DocTable(
-        "inertia-catalogue",
-        "nameplate.md",
-        "data/inertia_catalogue.csv",
-        _inertia_catalogue,
-        _measure_inertia_catalogue,
-    )
+study_table(
+    "inertia-catalogue",
+    "nameplate.md",
+    "data/inertia_catalogue.csv",
+    "inertia_catalogue",
+    "markdown",
+    "run",
 )
 
 # ---------------------------------------------------------------------------------------------
 # docs/machine-envelope.md: why the large machines lose control at rated speed
 
 
-def _ramp_diagnosis(df) -> list[str]:
-    from imdrive.studies.machines import diagnosis_markdown
-
-    return diagnosis_markdown(df)
-
-
-def _measure_ramp_diagnosis():
-    from imdrive.studies.machines import ramp_diagnosis
-
-    return ramp_diagnosis()
-
-
-register(
-    DocTable(
-        "machine-ramp-diagnosis",
-        "machine-envelope.md",
-        "data/machine_ramp_diagnosis.csv",
-        _ramp_diagnosis,
-        _measure_ramp_diagnosis,
-    )
+study_table(
+    "machine-ramp-diagnosis",
+    "machine-envelope.md",
+    "data/machine_ramp_diagnosis.csv",
+    "machines",
+    "diagnosis_markdown",
+    "ramp_diagnosis",
 )
 
 
@@ -317,73 +259,27 @@ register(
 # docs/machine-envelope.md: regenerating at low speed, by stator frequency
 
 
-def _zero_frequency(df) -> list[str]:
-    from imdrive.studies.zero_frequency import markdown_lines
-
-    return markdown_lines(df)
-
-
-def _measure_zero_frequency():
-    from imdrive.studies.zero_frequency import run
-
-    return run()
-
-
-register(
-    DocTable(
-        "zero-frequency",
-        "machine-envelope.md",
-        "data/zero_frequency.csv",
-        _zero_frequency,
-        _measure_zero_frequency,
-    )
+study_table(
+    "zero-frequency",
+    "machine-envelope.md",
+    "data/zero_frequency.csv",
+    "zero_frequency",
+    "markdown_lines",
+    "run",
 )
 
 
-def _zero_frequency_r1(df) -> list[str]:
-    from imdrive.studies.zero_frequency import r1_sensitivity_lines
-
-    return r1_sensitivity_lines(df)
-
-
-def _measure_zero_frequency_r1():
-    from imdrive.studies.zero_frequency import r1_sensitivity
-
-    return r1_sensitivity()
-
-
-register(
-    DocTable(
-        "zero-frequency-R1",
-        "machine-envelope.md",
-        "data/zero_frequency_R1.csv",
-        _zero_frequency_r1,
-        _measure_zero_frequency_r1,
-    )
+study_table(
+    "zero-frequency-R1",
+    "machine-envelope.md",
+    "data/zero_frequency_R1.csv",
+    "zero_frequency",
+    "r1_sensitivity_lines",
+    "r1_sensitivity",
 )
 
 
-def _library_tour(df) -> list[str]:
-    from imdrive.studies.tour import lines
-
-    return lines(df)
-
-
-def _measure_library_tour():
-    from imdrive.studies.tour import run
-
-    return run()
-
-
-register(
-    DocTable(
-        "library-tour",
-        "machines.md",
-        "data/library_tour.csv",
-        _library_tour,
-        _measure_library_tour,
-    )
-)
+study_table("library-tour", "machines.md", "data/library_tour.csv", "tour", "lines", "run")
 
 
 from imdrive.studies import (  # noqa: E402, F401  (register theirs)
