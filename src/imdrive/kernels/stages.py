@@ -38,6 +38,7 @@ from imdrive.kernels.compensator_range import headroom_weakening_input
 from imdrive.kernels.estimators.registry import (
     EstimatorInput,
     estimator_finite,
+    estimator_flux,
     estimator_log,
     estimator_step,
 )
@@ -114,6 +115,7 @@ class Estimate(NamedTuple):
     hold_R1: bool  # the estimator's R1 adaptation was held this period (its input)
     R1_after: float  # the model's R1_hat right after the estimator's step, ohm (before the
     R2_after: float  # compensator), and its R2_hat: what a recording needs to replay it
+    psi_r_ab: complex  # the estimator's rotor-flux estimate, stationary frame, Wb (0j: none)
 
 
 class Command(NamedTuple):
@@ -151,7 +153,7 @@ SCRATCH = record_dtype(
 )
 
 #: The open-loop drive's :class:`Estimate`: no estimator runs.
-NO_ESTIMATE = Estimate(0.0, 0j, 0.0, 0.0, 0.0, False, 0.0, 0.0)
+NO_ESTIMATE = Estimate(0.0, 0j, 0.0, 0.0, 0.0, False, 0.0, 0.0, 0j)
 
 
 @njit(cache=True, inline="always")
@@ -268,7 +270,8 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc
             speed_loop_gain(pc, 1.0 - ctl.fw_cut), ctl.i_s_dq.imag, Ts,
         )  # fmt: skip
         e_dq0 = track(pk, cmp, mdl, table, e_dq0, inp, w_r_hat, ti)
-    return Estimate(w_r_hat, e_dq0, i_inj, v_use, v_fw, hold_R1, R1_after, R2_after)
+    psi_r_ab = estimator_flux(est)
+    return Estimate(w_r_hat, e_dq0, i_inj, v_use, v_fw, hold_R1, R1_after, R2_after, psi_r_ab)
 
 
 @njit(cache=True, inline="always")
@@ -301,7 +304,17 @@ def control(sim, pc, x, mdl, ctl, smp, prof, smpl, estm, foc):
         if pc.ie_veq and pc.ie_rate > 0.0:  # the inverter error left, for the online scale
             stator_residual(pc, ctl, mdl, smp.v_prev_ab, smp.i_prev_ab, smpl.i_meas_ab, Ts)
         v_ref_alpha, v_ref_beta = foc_step(
-            pc, mdl, ctl, i_meas_alpha, i_meas_beta, w_fb, w_ref, psi_ref, estm.i_inj, Ts
+            pc,
+            mdl,
+            ctl,
+            i_meas_alpha,
+            i_meas_beta,
+            w_fb,
+            w_ref,
+            psi_ref,
+            estm.i_inj,
+            Ts,
+            estm.psi_r_ab,
         )
     else:
         v_ref_alpha, v_ref_beta = open_loop_voltage(ctl, prof.v_amp, prof.f, Ts)

@@ -263,4 +263,10 @@ def afo_estimate(p, m, s, inp):
     return s.w_r_hat, 0j
 
 
-KERNEL = register_kernel("afo", AFO_PARAMS, AFO_STATE, afo_estimate)
+@njit(cache=True)
+def afo_flux(s):
+    """The observer's rotor-flux estimate, stationary frame, Wb."""
+    return s.lam_ab
+
+
+KERNEL = register_kernel("afo", AFO_PARAMS, AFO_STATE, afo_estimate, flux=afo_flux)

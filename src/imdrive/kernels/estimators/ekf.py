@@ -257,4 +257,10 @@ def ekf_estimate(p, m, s, inp):
     return s.w_r_hat, 0j
 
 
-KERNEL = register_kernel("ekf", EKF_PARAMS, EKF_STATE, ekf_estimate)
+@njit(cache=True)
+def ekf_flux(s):
+    """The filter's rotor-flux estimate, stationary frame, Wb."""
+    return complex(s.x[2], s.x[3])
+
+
+KERNEL = register_kernel("ekf", EKF_PARAMS, EKF_STATE, ekf_estimate, flux=ekf_flux)

@@ -27,6 +27,11 @@ The contract
 ``finite(s) -> bool`` (optional)
     Whether the estimator's internal state is finite (a NaN there is a divergence); without it
     only the returned values are checked.
+``flux(s) -> complex`` (optional)
+    The estimator's rotor-flux estimate after its step, stationary frame, Wb, for an
+    estimator that observes the flux (the AFO, the EKF): the drive orients its frame on it
+    above 0.1 of the rated stator frequency (direct field orientation,
+    :mod:`imdrive.kernels.ifoc`); without it the frame integrates the slip (indirect).
 
 Caching
 -------
@@ -117,6 +122,8 @@ class EstimatorKernel:
         Optional (module docstring).
     reduced_state : bool
         Whether the stability maps' reduced drive state carries it (only the MRAS today).
+    flux : numba dispatcher or None
+        Optional: its rotor-flux estimate, which the drive orients on (module docstring).
     """
 
     name: str
@@ -127,6 +134,7 @@ class EstimatorKernel:
     log: object = None
     finite: object = None
     reduced_state: bool = False
+    flux: object = None
     source: str = field(default="", compare=False)
 
 
@@ -145,6 +153,7 @@ def register_kernel(
     log=None,
     finite=None,
     reduced_state: bool = False,
+    flux=None,
 ) -> EstimatorKernel:
     """Register an estimator's compiled half under ``name`` and return it.
 
@@ -158,7 +167,7 @@ def register_kernel(
         ``step(p, model, s, inp) -> (w_r_hat, e_dq0)``.
     log_fields : sequence of str
         Log fields it writes (float64).
-    log, finite : numba dispatcher, optional
+    log, finite, flux : numba dispatcher, optional
         See the module docstring.
     reduced_state : bool
         Whether the stability maps' reduced state carries it.
@@ -181,6 +190,7 @@ def register_kernel(
         log=log,
         finite=finite,
         reduced_state=reduced_state,
+        flux=flux,
         source=tag,
     )
     return _REGISTRY.add(kernel)
@@ -225,6 +235,12 @@ def estimator_finite(s):
     raise NotImplementedError("estimator_finite is called from compiled code only")
 
 
+def estimator_flux(s):
+    """The estimator's rotor-flux estimate, stationary frame, Wb (``0j``: it has none;
+    compiled code only)."""
+    raise NotImplementedError("estimator_flux is called from compiled code only")
+
+
 @overload(estimator_step, inline="always", jit_options={"cache": True})
 def _estimator_step(p, model, s, inp):
     k = _lookup(s)
@@ -266,3 +282,14 @@ def _estimator_finite(s):
         return lambda s: True
     finite = k.finite
     return lambda s: finite(s)
+
+
+@overload(estimator_flux, inline="always", jit_options={"cache": True})
+def _estimator_flux(s):
+    k = _lookup(s)
+    if k is None:
+        return None
+    if k.flux is None:
+        return lambda s: 0j
+    flux = k.flux
+    return lambda s: flux(s)
