@@ -40,6 +40,7 @@ from imdrive.commission.base import (
     test_scenario,
     window,
 )
+from imdrive.design.gains import torque_constant
 
 #: The speed steps, per unit of rated speed.
 HIGH_PU = 0.8
@@ -139,7 +140,7 @@ def _step_run(sc, npl: Nameplate, model: dict, T2: float, J_max: float, table, t
     up to ``J_max`` (kg m^2); returns an :class:`InertiaResult`."""
     u_inverter = float(table[1][-1])
     M, L2 = model["M_H"], model["M_H"] + model["Ll2_H"]
-    k_t = 1.5 * npl.n_p * M / L2 * npl.psi_rated_Wb
+    k_t = torque_constant(npl.n_p, M, L2, npl.psi_rated_Wb)
     iq = torque_pu * npl.torque_Nm / k_t
     i_d = npl.psi_rated_Wb / M
     w_rated = npl.speed_rpm * math.pi / 30.0

@@ -18,6 +18,14 @@ Pure Python: the kernels receive the numbers, never these functions.
 from __future__ import annotations
 
 
+def torque_constant(n_p: float, M: float, L2: float, psi: float) -> float:
+    """The field-oriented torque constant ``k_t = 1.5 n_p (M/L2) psi``, N m/A: the torque per
+    ampere of q current at rotor flux ``psi`` (Wb), with ``n_p`` pole pairs and the
+    magnetising and rotor inductances ``M``, ``L2`` (H); ``T = k_t i_q`` in the rotor-flux
+    frame (Novotny & Lipo, *Vector Control and Dynamics of AC Drives*, Oxford 1996)."""
+    return 1.5 * n_p * M / L2 * psi
+
+
 def default_current_gains(sigma_L1: float, R_sigma: float, bandwidth_rad_s: float):
     """Current PI gains ``(kp, ki)`` in V/A and V/(A s) for closed-loop bandwidth ``a_c``."""
     return sigma_L1 * bandwidth_rad_s, R_sigma * bandwidth_rad_s

@@ -25,7 +25,7 @@ from imdrive.config.scaled import flux_injection_frequency_Hz, plant_thermal_res
 from imdrive.config.scenario import Scenario
 from imdrive.config.sequence import sequence
 from imdrive.config.speed_gain import speed_gain_flux_scaling
-from imdrive.design.gains import default_current_gains, default_speed_gains
+from imdrive.design.gains import default_current_gains, default_speed_gains, torque_constant
 from imdrive.kernels import profiles as kp
 from imdrive.kernels.compensator import COMPENSATOR_PARAMS, COMPENSATOR_STATE
 from imdrive.kernels.engine import DRIVE_FOC, DRIVE_OPEN_LOOP, SAMPLE_STATE, SIM_PARAMS, DriveState
@@ -232,7 +232,7 @@ def control_fields(sc: Scenario, D: Resolved, mh: dict, psi0: float) -> tuple[di
     inv = sc.inverter
     Vdc_meas = sc.sensor.vdc_gain * inv.Vdc_V
     R_sigma = mh["R1_hat"] + (mh["M_hat"] / mh["L2_hat"]) ** 2 * mh["R2_hat"]
-    k_t = 1.5 * m.pole_pairs * mh["M_hat"] / mh["L2_hat"] * psi0
+    k_t = torque_constant(m.pole_pairs, mh["M_hat"], mh["L2_hat"], psi0)
     kp_i, ki_i = default_current_gains(
         mh["sigma_L1_hat"], R_sigma, 2 * math.pi * ctl.current_bandwidth_Hz
     )
@@ -383,7 +383,7 @@ def drive_derived(sc: Scenario, D: Resolved, psi0: float, mh: dict) -> dict:
     m = sc.machine
     return {
         "flux_ref_Wb": psi0,
-        "torque_constant_Nm_per_A": 1.5 * m.pole_pairs * mh["M_hat"] / mh["L2_hat"] * psi0,
+        "torque_constant_Nm_per_A": torque_constant(m.pole_pairs, mh["M_hat"], mh["L2_hat"], psi0),
         "current_limit_A": current_limit(sc, D),
         "divergence_current_A": divergence_current(sc, D),
         "rated_current_A": D.I_rated,

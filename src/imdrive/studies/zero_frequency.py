@@ -31,6 +31,7 @@ from scipy.optimize import brentq
 
 from imdrive.config.machine import machine_preset, rated_point
 from imdrive.config.scenario import Scenario
+from imdrive.design.gains import torque_constant
 from imdrive.errors import ConfigWarning
 from imdrive.studies import machines as envelope
 
@@ -196,7 +197,7 @@ def predicted_sensitivity(machine: str, f_s_Hz: float) -> float:
     rp = rated_point(m)
     psi = m.rated_flux_Wb  # the drive's flux reference
     L2 = m.M_H + m.Ll2_H
-    iq = abs(LOAD_PU) * rp.torque_Nm / (1.5 * m.pole_pairs * m.M_H / L2 * psi)
+    iq = abs(LOAD_PU) * rp.torque_Nm / torque_constant(m.pole_pairs, m.M_H, L2, psi)
     i_s = math.hypot(psi / m.M_H, iq)
     return r2_r1_sensitivity(m.R1_ohm, m.M_H, L2, i_s, 2 * math.pi * f_s_Hz, psi)
 
