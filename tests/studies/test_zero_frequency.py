@@ -140,14 +140,20 @@ def test_the_MRAS_drives_R2_hat_follows_R1_hat_as_the_voltage_model_says():
 
 def test_the_observers_R2_hat_follows_R1_hat_further_than_the_voltage_model_says():
     """On the observer's drive a 1 % R1_hat error moves R2_hat by more than 5 % at 0 Hz on
-    every machine it keeps control of (6-10 % per %), and at 2 Hz by more than twice eq.
-    (1)'s ``g`` on the two machines of large ``x = w_sl T2`` (Krause 50 and 500 hp, 13-20 % per
-    % against g = 0.57 and 0.63): its detection's current model runs at the observer's speed,
-    which R1_hat moves too. (With the observer's constant gain, before 2026-11-29: 17-78 % at
-    0 Hz, over 2 g at 2 Hz on three machines.)"""
+    Table IV and Krause 50 hp (9.8 and 10.4 % per %), and at 2 Hz by more than twice eq.
+    (1)'s ``g`` on the two machines of large ``x = w_sl T2`` (Krause 50 and 500 hp, 19 and
+    3.4 % per % against g = 0.57 and 0.63): its detection's current model runs at the
+    observer's speed, which R1_hat moves too. On the Aalto machine at 0 Hz the R1 error swings
+    the observer's speed 24-28 rpm and the law holds R2_hat instead (47-97 % of the time; with
+    the speed adaptation at 8 times the speed loop's bandwidth, before 2026-11-29, it moved
+    6.1 % per %). (With the observer's constant gain: 17-78 % at 0 Hz, over 2 g at 2 Hz on
+    three machines.)"""
     afo = _r1_table().query("estimator == 'afo'")
-    moved0 = [study.moved_pct(g) for _, g in afo[afo["f_s_target_Hz"] == 0.0].groupby("machine")]
-    assert all(x > 5.0 for x in moved0 if x == x) and sum(x == x for x in moved0) >= 3
+    zero = afo[afo["f_s_target_Hz"] == 0.0]
+    moved0 = {m: study.moved_pct(g) for m, g in zero.groupby("machine")}
+    assert moved0["paper-table-iv"] > 5.0 and moved0["krause-50hp"] > 5.0
+    aalto = zero[(zero["machine"] == "aalto-2.2kw") & (zero["R1_ratio"] != 1.0)]
+    assert (aalto["R2_held_pct"] > 40.0).all()
     at2 = afo[afo["f_s_target_Hz"] == 2.0]
     over = {m: study.moved_pct(g) > 2 * g["g_predicted"].iloc[0] for m, g in at2.groupby("machine")}
     assert over["krause-50hp"] and over["krause-500hp"]
