@@ -1,4 +1,5 @@
-"""Indirect field-oriented (vector) control and the open-loop voltage drive.
+"""Field-oriented (vector) control, indirect or direct on an observer's flux, and the
+open-loop voltage drive.
 
 Indirect field orientation (the paper's Fig. 4): the controller's synchronous frame has the angle
 
@@ -11,6 +12,7 @@ In steady state ``psi_hat = M_hat id*`` and the slip is the paper's ``(R2_hat/L2
 the flux model keeps the orientation right while the flux changes (magnetising, or the injected
 sinusoid of the persistent-excitation compensator; the AC flux component for R2
 identification is Kubota & Matsuse, IEEE Trans. Ind. Appl. 30(5), 1994).
+
 **Direct field orientation on an observer's flux.** A speed estimator that observes the
 rotor flux itself (the adaptive full-order observer, the EKF: ``flux`` in
 :mod:`imdrive.kernels.estimators.registry`) sets the frame's angle to its flux estimate's
@@ -28,6 +30,7 @@ ramp; oriented on the observer's flux the frame stays within 1.2 degrees
 from where the observer left it (the observer's flux is then the current model with
 ``R2_hat``, or near zero stator frequency its regeneration gain's voltage model, whose R1 and
 inverter errors the integrated slip does not see).
+
 The rotor-flux reference is expressed as the flux-current reference ``id* = psi* / M_hat`` (plus
 an optional injected sinusoid); the speed PI gives a torque command, expressed as the q current
 at the reference flux and divided by the flux model, ``iq* = u psi*/psi_hat``, so the torque
@@ -183,7 +186,8 @@ def open_loop_voltage(s, v_amp, f_Hz, Ts):
 
 @njit(cache=True)
 def foc_step(p, m, s, i_alpha, i_beta, w_fb_m, w_ref_m, psi_ref, i_inj, Ts, psi_obs_ab):
-    """One period of indirect field-oriented speed control (updates ``c``).
+    """One period of field-oriented speed control, indirect or, on an estimator's flux,
+    direct (updates ``s``).
 
     Parameters
     ----------

@@ -304,18 +304,9 @@ def control(sim, pc, x, mdl, ctl, smp, prof, smpl, estm, foc):
         if pc.ie_veq and pc.ie_rate > 0.0:  # the inverter error left, for the online scale
             stator_residual(pc, ctl, mdl, smp.v_prev_ab, smp.i_prev_ab, smpl.i_meas_ab, Ts)
         v_ref_alpha, v_ref_beta = foc_step(
-            pc,
-            mdl,
-            ctl,
-            i_meas_alpha,
-            i_meas_beta,
-            w_fb,
-            w_ref,
-            psi_ref,
-            estm.i_inj,
-            Ts,
+            pc, mdl, ctl, i_meas_alpha, i_meas_beta, w_fb, w_ref, psi_ref, estm.i_inj, Ts,
             estm.psi_r_ab,
-        )
+        )  # fmt: skip
     else:
         v_ref_alpha, v_ref_beta = open_loop_voltage(ctl, prof.v_amp, prof.f, Ts)
 
