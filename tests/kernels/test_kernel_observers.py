@@ -18,7 +18,7 @@ from scipy.linalg import expm
 
 from imdrive.config.machine import machine_preset
 from imdrive.design.estimators import default_afo_gains, default_ekf_noise
-from imdrive.kernels.estimators.afo import AFO_PARAMS, AFO_STATE, afo_step
+from imdrive.kernels.estimators.afo import AFO_PARAMS, AFO_STATE, adaptation_share, afo_step
 from imdrive.kernels.estimators.ekf import EKF_PARAMS, EKF_STATE, ekf_step
 from imdrive.kernels.model import MODEL_STATE
 from imdrive.kernels.records import new_record
@@ -186,3 +186,35 @@ def test_ekf_converges_from_a_wrong_speed(trajectory):
     err0 = 0.1 * W_R
     assert abs(w[-1] - W_R) < 1e-3 * err0
     assert abs(w[2000] - W_R) < 0.3 * err0
+
+
+def test_the_speed_adaptation_slows_below_a_sixth_of_its_bandwidth():
+    """``adaptation_share``: full where the sixth harmonic of the stator frequency reaches
+    the bandwidth, that share below it, never under half; no schedule without ``a_w``."""
+    a_w = 2 * math.pi * 80.0
+    p = new_record(AFO_PARAMS, a_w=a_w)[0]
+    assert adaptation_share(p, a_w / 6.0) == 1.0
+    assert adaptation_share(p, 10 * a_w) == 1.0
+    assert adaptation_share(p, -0.75 * a_w / 6.0) == pytest.approx(0.75, rel=1e-12)
+    assert adaptation_share(p, 0.0) == 0.5
+    assert adaptation_share(new_record(AFO_PARAMS)[0], 0.0) == 1.0
+
+
+def test_a_share_scales_both_adaptation_gains(trajectory):
+    """The share is the bandwidth's: ``Kp`` and ``Ki`` both scale (their ratio, the
+    cancelled pole, stays), so from the same start the estimate moves half as far in a step
+    at half the share."""
+    v, x = trajectory
+    p, Ki = _afo()
+    w0 = 0.9 * W_R
+    moved = []
+    for share in (1.0, 0.5):
+        s = np.zeros(1, dtype=AFO_STATE)[0]
+        s["i_hat_ab"] = complex(x[0, 0], x[0, 1])
+        s["lam_ab"] = complex(x[0, 2], x[0, 3])
+        s["int_e"] = w0 / Ki
+        s["w_r_hat"] = w0
+        afo_step(p, _model(), s, v[0, 0], v[0, 1], x[1, 0], x[1, 1], TS, share)
+        moved.append(s["w_r_hat"] - w0)
+    assert moved[0] != 0.0
+    assert moved[1] == pytest.approx(0.5 * moved[0], rel=1e-9)

@@ -144,10 +144,8 @@ def test_the_observers_R2_hat_follows_R1_hat_further_than_the_voltage_model_says
     (1)'s ``g`` on the two machines of large ``x = w_sl T2`` (Krause 50 and 500 hp, 19 and
     3.4 % per % against g = 0.57 and 0.63): its detection's current model runs at the
     observer's speed, which R1_hat moves too. On the Aalto machine at 0 Hz the R1 error swings
-    the observer's speed 24-28 rpm and the law holds R2_hat instead (47-97 % of the time; with
-    the speed adaptation at 8 times the speed loop's bandwidth, before 2026-11-29, it moved
-    6.1 % per %). (With the observer's constant gain: 17-78 % at 0 Hz, over 2 g at 2 Hz on
-    three machines.)"""
+    the observer's speed 24-27 rpm, and the law holds R2_hat 44-97 % of the time. (With the
+    observer's constant gain: 17-78 % at 0 Hz, over 2 g at 2 Hz on three machines.)"""
     afo = _r1_table().query("estimator == 'afo'")
     zero = afo[afo["f_s_target_Hz"] == 0.0]
     moved0 = {m: study.moved_pct(g) for m, g in zero.groupby("machine")}

@@ -124,6 +124,7 @@ class AfoSettings:
         """
         sc = ctx.scenario
         bandwidth_Hz = afo_bandwidth_Hz(sc, self)
+        own_R2 = sc.estimator.R2_adaptation == "afo"
         Kp, Ki, k_R1, k_R2 = default_afo_gains(
             ctx.psi0,
             ctx.R1_hat,
@@ -152,8 +153,11 @@ class AfoSettings:
             g2=self.g2_ohm,
             Kp=Kp,
             Ki=Ki,
+            # the schedule slows the adaptation to half (kernels/estimators/afo.py
+            # adaptation_share): not the observer's own R2 law's, already at that half
+            a_w=2 * math.pi * bandwidth_Hz if self.Kp is None and not own_R2 else 0.0,
             k_R1=k_R1 if self.R1_adaptation else 0.0,
-            k_R2=k_R2 if sc.estimator.R2_adaptation == "afo" else 0.0,
+            k_R2=k_R2 if own_R2 else 0.0,
             R_min=0.5,
             R_max=2.0,
         )
@@ -189,9 +193,15 @@ def afo_bandwidth_Hz(sc, afo=None) -> float:
     exact, and a 2 Hz speed loop with 40 Hz (20 times) exact too. On the machine envelope of
     the two observer drives (`injection-robust-afo`, `sensorless-afo`, 672 runs) 40 Hz
     converged in 653 runs and lost 8; 60, 80 and 160 Hz converged in 663, 668 and 665 and lost
-    none (668 with this rule, 197 Hz on the Aalto machine); 10 Hz in 589 (with the frame
-    on the observer's flux at every frequency). The zero-frequency study (168 runs of the
-    two): 40 Hz 132 converged and 1 lost, 80 Hz 132 and this rule 133, none lost.
+    none; 10 Hz in 589 (with the frame on the observer's flux at every frequency); this rule
+    with the kernel's slower adaptation at low stator frequency (below) 666, none lost. The
+    zero-frequency study (168 runs of the two): 40 Hz 132 converged and 1 lost, 80 Hz 132
+    and none, this rule 131 and 1.
+
+    Below a sixth of that bandwidth in stator frequency the kernel slows the adaptation, to
+    half at most (:func:`imdrive.kernels.estimators.afo.adaptation_share`: a dead-time
+    bridge's sixth harmonic there biased the estimate), so at low speed it runs at 8 times
+    the speed loop as before.
 
     Where the observer adapts R2 itself (``estimator.R2_adaptation = "afo"``) its R2 law and
     its speed law read the same current error, and the speed law stays at

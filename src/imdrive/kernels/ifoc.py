@@ -22,10 +22,10 @@ reference flux: the scheme of Kubota, Matsuse & Nakano (IEEE Trans. Ind. Appl. 2
 whose observer's flux the vector control uses. There the observer's flux leans on the voltage
 model and does not follow ``R2_hat``, while the integrated slip above does: an observer drive
 from ``R2_hat(0) = 1.2 R2`` on Krause 2250 hp ran the ramp to the rated speed with the frame
-up to 7 degrees off and the flux 12 % high (3.9 degrees with today's faster speed
+up to 7 degrees off and the flux 12 % high (5.9 degrees with today's faster speed
 adaptation), reached the voltage limit early and lost control at the ramp's end (both
 observer drives, 8 runs of the machine envelope), and the EKF drive lost control on the
-ramp; oriented on the observer's flux the frame stays within 1.2 degrees
+ramp; oriented on the observer's flux the frame stays within 1.7 degrees
 (tests/drive/test_direct_orientation.py). Below that frequency the frame integrates the slip
 from where the observer left it (the observer's flux is then the current model with
 ``R2_hat``, or near zero stator frequency its regeneration gain's voltage model, whose R1 and
