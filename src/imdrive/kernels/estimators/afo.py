@@ -19,6 +19,8 @@ Speed adaptation (Kubota et al. 1993, eq. 17)::
     eps = Im(conj(e) lam_hat) = e_alpha lam_hat_beta - e_beta lam_hat_alpha
     w_r_hat = Kp eps + Ki \\int eps dt
 
+(``Kp`` and ``Ki`` both scaled by :func:`adaptation_share` at low stator frequency.)
+
 **Observer gain.** With ``g1 = g2 = 0`` the steady-state sensitivity of ``eps`` to a speed
 error ``w_r - w_r_hat`` is proportional to ``w_e Im D``, ``D`` as in
 :func:`imdrive.design.estimators.afo_dc_sensitivity`, and with no gain::
