@@ -70,10 +70,15 @@ def _run(capsys, *argv) -> tuple[int, str]:
 
 
 def _one_error_line(err: str) -> str:
-    """The one ``imdrive: error:`` line of ``err`` (warnings aside), checked to be alone and
-    without a traceback."""
+    """The one ``imdrive: error:`` line of ``err`` (warnings and the compile notices of a
+    drive whose blocks were not compiled yet aside), checked to be alone and without a
+    traceback."""
     assert "Traceback" not in err and "Exception ignored" not in err, err
-    lines = [x for x in err.strip().splitlines() if not x.startswith("imdrive: warning:")]
+    lines = [
+        x
+        for x in err.strip().splitlines()
+        if not x.startswith(("imdrive: warning:", "imdrive: compiling ", "imdrive: compiled "))
+    ]
     assert len(lines) == 1, err
     assert lines[0].startswith("imdrive: error: "), err
     return lines[0][len("imdrive: error: ") :]

@@ -29,8 +29,18 @@ from imdrive.errors import ConfigError
 T_END_S = 0.002
 
 
+#: The optional blocks a drive compiles (kernels/features.py ``GROUPS``), each set as a preset
+#: that runs it: the MRAS drive is compiled with each (``drive:mras:<set>``).
+FEATURE_SETS = {
+    "r2": "injection-robust",
+    "realistic": "sensorless-realistic",
+    "r2+realistic": "injection-fig5-realistic",
+}
+
+
 def jobs() -> list[str]:
-    """Every job name, the MRAS drive first: ``drive:<estimator>``, ``batch`` (the MRAS's),
+    """Every job name, the MRAS drive first: ``drive:<estimator>``, ``drive:mras:<set>`` (the
+    MRAS drive with each set of optional blocks, :data:`FEATURE_SETS`), ``batch`` (the MRAS's),
     ``batch:<estimator>``, ``batch-serial``, ``replay:<estimator>``, ``stability``."""
     from imdrive.run.estimators import estimator_names
 
@@ -38,6 +48,7 @@ def jobs() -> list[str]:
     replayed = [n for n in estimator_names() if n != "measured"]
     return [
         "drive:mras",
+        *(f"drive:mras:{s}" for s in FEATURE_SETS),
         *(f"drive:{n}" for n in names),
         "batch",
         *(f"batch:{n}" for n in names if n != "measured"),
@@ -47,21 +58,24 @@ def jobs() -> list[str]:
     ]
 
 
-def _scenario(estimator: str = "mras"):
+def _scenario(estimator: str = "mras", preset: str = "sensorless"):
     from imdrive.config.scenario import Scenario
 
     return Scenario.read(
-        "sensorless", [f'control.speed_feedback="{estimator}"', f"simulation.t_end_s={T_END_S}"]
+        preset, [f'control.speed_feedback="{estimator}"', f"simulation.t_end_s={T_END_S}"]
     )
 
 
 def run_job(name: str) -> None:
     """Compile (or load) the kernels of job ``name`` in this process."""
     kind, _, estimator = name.partition(":")
+    estimator, _, blocks = estimator.partition(":")
     if kind == "drive":
         from imdrive.run.simulate import simulate
 
-        simulate(_scenario(estimator))
+        if blocks and blocks not in FEATURE_SETS:
+            raise ConfigError("job", f"unknown job {name!r} (known: {', '.join(jobs())})")
+        simulate(_scenario(estimator, FEATURE_SETS.get(blocks, "sensorless")))
     elif kind in ("batch", "batch-serial"):
         from imdrive.run.batch import simulate_batch
 

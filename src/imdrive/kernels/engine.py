@@ -25,6 +25,8 @@ from numba import njit
 from imdrive.kernels import compensator, ifoc, inverter, machine, model, sensors
 from imdrive.kernels.bridge import switching_period  # noqa: F401  (re-exported: old path)
 from imdrive.kernels.estimators import afo, ekf, mras, reactive_mras, registry  # noqa: F401  (the package's estimators register on import)
+from imdrive.kernels.features import row as features_row
+from imdrive.kernels.features import switching_bridge
 from imdrive.kernels.inverter import INV_SWITCHING, MAX_EVENTS  # noqa: F401  (MAX_EVENTS: old path)
 from imdrive.kernels.recording import record_after, record_before
 from imdrive.kernels.records import b1, c16, f8, i8, record_dtype
@@ -130,6 +132,9 @@ class DriveParams(NamedTuple):
     prof_n: np.ndarray  # int64[N, N_PROF] breakpoints per profile
     tables: np.ndarray  # float64[T, 13, 13] fuzzy lookup tables
     table_idx: np.ndarray  # int64[N] each drive's table
+    #: the optional blocks compiled in, named by the dtype (kernels/features.py ``resolve``);
+    #: ``None``: every one
+    features: np.ndarray | None = None
 
 
 class DriveState(NamedTuple):
@@ -224,11 +229,12 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True, rec=None):
     ctl = S.control[i]
     est = S.est[i]
     cmp = S.comp[i]
+    feat = features_row(P.features, i)  # the blocks compiled in (a type: kernels/features.py)
 
     Ts = sim.Ts
     nsub = max(sim.nsub, 1)
     foc = sim.mode == DRIVE_FOC
-    switching = pinv.model == INV_SWITCHING
+    switching = switching_bridge(pinv)
     Vdc_meas = psen.vdc_gain * pinv.Vdc
     n_rows = log.shape[0]
 
@@ -241,16 +247,16 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True, rec=None):
     for k in range(n_steps + 1 if final else n_steps):
         t = (k0 + k) * Ts
         prof = profiles(pp, pt, pv, pn, t, foc, mdl, Ts)
-        smpl = measure(pp, psen, x, ctl, prof, t, k0 + k, i_next_ab, have_next, scratch[0])
+        smpl = measure(feat, pp, psen, x, ctl, prof, t, k0 + k, i_next_ab, have_next, scratch[0])
         if rec is not None:  # pruned at compile time without a recording
             if k < rec.shape[0]:
                 record_before(rec[k], smpl, mdl, ctl, smp)
         estm = NO_ESTIMATE
         if foc:
             estm = estimate(
-                sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc_meas, pc,
+                feat, sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc_meas, pc,
             )  # fmt: skip
-        cmd = control(sim, pc, x, mdl, ctl, smp, prof, smpl, estm, foc)
+        cmd = control(feat, sim, pc, x, mdl, ctl, smp, prof, smpl, estm, foc)
         mod = modulate(pinv, pc, smp, smpl, cmd, switching, Vdc_meas, scratch[0], Ts)
         if rec is not None:
             if k < rec.shape[0]:
@@ -265,7 +271,7 @@ def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True, rec=None):
             break
 
         v_app_ab = plant(
-            pinv, sinv, pp, x, prof, mod, switching, Vdc_meas, nsub, scratch[0], Ts,
+            feat, pinv, sinv, pp, x, prof, mod, switching, Vdc_meas, nsub, scratch[0], Ts,
         )  # fmt: skip
         if switching and logged:  # the true average, known only now
             log[k // log_every].v_alpha = v_app_ab.real

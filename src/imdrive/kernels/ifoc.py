@@ -363,8 +363,9 @@ def inverter_error(p, i_x):
 
 @njit(cache=True)
 def has_feedforward(p):
-    """Whether the controller compensates the inverter's voltage error (either model)."""
-    return p.dtc_u > 0.0 or p.ie_n > 0
+    """Whether the controller compensates the inverter's voltage error (either model). On
+    records or, elementwise, on arrays of them (kernels/features.py)."""
+    return (p["dtc_u"] > 0.0) | (p["ie_n"] > 0)
 
 
 @njit(cache=True)

@@ -31,7 +31,9 @@ def pwl_eval(t_pts, v_pts, n, t):
     return v_pts[i] + (v_pts[i + 1] - v_pts[i]) * (t - t_pts[i]) / dt
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def profile_at(prof_t, prof_v, prof_n, slot, t):
-    """Value of profile ``slot`` at time ``t``."""
+    """Value of profile ``slot`` at time ``t``. Inlined: the loop calls it with each slot a
+    constant, and numba compiled a function of its own for each (8 of them, 0.7 s of a cold
+    start)."""
     return pwl_eval(prof_t[slot], prof_v[slot], prof_n[slot], t)

@@ -42,6 +42,11 @@ from imdrive.kernels.estimators.registry import (
     estimator_log,
     estimator_step,
 )
+from imdrive.kernels.features import (
+    compiled,
+    standstill_r1,
+    tracks_r2,
+)
 from imdrive.kernels.ifoc import (
     dead_time_advance,
     field_weakening,
@@ -156,6 +161,98 @@ SCRATCH = record_dtype(
 NO_ESTIMATE = Estimate(0.0, 0j, 0.0, 0.0, 0.0, False, 0.0, 0.0, 0j)
 
 
+# The optional blocks (kernels/features.py): each compiled where its feature is, a stand-in
+# returning what the skipped branch leaves elsewhere.
+
+
+@njit(cache=True, inline="always")
+def _r2_tracking_front(pk, cmp, t_cyc, v_use, pc, ctl, Ts):
+    """The injection's excitation and the headroom the field weakening leaves it: ``(sine,
+    i_inj, v_fw)``."""
+    sine, i_inj = excitation(pk, cmp, t_cyc, v_use, 1.0 - ctl.fw_cut, Ts)
+    v_fw = v_use
+    if pk.inj_amp != 0.0 and pk.inj_fw and cmp.v_peak_last > 0.0:
+        # the field weakening leaves the injection headroom
+        i_ref = ctl.i_ref_dq  # the speed loop's torque current at its limit
+        iq_max = math.sqrt(max(pc.i_max * pc.i_max - i_ref.real * i_ref.real, 0.0))
+        lim = abs(i_ref.imag) >= 0.99 * iq_max
+        v_fw = headroom_weakening_input(pk, cmp, v_use, lim, 1.0 - ctl.fw_cut)
+    return sine, i_inj, v_fw
+
+
+@njit(cache=True, inline="always")
+def _no_r2_tracking_front(pk, cmp, t_cyc, v_use, pc, ctl, Ts):
+    return 0.0, 0.0, v_use
+
+
+@njit(cache=True, inline="always")
+def _no_track(pk, cmp, mdl, table, e_dq0, inp, w_r_hat, ti):
+    return e_dq0
+
+
+@njit(cache=True, inline="always")
+def _no_r1_standstill(p, m, s, v_alpha, v_beta, i0_a, i0_b, i_a, i_b, w_ref, w_e, Ts):
+    return None
+
+
+@njit(cache=True, inline="always")
+def _compensate_inverter(pc, ctl, mdl, smp, smpl, Ts, v_ref_alpha, v_ref_beta, w_ref):
+    """The inverter-error compensation the controller adds to its reference and the bridge's
+    gate advance: ``(dv_alpha, dv_beta, t_adv)``, V, V, s."""
+    i_meas_alpha = smpl.i_meas_ab.real
+    i_meas_beta = smpl.i_meas_ab.imag
+    dv_alpha, dv_beta = inverter_feedforward(
+        pc, ctl, i_meas_alpha, i_meas_beta, Ts, v_ref_alpha, v_ref_beta
+    )
+    standstill_compensation(ctl, dv_alpha, dv_beta, i_meas_alpha, i_meas_beta, w_ref)
+    if mdl.ie_new:  # the standstill test identified the residual: the scale starts there
+        start_from_identified(ctl, mdl)
+    return dv_alpha, dv_beta, dead_time_advance(pc, ctl, Ts)
+
+
+@njit(cache=True, inline="always")
+def _no_inverter_compensation(pc, ctl, mdl, smp, smpl, Ts, v_ref_alpha, v_ref_beta, w_ref):
+    return 0.0, 0.0, 0.0
+
+
+@njit(cache=True, inline="always")
+def _no_residual(p, s, m, v_ab, i_prev_ab, i_ab, Ts):
+    return None
+
+
+@njit(cache=True, inline="always")
+def _inverter_masks_r1(pc, ctl, mdl, i_ab):
+    return r1_masked_by_inverter_error(pc, ctl, mdl, i_ab)
+
+
+@njit(cache=True, inline="always")
+def _no_inverter_error(pc, ctl, mdl, i_ab):
+    return False
+
+
+@njit(cache=True, inline="always")
+def _no_bridge(pinv, sinv, pp, x, v_alpha, v_beta, Vdc_meas, R1b, R2b, TL0, Ts, nsub, ev,
+               trace, carry, advance):  # fmt: skip
+    return 0.0, 0.0
+
+
+@njit(cache=True, inline="always")
+def _current_offset_only(p, i_s_alpha, i_s_beta, k, buf):
+    return i_s_alpha + p.i_offset_ab.real, i_s_beta + p.i_offset_ab.imag
+
+
+r2_tracking_front = compiled("r2_tracking", _no_r2_tracking_front)(_r2_tracking_front)
+track_r2 = compiled("r2_tracking", _no_track)(track)
+run_r1_standstill = compiled("standstill_r1", _no_r1_standstill)(r1_standstill)
+bridge = compiled("switching_bridge", _no_bridge)(bridge_period)
+compensate_inverter = compiled("inverter_compensation", _no_inverter_compensation)(
+    _compensate_inverter
+)
+inverter_residual = compiled("inverter_compensation", _no_residual)(stator_residual)
+r1_masked = compiled("inverter_compensation", _no_inverter_error)(_inverter_masks_r1)
+current_sensors = compiled("phase_sensors", _current_offset_only)(measure_current_drawn)
+
+
 @njit(cache=True, inline="always")
 def profiles(pp, pt, pv, pn, t, foc, mdl, Ts):
     """The profiles the drive reads at ``t`` (the stages after it read no profile array): the
@@ -188,7 +285,7 @@ def profiles(pp, pt, pv, pn, t, foc, mdl, Ts):
 
 
 @njit(cache=True, inline="always")
-def measure(pp, psen, x, ctl, prof, t, k, i_next_ab, have_next, scr):
+def measure(feat, pp, psen, x, ctl, prof, t, k, i_next_ab, have_next, scr):
     """The plant's current and the current sensors at ``t``: the :class:`Sample`.
 
     ``i_next_ab`` is the current :func:`check` computed from this same state after the last
@@ -202,14 +299,14 @@ def measure(pp, psen, x, ctl, prof, t, k, i_next_ab, have_next, scr):
         i_s_beta = i_next_ab.imag
     else:
         i_s_alpha, i_s_beta = stator_current(pp, x)
-    i_meas_alpha, i_meas_beta = measure_current_drawn(psen, i_s_alpha, i_s_beta, k, scr)
+    i_meas_alpha, i_meas_beta = current_sensors(feat, psen, i_s_alpha, i_s_beta, k, scr)
     return Sample(
         t, k, complex(i_s_alpha, i_s_beta), complex(i_meas_alpha, i_meas_beta), ctl.theta_e
     )
 
 
 @njit(cache=True, inline="always")
-def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc_meas, pc):
+def estimate(feat, sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc_meas, pc):
     """The injection, the selected estimator, the detection and the R2 compensator.
 
     Returns the :class:`Estimate`; updates the estimator's state ``est`` and the compensator's
@@ -224,14 +321,7 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc
     # weakening and the headroom must leave it room (without it, at twice the rated speed on
     # the dead-time bridge the compensation's few percent pushed the sum into the limit)
     v_use = smp.v_use
-    v_fw = v_use
-    sine, i_inj = excitation(pk, cmp, t_cyc, v_use, 1.0 - ctl.fw_cut, Ts)
-    if pk.inj_amp != 0.0 and pk.inj_fw and cmp.v_peak_last > 0.0:
-        # the field weakening leaves the injection headroom
-        i_ref = ctl.i_ref_dq  # the speed loop's torque current at its limit
-        iq_max = math.sqrt(max(pc.i_max * pc.i_max - i_ref.real * i_ref.real, 0.0))
-        lim = abs(i_ref.imag) >= 0.99 * iq_max
-        v_fw = headroom_weakening_input(pk, cmp, v_use, lim, 1.0 - ctl.fw_cut)
+    sine, i_inj, v_fw = r2_tracking_front(feat, pk, cmp, t_cyc, v_use, pc, ctl, Ts)
     w_ref = prof.w_ref
 
     # R1 adaptation held from the compensator's start until it first updates and whenever
@@ -244,7 +334,7 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc
         ctl.w_ref_prev = w_ref
     hold_R1 = hold_R1 or t - ctl.ref_moved_at < pc.r1_settle
     # and where its drop is below the inverter error the controller compensates
-    hold_R1 = hold_R1 or r1_masked_by_inverter_error(pc, ctl, mdl, smpl.i_meas_ab)
+    hold_R1 = hold_R1 or r1_masked(feat, pc, ctl, mdl, smpl.i_meas_ab)
     inp = EstimatorInput(
         smp.v_prev_ab, smp.i_prev_ab, smpl.i_meas_ab, smpl.theta_k, ctl.w_e, ctl.i_ref_dq,
         w_ref, i_inj, hold_R1, Ts, t, ctl.dc_restart,
@@ -252,14 +342,15 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc
     w_r_hat, e_dq0 = estimator_step(pe, mdl, est, inp)
     R1_after = mdl.R1_hat
     R2_after = mdl.R2_hat
-    if pc.R1_dc:  # the standstill R1 test, whatever the estimator (after it: the controller's)
-        i0 = smp.i_prev_ab
+    if standstill_r1(pc):  # the standstill R1 test, whatever the estimator (after it: the
+        i0 = smp.i_prev_ab  # controller's)
         i1 = smpl.i_meas_ab
         v = smp.v_prev_ab
-        r1_standstill(
-            pc, mdl, ctl, v.real, v.imag, i0.real, i0.imag, i1.real, i1.imag, w_ref, ctl.w_e, Ts
-        )
-    if pk.enabled or pk.det or pk.inj_amp != 0.0:  # R2 tracking (not built without it)
+        run_r1_standstill(
+            feat, pc, mdl, ctl, v.real, v.imag, i0.real, i0.imag, i1.real, i1.imag, w_ref,
+            ctl.w_e, Ts,
+        )  # fmt: skip
+    if tracks_r2(pk):  # R2 tracking
         # the gate compares torques: iq* at the reference flux, scaled by the field
         # weakening's flux factor (in deep field weakening the speed loop's iq* swings by 1/k
         # more for the same torque, and the gate held R2_hat 80 % of the time at 2 x rated
@@ -269,13 +360,13 @@ def estimate(sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc
             ctl.i_ref_dq.imag * (1.0 - ctl.fw_cut), v_use, ctl.w_e, ctl.w_sl,
             speed_loop_gain(pc, 1.0 - ctl.fw_cut), ctl.i_s_dq.imag, Ts,
         )  # fmt: skip
-        e_dq0 = track(pk, cmp, mdl, table, e_dq0, inp, w_r_hat, ti)
+        e_dq0 = track_r2(feat, pk, cmp, mdl, table, e_dq0, inp, w_r_hat, ti)
     psi_r_ab = estimator_flux(est)
     return Estimate(w_r_hat, e_dq0, i_inj, v_use, v_fw, hold_R1, R1_after, R2_after, psi_r_ab)
 
 
 @njit(cache=True, inline="always")
-def control(sim, pc, x, mdl, ctl, smp, prof, smpl, estm, foc):
+def control(feat, sim, pc, x, mdl, ctl, smp, prof, smpl, estm, foc):
     """Field-oriented control (or the open-loop voltage), dead-time feed-forward, delay.
 
     Returns the :class:`Command`: the reference of this sample (``v_log_ab``), the one that
@@ -301,8 +392,9 @@ def control(sim, pc, x, mdl, ctl, smp, prof, smpl, estm, foc):
         if sim.flux_inj_amp != 0.0:  # excitation for R2 adaptation (Kubota & Matsuse 1994)
             psi_ref *= 1.0 + sim.flux_inj_amp * math.sin(2.0 * math.pi * sim.flux_inj_freq * t)
         w_fb = estm.w_r_hat / pc.n_p if sim.sensorless else x.w_m
-        if pc.ie_veq and pc.ie_rate > 0.0:  # the inverter error left, for the online scale
-            stator_residual(pc, ctl, mdl, smp.v_prev_ab, smp.i_prev_ab, smpl.i_meas_ab, Ts)
+        if pc.ie_veq and pc.ie_rate > 0.0 and has_feedforward(pc):  # the inverter error
+            # left, for the online scale of the compensation (none without it)
+            inverter_residual(feat, pc, ctl, mdl, smp.v_prev_ab, smp.i_prev_ab, smpl.i_meas_ab, Ts)
         v_ref_alpha, v_ref_beta = foc_step(
             pc, mdl, ctl, i_meas_alpha, i_meas_beta, w_fb, w_ref, psi_ref, estm.i_inj, Ts,
             estm.psi_r_ab,
@@ -314,15 +406,11 @@ def control(sim, pc, x, mdl, ctl, smp, prof, smpl, estm, foc):
     dv_beta = 0.0
     t_adv = 0.0
     if has_feedforward(pc):  # inverter-error compensation, on the measured current
-        dv_alpha, dv_beta = inverter_feedforward(
-            pc, ctl, i_meas_alpha, i_meas_beta, Ts, v_ref_alpha, v_ref_beta
+        dv_alpha, dv_beta, t_adv = compensate_inverter(
+            feat, pc, ctl, mdl, smp, smpl, Ts, v_ref_alpha, v_ref_beta, w_ref
         )
-        standstill_compensation(ctl, dv_alpha, dv_beta, i_meas_alpha, i_meas_beta, w_ref)
-        if mdl.ie_new:  # the standstill test identified the residual: the scale starts there
-            start_from_identified(ctl, mdl)
         v_ref_alpha += dv_alpha
         v_ref_beta += dv_beta
-        t_adv = dead_time_advance(pc, ctl, Ts)
     v_log_ab = complex(v_ref_alpha, v_ref_beta)
     if sim.delay > 0:  # the reference of the last sample acts now, this one next period
         held = smp.v_hold_ab
@@ -420,14 +508,14 @@ def log_row(row, pp, pe, x, mdl, ctl, est, cmp, prof, smpl, estm, cmd, v_app_ab)
 
 
 @njit(cache=True, inline="always")
-def plant(pinv, sinv, pp, x, prof, mod, switching, Vdc_meas, nsub, scr, Ts):
+def plant(feat, pinv, sinv, pp, x, prof, mod, switching, Vdc_meas, nsub, scr, Ts):
     """Integrate the plant over the period: the average model's segments, or the switching
     bridge between its gate events (``scr``: the :data:`SCRATCH` record). Returns the period's
     true average voltage, V (complex)."""
     if switching:
         v_cmd = mod.v_cmd_ab
-        v_app_alpha, v_app_beta = bridge_period(
-            pinv, sinv, pp, x, v_cmd.real, v_cmd.imag, Vdc_meas,
+        v_app_alpha, v_app_beta = bridge(
+            feat, pinv, sinv, pp, x, v_cmd.real, v_cmd.imag, Vdc_meas,
             prof.R1_base, prof.R2_base, prof.T_L0, Ts, nsub, scr.ev, scr.no_trace, scr,
             mod.t_adv,
         )  # fmt: skip

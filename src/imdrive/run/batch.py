@@ -54,6 +54,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from imdrive.kernels import features
 from imdrive.kernels.batch import (
     BATCH_METRICS,
     METRICS,
@@ -184,7 +185,7 @@ def stack_drives(arrays) -> tuple[DriveParams, DriveState]:
     records = {
         name: _rows([getattr(a.params, name) for a in arrays])
         for name in DriveParams._fields
-        if name not in ("prof_t", "prof_v", "tables", "table_idx")
+        if name not in ("prof_t", "prof_v", "tables", "table_idx", "features")
     }
     params = DriveParams(
         **records,
@@ -192,6 +193,7 @@ def stack_drives(arrays) -> tuple[DriveParams, DriveState]:
         prof_v=prof_v,
         tables=np.ascontiguousarray(np.stack(tables)),
         table_idx=table_idx,
+        features=features.of(records),  # the blocks some drive of the batch runs
     )
     state = DriveState(
         *(_rows([a.state0[j] for a in arrays]) for j in range(len(DriveState._fields)))

@@ -19,6 +19,7 @@ from imdrive.config.r2_laws import plugin_law
 from imdrive.config.scenario import Scenario
 from imdrive.config.sequence import sequence
 from imdrive.errors import ConfigError
+from imdrive.kernels import features
 from imdrive.kernels.engine import DriveParams, DriveState, log_dtype
 from imdrive.run import blocks
 from imdrive.run.blocks import RPM, saturation_curve  # noqa: F401  (re-exported: old path)
@@ -236,19 +237,16 @@ def _build_arrays(sc: Scenario) -> DriveArrays:
     rec, gains, comp_derived = blocks.drive_records(sc, D, model, mh, psi0)
     gains.update(er.derived)
     prof_t, prof_v, prof_n = blocks.profile_arrays(sc, D)
+    records = {"est": est_params, **{k: rec[k] for k in ("sim", "plant", "inverter", "sensor")}}
+    records.update(control=rec["control"], comp=rec["comp"])
     params = DriveParams(
-        sim=rec["sim"],
-        plant=rec["plant"],
-        inverter=rec["inverter"],
-        sensor=rec["sensor"],
-        control=rec["control"],
-        est=est_params,
-        comp=rec["comp"],
+        **records,
         prof_t=prof_t[None],
         prof_v=prof_v[None],
         prof_n=prof_n[None],
         tables=np.ascontiguousarray(blocks.fuzzy_lookup_table(sc)[None]),
         table_idx=np.zeros(1, dtype=np.int64),
+        features=features.of(records),  # compile only the blocks this drive runs
     )
     state0 = blocks.initial_state(sc, D, rec["model"], est_state, rec["comp_state"])
 

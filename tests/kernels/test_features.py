@@ -1,0 +1,83 @@
+"""The optional blocks a drive compiles (kernels/features.py).
+
+That every preset still gives its stored results bit for bit with only its own blocks compiled
+is tests/drive/test_preset_baseline.py's; here: which blocks a drive's records select, that a
+block outside them is never typed, and that a batch compiles what any of its drives runs.
+"""
+
+import numpy as np
+import pytest
+from numba import njit
+from numba.core.errors import TypingError
+
+from imdrive.config.scenario import Scenario
+from imdrive.kernels import features
+from imdrive.run.batch import stack_drives
+from imdrive.run.build import build_arrays
+
+
+def _names(preset, *sets):
+    return build_arrays(Scenario.read(preset, list(sets))).params.features.dtype.names[1:]
+
+
+TRACKING = {"r2_tracking", "standstill_r1"}
+REALISTIC = {"switching_bridge", "inverter_compensation", "phase_sensors"}
+
+
+def test_each_drive_compiles_the_groups_of_blocks_its_records_run():
+    assert _names("sensorless") == ()
+    assert set(_names("injection-robust")) == TRACKING
+    assert set(_names("paper-fig5")) == TRACKING  # no standstill test: its group's all the same
+    assert set(_names("sensorless-realistic")) == REALISTIC
+    assert set(_names("injection-fig5-realistic")) == TRACKING | REALISTIC
+    # a setting that turns a block on turns its group on
+    assert set(_names("sensorless", 'inverter.model="switching"')) == REALISTIC
+
+
+def test_the_groups_partition_the_features():
+    grouped = [name for group in features.GROUPS for name in group]
+    assert sorted(grouped) == sorted(features.FEATURES)
+
+
+def test_a_batch_compiles_what_any_of_its_drives_runs():
+    arrays = [build_arrays(Scenario.read(n)) for n in ("sensorless", "injection-robust")]
+    params, _ = stack_drives(arrays)
+    assert params.features.shape == (2,)
+    assert set(params.features.dtype.names[1:]) == TRACKING
+    assert features.has(params.features, "r2_tracking")
+    assert not features.has(params.features, "switching_bridge")
+    assert features.has(None, "switching_bridge")  # no features array: every block
+
+
+@njit
+def _untypable(x):
+    return x.no_such_attribute  # typing this fails: it must never be typed when off
+
+
+@njit
+def _stand_in(x):
+    return -1.0
+
+
+_gated = features.compiled("switching_bridge", _stand_in)(_untypable)
+
+
+@njit
+def _call(feat, x):
+    return _gated(feat, x)
+
+
+def test_a_block_outside_the_drive_s_features_is_never_typed():
+    off = np.ones(1, dtype=features.features_dtype(["r2_tracking"]))
+    assert _call(off[0], 2.0) == -1.0
+    with pytest.raises(TypingError, match="no_such_attribute"):
+        _call(np.ones(1, dtype=features.EVERY)[0], 2.0)
+    with pytest.raises(TypingError, match="no_such_attribute"):
+        _call(None, 2.0)  # None: every block compiled
+
+
+def test_unknown_features_are_refused_by_name():
+    with pytest.raises(KeyError, match="warp_drive"):
+        features.features_dtype(["warp_drive"])
+    with pytest.raises(KeyError, match="warp_drive"):
+        features.compiled("warp_drive", _stand_in)
