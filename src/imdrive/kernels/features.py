@@ -27,7 +27,6 @@ import numpy as np
 from numba import njit, types
 from numba.extending import overload
 
-from imdrive.kernels.ifoc import has_feedforward
 from imdrive.kernels.inverter import INV_SWITCHING
 from imdrive.kernels.records import b1, record_dtype
 
@@ -50,6 +49,14 @@ def switching_bridge(pinv):
 def standstill_r1(pc):
     """The standstill R1 test runs while the rotor magnetises (``pc``: the controller's)."""
     return pc["R1_dc"]
+
+
+@njit(cache=True)
+def has_feedforward(pc):
+    """Whether the controller compensates the inverter's voltage error (dead-time sign model
+    or the identified table; ``pc``: the controller's params). Also
+    ``kernels.ifoc.has_feedforward``."""
+    return (pc["dtc_u"] > 0.0) | (pc["ie_n"] > 0)
 
 
 @njit(cache=True, inline="always")
@@ -172,7 +179,8 @@ def compiled(feature: str, off):
         impl_on, impl_off = _define(src, run=block), _define(src, run=off)
 
         def choose(feat):  # at typing: the block where the drive compiles the feature
-            on = isinstance(feat, types.NoneType) or feature in feat.fields
+            # None (or a block's argument left out): every block
+            on = isinstance(feat, (types.NoneType, types.Omitted)) or feature in feat.fields
             return impl_on if on else impl_off
 
         overload(stub, inline="always")(_define(src, run=choose, feat_only=True))

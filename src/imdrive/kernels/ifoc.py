@@ -59,6 +59,7 @@ import math
 from numba import njit
 
 from imdrive.kernels.current_control import decoupling_voltage
+from imdrive.kernels.features import compiled, has_feedforward
 from imdrive.kernels.inverter import (
     clarke,
     duty_cycles,
@@ -185,7 +186,17 @@ def open_loop_voltage(s, v_amp, f_Hz, Ts):
 
 
 @njit(cache=True)
-def foc_step(p, m, s, i_alpha, i_beta, w_fb_m, w_ref_m, psi_ref, i_inj, Ts, psi_obs_ab):
+def _no_scale_adaptation(p, s, m, u_d, u_q, i_d, i_q, th, w_e, Ts):
+    return None
+
+
+#: The online scale of the inverter-error compensation, compiled with its group of blocks.
+adapt_inverter_scale = compiled("inverter_compensation", _no_scale_adaptation)(adapt_inverter_error)
+
+
+@njit(cache=True)
+def foc_step(p, m, s, i_alpha, i_beta, w_fb_m, w_ref_m, psi_ref, i_inj, Ts, psi_obs_ab,
+             feat=None):  # fmt: skip
     """One period of field-oriented speed control, indirect or, on an estimator's flux,
     direct (updates ``s``).
 
@@ -211,6 +222,9 @@ def foc_step(p, m, s, i_alpha, i_beta, w_fb_m, w_ref_m, psi_ref, i_inj, Ts, psi_
     psi_obs_ab : complex
         The speed estimator's rotor-flux estimate, stationary frame, Wb (``0j``: it has none;
         the frame then integrates the slip alone; module docstring).
+    feat : features record or None
+        The optional blocks compiled in (kernels/features.py): the online scale of the
+        inverter-error compensation is typed only with its group (default: every block).
 
     Returns
     -------
@@ -277,7 +291,7 @@ def foc_step(p, m, s, i_alpha, i_beta, w_fb_m, w_ref_m, psi_ref, i_inj, Ts, psi_
     if p.ie_rate > 0.0 and v_q_unsat == v_q and v_d_unsat == v_d:
         u_d = v_d - ff_d - p.R_a * i_d
         u_q = v_q - ff_q - p.R_a * i_q
-        adapt_inverter_error(p, s, m, u_d, u_q, i_d, i_q, th, w_e, Ts)
+        adapt_inverter_scale(feat, p, s, m, u_d, u_q, i_d, i_q, th, w_e, Ts)
     elif p.or_wmin > 0.0 and (v_q_unsat != v_q or v_d_unsat != v_d):
         dth = check_orientation(p, s, m, v_d, v_q, i_d, i_q, w_e, sigma_L1, Ts)
     elif s.or_time > 0.0:
@@ -359,13 +373,6 @@ def inverter_error(p, i_x):
     identified table, V: odd in ``i_x``, linear between the nodes, held past the last."""
     u, _ = table_interp(abs(i_x), p.ie_i, p.ie_u, p.ie_n)
     return u if i_x >= 0.0 else -u
-
-
-@njit(cache=True)
-def has_feedforward(p):
-    """Whether the controller compensates the inverter's voltage error (either model). On
-    records or, elementwise, on arrays of them (kernels/features.py)."""
-    return (p["dtc_u"] > 0.0) | (p["ie_n"] > 0)
 
 
 @njit(cache=True)
