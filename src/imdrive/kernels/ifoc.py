@@ -59,7 +59,7 @@ import math
 from numba import njit
 
 from imdrive.kernels.current_control import decoupling_voltage
-from imdrive.kernels.features import compiled, has_feedforward
+from imdrive.kernels.features import has_feedforward
 from imdrive.kernels.inverter import (
     clarke,
     duty_cycles,
@@ -72,6 +72,7 @@ from imdrive.kernels.inverter import (
 from imdrive.kernels.inverter_scale import (  # noqa: F401
     SIXTH_HARMONIC_HALF,
     adapt_inverter_error,
+    adapt_inverter_scale,
     standstill_compensation,
 )
 from imdrive.kernels.model import (
@@ -183,15 +184,6 @@ def open_loop_voltage(s, v_amp, f_Hz, Ts):
     th = s.theta_ol + 0.5 * w * Ts
     s.theta_ol = wrap_angle(s.theta_ol + w * Ts)
     return v_amp * math.cos(th), v_amp * math.sin(th)
-
-
-@njit(cache=True)
-def _no_scale_adaptation(p, s, m, u_d, u_q, i_d, i_q, th, w_e, Ts):
-    return None
-
-
-#: The online scale of the inverter-error compensation, compiled with its group of blocks.
-adapt_inverter_scale = compiled("inverter_compensation", _no_scale_adaptation)(adapt_inverter_error)
 
 
 @njit(cache=True)
