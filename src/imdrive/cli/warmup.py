@@ -30,7 +30,9 @@ T_END_S = 0.002
 
 
 #: The optional blocks a drive compiles (kernels/features.py ``GROUPS``), each set as a preset
-#: that runs it: the MRAS drive is compiled with each (``drive:mras:<set>``).
+#: that runs it: the MRAS drive is compiled with each (``drive:mras:<set>``), its batch kernel
+#: with the two a sweep most often runs (``batch:mras:<set>``; in the test suite two workers
+#: compiled each side by side, 15-17 s apiece).
 FEATURE_SETS = {
     "r2": "injection-robust",
     "realistic": "sensorless-realistic",
@@ -41,7 +43,8 @@ FEATURE_SETS = {
 def jobs() -> list[str]:
     """Every job name, the MRAS drive first: ``drive:<estimator>``, ``drive:mras:<set>`` (the
     MRAS drive with each set of optional blocks, :data:`FEATURE_SETS`), ``batch`` (the MRAS's),
-    ``batch:<estimator>``, ``batch-serial``, ``replay:<estimator>``, ``stability``."""
+    ``batch:mras:<set>``, ``batch:<estimator>``, ``batch-serial``, ``replay:<estimator>``,
+    ``stability``."""
     from imdrive.run.estimators import estimator_names
 
     names = [n for n in estimator_names() if n != "mras"]
@@ -51,6 +54,7 @@ def jobs() -> list[str]:
         *(f"drive:mras:{s}" for s in FEATURE_SETS),
         *(f"drive:{n}" for n in names),
         "batch",
+        *(f"batch:mras:{s}" for s in ("r2", "realistic")),
         *(f"batch:{n}" for n in names if n != "measured"),
         "batch-serial",
         *(f"replay:{n}" for n in replayed),
@@ -70,16 +74,17 @@ def run_job(name: str) -> None:
     """Compile (or load) the kernels of job ``name`` in this process."""
     kind, _, estimator = name.partition(":")
     estimator, _, blocks = estimator.partition(":")
+    if blocks and blocks not in FEATURE_SETS:
+        raise ConfigError("job", f"unknown job {name!r} (known: {', '.join(jobs())})")
     if kind == "drive":
         from imdrive.run.simulate import simulate
 
-        if blocks and blocks not in FEATURE_SETS:
-            raise ConfigError("job", f"unknown job {name!r} (known: {', '.join(jobs())})")
         simulate(_scenario(estimator, FEATURE_SETS.get(blocks, "sensorless")))
     elif kind in ("batch", "batch-serial"):
         from imdrive.run.batch import simulate_batch
 
-        simulate_batch([_scenario(estimator or "mras")] * 2, parallel=kind == "batch")
+        sc = _scenario(estimator or "mras", FEATURE_SETS.get(blocks, "sensorless"))
+        simulate_batch([sc] * 2, parallel=kind == "batch")
     elif kind == "replay":
         import tempfile
 

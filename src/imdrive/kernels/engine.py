@@ -132,7 +132,7 @@ class DriveParams(NamedTuple):
     prof_n: np.ndarray  # int64[N, N_PROF] breakpoints per profile
     tables: np.ndarray  # float64[T, 13, 13] fuzzy lookup tables
     table_idx: np.ndarray  # int64[N] each drive's table
-    #: the optional blocks compiled in, named by the dtype (kernels/features.py ``resolve``);
+    #: the optional blocks compiled in, named by the dtype (kernels/features.py ``of``);
     #: ``None``: every one
     features: np.ndarray | None = None
 

@@ -6,14 +6,15 @@ branch still had numba type and lower the block behind it: every ``imdrive run``
 whole engine, about 120 functions whatever the drive used (``benchmarks/bench_compile.py``).
 Here each optional block is a *feature*: a predicate on the drive's records says whether a
 drive runs it, and :class:`~imdrive.kernels.engine.DriveParams` carries a ``features`` record
-array whose dtype names the features compiled in (:func:`resolve`: those some drive of the
-arrays runs). A block wrapped by :func:`compiled` is typed only where its feature is in that
-dtype; elsewhere a light stand-in of the same signature runs, which returns what the block
-returns when its branch is not taken. So the results are the same bit for bit, and numba
-compiles one loop per set of features, as it compiles one per estimator.
+array whose dtype names the features compiled in (:func:`of`: those some drive of the arrays
+runs, completed to their :data:`GROUPS`). A block wrapped by :func:`compiled` is typed only
+where its feature is in that dtype; elsewhere a light stand-in of the same signature runs,
+which returns what the block returns when its branch is not taken. So the results are the
+same bit for bit, and numba compiles one loop per set of features, as it compiles one per
+estimator.
 
 The predicates are written on record fields by subscript with ``&``, ``|`` and comparisons:
-the kernels call them on a record, :func:`resolve` on the record arrays of a batch (numpy
+the kernels call them on a record, :func:`used` on the record arrays of a batch (numpy
 elementwise), so the decision to compile a block and the branch that runs it are one code.
 """
 
@@ -121,11 +122,6 @@ def of(records, names=None) -> np.ndarray:
     names = used(records) if names is None else names
     get = records.__getitem__ if isinstance(records, Mapping) else records.__getattribute__
     return np.ones(get("sim").shape[0], dtype=features_dtype(names))
-
-
-def resolve(params, names=None):
-    """``params`` (a ``DriveParams``) with the ``features`` array of :func:`of`."""
-    return params._replace(features=of(params, names))
 
 
 def has(features, name: str) -> bool:

@@ -221,11 +221,6 @@ def _no_residual(p, s, m, v_ab, i_prev_ab, i_ab, Ts):
 
 
 @njit(cache=True, inline="always")
-def _inverter_masks_r1(pc, ctl, mdl, i_ab):
-    return r1_masked_by_inverter_error(pc, ctl, mdl, i_ab)
-
-
-@njit(cache=True, inline="always")
 def _no_inverter_error(pc, ctl, mdl, i_ab):
     return False
 
@@ -249,7 +244,7 @@ compensate_inverter = compiled("inverter_compensation", _no_inverter_compensatio
     _compensate_inverter
 )
 inverter_residual = compiled("inverter_compensation", _no_residual)(stator_residual)
-r1_masked = compiled("inverter_compensation", _no_inverter_error)(_inverter_masks_r1)
+r1_masked = compiled("inverter_compensation", _no_inverter_error)(r1_masked_by_inverter_error)
 current_sensors = compiled("phase_sensors", _current_offset_only)(measure_current_drawn)
 
 
