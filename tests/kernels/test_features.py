@@ -81,3 +81,21 @@ def test_unknown_features_are_refused_by_name():
         features.features_dtype(["warp_drive"])
     with pytest.raises(KeyError, match="warp_drive"):
         features.compiled("warp_drive", _stand_in)
+
+
+@pytest.mark.slow
+def test_a_drive_without_a_features_array_compiles_every_block_and_runs_the_same():
+    # DriveParams built by hand before the field existed: features None, every block compiled
+    # (the engine of before); the realistic drive's blocks all run, bit for bit
+    from dataclasses import replace
+
+    from imdrive.run.simulate import simulate
+
+    sc = Scenario.read("injection-fig5-realistic", ["simulation.t_end_s=0.05"])
+    a = build_arrays(sc)
+    every = replace(a, params=a.params._replace(features=None))
+    got, want = simulate(sc, arrays=every), simulate(sc, arrays=a)
+    assert got.status == want.status
+    assert list(got.signals) == list(want.signals)
+    for col in want.signals:
+        assert np.array_equal(got.signals[col], want.signals[col], equal_nan=True), col
