@@ -410,12 +410,13 @@ def r1_sensitivity(res, window_s: float = DEFAULT_WINDOW_S) -> float | None:
     stator frequency (the slope of ``theta_e``), the stator current ``|i_dq|``, the rotor
     flux and the final R1_hat. None without a compensator or a diverged run; ``inf`` at zero
     stator frequency."""
-    from imdrive.analysis.observability import r2_r1_sensitivity
-    from imdrive.config.perunit import resolve
-
     s = res.signals
     if not res.scenario.compensator.enabled or res.diverged or "theta_e_rad" not in s:
         return None
+    # here, not above: the analysis package imports scipy.optimize (0.3 s of a warm run)
+    from imdrive.analysis.observability import r2_r1_sensitivity
+    from imdrive.config.perunit import resolve
+
     t = s["time_s"]
     win = t >= t[-1] - window_s
     if win.sum() < 2:

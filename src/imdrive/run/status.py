@@ -430,9 +430,11 @@ def r1_note(g: float | None) -> str | None:
     on R1_hat more than the R2 tolerance allows: ``g`` times
     :data:`~imdrive.analysis.observability.R1_UNCERTAINTY` above :data:`R2_TOLERANCE`
     (``g``: :func:`imdrive.run.metrics.r1_sensitivity`). None otherwise."""
+    if g is None:  # before the import: the analysis package loads scipy.optimize (0.3 s)
+        return None
     from imdrive.analysis.observability import R1_UNCERTAINTY
 
-    if g is None or not g * R1_UNCERTAINTY > R2_TOLERANCE:
+    if not g * R1_UNCERTAINTY > R2_TOLERANCE:
         return None
     d1 = 100 * R1_UNCERTAINTY
     if math.isinf(g):
