@@ -21,53 +21,47 @@ see :mod:`imdrive`).
 * :mod:`imdrive.analysis.circuit_from_tests` — the circuit from a DC stator resistance, a
   no-load and a locked-rotor test (:func:`circuit_from_tests`).
 
-Every public name is re-exported here.
+Every public name is re-exported here, its module imported on first use.
 """
 
 from __future__ import annotations
 
-from imdrive.analysis.circuit import (
-    SteadyState,
-    breakdown,
-    breakdown_thevenin,
-    equivalent_circuit,
-)
-from imdrive.analysis.circuit_from_tests import (
-    LockedRotorTest,
-    NoLoadTest,
-    TestCircuit,
-    circuit_from_tests,
-)
-from imdrive.analysis.figures import plot_speed_error_vs_R2
-from imdrive.analysis.foc import (
-    FOCOperatingPoint,
-    detuning_speed_error_rpm,
-    field_weakened_flux_Wb,
-    foc_operating_point,
-)
-from imdrive.analysis.nameplate import (
-    Nameplate,
-    NameplateFit,
-    estimate_circuit,
-    estimate_circuit_lee,
-)
+import importlib
 
-__all__ = [
-    "SteadyState",
-    "FOCOperatingPoint",
-    "equivalent_circuit",
-    "breakdown",
-    "breakdown_thevenin",
-    "foc_operating_point",
-    "detuning_speed_error_rpm",
-    "field_weakened_flux_Wb",
-    "plot_speed_error_vs_R2",
-    "Nameplate",
-    "NameplateFit",
-    "estimate_circuit",
-    "estimate_circuit_lee",
-    "NoLoadTest",
-    "LockedRotorTest",
-    "TestCircuit",
-    "circuit_from_tests",
-]
+#: Each public name and the module it comes from, imported on first use (PEP 562): the
+#: modules load scipy.optimize and matplotlib's helpers, 0.3 s that a run's status, which
+#: needs only :mod:`imdrive.analysis.observability`, paid through this package (2026-11-30).
+_EXPORTS = {
+    "SteadyState": "circuit",
+    "breakdown": "circuit",
+    "breakdown_thevenin": "circuit",
+    "equivalent_circuit": "circuit",
+    "LockedRotorTest": "circuit_from_tests",
+    "NoLoadTest": "circuit_from_tests",
+    "TestCircuit": "circuit_from_tests",
+    "circuit_from_tests": "circuit_from_tests",
+    "plot_speed_error_vs_R2": "figures",
+    "FOCOperatingPoint": "foc",
+    "detuning_speed_error_rpm": "foc",
+    "field_weakened_flux_Wb": "foc",
+    "foc_operating_point": "foc",
+    "Nameplate": "nameplate",
+    "NameplateFit": "nameplate",
+    "estimate_circuit": "nameplate",
+    "estimate_circuit_lee": "nameplate",
+}
+
+__all__ = list(_EXPORTS)
+
+
+def __getattr__(name: str):
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))
