@@ -1,12 +1,13 @@
 """``imdrive warm-up``: compile every kernel entry point into the cache, on every core.
 
 Each compiled entry point is a job: the drive once per registered estimator (the engine is
-specialised by the estimator's records), the batch kernels (sweeps; parallel once per
-estimator and, for dask, serial), the replay once per estimator (the estimator and its R2 law
-on a recording) and the stability map's. The first job compiles the MRAS drive, which every
-other entry point links in; the others then run in parallel processes (numba compiles one
-function at a time per process). A job whose kernels are cached takes the time to load them
-(about 1 s).
+specialised by the estimator's records) and, for the MRAS, once per set of optional blocks
+(the engine is specialised by the blocks a drive runs too, kernels/features.py), the batch
+kernels (sweeps; parallel once per estimator and, for dask, serial), the replay once per
+estimator (the estimator and its R2 law on a recording) and the stability map's. The first
+job compiles the MRAS drive, which the other entry points of the same blocks link in; the
+others then run in parallel processes (numba compiles one function at a time per process).
+A job whose kernels are cached takes the time to load them (about 1 s).
 
 The test suite runs it before its workers start (``tests/conftest.py``), so that two workers do
 not compile the same kernel side by side.
