@@ -168,7 +168,7 @@ def compiled(feature: str, off):
         # the block's own arguments, spelled out: numba inlines no call through ``*args``
         names = ", ".join(inspect.signature(block.py_func).parameters)
         src = f"def gated(feat, {names}):\n    return run({names})\n"
-        stub = _define(src, run=None)
+        stub = _define(src, run=block)  # called from Python: the block, whatever ``feat``
         stub.__name__ = stub.__qualname__ = block.__name__
         stub.__doc__ = block.__doc__
         stub.__module__ = block.__module__
