@@ -76,6 +76,11 @@ def test_a_block_outside_the_drive_s_features_is_never_typed():
         _call(None, 2.0)  # None: every block compiled
 
 
+def test_the_wrapper_called_from_python_runs_the_block():
+    twice = features.compiled("phase_sensors", _stand_in)(njit(lambda x: 2.0 * x))
+    assert twice(None, 2.0) == 4.0
+
+
 def test_unknown_features_are_refused_by_name():
     with pytest.raises(KeyError, match="warp_drive"):
         features.features_dtype(["warp_drive"])
