@@ -80,7 +80,14 @@ FEATURES = {
 
 def features_dtype(names) -> np.dtype:
     """The ``features`` record of a drive that compiles ``names`` (in :data:`FEATURES`'
-    order; the first field, ``compiled``, is there for a drive that compiles none)."""
+    order), after a first field named by the whole set (``set__`` and the names).
+
+    That first field is what keeps two sets apart: numba passes a record where a record of a
+    prefix of its fields is expected (width subtyping), and a function compiled for the lean
+    set (``foc_step``, a dispatcher of its own) then ran for a drive with the inverter
+    compensation, whose online scale never adapted (the clean-clone CI of 2026-11-30, 9
+    tests, depending on which drive a process compiled first).
+    """
     return _features_dtype(frozenset(names))
 
 
@@ -89,7 +96,9 @@ def _features_dtype(names: frozenset) -> np.dtype:  # one dtype per set: a batch
     unknown = set(names) - set(FEATURES)
     if unknown:
         raise KeyError(f"unknown features {sorted(unknown)}: known are {list(FEATURES)}")
-    return record_dtype([("compiled", b1)] + [(n, b1) for n in FEATURES if n in names])
+    ordered = [n for n in FEATURES if n in names]
+    first = "set__" + "__".join(ordered or ["none"])  # an identifier: numpy's buffers want one
+    return record_dtype([(first, b1)] + [(n, b1) for n in ordered])
 
 
 #: Every feature compiled: what a drive whose ``features`` is ``None`` runs.
