@@ -82,11 +82,9 @@ def features_dtype(names) -> np.dtype:
     """The ``features`` record of a drive that compiles ``names`` (in :data:`FEATURES`'
     order), after a first field named by the whole set (``set__`` and the names).
 
-    That first field is what keeps two sets apart: numba passes a record where a record of a
-    prefix of its fields is expected (width subtyping), and a function compiled for the lean
-    set (``foc_step``, a dispatcher of its own) then ran for a drive with the inverter
-    compensation, whose online scale never adapted (the clean-clone CI of 2026-11-30, 9
-    tests, depending on which drive a process compiled first).
+    That first field keeps two sets apart: numba passes a record where a record of a prefix
+    of its fields is expected (width subtyping), so a function compiled for the lean set
+    could run for a drive with more blocks.
     """
     return _features_dtype(frozenset(names))
 
@@ -169,6 +167,14 @@ def compiled(feature: str, off):
     The wrapped block takes the drive's ``features`` record (:func:`row`) as a first argument
     ``feat``: ``block(feat, *args)``. ``off`` returns what the block returns when the branch
     that calls it is not taken (it is called only there, through the feature's predicate).
+
+    Only code inlined into the loop may take ``feat`` (the stages, these wrappers): numba
+    names a compiled function by its arguments' types, a record by a type code each process
+    numbers for itself, so two variants of a separately compiled function that differ only in
+    the features record got one symbol name in processes that compiled in the same order, and
+    a process that loaded both from the cache ran one for the other (``foc_step`` with the
+    scale adaptation gated: the online scale never adapted in 9 tests of the clean-clone CI,
+    2026-11-30; the adaptation is compiled into every drive since, 0.35 s of a cold start).
     """
     if feature not in FEATURES:
         raise KeyError(f"unknown feature {feature!r}: known are {list(FEATURES)}")

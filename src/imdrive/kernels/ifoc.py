@@ -72,7 +72,6 @@ from imdrive.kernels.inverter import (
 from imdrive.kernels.inverter_scale import (  # noqa: F401
     SIXTH_HARMONIC_HALF,
     adapt_inverter_error,
-    adapt_inverter_scale,
     standstill_compensation,
 )
 from imdrive.kernels.model import (
@@ -187,8 +186,7 @@ def open_loop_voltage(s, v_amp, f_Hz, Ts):
 
 
 @njit(cache=True)
-def foc_step(p, m, s, i_alpha, i_beta, w_fb_m, w_ref_m, psi_ref, i_inj, Ts, psi_obs_ab,
-             feat=None):  # fmt: skip
+def foc_step(p, m, s, i_alpha, i_beta, w_fb_m, w_ref_m, psi_ref, i_inj, Ts, psi_obs_ab):
     """One period of field-oriented speed control, indirect or, on an estimator's flux,
     direct (updates ``s``).
 
@@ -214,9 +212,6 @@ def foc_step(p, m, s, i_alpha, i_beta, w_fb_m, w_ref_m, psi_ref, i_inj, Ts, psi_
     psi_obs_ab : complex
         The speed estimator's rotor-flux estimate, stationary frame, Wb (``0j``: it has none;
         the frame then integrates the slip alone; module docstring).
-    feat : features record or None
-        The optional blocks compiled in (kernels/features.py): the online scale of the
-        inverter-error compensation is typed only with its group (default: every block).
 
     Returns
     -------
@@ -283,7 +278,7 @@ def foc_step(p, m, s, i_alpha, i_beta, w_fb_m, w_ref_m, psi_ref, i_inj, Ts, psi_
     if p.ie_rate > 0.0 and v_q_unsat == v_q and v_d_unsat == v_d:
         u_d = v_d - ff_d - p.R_a * i_d
         u_q = v_q - ff_q - p.R_a * i_q
-        adapt_inverter_scale(feat, p, s, m, u_d, u_q, i_d, i_q, th, w_e, Ts)
+        adapt_inverter_error(p, s, m, u_d, u_q, i_d, i_q, th, w_e, Ts)
     elif p.or_wmin > 0.0 and (v_q_unsat != v_q or v_d_unsat != v_d):
         dth = check_orientation(p, s, m, v_d, v_q, i_d, i_q, w_e, sigma_L1, Ts)
     elif s.or_time > 0.0:

@@ -43,7 +43,6 @@ import math
 
 from numba import njit
 
-from imdrive.kernels.features import compiled
 from imdrive.kernels.model import model_inductances
 
 #: Half the sixth-harmonic coefficient ``c6/2`` of a six-step error across the current
@@ -192,13 +191,3 @@ def start_from_identified(s, m):
         dk = s.ie_dk + m.u0_id / (s.ie_c0 * m.i_id)
         s.ie_dk = min(max(dk, -0.75), 1.0)
     m.ie_new = False
-
-
-@njit(cache=True)
-def _no_scale_adaptation(p, s, m, u_d, u_q, i_d, i_q, th, w_e, Ts):
-    return None
-
-
-#: :func:`adapt_inverter_error` compiled with its group of blocks (kernels/features.py):
-#: ``adapt_inverter_scale(feat, p, s, ...)``.
-adapt_inverter_scale = compiled("inverter_compensation", _no_scale_adaptation)(adapt_inverter_error)

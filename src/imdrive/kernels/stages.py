@@ -392,7 +392,7 @@ def control(feat, sim, pc, x, mdl, ctl, smp, prof, smpl, estm, foc):
             inverter_residual(feat, pc, ctl, mdl, smp.v_prev_ab, smp.i_prev_ab, smpl.i_meas_ab, Ts)
         v_ref_alpha, v_ref_beta = foc_step(
             pc, mdl, ctl, i_meas_alpha, i_meas_beta, w_fb, w_ref, psi_ref, estm.i_inj, Ts,
-            estm.psi_r_ab, feat,
+            estm.psi_r_ab,
         )  # fmt: skip
     else:
         v_ref_alpha, v_ref_beta = open_loop_voltage(ctl, prof.v_amp, prof.f, Ts)
