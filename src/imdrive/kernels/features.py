@@ -108,7 +108,7 @@ EVERY = features_dtype(FEATURES)
 #: the five apart made the test suite compile 41 engines and run 6 min 37 s instead of 3 min 7 s
 #: (2026-11-30); the R2 tracking and the realistic inverter and sensors are what a scenario
 #: adds, so two groups keep a drive with neither lean (a cold ``imdrive run sensorless``
-#: 22.3 -> 12.4 s) at four engines per estimator.
+#: 22.3 -> 11.8-12.8 s) at four engines per estimator.
 GROUPS = (
     ("r2_tracking", "standstill_r1"),
     ("switching_bridge", "inverter_compensation", "phase_sensors"),
