@@ -14,7 +14,6 @@ import numpy as np
 from numba import njit, prange
 
 from imdrive.kernels.engine import LOG, S_OK, DriveParams, DriveState, run_drive
-from imdrive.kernels.features import rows as features_rows
 from imdrive.kernels.recording import RECORDING
 from imdrive.kernels.records import b1, f8, i8, record_dtype
 
@@ -264,7 +263,7 @@ def _drive_params(P, i):
         P.prof_n[i : i + 1],
         P.tables,
         P.table_idx[i : i + 1],
-        features_rows(P.features, i),
+        P.features,  # whole: the engine reads its type, not its rows
     )
 
 

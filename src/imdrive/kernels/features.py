@@ -148,18 +148,6 @@ def _row(features, i):
     return lambda features, i: features[i]
 
 
-def rows(features, i):
-    """Drive ``i``'s ``features`` as a one-row array (``None`` stays ``None``)."""
-    raise NotImplementedError("compiled only")
-
-
-@overload(rows, inline="always")
-def _rows(features, i):
-    if isinstance(features, types.NoneType):
-        return lambda features, i: None
-    return lambda features, i: features[i : i + 1]
-
-
 def compiled(feature: str, off):
     """Decorator: the block runs where ``feature`` is compiled into the drive, ``off`` (a
     compiled function of the same arguments) elsewhere, and the block is then never typed.
