@@ -15,7 +15,7 @@ from numba import njit, prange
 
 from imdrive.kernels.engine import LOG, S_OK, DriveParams, DriveState, run_drive
 from imdrive.kernels.recording import RECORDING
-from imdrive.kernels.records import b1, f8, i8, record_dtype
+from imdrive.kernels.records import b1, copy_row, f8, i8, record_dtype
 
 RPM = 2.0 * math.pi / 60.0
 _INV_RPM = 1.0 / RPM  # the factor the result applies to rad/s columns
@@ -284,13 +284,13 @@ def _own_state(S, i):
 @njit(cache=True)
 def _give_back(S, i, own):
     """Write the state :func:`_own_state` copied out back into drive ``i``'s rows."""
-    S.plant[i] = own.plant[0]
-    S.sample[i] = own.sample[0]
-    S.model[i] = own.model[0]
-    S.control[i] = own.control[0]
-    S.est[i] = own.est[0]
-    S.comp[i] = own.comp[0]
-    S.inverter[i] = own.inverter[0]
+    copy_row(S.plant, i, own.plant, 0)
+    copy_row(S.sample, i, own.sample, 0)
+    copy_row(S.model, i, own.model, 0)
+    copy_row(S.control, i, own.control, 0)
+    copy_row(S.est, i, own.est, 0)
+    copy_row(S.comp, i, own.comp, 0)
+    copy_row(S.inverter, i, own.inverter, 0)
 
 
 @njit(cache=True)
@@ -335,7 +335,11 @@ def run_one(P, S, i, n_steps, n_win, log_out, log_every, metrics, scratch, lc_bo
         final = k0 + steps == n_steps
         # the engine with simulate()'s argument types: a constant here (i = 0 from
         # one_drive, log_every = 1) reached it as a numba literal, a signature of its own,
-        # and every first batch compiled the whole engine again instead of loading run's
+        # and every first batch compiled the whole engine again instead of loading run's.
+        # Linked, not called through its address as the stability map does
+        # (kernels/engine_call.py): optimised again with its callers here, the engine ran
+        # the bench's 2000 one-second drives in 7.4 s of kernel against 10.4-10.8 s through
+        # the address (2026-11-30, same results), for 2.5 s more of the first batch's compile
         status, ke = run_drive(
             P, S, np.int64(i), np.int64(steps), scratch, np.int64(1), np.int64(k0),
             np.bool_(final), no_rec,
@@ -348,7 +352,7 @@ def run_one(P, S, i, n_steps, n_win, log_out, log_every, metrics, scratch, lc_bo
         for r in range(rows):
             k = k0 + r
             if k % log_every == 0 and k // log_every < log_out.shape[0]:
-                log_out[k // log_every] = scratch[r]
+                copy_row(log_out, k // log_every, scratch, r)
         last = scratch[rows - 1]
         if not ok:
             k_end = k0 + ke

@@ -54,7 +54,8 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from imdrive.kernels.engine import LOG, S_OK, run_drive
+from imdrive.kernels.engine import LOG, S_OK
+from imdrive.kernels.engine_call import call_engine, engine_address
 from imdrive.kernels.profiles import PR_LOAD, PR_SPEED_REF
 from imdrive.kernels.recording import RECORDING
 
@@ -136,23 +137,25 @@ def unpack_state(z, S, i):
 
 
 @njit(cache=True)
-def _engine(P, S, i, n_steps, k0):
+def _engine(P, S, i, n_steps, k0, engine):
     """``run_drive`` for ``n_steps`` periods of drive ``i`` from period ``k0``, nothing logged,
-    with the argument types of ``simulate()``'s call (int64, bool, ``rec`` a zero-length
-    recording).
-
-    A constant argument written in the call would reach the engine as a numba literal
-    (``Literal[int](1)``): a signature of its own, and the whole engine compiled again for the
-    stability map (once per such call, three of them), instead of loaded from ``run``'s.
-    """
-    return run_drive(
-        P, S, i, np.int64(n_steps), np.empty(0, dtype=LOG), np.int64(0), np.int64(k0),
+    through its address ``engine`` (:func:`map_engine`) with the argument types of
+    ``simulate()``'s call (int64, bool, ``rec`` a zero-length recording): the engine ``run``
+    compiled, not linked into the map's kernels (:mod:`imdrive.kernels.engine_call`)."""
+    return call_engine(
+        engine, P, S, i, np.int64(n_steps), np.empty(0, dtype=LOG), np.int64(0), np.int64(k0),
         np.bool_(False), np.zeros(0, dtype=RECORDING),
     )  # fmt: skip
 
 
+def map_engine(P, S) -> int:
+    """The engine's address for the map's kernels on parameters ``P`` and state ``S``
+    (:func:`imdrive.kernels.engine_call.engine_address`)."""
+    return engine_address(P, S, np.empty(0, dtype=LOG))
+
+
 @njit(cache=True)
-def rotated_map(P, S, i, z, zout, th1, th2):
+def rotated_map(P, S, i, z, zout, th1, th2, engine):
     """One control period of drive ``i`` from reduced state ``z``; reduced result in ``zout``.
 
     ``th1``, ``th2`` are the (frozen) winding temperatures, degC. Returns the engine status.
@@ -161,13 +164,13 @@ def rotated_map(P, S, i, z, zout, th1, th2):
     x = S.plant[i]
     x.theta1 = th1
     x.theta2 = th2
-    status, _ = _engine(P, S, i, 1, 0)
+    status, _ = _engine(P, S, i, 1, 0, engine)
     pack_state(S, i, zout, P.est[i].b2)
     return status
 
 
 @njit(cache=True)
-def _jacobian(P, S, i, z, th1, th2, A, Bu, fp, fm, zp):
+def _jacobian(P, S, i, z, th1, th2, A, Bu, fp, fm, zp, engine):
     """Central finite differences of :func:`rotated_map` in ``z`` (``A``) and the inputs (``Bu``).
 
     Returns the worst engine status met.
@@ -177,9 +180,9 @@ def _jacobian(P, S, i, z, th1, th2, A, Bu, fp, fm, zp):
         h = 1e-6 * (abs(z[j]) + Z_SCALE[j])
         zp[:] = z
         zp[j] = z[j] + h
-        s1 = rotated_map(P, S, i, zp, fp, th1, th2)
+        s1 = rotated_map(P, S, i, zp, fp, th1, th2, engine)
         zp[j] = z[j] - h
-        s2 = rotated_map(P, S, i, zp, fm, th1, th2)
+        s2 = rotated_map(P, S, i, zp, fm, th1, th2, engine)
         if s1 != S_OK or s2 != S_OK:
             bad = max(s1, s2)
         for r in range(N_Z):
@@ -190,9 +193,9 @@ def _jacobian(P, S, i, z, th1, th2, A, Bu, fp, fm, zp):
         u0 = pv[slot, 0]
         h = 1e-6 * (abs(u0) + 1.0)
         pv[slot, 0] = u0 + h
-        s1 = rotated_map(P, S, i, z, fp, th1, th2)
+        s1 = rotated_map(P, S, i, z, fp, th1, th2, engine)
         pv[slot, 0] = u0 - h
-        s2 = rotated_map(P, S, i, z, fm, th1, th2)
+        s2 = rotated_map(P, S, i, z, fm, th1, th2, engine)
         pv[slot, 0] = u0
         if s1 != S_OK or s2 != S_OK:
             bad = max(s1, s2)
@@ -213,7 +216,45 @@ def _residual_norm(f, z):
 
 
 @njit(cache=True)
-def solve_point(P, S, i, z, th1, th2, A, Bu, tol, max_iter):
+def _newton_step(A, r, dz, M):
+    """``dz`` solving ``(A - I) dz = r`` by Gaussian elimination with partial pivoting;
+    ``M`` is scratch of ``A``'s shape. Returns False where the matrix is singular.
+
+    ``np.linalg.solve`` (LAPACK's ``gesv``, the same elimination) brings its shape checks and
+    error messages into the map's first compile: 2.5-3 s of it (numba's unicode and
+    ``repr`` functions among them, 2026-11-30), for a 22 x 22 system.
+    """
+    n = r.shape[0]
+    for a in range(n):
+        for b in range(n):
+            M[a, b] = A[a, b] - (1.0 if a == b else 0.0)
+        dz[a] = r[a]
+    for c in range(n):
+        p = c
+        for a in range(c + 1, n):
+            if abs(M[a, c]) > abs(M[p, c]):
+                p = a
+        if M[p, c] == 0.0:
+            return False
+        if p != c:
+            for b in range(c, n):
+                M[c, b], M[p, b] = M[p, b], M[c, b]
+            dz[c], dz[p] = dz[p], dz[c]
+        for a in range(c + 1, n):
+            m = M[a, c] / M[c, c]
+            for b in range(c + 1, n):
+                M[a, b] -= m * M[c, b]
+            dz[a] -= m * dz[c]
+    for c in range(n - 1, -1, -1):
+        acc = dz[c]
+        for b in range(c + 1, n):
+            acc -= M[c, b] * dz[b]
+        dz[c] = acc / M[c, c]
+    return True
+
+
+@njit(cache=True)
+def solve_point(P, S, i, z, th1, th2, A, Bu, tol, max_iter, engine):
     """Newton's method on ``rotated_map(z) - z`` from ``z`` (in place), then the Jacobians.
 
     Each iteration solves ``(A - I) dz = z - F(z)`` with the central-difference Jacobian ``A``
@@ -232,6 +273,8 @@ def solve_point(P, S, i, z, th1, th2, A, Bu, tol, max_iter):
     tol : float
         Largest scaled residual ``|F_j - z_j| / (|z_j| + Z_SCALE_j)`` accepted.
     max_iter : int
+    engine : int
+        The engine's address (:func:`map_engine`).
 
     Returns
     -------
@@ -246,26 +289,28 @@ def solve_point(P, S, i, z, th1, th2, A, Bu, tol, max_iter):
     fm = np.empty(N_Z)
     zp = np.empty(N_Z)
     zt = np.empty(N_Z)
-    eye = np.eye(N_Z)
-    st = rotated_map(P, S, i, z, f, th1, th2)
+    dz = np.empty(N_Z)
+    M = np.empty((N_Z, N_Z))
+    st = rotated_map(P, S, i, z, f, th1, th2, engine)
     if st != S_OK:
         return P_DIVERGED, math.inf, 0
     res = _residual_norm(f, z)
     it = 0
     while res > tol and it < max_iter:
         it += 1
-        _jacobian(P, S, i, z, th1, th2, A, Bu, fp, fm, zp)
+        _jacobian(P, S, i, z, th1, th2, A, Bu, fp, fm, zp, engine)
         for r in range(N_Z):
             for c in range(N_Z):
                 if not math.isfinite(A[r, c]):
                     return P_DIVERGED, res, it
-        dz = np.linalg.solve(A - eye, z - f)
+        if not _newton_step(A, z - f, dz, M):
+            return P_NO_CONVERGENCE, res, it
         lam = 1.0
         accepted = False
         for _ in range(9):
             for j in range(N_Z):
                 zt[j] = z[j] + lam * dz[j]
-            st = rotated_map(P, S, i, zt, fp, th1, th2)
+            st = rotated_map(P, S, i, zt, fp, th1, th2, engine)
             r_new = _residual_norm(fp, zt) if st == S_OK else math.inf
             if r_new < res:
                 accepted = True
@@ -278,26 +323,28 @@ def solve_point(P, S, i, z, th1, th2, A, Bu, tol, max_iter):
         res = r_new
     if res > tol:
         return P_NO_CONVERGENCE, res, it
-    st = _jacobian(P, S, i, z, th1, th2, A, Bu, fp, fm, zp)
+    st = _jacobian(P, S, i, z, th1, th2, A, Bu, fp, fm, zp, engine)
     if st != S_OK:
         return P_DIVERGED, res, it
     return P_OK, res, it
 
 
 @njit(cache=True, parallel=True)
-def solve_points(P, S, Z, TH, A, Bu, status, residual, iterations, tol, max_iter):
+def solve_points(P, S, Z, TH, A, Bu, status, residual, iterations, tol, max_iter, engine):
     """:func:`solve_point` for every drive ``i`` of ``P``/``S`` (rows of ``Z``, ``A``, ...)."""
     n = Z.shape[0]
     for ii in prange(n):
         i = np.int64(ii)  # prange's index is unsigned: one signature of the engine, not two
-        st, res, it = solve_point(P, S, i, Z[i], TH[i, 0], TH[i, 1], A[i], Bu[i], tol, max_iter)
+        st, res, it = solve_point(
+            P, S, i, Z[i], TH[i, 0], TH[i, 1], A[i], Bu[i], tol, max_iter, engine
+        )
         status[i] = st
         residual[i] = res
         iterations[i] = it
 
 
 @njit(cache=True)
-def propagate(P, S, i, z, n_steps, th1, th2, zout):
+def propagate(P, S, i, z, n_steps, th1, th2, zout, engine):
     """Run ``n_steps`` periods of drive ``i`` from reduced state ``z`` in one engine call.
 
     The field angle turns freely over the run; the reduced state at the end (rotated by the
@@ -307,13 +354,13 @@ def propagate(P, S, i, z, n_steps, th1, th2, zout):
     x = S.plant[i]
     x.theta1 = th1
     x.theta2 = th2
-    status, _ = _engine(P, S, i, n_steps, 0)
+    status, _ = _engine(P, S, i, n_steps, 0, engine)
     pack_state(S, i, zout, P.est[i].b2)
     return status
 
 
 @njit(cache=True, parallel=True)
-def step_check(P, S, Z0, Z1, TH, n_steps, n_win, peaks, status):
+def step_check(P, S, Z0, Z1, TH, n_steps, n_win, peaks, status, engine):
     """Simulate every drive ``i`` from ``Z0[i]``; per window, its largest distance to ``Z1[i]``.
 
     ``Z0`` is the starting reduced state (a fixed point, perturbed), ``Z1`` the fixed point of
@@ -335,7 +382,7 @@ def step_check(P, S, Z0, Z1, TH, n_steps, n_win, peaks, status):
             peaks[i, w] = np.nan
         st = S_OK
         for k in range(n_steps):
-            st, _ = _engine(P, S, i, 1, k)
+            st, _ = _engine(P, S, i, 1, k, engine)
             if st != S_OK:
                 break
             pack_state(S, i, z, P.est[i].b2)

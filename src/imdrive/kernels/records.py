@@ -15,6 +15,9 @@ used; records of arrays passed in as arguments are safe.
 from __future__ import annotations
 
 import numpy as np
+from numba import types
+from numba.core import cgutils
+from numba.extending import intrinsic
 
 f8 = np.float64
 c16 = np.complex128
@@ -55,3 +58,36 @@ def new_records(specs: dict) -> dict:
 def record_bytes(rec: np.ndarray) -> np.ndarray:
     """The record array's raw bytes (uint8): equal bytes mean bit-identical records."""
     return np.ascontiguousarray(rec).view(np.uint8)
+
+
+@intrinsic
+def copy_row(typingctx, dst, i, src, j):
+    """``dst[i] = src[j]`` for two arrays of one record dtype, as one ``memcpy``.
+
+    numba lowers a record assignment as a load and a store per byte: the seven state records
+    of a drive (about 2 kB) made 8,400 lines of LLVM in the one function that copied them back
+    (``kernels/batch._give_back``), optimised again in every caller, seconds of the first
+    batch's compile. No bounds check, like numba's own indexing.
+    """
+    ok = (
+        isinstance(dst, types.Array)
+        and isinstance(src, types.Array)
+        and isinstance(dst.dtype, types.Record)
+        and dst.dtype == src.dtype
+        and dst.ndim == src.ndim == 1
+        and isinstance(i, types.Integer)
+        and isinstance(j, types.Integer)
+    )
+    if not ok:
+        return None
+
+    def codegen(context, builder, sig, args):
+        ary_dst = context.make_array(dst)(context, builder, args[0])
+        ary_src = context.make_array(src)(context, builder, args[2])
+        p_dst = cgutils.get_item_pointer(context, builder, dst, ary_dst, [args[1]], wraparound=True)
+        p_src = cgutils.get_item_pointer(context, builder, src, ary_src, [args[3]], wraparound=True)
+        size = context.get_constant(types.intp, dst.dtype.size)
+        cgutils.raw_memcpy(builder, p_dst, p_src, size, 1)
+        return context.get_dummy_value()
+
+    return types.none(dst, i, src, j), codegen
