@@ -156,6 +156,25 @@ def test_serial_kernel_small_blocks_and_generators_give_the_same_metrics(scenari
     pd.testing.assert_frame_equal(a.metrics, batch.metrics)
 
 
+def test_drives_of_different_lengths_share_one_kernel_call(scenarios, monkeypatch):
+    """Each drive runs its own number of periods in one call over the threads: grouped by
+    length, a batch whose drives' sequencing differs (premagnetisation, ramps) ran one drive
+    per call, on one thread (a 10,000-drive batch 49 s, now 29 s)."""
+    from imdrive.run import batch as rb
+
+    calls = []
+    kernel = rb.batch_kernel
+    monkeypatch.setattr(rb, "batch_kernel", lambda *a: calls.append(a[4].n_steps) or kernel(*a))
+    same = scenarios[:2] + scenarios[4:5]  # MRAS drives, 0.6 s and 0.45 s
+    res = simulate_batch(same, logs=True)
+    assert len(calls) == 1
+    assert len(set(calls[0])) == 3  # each its own length
+    for one, many in zip([simulate(sc) for sc in same], res.results, strict=True):
+        assert many.k_end == one.k_end
+        for name, v in one.signals.items():
+            assert np.array_equal(many.signals[name], v), name
+
+
 def test_empty_batch_and_bad_arguments(scenarios):
     assert len(simulate_batch([]).metrics) == 0
     with pytest.raises(ConfigError, match="log_every"):

@@ -3,7 +3,7 @@
 Each compiled entry point is a job: the drive once per registered estimator (the engine is
 specialised by the estimator's records) and, for the MRAS, once per set of optional blocks
 (the engine is specialised by the blocks a drive runs too, kernels/features.py), the batch
-kernels (sweeps; parallel once per estimator and, for dask, serial), the replay once per
+kernel (sweeps, once per estimator: the same for the threads and for dask), the replay once per
 estimator (the estimator and its R2 law on a recording) and the stability map's. The first
 job compiles the MRAS drive, which the other entry points of the same blocks link in; the
 others then run in parallel processes (numba compiles one function at a time per process).
@@ -44,8 +44,8 @@ FEATURE_SETS = {
 def jobs() -> list[str]:
     """Every job name, the MRAS drive first: ``drive:<estimator>``, ``drive:mras:<set>`` (the
     MRAS drive with each set of optional blocks, :data:`FEATURE_SETS`), ``batch`` (the MRAS's),
-    ``batch:mras:<set>``, ``batch:<estimator>``, ``batch-serial``, ``replay:<estimator>``,
-    ``stability``."""
+    ``batch:mras:<set>``, ``batch:<estimator>``, ``replay:<estimator>``, ``stability``.
+    (``batch-serial`` is still accepted: since 2026-11-30 it compiles what ``batch`` does.)"""
     from imdrive.run.estimators import estimator_names
 
     names = [n for n in estimator_names() if n != "mras"]
@@ -57,7 +57,6 @@ def jobs() -> list[str]:
         "batch",
         *(f"batch:mras:{s}" for s in ("r2", "realistic")),
         *(f"batch:{n}" for n in names if n != "measured"),
-        "batch-serial",
         *(f"replay:{n}" for n in replayed),
         "stability",
     ]
@@ -187,7 +186,7 @@ def _cmd_warm_up(args) -> int:
     names = None
     if args.only:
         names = [n.strip() for n in args.only.split(",") if n.strip()]
-        unknown = sorted(set(names) - set(jobs()))
+        unknown = sorted(set(names) - set(jobs()) - {"batch-serial"})  # batch's, still accepted
         if unknown:
             raise ConfigError("--only", f"unknown job {unknown[0]!r} (known: {', '.join(jobs())})")
     if args.processes is not None and args.processes < 1:

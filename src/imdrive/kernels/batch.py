@@ -7,11 +7,12 @@ definitions (this module is their streaming implementation; a test checks the tw
 from __future__ import annotations
 
 import math
+from concurrent.futures import ThreadPoolExecutor
 from typing import NamedTuple
 
 import numba
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 from imdrive.kernels.engine import LOG, S_OK, DriveParams, DriveState, run_drive
 from imdrive.kernels.recording import RECORDING
@@ -85,13 +86,14 @@ class BatchOut(NamedTuple):
     metrics: np.ndarray  # BATCH_METRICS[N]
     status: np.ndarray  # int64[N]: S_OK or a divergence code
     k_end: np.ndarray  # int64[N]: periods completed
+    n_steps: np.ndarray  # int64[N] (input): control periods to run
     n_win: np.ndarray  # int64[N] (input): length of the steady-state window, periods
     lc_bound: np.ndarray  # float64[N] (input): loss-of-control speed bound, rad/s (<= 0: off)
     lc_n: np.ndarray  # int64[N] (input): loss-of-control duration, periods
 
 
 def num_threads() -> int:
-    """Threads numba's parallel kernels use."""
+    """Threads the batch runs on: numba's (``NUMBA_NUM_THREADS``, ``numba.set_num_threads``)."""
     return numba.get_num_threads()
 
 
@@ -293,7 +295,7 @@ def _give_back(S, i, own):
     copy_row(S.inverter, i, own.inverter, 0)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def one_drive(P, S, i, n_steps, n_win, log_out, log_every, metrics, scratch, lc_bound=0.0, lc_n=0):
     """Run drive ``i`` of the batch (:func:`run_one`) on a copy of its state of its own.
 
@@ -311,7 +313,7 @@ def one_drive(P, S, i, n_steps, n_win, log_out, log_every, metrics, scratch, lc_
     return status, k_end
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def run_one(P, S, i, n_steps, n_win, log_out, log_every, metrics, scratch, lc_bound=0.0, lc_n=0):
     """Run drive ``i`` at full rate, ``scratch.shape[0] - 1`` periods per engine call, folding
     each chunk into the metrics and copying its decimated rows into ``log_out``.
@@ -365,14 +367,15 @@ def run_one(P, S, i, n_steps, n_win, log_out, log_every, metrics, scratch, lc_bo
 
 
 @njit(cache=True, nogil=True)
-def _worker(P, S, n_steps, log, log_every, out, first, stride, scratch):
-    """Drives ``first, first + stride, ...`` one after the other, sharing ``scratch``."""
+def _worker(P, S, log, log_every, out, first, stride, scratch):
+    """Drives ``first, first + stride, ...`` one after the other, sharing ``scratch``: the
+    batch's one compiled entry point, the GIL released so that threads run it side by side."""
     for n in range(first, P.sim.shape[0], stride):
         s, ke = one_drive(
             P,
             S,
             n,
-            n_steps,
+            out.n_steps[n],
             out.n_win[n],
             log[n],
             log_every,
@@ -390,26 +393,37 @@ def new_scratch(n_slots: int, dtype=LOG) -> np.ndarray:
     return np.empty((n_slots, CHUNK + 1), dtype=dtype)
 
 
-@njit(cache=True, parallel=True)
-def batch_kernel(P, S, n_steps, log, log_every, out, scratch):
+def batch_kernel(P, S, log, log_every, out, scratch):
     """``N`` drives over the cores (first axis of every array of ``P``, ``S``, ``out``).
 
-    ``log`` is a ``[N, n_rows]`` log of the drives' log dtype (``n_rows`` may be 0),
-    pre-filled with NaN; ``out`` receives the metrics, status and periods of each drive;
+    ``log`` is a ``[N, n_rows]`` log of the drives' log dtype (``n_rows`` may be 0, and
+    at least the longest drive's rows otherwise), pre-filled with NaN; ``out`` gives each
+    drive's number of periods and receives its metrics, status and periods done;
     ``S`` holds the final states on return. The drives are dealt to ``n_slots =
-    scratch.shape[0]`` parallel workers (``n, n + n_slots, ...``), each with its row of
-    ``scratch`` (:func:`new_scratch`) as the scratch log for all its drives.
+    scratch.shape[0]`` threads (``n, n + n_slots, ...``), each running the compiled
+    :func:`_worker` with its row of ``scratch`` (:func:`new_scratch`) as the scratch log for
+    all its drives.
+
+    Threads of Python rather than numba's ``prange``: the parallel loop was an entry point of
+    its own, linking the worker and the engine and optimising them once more, and its
+    unsigned index compiled the worker a second time. The first batch after a warm ``imdrive
+    run`` compiled 11.1 s; with the threads 6.3 s, its drives as fast (2026-11-30,
+    benchmarks/README.md).
     """
     n_slots = scratch.shape[0]
-    for slot in prange(n_slots):
-        # prange's index is unsigned, so the engine is compiled once more for it here; cast to
-        # int64 to share `run`'s signature, the parallel kernel ran 15-19 % slower (1000
-        # drives, 2 threads, alternated with this build, 2026-11-28), so the cast is not made
-        _worker(P, S, n_steps, log, log_every, out, slot, n_slots, scratch[slot])
+    if n_slots == 1:
+        _worker(P, S, log, log_every, out, 0, 1, scratch[0])
+        return
+    with ThreadPoolExecutor(n_slots) as pool:
+        jobs = [
+            pool.submit(_worker, P, S, log, log_every, out, slot, n_slots, scratch[slot])
+            for slot in range(n_slots)
+        ]
+        for job in jobs:
+            job.result()  # a worker's exception, raised here
 
 
-@njit(cache=True, nogil=True)
-def batch_kernel_serial(P, S, n_steps, log, log_every, out, scratch):
+def batch_kernel_serial(P, S, log, log_every, out, scratch):
     """:func:`batch_kernel` on the calling thread only, releasing the GIL (for dask workers);
     ``scratch`` is one row of :func:`new_scratch`."""
-    _worker(P, S, n_steps, log, log_every, out, 0, 1, scratch)
+    _worker(P, S, log, log_every, out, 0, 1, scratch)

@@ -7,9 +7,9 @@ drives' decimated logs as :class:`~imdrive.result.SimulationResult` objects iden
 
 Design
 ------
-One compiled kernel (:func:`batch_kernel`, numba ``parallel=True``; :func:`batch_kernel_serial`
-is the same loop on one thread, without the GIL, for dask workers) deals the drives to one
-parallel worker per thread (``prange``; worker ``w`` takes drives ``w, w + W, ...``). Each worker
+One compiled kernel (the worker of :func:`batch_kernel`, without the GIL;
+:func:`batch_kernel_serial` runs it on the calling thread, for dask workers) deals the drives to
+one worker per thread (worker ``w`` takes drives ``w, w + W, ...``). Each worker
 allocates one scratch log of ``CHUNK + 1`` rows (240 kB) and reuses it for all its drives, so
 memory scales with the number of threads, not with N nor with the length of a drive. For each
 drive it
@@ -28,9 +28,10 @@ the kernel time (the dynamics dominate).
 
 The Python side feeds the kernel blocks of ``block_size`` drives (default 512): per block it
 builds and stacks the drives' records (:func:`imdrive.run.build.build_arrays`,
-:func:`stack_drives`), grouped by number of
-periods (one ``n_steps`` per kernel call), by estimator (each has its own records, and the
-kernel is compiled once per estimator) and, with logs, by ``log_every``; profiles with
+:func:`stack_drives`), grouped by estimator and R2 law (each has its own records, and the
+kernel is compiled once per estimator) and, with logs, by ``log_every``; each drive runs its
+own number of periods (its sequence's: the premagnetisation and the torque-limited ramps
+make it the drive's own); profiles with
 different numbers of breakpoints are padded (the kernel reads ``prof_n`` of them); fuzzy tables
 are shared (a small stack of the distinct tables plus an index per drive). Without logs, what is
 kept per drive is its metrics record and status: 13 float64 + 2 int64 = 120 bytes (plus pandas'
@@ -213,10 +214,10 @@ def _rows(arrs: list) -> np.ndarray:
 
 
 def _stack(items, log_every: int, n_rows: int, window_s: float, parallel: bool):
-    """Run one group of (index, scenario, DriveArrays) sharing n_steps; return per-drive data."""
+    """Run one group of (index, scenario, DriveArrays) sharing their records' dtypes; return
+    per-drive data."""
     G = len(items)
     arrays = [a for _, _, a in items]
-    n_steps = arrays[0].n_steps
     params, state = stack_drives(arrays)
     n_win = np.array(
         [steady_window_periods(sc, window_s, a.Ts, a.n_steps) for _, sc, a in items],
@@ -230,6 +231,7 @@ def _stack(items, log_every: int, n_rows: int, window_s: float, parallel: bool):
     dtype = log_dtype(kernel_of_state(params.est.dtype), law_of_records(params.comp.dtype))
     log = np.full((G, n_rows), np.nan, dtype=dtype)
     out = BatchOut(
+        n_steps=np.array([a.n_steps for a in arrays], dtype=np.int64),
         metrics=np.empty(G, dtype=BATCH_METRICS),
         status=np.empty(G, dtype=np.int64),
         k_end=np.empty(G, dtype=np.int64),
@@ -240,9 +242,9 @@ def _stack(items, log_every: int, n_rows: int, window_s: float, parallel: bool):
     t0 = time.perf_counter()
     if parallel:
         scratch = new_scratch(max(min(G, num_threads()), 1), dtype)
-        batch_kernel(params, state, n_steps, log, log_every, out, scratch)
+        batch_kernel(params, state, log, log_every, out, scratch)
     else:
-        batch_kernel_serial(params, state, n_steps, log, log_every, out, new_scratch(1, dtype)[0])
+        batch_kernel_serial(params, state, log, log_every, out, new_scratch(1, dtype)[0])
     wall = time.perf_counter() - t0
     return params, state, log, out, wall
 
@@ -292,11 +294,14 @@ def _run_block(block, offset, logs, log_every, window_s, parallel, errors):
             e_blk[i] = sc.message if isinstance(sc, FailedRun) else str(exc)
             continue
         le = (log_every or a.log_every) if logs else 1
-        # one kernel call per number of periods, decimation, estimator and R2 law (records)
-        key = (a.n_steps, int(le), a.params.est.dtype, a.params.comp.dtype)
+        # one kernel call per decimation, estimator and R2 law (records); until 2026-11-30
+        # per number of periods too, and since the drives' sequencing (premagnetisation,
+        # torque-limited ramps) gives each drive its own, a batch ran one drive per call, on
+        # one thread
+        key = (int(le), a.params.est.dtype, a.params.comp.dtype)
         groups.setdefault(key, []).append((i, sc, a))
-    for (n_steps, le, _, _), items in groups.items():
-        n_rows = n_steps // le + 1 if logs else 0
+    for (le, _, _), items in groups.items():
+        n_rows = max(a.n_steps for _, _, a in items) // le + 1 if logs else 0
         params, state, log, out, wall = _stack(items, le, n_rows, window_s, parallel)
         kernel_wall += wall
         for g, (i, sc, a) in enumerate(items):
@@ -306,7 +311,8 @@ def _run_block(block, offset, logs, log_every, window_s, parallel, errors):
             ts_blk[i] = a.Ts
             r1_blk[i] = state.control[g]["dc_status"]
             if logs:
-                lg = logged_rows(log[g], out.status[g], out.k_end[g], le)
+                own = log[g][: a.n_steps // le + 1]  # the rows of its own periods
+                lg = logged_rows(own, out.status[g], out.k_end[g], le)
                 final = DriveState(*(f[g : g + 1].copy() for f in state))
                 res_blk[i] = SimulationResult.from_log(
                     sc,
