@@ -7,16 +7,15 @@ definitions (this module is their streaming implementation; a test checks the tw
 from __future__ import annotations
 
 import math
-from concurrent.futures import ThreadPoolExecutor
 from typing import NamedTuple
 
-import numba
 import numpy as np
 from numba import njit
 
 from imdrive.kernels.engine import LOG, S_OK, DriveParams, DriveState, run_drive
 from imdrive.kernels.recording import RECORDING
 from imdrive.kernels.records import b1, copy_row, f8, i8, record_dtype
+from imdrive.kernels.threads import num_threads, over_threads  # noqa: F401  (num_threads: old path)
 
 RPM = 2.0 * math.pi / 60.0
 _INV_RPM = 1.0 / RPM  # the factor the result applies to rad/s columns
@@ -90,11 +89,6 @@ class BatchOut(NamedTuple):
     n_win: np.ndarray  # int64[N] (input): length of the steady-state window, periods
     lc_bound: np.ndarray  # float64[N] (input): loss-of-control speed bound, rad/s (<= 0: off)
     lc_n: np.ndarray  # int64[N] (input): loss-of-control duration, periods
-
-
-def num_threads() -> int:
-    """Threads the batch runs on: numba's (``NUMBA_NUM_THREADS``, ``numba.set_num_threads``)."""
-    return numba.get_num_threads()
 
 
 @njit(cache=True)
@@ -404,23 +398,18 @@ def batch_kernel(P, S, log, log_every, out, scratch):
     :func:`_worker` with its row of ``scratch`` (:func:`new_scratch`) as the scratch log for
     all its drives.
 
-    Threads of Python rather than numba's ``prange``: the parallel loop was an entry point of
-    its own, linking the worker and the engine and optimising them once more, and its
-    unsigned index compiled the worker a second time. The first batch after a warm ``imdrive
-    run`` compiled 11.1 s; with the threads 6.3 s, its drives as fast (2026-11-30,
-    benchmarks/README.md).
+    Threads of Python (:func:`imdrive.kernels.threads.over_threads`) rather than numba's
+    ``prange``: the parallel loop was an entry point of its own, linking the worker and the
+    engine and optimising them once more, and its unsigned index compiled the worker a second
+    time. The first batch after a warm ``imdrive run`` compiled 11.1 s; with the threads
+    3.5 s, its drives as fast (2026-11-30, benchmarks/README.md).
     """
     n_slots = scratch.shape[0]
-    if n_slots == 1:
-        _worker(P, S, log, log_every, out, 0, 1, scratch[0])
-        return
-    with ThreadPoolExecutor(n_slots) as pool:
-        jobs = [
-            pool.submit(_worker, P, S, log, log_every, out, slot, n_slots, scratch[slot])
-            for slot in range(n_slots)
-        ]
-        for job in jobs:
-            job.result()  # a worker's exception, raised here
+
+    def slot_of(slot):
+        _worker(P, S, log, log_every, out, slot, n_slots, scratch[slot])
+
+    over_threads(slot_of, n_slots)
 
 
 def batch_kernel_serial(P, S, log, log_every, out, scratch):

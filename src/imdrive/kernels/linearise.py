@@ -52,12 +52,13 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 from imdrive.kernels.engine import LOG, S_OK
 from imdrive.kernels.engine_call import call_engine, engine_address
 from imdrive.kernels.profiles import PR_LOAD, PR_SPEED_REF
 from imdrive.kernels.recording import RECORDING
+from imdrive.kernels.threads import num_threads, over_threads
 
 N_Z = 22
 N_U = 2
@@ -329,18 +330,30 @@ def solve_point(P, S, i, z, th1, th2, A, Bu, tol, max_iter, engine):
     return P_OK, res, it
 
 
-@njit(cache=True, parallel=True)
-def solve_points(P, S, Z, TH, A, Bu, status, residual, iterations, tol, max_iter, engine):
-    """:func:`solve_point` for every drive ``i`` of ``P``/``S`` (rows of ``Z``, ``A``, ...)."""
-    n = Z.shape[0]
-    for ii in prange(n):
-        i = np.int64(ii)  # prange's index is unsigned: one signature of the engine, not two
+@njit(cache=True, nogil=True)
+def _solve_some(P, S, Z, TH, A, Bu, status, residual, iterations, tol, max_iter, engine, first, n):
+    """:func:`solve_point` for drives ``first, first + n, ...`` (one thread's share)."""
+    for i in range(first, Z.shape[0], n):
         st, res, it = solve_point(
             P, S, i, Z[i], TH[i, 0], TH[i, 1], A[i], Bu[i], tol, max_iter, engine
         )
         status[i] = st
         residual[i] = res
         iterations[i] = it
+
+
+def solve_points(P, S, Z, TH, A, Bu, status, residual, iterations, tol, max_iter, engine):
+    """:func:`solve_point` for every drive ``i`` of ``P``/``S`` (rows of ``Z``, ``A``, ...),
+    over the cores (:func:`imdrive.kernels.threads.over_threads`)."""
+    n = max(min(Z.shape[0], num_threads()), 1)
+
+    def share(first):
+        _solve_some(
+            P, S, Z, TH, A, Bu, status, residual, iterations, float(tol), int(max_iter), engine,
+            first, n,
+        )  # fmt: skip
+
+    over_threads(share, n)
 
 
 @njit(cache=True)
@@ -359,7 +372,6 @@ def propagate(P, S, i, z, n_steps, th1, th2, zout, engine):
     return status
 
 
-@njit(cache=True, parallel=True)
 def step_check(P, S, Z0, Z1, TH, n_steps, n_win, peaks, status, engine):
     """Simulate every drive ``i`` from ``Z0[i]``; per window, its largest distance to ``Z1[i]``.
 
@@ -370,9 +382,18 @@ def step_check(P, S, Z0, Z1, TH, n_steps, n_win, peaks, status, engine):
     ``w n_win ... (w + 1) n_win - 1``. ``status[i]`` is the engine status (a diverged drive
     keeps NaN in the windows it did not reach).
     """
-    n = Z0.shape[0]
-    for ii in prange(n):
-        i = np.int64(ii)  # as in solve_points
+    n = max(min(Z0.shape[0], num_threads()), 1)
+
+    def share(first):
+        _check_some(P, S, Z0, Z1, TH, int(n_steps), int(n_win), peaks, status, engine, first, n)
+
+    over_threads(share, n)
+
+
+@njit(cache=True, nogil=True)
+def _check_some(P, S, Z0, Z1, TH, n_steps, n_win, peaks, status, engine, first, n):
+    """:func:`step_check` for drives ``first, first + n, ...`` (one thread's share)."""
+    for i in range(first, Z0.shape[0], n):
         unpack_state(Z0[i], S, i)
         x = S.plant[i]
         x.theta1 = TH[i, 0]
