@@ -25,3 +25,20 @@ def test_newton_step_solves_as_lapack():
 def test_newton_step_reports_a_singular_matrix():
     A = np.eye(N_Z)  # A - I = 0
     assert not _newton_step(A, np.ones(N_Z), np.empty(N_Z), np.empty((N_Z, N_Z)))
+
+
+def test_the_map_kernels_find_the_engine_themselves():
+    """``propagate`` with the engine's address given or looked up: the same run."""
+    from imdrive.config.scenario import Scenario
+    from imdrive.kernels.linearise import map_engine, propagate
+    from imdrive.stability.linear import map_scenario, operating_point
+
+    op = operating_point(map_scenario(Scenario.read("sensorless")), 600.0, 6.0)
+    d = op._ops.drive
+    outs = []
+    for engine in (None, map_engine(d.P, d.S)):
+        S = type(d.S)(*(f.copy() for f in d.S))
+        out = np.empty(N_Z)
+        assert propagate(d.P, S, 0, op.z.copy(), 20, d.TH[0, 0], d.TH[0, 1], out, engine) == 0
+        outs.append(out)
+    assert outs[0].tobytes() == outs[1].tobytes()

@@ -26,10 +26,11 @@ _COMP_ON = [
     "compensator.t_on_s=3.0",
     # the paper's scalings 1e6 /Wb and 1 mohm per output level: the defaults on Table IV,
     # scaled to the machine elsewhere (config/compensator_gains.py)
-    # the clamps at 0.5 and 1.5 times the machine's R2 (0.408 and 1.224 ohm for Table IV), in
-    # ohm (deprecated spellings): a case's R2_hat(0) may differ from R2, their twins' base
-    "compensator.R2_min_ohm={R2_half}",
-    "compensator.R2_max_ohm={R2_1p5}",
+    # the clamps at 0.5 and 1.5 times the machine's R2 (0.408 and 1.224 ohm for Table IV): the
+    # ratio keys are multiples of R2_hat(0), which a case may set elsewhere (0.8 R2), so the
+    # ratios are the case's own (scenario(); the ohm spellings they replace are deprecated)
+    "compensator.R2_min_ratio={R2_half_of_R2_hat}",
+    "compensator.R2_max_ratio={R2_1p5_of_R2_hat}",
 ]
 
 #: estimator configuration -> overrides
@@ -237,6 +238,24 @@ def machine_values(machine) -> dict[str, str]:
     return {"{" + k + "}": f"{v:.6g}" for k, v in vals.items()}
 
 
+def _clamps_of_R2_hat(base, ov: list[str]) -> list[str]:
+    """``ov`` with ``{R2_half_of_R2_hat}`` and ``{R2_1p5_of_R2_hat}`` as 0.5 and 1.5 times the
+    machine's R2 over the R2_hat(0) the other overrides give (the ratio keys' unit)."""
+    from imdrive.config.perunit import resolve
+    from imdrive.config.scenario import Scenario
+
+    rest = [o for o in ov if "_of_R2_hat}" not in o]
+    sc = Scenario.read(base, rest)
+    r = sc.machine.R2_ohm / resolve(sc).R2_hat
+    values = {"{R2_half_of_R2_hat}": f"{0.5 * r:.6g}", "{R2_1p5_of_R2_hat}": f"{1.5 * r:.6g}"}
+    out = []
+    for o in ov:
+        for key, v in values.items():
+            o = o.replace(key, v)
+        out.append(o)
+    return out
+
+
 def scenario(run: Run, estimators: dict | None = None, cases=None, drives=None, overrides=()):
     """The scenario of one run.
 
@@ -285,6 +304,8 @@ def scenario(run: Run, estimators: dict | None = None, cases=None, drives=None, 
         for key, v in values.items():
             o = o.replace(key, v)
         ov.append(o)
+    if any("_of_R2_hat}" in o for o in ov):  # clamps in R2 of the case's R2_hat(0)
+        ov = _clamps_of_R2_hat(base, ov)
     ov += [
         f"simulation.t_end_s={case.t_end_s}",
         "simulation.log_every=10",

@@ -342,9 +342,11 @@ def _solve_some(P, S, Z, TH, A, Bu, status, residual, iterations, tol, max_iter,
         iterations[i] = it
 
 
-def solve_points(P, S, Z, TH, A, Bu, status, residual, iterations, tol, max_iter, engine):
+def solve_points(P, S, Z, TH, A, Bu, status, residual, iterations, tol, max_iter, engine=None):
     """:func:`solve_point` for every drive ``i`` of ``P``/``S`` (rows of ``Z``, ``A``, ...),
-    over the cores (:func:`imdrive.kernels.threads.over_threads`)."""
+    over the cores (:func:`imdrive.kernels.threads.over_threads`); ``engine``: the engine's
+    address (:func:`map_engine`; default: looked up here)."""
+    engine = map_engine(P, S) if engine is None else engine
     n = max(min(Z.shape[0], num_threads()), 1)
 
     def share(first):
@@ -356,13 +358,19 @@ def solve_points(P, S, Z, TH, A, Bu, status, residual, iterations, tol, max_iter
     over_threads(share, n)
 
 
-@njit(cache=True)
-def propagate(P, S, i, z, n_steps, th1, th2, zout, engine):
+def propagate(P, S, i, z, n_steps, th1, th2, zout, engine=None):
     """Run ``n_steps`` periods of drive ``i`` from reduced state ``z`` in one engine call.
 
     The field angle turns freely over the run; the reduced state at the end (rotated by the
     final angle) goes into ``zout``. Used to check the linearisation against the nonlinear loop.
+    ``engine``: the engine's address (:func:`map_engine`; default: looked up here).
     """
+    engine = map_engine(P, S) if engine is None else engine
+    return _propagate(P, S, int(i), z, int(n_steps), float(th1), float(th2), zout, engine)
+
+
+@njit(cache=True)
+def _propagate(P, S, i, z, n_steps, th1, th2, zout, engine):
     unpack_state(z, S, i)
     x = S.plant[i]
     x.theta1 = th1
@@ -372,7 +380,7 @@ def propagate(P, S, i, z, n_steps, th1, th2, zout, engine):
     return status
 
 
-def step_check(P, S, Z0, Z1, TH, n_steps, n_win, peaks, status, engine):
+def step_check(P, S, Z0, Z1, TH, n_steps, n_win, peaks, status, engine=None):
     """Simulate every drive ``i`` from ``Z0[i]``; per window, its largest distance to ``Z1[i]``.
 
     ``Z0`` is the starting reduced state (a fixed point, perturbed), ``Z1`` the fixed point of
@@ -380,8 +388,10 @@ def step_check(P, S, Z0, Z1, TH, n_steps, n_win, peaks, status, engine):
     ``max_j |z_j - Z1_j| / (|Z1_j| + Z_SCALE_j)`` of the reduced state (rotated into the
     controller's frame every period); ``peaks[i, w]`` is its largest value over periods
     ``w n_win ... (w + 1) n_win - 1``. ``status[i]`` is the engine status (a diverged drive
-    keeps NaN in the windows it did not reach).
+    keeps NaN in the windows it did not reach). ``engine``: the engine's address
+    (:func:`map_engine`; default: looked up here).
     """
+    engine = map_engine(P, S) if engine is None else engine
     n = max(min(Z0.shape[0], num_threads()), 1)
 
     def share(first):

@@ -259,7 +259,6 @@ def solve_operating_points(sc: Scenario, speeds_rpm, torques_Nm) -> OperatingPoi
             its_s,
             _NEWTON_TOL,
             _NEWTON_ITER,
-            rl.map_engine(sub_P, sub_S),
         )
         Z[idx], A[idx], B[idx], res[idx], its[idx] = Zs, As, Bs, rs, its_s
         status[idx[sts == rl.P_NO_CONVERGENCE]] = STATUS_NONE
@@ -471,9 +470,7 @@ class OperatingPoint:
             S = rl.DriveState(*(f.copy() for f in d.S))
             out = np.empty(rl.N_Z)
             z0 = np.ascontiguousarray(self.z + np.asarray(dz, dtype=float))
-            th1, th2 = d.TH[0, 0], d.TH[0, 1]
-            engine = rl.map_engine(P, S)
-            st = rl.propagate(P, S, 0, z0, int(n_steps), th1, th2, out, engine)
+            st = rl.propagate(P, S, 0, z0, int(n_steps), d.TH[0, 0], d.TH[0, 1], out)
         finally:
             P.prof_v[0, [rl.PR_SPEED_REF, rl.PR_LOAD], 0] = saved
         if st != 0:

@@ -223,7 +223,6 @@ def simulate_steps(
         n_win,
         peaks,
         status,
-        rl.map_engine(P, S),
     )
     half = n_w // 2
     t = (np.arange(half, n_w) + 0.5) * n_win * ops.Ts
