@@ -5,9 +5,9 @@ code into its own kernels.
 numba compiles a call from one jitted function to another by linking the callee's LLVM module
 into the caller's and optimising the whole again (``CPUCodeLibrary.finalize``: every linked
 library goes through the module pass manager and the machine-code emitter once more), in
-every entry point that reaches it. The map has three (``solve_points``, ``propagate``,
-``step_check``), each paying the engine's optimisation again on its first use, cached by
-``run`` or not.
+every entry point that reaches it. The map has three (the workers of ``solve_points``,
+``propagate`` and ``step_check``), each paying the engine's optimisation again on its first
+use, cached by ``run`` or not.
 
 Here the caller receives the engine's native entry as an integer (:func:`engine_address`,
 which loads or compiles ``run_drive`` for the exact argument types) and calls it with
