@@ -58,3 +58,45 @@ def test_commission_takes_quiet_as_run_does():
         assert parser.parse_args([*argv, "-q"]).quiet is True, command
         assert parser.parse_args([*argv, "--quiet"]).quiet is True, command
         assert parser.parse_args(argv).quiet is False, command
+
+
+def test_every_command_that_compiles_takes_quiet():
+    """Every command that runs the kernels (and may meet a cold cache, with its compile
+    notice) takes ``-q``; ``imdrive paper`` did not."""
+    parser = build_parser()
+    argvs = {
+        "paper": ["paper", "--out", "o"],
+        "sweep": ["sweep", "detuning-map"],
+        "stability": ["stability", "sensorless", "--out", "o"],
+        "bench-estimators": ["bench-estimators", "--out", "o"],
+        "replay": ["replay", "rec", "--out", "o"],
+        "warm-up": ["warm-up"],
+    }
+    for command, argv in argvs.items():
+        assert parser.parse_args([*argv, "-q"]).quiet is True, command
+        assert parser.parse_args(argv).quiet is False, command
+
+
+def test_paper_quiet_prints_nothing(tmp_path, monkeypatch, capsys):
+    """``imdrive paper -q``: the files, no progress and no summary (run_all stubbed: the
+    reproduction itself is tested in tests/studies)."""
+    from imdrive.studies import paper
+
+    seen = {}
+
+    def fake_run_all(out, progress=None):
+        seen["progress"] = progress
+        if progress is not None:
+            progress("a step")
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "results.json").write_text("{}")
+        return {"compensation": []}
+
+    monkeypatch.setattr(paper, "run_all", fake_run_all)
+    from imdrive.cli import main
+
+    rc = main(["paper", "--out", str(tmp_path / "p"), "-q"])
+    assert rc == 0, capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert err == ""
+    assert seen["progress"] is not None  # a silent progress, not the default bar

@@ -21,7 +21,9 @@ def _cmd_paper(args) -> int:
         args.out, owns=_owns_paper_file, force=args.force, what="the paper's reproduction"
     )
     t0 = time.perf_counter()
-    res = run_all(out)
+    res = run_all(out, progress=(lambda msg: None) if args.quiet else None)
+    if args.quiet:  # the files say it all; errors still go to stderr
+        return EXIT_OK
     n_png = len(list(out.glob("*.png")))
     print(
         f"imdrive: paper reproduction done in {time.perf_counter() - t0:.0f} s: {n_png} figures, "
@@ -58,4 +60,10 @@ def add_parser(sub) -> None:
     )
     pp.add_argument("--out", metavar="DIR", default="out/paper")
     add_force(pp, "the paper's reproduction")
+    pp.add_argument(
+        "-q",
+        "--quiet",
+        action="store_true",
+        help="print nothing but errors (no compile notice, no summary), as run and sweep",
+    )
     pp.set_defaults(func=_cmd_paper)
