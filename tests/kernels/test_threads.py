@@ -37,3 +37,11 @@ def test_num_threads_is_numbas():
     import numba
 
     assert num_threads() == numba.get_num_threads() >= 1
+
+
+def test_slots_are_one_per_item_up_to_the_threads():
+    from imdrive.kernels.threads import slots
+
+    assert slots(0) == 1
+    assert slots(1) == 1
+    assert slots(10**6) == num_threads()

@@ -58,7 +58,7 @@ from imdrive.kernels.engine import LOG, S_OK
 from imdrive.kernels.engine_call import call_engine, engine_address
 from imdrive.kernels.profiles import PR_LOAD, PR_SPEED_REF
 from imdrive.kernels.recording import RECORDING
-from imdrive.kernels.threads import num_threads, over_threads
+from imdrive.kernels.threads import over_threads, slots
 
 N_Z = 22
 N_U = 2
@@ -347,7 +347,7 @@ def solve_points(P, S, Z, TH, A, Bu, status, residual, iterations, tol, max_iter
     over the cores (:func:`imdrive.kernels.threads.over_threads`); ``engine``: the engine's
     address (:func:`map_engine`; default: looked up here)."""
     engine = map_engine(P, S) if engine is None else engine
-    n = max(min(Z.shape[0], num_threads()), 1)
+    n = slots(Z.shape[0])
 
     def share(first):
         _solve_some(
@@ -392,7 +392,7 @@ def step_check(P, S, Z0, Z1, TH, n_steps, n_win, peaks, status, engine=None):
     (:func:`map_engine`; default: looked up here).
     """
     engine = map_engine(P, S) if engine is None else engine
-    n = max(min(Z0.shape[0], num_threads()), 1)
+    n = slots(Z0.shape[0])
 
     def share(first):
         _check_some(P, S, Z0, Z1, TH, int(n_steps), int(n_win), peaks, status, engine, first, n)

@@ -19,6 +19,11 @@ def num_threads() -> int:
     return numba.get_num_threads()
 
 
+def slots(n_items: int) -> int:
+    """Threads to deal ``n_items`` to: one per item, at most :func:`num_threads`, at least 1."""
+    return max(min(int(n_items), num_threads()), 1)
+
+
 def over_threads(call, n_slots: int) -> None:
     """``call(slot)`` for ``slot`` in ``range(n_slots)``, each on a thread of its own (on the
     calling thread when there is one); an exception of any of them is raised here.

@@ -63,12 +63,12 @@ from imdrive.kernels.batch import (
     batch_kernel,
     batch_kernel_serial,
     new_scratch,
-    num_threads,
 )
 from imdrive.kernels.engine import S_OK, DriveParams, DriveState, log_dtype
 from imdrive.kernels.estimators.registry import kernel_of_state
 from imdrive.kernels.profiles import N_PROF
 from imdrive.kernels.r2_law_registry import law_of_records
+from imdrive.kernels.threads import slots
 from imdrive.run.metrics import lost_control_check, steady_window_periods
 from imdrive.run.status import STATUS_COLUMNS
 
@@ -241,7 +241,7 @@ def _stack(items, log_every: int, n_rows: int, window_s: float, parallel: bool):
     )
     t0 = time.perf_counter()
     if parallel:
-        scratch = new_scratch(max(min(G, num_threads()), 1), dtype)
+        scratch = new_scratch(slots(G), dtype)
         batch_kernel(params, state, log, log_every, out, scratch)
     else:
         batch_kernel_serial(params, state, log, log_every, out, new_scratch(1, dtype)[0])
