@@ -195,12 +195,12 @@ def dither(sc, I_dc: float, f: float) -> dict:
     adc_bits`` and its range) at the odd multiple of ``f/2`` nearest :data:`DITHER_BANDWIDTH`
     x the current controllers' bandwidth, so an even number of the test's periods holds whole
     periods of it; none without an ADC."""
-    from imdrive.config.perunit import adc_range_A
+    from imdrive.config.defaults import in_effect
 
     bits = sc.sensor.adc_bits
     if not bits:
         return {"amplitude": 0.0}
-    lsb = 2.0 * adc_range_A(sc) / 2**bits
+    lsb = 2.0 * in_effect(sc, "sensor.adc_range_A") / 2**bits
     n = max(round(DITHER_BANDWIDTH * sc.control.current_bandwidth_Hz / f - 0.5), 1)
     return {
         "amplitude": min(DITHER_LSB * lsb / I_dc, 0.5),

@@ -80,8 +80,7 @@ class CompensatorSettings:
             "scaling of e_d0 before the 13-level quantiser (1e6: the paper's µWb thresholds)",
             "1/Wb",
             gt=0.0,
-            default_doc="the paper's 1e6 on Table IV scaled by 1/ψ_rated "
-            "(config/compensator_gains.py)",
+            derived=True,
         ),
     ] = None
     G_CR_ohm: Annotated[
@@ -90,7 +89,7 @@ class CompensatorSettings:
             "change of R̂2 per output level and period",
             "ohm",
             ge=0.0,
-            default_doc="the paper's 0.001 on Table IV scaled by the machine's R2",
+            derived=True,
         ),
     ] = None
     G_CR_pu: Annotated[
@@ -156,7 +155,7 @@ class CompensatorSettings:
             "the speed loop's gain, k^2 with the flux-scaled speed gains)",
             "rpm",
             gt=0.0,
-            default_doc="1 rpm on Table IV scaled by the rated slip speed (0.0126 × it)",
+            derived=True,
         ),
     ] = None
     gate_iq_A: Annotated[
@@ -166,7 +165,7 @@ class CompensatorSettings:
             "period is a load transient",
             "A",
             gt=0.0,
-            default_doc="0.3 A on Table IV scaled by machine.rated_current_A",
+            derived=True,
         ),
     ] = None
     gate_speed_pu: Annotated[
@@ -214,7 +213,7 @@ class CompensatorSettings:
             "of it (0: never)",
             "Hz",
             ge=0.0,
-            default_doc="0.75 of the first injection frequency (1.5 Hz of Table IV's 2 Hz)",
+            derived=True,
         ),
     ] = None
     step_law: Annotated[
@@ -309,8 +308,7 @@ class InjectionSettings:
             "frequency of the sinusoid",
             "Hz",
             gt=0.0,
-            default_doc="Table IV's 2 Hz scaled by the machine's rotor corner R2/(2π L2), to "
-            "whole control periods (config/compensator_gains.py injection_frequency_Hz)",
+            derived=True,
         ),
     ] = None
     frequency_pu: Annotated[

@@ -194,8 +194,7 @@ class ControlSettings:
             "stator current limit (peak)",
             "A",
             gt=0.0,
-            default_doc="1.5 × the rated peak current, √2 × the nameplate's rms current "
-            "({current_limit_A} A for {preset})",
+            derived=True,
         ),
     ] = None
     decoupling: Annotated[
@@ -209,9 +208,7 @@ class ControlSettings:
             "1998): the cross-coupling decoupled on the measured current and an active "
             "resistance, so an error of the back-emf's feed-forward is rejected at the current "
             "loop's bandwidth (kernels/current_control.py)",
-            default_doc='"imc" with field_weakening on where the speed reference\'s electrical '
-            "speed exceeds half the current loop's bandwidth (1.74 x the rated speed of Table "
-            'IV at 200 Hz; config/current_control.py), "pi" otherwise',
+            derived=True,
         ),
     ] = None
     field_weakening: Annotated[
@@ -220,9 +217,7 @@ class ControlSettings:
             "field weakening above base speed: the flux reference is scaled down by a voltage "
             "feedback that holds the voltage use at field_weakening_voltage "
             "(kernels/ifoc.py, field_weakening); turns the injection's headroom on",
-            default_doc="on when the speed reference reaches the speed where the rated "
-            "torque at rated flux needs more than field_weakening_voltage of Vdc/√3 "
-            "(config/field_weakening.py), else off",
+            derived=True,
         ),
     ] = None
     field_weakening_voltage: Annotated[
@@ -247,7 +242,7 @@ class ControlSettings:
             "an estimator's speed error from a wrong R2_hat is proportional to the torque "
             "current and grows as 1/k, a positive feedback through the speed PI that made the "
             "loop limit-cycle at twice the rated speed (kernels/speed_control.py)",
-            default_doc="on with field_weakening on and a sensorless speed_feedback, else off",
+            derived=True,
         ),
     ] = None
     reorientation: Annotated[

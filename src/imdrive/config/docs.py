@@ -236,6 +236,10 @@ def _derived_values() -> dict:
 
 def _default(key: Key, machine) -> str:
     extra = key.info.json_schema_extra or {}
+    if extra.get("derived"):  # the one resolver's rule (config/defaults.py)
+        from imdrive.config.defaults import rule
+
+        extra = {"default_doc": rule(key.dotted)}
     if "default_doc" in extra:
         text = extra["default_doc"].format(**_derived_values())
         return f"*derived*: {text}" if key.default is None else text

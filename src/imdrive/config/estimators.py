@@ -165,8 +165,7 @@ class FluxInjectionSettings:
             "frequency of the sinusoid; the absolute twin of frequency_pu",
             "Hz",
             gt=0.0,
-            default_doc="Table IV's 2 Hz scaled by the machine's rotor corner R2/(2π L2) "
-            "(1.098 × it; config/scaled.py flux_injection_frequency_Hz)",
+            derived=True,
         ),
     ] = None
     frequency_pu: Annotated[
@@ -252,8 +251,7 @@ class MrasSettings:
             "bandwidth K1 and K2 are derived from (docs/stability.md)",
             "Hz",
             gt=0.0,
-            default_doc="20 Hz, at least 4 times the speed loop's bandwidth "
-            "(imdrive.config.mras_bandwidth.mras_bandwidth_Hz)",
+            derived=True,
         ),
     ] = None
     K1: Annotated[
@@ -325,7 +323,7 @@ class MrasSettings:
             "R1_standstill_hold_T2 (kernels/r1_standstill.py)",
             ge=1,
             le=2,
-            default_doc="2 where the controller compensates its inverter's error, else 1",
+            derived=True,
         ),
     ] = None
     R1_standstill_first_level: Annotated[
@@ -363,10 +361,7 @@ class MrasSettings:
             "type-2 adaptation: a second integral of the error, so the estimate follows a "
             "constant acceleration without lag (its corner from bandwidth_Hz; "
             "design/gains.py mras_type2_gains)",
-            default_doc="on when the type-1 lag at the machine's rated acceleration exceeds "
-            "half the rotor's corner frequency 1/T2 (config/mras_type.py mras_ramp_lag_pu), and "
-            "when the speed reference goes above 1.1 x the rated speed with field weakening on "
-            "(mras_type2_for_field_weakening)",
+            derived=True,
         ),
     ] = None
     acceleration_tracking_from_pu: Annotated[

@@ -83,8 +83,7 @@ class InverterParams:
             "dead-time compensation change sign linearly; the absolute twin of sign_band_pu",
             "A",
             gt=0.0,
-            default_doc="Table IV's 0.2 A scaled by the machine's rated peak current "
-            "(0.0174 × it; config/perunit.py sign_band_A)",
+            derived=True,
         ),
     ] = None
     sign_band_pu: Annotated[

@@ -70,8 +70,7 @@ class ThermalSettings:
             "thermal resistance, stator winding to ambient; the absolute twin of Rth1_pu",
             "K/W",
             gt=0.0,
-            default_doc="Table IV's 0.4 K/W scaled by 1 / the rated stator copper losses "
-            "(config/scaled.py plant_thermal_resistances)",
+            derived=True,
         ),
     ] = None
     Rth1_pu: Annotated[
@@ -91,8 +90,7 @@ class ThermalSettings:
             "thermal resistance, rotor winding to ambient; the absolute twin of Rth2_pu",
             "K/W",
             gt=0.0,
-            default_doc="Table IV's 0.4 K/W scaled by 1 / the rated rotor copper losses "
-            "(config/scaled.py plant_thermal_resistances)",
+            derived=True,
         ),
     ] = None
     Rth2_pu: Annotated[

@@ -35,8 +35,7 @@ class SensorSettings:
             "ADC full scale of the current sensors (±); the absolute twin of adc_range_pu",
             "A",
             gt=0.0,
-            default_doc="Table IV's 50 A scaled by the machine's rated peak current "
-            "(4.36 × it; config/perunit.py adc_range_A)",
+            derived=True,
         ),
     ] = None
     adc_range_pu: Annotated[

@@ -86,7 +86,7 @@ class SimulationSettings:
             "current magnitude that stops a diverging run",
             "A",
             gt=0.0,
-            default_doc="70 × the rated peak current ({divergence_current_A} A for {preset})",
+            derived=True,
         ),
     ] = None
     divergence_speed_rpm: Annotated[

@@ -123,12 +123,19 @@ Name = Annotated[str, Strict(), AfterValidator(check_name)]
 
 
 def setting(
-    description: str, unit: str | None = None, *, default_doc: str | None = None, **constraints
+    description: str,
+    unit: str | None = None,
+    *,
+    default_doc: str | None = None,
+    derived: bool = False,
+    **constraints,
 ):
     """Field metadata of a setting: what it means, its unit, its constraints (``gt=0``, ...).
 
     ``default_doc`` says what a ``None`` default means (``"the plant's"``); the docs print it
-    in place of the default. Use inside ``Annotated[...]``; the default is the plain value
+    in place of the default. ``derived=True``: the unset value depends on the scenario and is
+    resolved by :mod:`imdrive.config.defaults`, whose entry for the key holds the rule the docs
+    print (written there once). Use inside ``Annotated[...]``; the default is the plain value
     after ``=`` so that ``dataclasses.fields`` shows it.
     """
     extra: dict[str, Any] = {}
@@ -136,6 +143,8 @@ def setting(
         extra["unit"] = unit
     if default_doc:
         extra["default_doc"] = default_doc
+    if derived:
+        extra["derived"] = True
     return Field(description=description, json_schema_extra=extra or None, **constraints)
 
 

@@ -3,8 +3,14 @@
 Each ``*_fields`` function turns the settings of one block into the fields of its record, with
 the gain design where the block has one; :func:`drive_records` makes every block's record
 (``(1,)`` arrays of the block's dtype, :func:`imdrive.kernels.records.new_records`) in one go.
-Every machine-dependent value comes from the scenario's resolved per-unit values ``D``
-(:func:`imdrive.config.perunit.resolve`), computed once per scenario.
+Every machine-dependent value comes from the one resolver: a setting whose unset value
+depends on the scenario from :func:`imdrive.config.defaults.in_effect` (what ``imdrive show
+--all`` and ``summary.json`` print for it), a per-unit pair from the scenario's resolved
+values ``D`` (:func:`imdrive.config.perunit.resolve`, computed once per scenario, which the
+resolver reads too). Two builders keep their own module: the standstill R1 test's record
+(:func:`imdrive.config.r1_standstill.r1_standstill_fields`) and the drive's sequencing
+(:func:`imdrive.config.sequence.sequence`), each a set of record fields rather than one
+setting's default.
 :func:`imdrive.run.build.build_arrays` assembles the drive; the estimator's records come from
 its own builder (:mod:`imdrive.run.estimators`).
 """
@@ -16,15 +22,12 @@ import math
 import numpy as np
 
 from imdrive.config.controller_model import inverter_error_half, magnetising_table
-from imdrive.config.current_control import current_controller
-from imdrive.config.field_weakening import field_weakening_on
-from imdrive.config.perunit import Resolved, adc_range_A, sign_band_A
+from imdrive.config.defaults import in_effect
+from imdrive.config.perunit import Resolved
 from imdrive.config.profiles import Profile
 from imdrive.config.r1_standstill import r1_standstill_fields
-from imdrive.config.scaled import flux_injection_frequency_Hz, plant_thermal_resistances
 from imdrive.config.scenario import Scenario
 from imdrive.config.sequence import sequence
-from imdrive.config.speed_gain import speed_gain_flux_scaling
 from imdrive.design.gains import default_current_gains, default_speed_gains, torque_constant
 from imdrive.kernels import profiles as kp
 from imdrive.kernels.compensator import COMPENSATOR_PARAMS, COMPENSATOR_STATE
@@ -67,7 +70,11 @@ def plant_fields(sc: Scenario, D: Resolved) -> dict:
     m = sc.machine
     th = sc.plant.thermal
     # off, the kernels never read them (kernels/machine.py, bridge.py: if p.thermal)
-    Rth1, Rth2 = plant_thermal_resistances(sc) if th.enabled else (0.0, 0.0)
+    Rth1, Rth2 = (
+        (in_effect(sc, "plant.thermal.Rth1_K_per_W"), in_effect(sc, "plant.thermal.Rth2_K_per_W"))
+        if th.enabled
+        else (0.0, 0.0)
+    )
     return dict(
         R1=m.R1_ohm,
         R2=m.R2_ohm,
@@ -95,8 +102,8 @@ def plant_fields(sc: Scenario, D: Resolved) -> dict:
 
 def divergence_current(sc: Scenario, D: Resolved) -> float:
     """The current beyond which a run counts as diverged, A
-    (:func:`imdrive.config.perunit.divergence_current_A`)."""
-    return D.divergence_current_A
+    (``simulation.divergence_current_A``: :mod:`imdrive.config.defaults`)."""
+    return in_effect(sc, "simulation.divergence_current_A")
 
 
 def sim_fields(sc: Scenario, D: Resolved) -> dict:
@@ -111,7 +118,7 @@ def sim_fields(sc: Scenario, D: Resolved) -> dict:
         sensorless=ctl.speed_feedback != "measured",
         delay=ctl.delay_periods,
         flux_inj_amp=sc.flux_injection.amplitude,
-        flux_inj_freq=flux_injection_frequency_Hz(sc),
+        flux_inj_freq=in_effect(sc, "flux_injection.frequency_Hz"),
     )
 
 
@@ -123,7 +130,7 @@ def inverter_fields(sc: Scenario) -> dict:
         model=INVERTER_CODES[inv.model],
         t_d=inv.dead_time_s,
         v_drop=inv.device_drop_V,
-        i_band=sign_band_A(sc),
+        i_band=in_effect(sc, "inverter.sign_band_A"),
         f_sw=inv.switching_frequency_Hz,
     )
 
@@ -140,7 +147,7 @@ def sensor_fields(sc: Scenario) -> dict:
         offset_b=sen.offset_b_A,
         noise_rms=sen.noise_rms_A,
         adc_bits=sen.adc_bits or 0,
-        adc_range=adc_range_A(sc),
+        adc_range=in_effect(sc, "sensor.adc_range_A"),
         seed=sen.seed,
         vdc_gain=sen.vdc_gain,
     )
@@ -237,7 +244,7 @@ def control_fields(sc: Scenario, D: Resolved, mh: dict, psi0: float) -> tuple[di
         mh["sigma_L1_hat"], R_sigma, 2 * math.pi * ctl.current_bandwidth_Hz
     )
     R_a = 0.0
-    imc = current_controller(sc) == "imc"
+    imc = in_effect(sc, "control.current_controller") == "imc"
     if imc:  # internal model control, kernels/current_control.py
         R_a = max(kp_i - R_sigma, 0.0)
         ki_i = 2 * math.pi * ctl.current_bandwidth_Hz * (R_sigma + R_a)
@@ -266,7 +273,7 @@ def control_fields(sc: Scenario, D: Resolved, mh: dict, psi0: float) -> tuple[di
             if ctl.dead_time_compensation == "feedforward"
             else 0.0
         ),
-        dtc_band=sign_band_A(sc),
+        dtc_band=in_effect(sc, "inverter.sign_band_A"),
         # the switching bridge's dead-time loss has the shape of the current's ripple at the
         # commutations; the compensation follows it (kernels/ifoc.py, commutation_ripple)
         dtc_ripple=(
@@ -280,12 +287,12 @@ def control_fields(sc: Scenario, D: Resolved, mh: dict, psi0: float) -> tuple[di
         # the standstill R1 identification absorbed the residual the scale learns
         ie_r1=ie_rate > 0 and sc.mras.R1_standstill,
         ie_veq=ctl.inverter_error_signal == "stator-voltage",
-        fw=field_weakening_on(sc),
+        fw=in_effect(sc, "control.field_weakening"),
         fw_v=ctl.field_weakening_voltage,
         fw_rate=ctl.field_weakening_rate,
         fw_min=ctl.field_weakening_min,
         fw_bound=ctl.field_weakening_bound,
-        w_fw_sched=speed_gain_flux_scaling(sc),
+        w_fw_sched=in_effect(sc, "control.speed_gain_flux_scaling"),
         r1_settle=_r1_settle_s(D),
         or_wmin=(
             2 * math.pi * m.rated_frequency_Hz * ORIENTATION_FROM_PU if ctl.reorientation else 0.0
@@ -305,8 +312,9 @@ def control_fields(sc: Scenario, D: Resolved, mh: dict, psi0: float) -> tuple[di
 
 
 def current_limit(sc: Scenario, D: Resolved) -> float:
-    """The controller's current limit, A (:func:`imdrive.config.perunit.current_limit_A`)."""
-    return D.current_limit_A
+    """The controller's current limit, A (``control.current_limit_A``:
+    :mod:`imdrive.config.defaults`)."""
+    return in_effect(sc, "control.current_limit_A")
 
 
 def _vf_profiles(sc: Scenario) -> tuple[Profile, Profile]:

@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from imdrive.config.compensator import demodulated_input
-from imdrive.config.field_weakening import field_weakening_on
+from imdrive.config.defaults import in_effect
 from imdrive.config.injection_backoff import backoff_band
 from imdrive.config.perunit import Resolved
 from imdrive.config.r2_kalman import prior_pu
@@ -78,13 +78,12 @@ def _detector_adaptation(sc: Scenario, D: Resolved) -> dict:
     the MRAS of this drive would have (``det_K1``, ``det_K2``: its bandwidth, pole-zero
     cancellation at ``T2_hat``), held below the rated slip frequency while regenerating
     (``det_wmin``, electrical rad/s). Zero where the detection is not the law's."""
-    from imdrive.config.mras_bandwidth import mras_bandwidth_Hz
     from imdrive.config.rated import rated_point
     from imdrive.design.gains import default_mras_gains
 
     if not (sc.compensator.enabled and not gives_flux_error(sc.control.speed_feedback)):
         return {"det_K1": 0.0, "det_K2": 0.0, "det_wmin": 0.0}
-    a = 2 * math.pi * mras_bandwidth_Hz(sc, sc.mras)
+    a = 2 * math.pi * in_effect(sc, "mras.bandwidth_Hz")
     T2_hat = (D.M_hat + D.Ll2_hat) / D.R2_hat
     K1, K2 = default_mras_gains(sc.machine.rated_flux_Wb, T2_hat, a)
     w_sl = 2 * math.pi * sc.machine.rated_frequency_Hz * rated_point(sc.machine).slip
@@ -168,7 +167,7 @@ def _gating(sc, r) -> dict:
     inj = sc.injection
     # the amplitude backs off near the voltage limit whenever the field weakening is on
     # (injection.headroom, deprecated: config/compensator.py)
-    headroom = field_weakening_on(sc)
+    headroom = in_effect(sc, "control.field_weakening")
     fw_v = sc.control.field_weakening_voltage
     if headroom and r.inj_amp > 0.0:
         # its band follows the voltage the field weakening holds (injection.headroom_from,

@@ -492,15 +492,9 @@ class SimulationResult:
     def _resolved_defaults(self) -> dict:
         """The value each unset scenario-dependent setting took in this run (dotted key ->
         value; :func:`imdrive.config.resolved.resolved_defaults`), only those left unset."""
-        from imdrive.config.resolved import resolved_defaults
+        from imdrive.config.resolved import unset_resolved_defaults
 
-        sc = self.scenario
-        out = {}
-        for key, value in resolved_defaults(sc).items():
-            section, name = key.split(".")
-            if getattr(getattr(sc, section), name) is None:
-                out[key] = value
-        return out
+        return unset_resolved_defaults(self.scenario)
 
     def to_csv(self, path) -> None:
         """Write the signals as CSV (header = column names with units).

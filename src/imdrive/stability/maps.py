@@ -143,10 +143,10 @@ def field_weakening_note(scenario: Scenario, df) -> str | None:
     at rated torque): it reaches them in simulation with a lowered flux, which the map does
     not linearise (its reduced state holds the loop at the reference flux). None where the
     drive has no field weakening or the map no such point."""
-    from imdrive.config.field_weakening import field_weakening_on
+    from imdrive.config.defaults import in_effect
 
     n = int((df["status"] == "voltage_limit").sum())
-    if not n or not field_weakening_on(scenario):
+    if not n or not in_effect(scenario, "control.field_weakening"):
         return None
     return (
         f"{n} point(s) need more than the inverter's voltage at the reference flux "

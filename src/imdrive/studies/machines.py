@@ -53,7 +53,7 @@ import pandas as pd
 
 from imdrive.analysis import detuning_speed_error_rpm, field_weakened_flux_Wb
 from imdrive.analysis.foc import foc_operating_point
-from imdrive.config.field_weakening import field_weakening_on
+from imdrive.config.defaults import in_effect
 from imdrive.config.machine import machine_presets, rated_point
 from imdrive.config.perunit import SPEED_TOLERANCE_MIN_RPM, SPEED_TOLERANCE_PU
 from imdrive.config.scenario import Scenario
@@ -253,7 +253,7 @@ def law_flux_Wb(sc, speed_rpm: float, load_Nm: float, R2_ratio: float) -> float:
     stator voltage is ``field_weakening_voltage`` of ``Vdc/sqrt 3``
     (:func:`imdrive.analysis.field_weakened_flux_Wb`)."""
     psi = sc.machine.rated_flux_Wb
-    if not field_weakening_on(sc):
+    if not in_effect(sc, "control.field_weakening"):
         return psi
     hold = sc.control.field_weakening_voltage * sc.inverter.v_max_V
     return field_weakened_flux_Wb(
