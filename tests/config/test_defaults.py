@@ -33,8 +33,17 @@ RECORD_FIELD = {
     "plant.thermal.Rth1_K_per_W": ("plant", "Rth1"),
     "plant.thermal.Rth2_K_per_W": ("plant", "Rth2"),
     "compensator.G_CR_ohm": ("comp", "G_CR"),
+    "compensator.R2_min_ohm": ("comp", "R2_min"),
+    "compensator.R2_max_ohm": ("comp", "R2_max"),
     "compensator.gain_E_per_Wb": ("comp", "G_E"),
     "injection.frequency_Hz": ("comp", "inj_freq"),
+}
+
+
+#: ... the estimator's own, each on a drive running that estimator
+ESTIMATOR_FIELD = {
+    "afo": ("afo.R1_bandwidth_rad_s", "sensorless", 'control.speed_feedback="afo"'),
+    "ekf": ("ekf.current_noise_A", "sensorless", 'control.speed_feedback="ekf"'),
 }
 
 
@@ -117,3 +126,28 @@ def test_summary_and_show_all_list_a_nested_setting_left_unset():
     shown = _read("sensorless").to_toml()
     value = in_effect(_read("sensorless"), "sensor.adc_range_A")
     assert f"adc_range_A is unset (its documented default applies: {value} here)" in shown
+
+
+def test_the_speed_loop_and_the_divergence_bound_follow_the_resolver():
+    import math
+
+    sc = _read("sensorless", 'machine.preset="krause-50hp"')
+    params = build_arrays(sc).params
+    w_lim = in_effect(sc, "simulation.divergence_speed_rpm") * math.pi / 30.0
+    assert params.sim["w_lim"][0] == pytest.approx(w_lim, rel=1e-12)
+    # the speed gains: set to the resolver's value, the bandwidth gives the same gains
+    bw = in_effect(sc, "control.speed_bandwidth_Hz")
+    same = _read("sensorless", 'machine.preset="krause-50hp"', f"control.speed_bandwidth_Hz={bw!r}")
+    other = build_arrays(same).params
+    for field in ("kp_w", "ki_w"):
+        assert params.control[field][0] == other.control[field][0], field
+
+
+@pytest.mark.parametrize("name", sorted(ESTIMATOR_FIELD))
+def test_an_estimator_registers_its_own_derived_settings(name):
+    key, preset, choose = ESTIMATOR_FIELD[name]
+    sc = _read(preset, choose)
+    assert key in derived_defaults(sc)  # listed by show --all and summary.json
+    assert key not in derived_defaults(_read(preset))  # not with another estimator
+    large = _read(preset, choose, 'machine.preset="krause-500hp"')
+    assert in_effect(large, key) != in_effect(sc, key)  # it follows the machine

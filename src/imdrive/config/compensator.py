@@ -129,11 +129,11 @@ class CompensatorSettings:
     ] = None
     R2_min_ohm: Annotated[
         Float | None,
-        setting("lower clamp of R̂2", "ohm", gt=0.0, default_doc="0.5 × the initial R̂2"),
+        setting("lower clamp of R̂2", "ohm", gt=0.0, derived=True),
     ] = None
     R2_max_ohm: Annotated[
         Float | None,
-        setting("upper clamp of R̂2", "ohm", gt=0.0, default_doc="2 × the initial R̂2"),
+        setting("upper clamp of R̂2", "ohm", gt=0.0, derived=True),
     ] = None
     table: Annotated[
         Literal["paper", "rules"],

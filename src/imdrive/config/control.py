@@ -142,9 +142,7 @@ class ControlSettings:
             "speed-loop bandwidth the speed PI gains are derived from",
             "Hz",
             gt=0.0,
-            default_doc="5 Hz, raised for a machine whose rated torque would pull the speed "
-            "down by more than 5 % of its rated speed in a rated-load step (config/perunit.py "
-            "speed_bandwidth_Hz; at most a tenth of current_bandwidth_Hz)",
+            derived=True,
         ),
     ] = None
     current_bandwidth_Hz: Annotated[

@@ -139,11 +139,29 @@ def _r1_standstill_levels(sc):
 
 
 def _acceleration_tracking(sc):
-    from imdrive.config.estimators import mras_type2
+    from imdrive.config.mras_bandwidth import mras_type2
     from imdrive.config.perunit import resolve
 
     r = resolve(sc)
     return mras_type2(sc, sc.mras, (r.Ll2_hat + r.M_hat) / r.R2_hat)
+
+
+def _mras_normalise(sc):
+    from imdrive.config.mras_bandwidth import mras_normalise
+
+    return mras_normalise(sc)
+
+
+def _r1_max_freq(sc):
+    from imdrive.config.mras_bandwidth import r1_max_freq_Hz
+
+    return r1_max_freq_Hz(sc.mras, sc.machine.rated_frequency_Hz)
+
+
+def _lost_control(sc):
+    from imdrive.config.perunit import lost_control_rpm
+
+    return lost_control_rpm(sc)
 
 
 def _flux_injection_frequency(sc):
@@ -206,6 +224,25 @@ _ENTRIES = (
         _always,
     ),
     Derived(
+        "control.speed_bandwidth_Hz",
+        "5 Hz, raised for a machine whose rated torque would pull the speed down by more than "
+        "5 % of its rated speed in a rated-load step (config/perunit.py speed_bandwidth_Hz; at "
+        "most a tenth of current_bandwidth_Hz)",
+        _resolved("speed_bandwidth_Hz"),
+    ),
+    Derived(
+        "simulation.divergence_speed_rpm",
+        "20000/1800 (about 11) × the machine's synchronous speed: 20000 rpm on Table IV",
+        _resolved("divergence_speed_rpm"),
+        _always,
+    ),
+    Derived(
+        "simulation.lost_control_rpm",
+        "twice the machine's rated slip speed, at least 1 % of its rated speed (158 rpm on "
+        "Table IV)",
+        _lost_control,
+    ),
+    Derived(
         "inverter.sign_band_A",
         "Table IV's 0.2 A scaled by the machine's rated peak current (0.0174 × it; "
         "config/perunit.py sign_band_A)",
@@ -240,6 +277,18 @@ _ENTRIES = (
         _mras,
     ),
     Derived(
+        "mras.normalise",
+        "on with control.field_weakening (set or by default), else off",
+        _mras_normalise,
+        _mras,
+    ),
+    Derived(
+        "mras.R1_max_freq_Hz",
+        "R1_max_freq_pu × the rated frequency",
+        _r1_max_freq,
+        _mras,
+    ),
+    Derived(
         "flux_injection.frequency_Hz",
         "Table IV's 2 Hz scaled by the machine's rotor corner R2/(2π L2) (1.098 × it; "
         "config/scaled.py flux_injection_frequency_Hz)",
@@ -259,6 +308,18 @@ _ENTRIES = (
         "(config/scaled.py plant_thermal_resistances)",
         _plant_Rth(1),
         _plant_thermal,
+    ),
+    Derived(
+        "compensator.R2_min_ohm",
+        "0.5 × the initial R̂2",
+        _resolved("R2_min"),
+        _compensator,
+    ),
+    Derived(
+        "compensator.R2_max_ohm",
+        "2 × the initial R̂2",
+        _resolved("R2_max"),
+        _compensator,
     ),
     Derived(
         "compensator.G_CR_ohm",
@@ -300,8 +361,41 @@ _ENTRIES = (
 )
 
 #: dotted key -> its :class:`Derived` entry: every setting whose unset value depends on the
-#: scenario, resolved here and nowhere else.
+#: scenario, resolved here and nowhere else (the package's below; an estimator's own section
+#: registers its entries beside its settings class: :func:`register_derived`).
 DERIVED: dict[str, Derived] = {d.key: d for d in _ENTRIES}
+
+
+def register_derived(*entries: Derived) -> None:
+    """Add the derived settings of a section that lives in a module of its own (an estimator's
+    ``[afo]``, ``[ekf]``, a plug-in's): its settings declare ``derived=True`` and the module
+    registers one :class:`Derived` entry for each, so the records, ``show --all``,
+    ``summary.json`` and the docs find them here as the package's.
+
+    Raises
+    ------
+    ValueError
+        A key already registered by another entry.
+    """
+    for d in entries:
+        if d.key in DERIVED and _origin(DERIVED[d.key]) != _origin(d):
+            raise ValueError(f"{d.key}: a derived default is already registered")
+        DERIVED[d.key] = d
+
+
+def _origin(d: Derived) -> tuple:
+    """What makes two entries one (a module imported again registers its entries again)."""
+    f = d.value
+    return d.key, d.rule, getattr(f, "__module__", None), getattr(f, "__qualname__", None)
+
+
+def uses_estimator(name: str) -> Callable:
+    """``applies`` of an estimator's own settings: the vector drive with that estimator."""
+
+    def applies(sc) -> bool:
+        return _vector(sc) and sc.control.speed_feedback == name
+
+    return applies
 
 
 def rule(key: str) -> str:

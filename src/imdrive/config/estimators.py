@@ -16,7 +16,6 @@ from __future__ import annotations
 import math
 from typing import Annotated, Literal
 
-from imdrive.config.field_weakening import field_weakening_on
 from imdrive.config.mras_regeneration import (
     RegenerationAngle,
     RegenerationBand,
@@ -297,7 +296,7 @@ class MrasSettings:
         setting(
             "scale the adaptation error by (design flux / estimated flux)², so the loop keeps "
             "its bandwidth in field weakening (kernels/estimators/mras.py)",
-            default_doc="on with control.field_weakening (set or by default), else off",
+            derived=True,
         ),
     ] = None
     R1_standstill: Annotated[
@@ -338,7 +337,7 @@ class MrasSettings:
             "the absolute twin of R1_max_freq_pu",
             "Hz",
             gt=0.0,
-            default_doc="R1_max_freq_pu × the rated frequency",
+            derived=True,
         ),
     ] = None
     R1_max_freq_pu: Annotated[
@@ -401,7 +400,7 @@ class MrasSettings:
             K1, K2 = default_mras_gains(ctx.psi0, T2_hat, a)
         K1 = self.K1 if self.K1 is not None else K1
         K2 = self.K2 if self.K2 is not None else K2
-        normalise = self.normalise if self.normalise is not None else field_weakening_on(sc)
+        normalise = mras_normalise(sc, self)
         if self.R1_rate_pu is not None and self.R1_rate_per_s != 0.0:
             raise ConfigError(
                 "mras.R1_rate_pu", "set mras.R1_rate_per_s or mras.R1_rate_pu, not both"
@@ -437,17 +436,12 @@ class MrasSettings:
         return EstimatorRecords(params, derived=derived, sources=src)
 
 
-def r1_max_freq_Hz(mras: MrasSettings, f_rated: float) -> float:
-    """The online R1 law's upper stator-frequency bound, Hz: ``mras.R1_max_freq_Hz``, or
-    ``mras.R1_max_freq_pu`` times the machine's rated frequency ``f_rated`` (Hz): 30 Hz on
-    Table IV and the 60 Hz Krause machines, 25 Hz on the 50 Hz ones."""
-    if mras.R1_max_freq_Hz is not None:
-        return mras.R1_max_freq_Hz
-    return mras.R1_max_freq_pu * f_rated
-
-
 # the type-2 rule lives with its criteria (this module's size); the old import path works
 # the sliding-mode MRAS's settings live in their own module (this one's size); imported here
 # so it registers after the others, as before, and the old import path works
 from imdrive.config.estimators_smo import SmoMrasSettings  # noqa: E402,F401
-from imdrive.config.mras_bandwidth import mras_type2  # noqa: E402,F401
+from imdrive.config.mras_bandwidth import (  # noqa: E402,F401
+    mras_normalise,
+    mras_type2,
+    r1_max_freq_Hz,
+)

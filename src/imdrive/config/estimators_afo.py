@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 from typing import Annotated, Literal
 
+from imdrive.config.defaults import Derived, register_derived, uses_estimator
 from imdrive.config.registry import EstimatorContext, EstimatorRecords, estimator_settings
 from imdrive.config.scaled import afo_resistance_bandwidths, flux_injection_frequency_Hz
 from imdrive.config.validation import Bool, Float, setting
@@ -50,10 +51,7 @@ class AfoSettings:
             "afo_bandwidth_Hz)",
             "Hz",
             gt=0.0,
-            default_doc=(
-                "16 x the speed loop's bandwidth (80 Hz on Table IV); 8 x with the observer's "
-                'own R2 law (estimator.R2_adaptation = "afo")'
-            ),
+            derived=True,
         ),
     ] = None
     Kp: Annotated[
@@ -75,8 +73,7 @@ class AfoSettings:
             "R̂1 adaptation rate the gain is derived from; the absolute twin of R1_bandwidth_pu",
             "rad/s",
             gt=0.0,
-            default_doc="Table IV's 2 rad/s scaled by the rotor corner 1/T2 (0.175 × it; "
-            "config/scaled.py afo_resistance_bandwidths)",
+            derived=True,
         ),
     ] = None
     R1_bandwidth_pu: Annotated[
@@ -95,8 +92,7 @@ class AfoSettings:
             "the absolute twin of R2_bandwidth_pu",
             "rad/s",
             gt=0.0,
-            default_doc="Table IV's 2 rad/s scaled by the rotor corner 1/T2 (0.175 × it; "
-            "config/scaled.py afo_resistance_bandwidths)",
+            derived=True,
         ),
     ] = None
     R2_bandwidth_pu: Annotated[
@@ -241,3 +237,32 @@ def _afo_gain_mode(gain: str, adapts_R2: bool) -> int:
     if gain == "regeneration" or (gain == "scheduled" and adapts_R2):
         return 1
     return 2 if gain == "scheduled" else 0
+
+
+def _bandwidth(sc) -> float:
+    return afo_bandwidth_Hz(sc, sc.afo)
+
+
+def _R1_bandwidth(sc) -> float:
+    return afo_resistance_bandwidths(sc.afo, sc.machine)[0]
+
+
+def _R2_bandwidth(sc) -> float:
+    return afo_resistance_bandwidths(sc.afo, sc.machine)[1]
+
+
+_RESISTANCE_RATE = (
+    "Table IV's 2 rad/s scaled by the rotor corner 1/T2 (0.175 × it; config/scaled.py "
+    "afo_resistance_bandwidths)"
+)
+register_derived(
+    Derived(
+        "afo.bandwidth_Hz",
+        "16 x the speed loop's bandwidth (80 Hz on Table IV); 8 x with the observer's own R2 "
+        'law (estimator.R2_adaptation = "afo")',
+        _bandwidth,
+        uses_estimator("afo"),
+    ),
+    Derived("afo.R1_bandwidth_rad_s", _RESISTANCE_RATE, _R1_bandwidth, uses_estimator("afo")),
+    Derived("afo.R2_bandwidth_rad_s", _RESISTANCE_RATE, _R2_bandwidth, uses_estimator("afo")),
+)

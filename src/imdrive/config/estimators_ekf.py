@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from typing import Annotated
 
+from imdrive.config.defaults import Derived, register_derived, uses_estimator
 from imdrive.config.registry import EstimatorContext, EstimatorRecords, estimator_settings
 from imdrive.config.validation import Float, setting
 from imdrive.design.estimators import default_ekf_noise
@@ -30,8 +31,7 @@ class EkfSettings:
             "voltage_noise_pu",
             "V",
             gt=0.0,
-            default_doc="Table IV's 5 V scaled by the rated phase voltage's peak (0.0278 × it; "
-            "config/scaled.py)",
+            derived=True,
         ),
     ] = None
     voltage_noise_pu: Annotated[
@@ -49,8 +49,7 @@ class EkfSettings:
             "rotor-flux process noise density; the absolute twin of flux_noise_pu",
             "Wb/s",
             gt=0.0,
-            default_doc="Table IV's 0.1 Wb/s scaled by psi_rated / T2 (0.0189 × it; "
-            "config/scaled.py)",
+            derived=True,
         ),
     ] = None
     flux_noise_pu: Annotated[
@@ -69,8 +68,7 @@ class EkfSettings:
             "acceleration_noise_pu",
             "rad/s²",
             gt=0.0,
-            default_doc="Table IV's 2000 rad/s² scaled by the rated acceleration n_p T_rated / J "
-            "(5.56 × it; config/scaled.py)",
+            derived=True,
         ),
     ] = None
     acceleration_noise_pu: Annotated[
@@ -88,7 +86,7 @@ class EkfSettings:
             "R2 process noise: drift-rate uncertainty; the absolute twin of R2_drift_pu",
             "ohm/s",
             gt=0.0,
-            default_doc="Table IV's 0.5 ohm/s scaled by R2 / T2 (0.0536 × it; config/scaled.py)",
+            derived=True,
         ),
     ] = None
     R2_drift_pu: Annotated[
@@ -106,8 +104,7 @@ class EkfSettings:
             "measurement noise per current component (rms); the absolute twin of current_noise_pu",
             "A",
             gt=0.0,
-            default_doc="Table IV's 0.05 A scaled by the rated peak current (0.00436 × it; "
-            "config/scaled.py)",
+            derived=True,
         ),
     ] = None
     current_noise_pu: Annotated[
@@ -148,3 +145,50 @@ class EkfSettings:
             write_R2=on,
         )
         return EstimatorRecords(params)
+
+
+def _noise(n: int):
+    """The ``n``-th of :func:`imdrive.config.scaled.ekf_noise` (``EKF_NOISE``'s order)."""
+
+    def value(sc) -> float:
+        from imdrive.config.scaled import ekf_noise
+
+        return ekf_noise(sc.ekf, sc.machine)[n]
+
+    value.__qualname__ = f"_noise_{n}"
+    return value
+
+
+register_derived(
+    Derived(
+        "ekf.voltage_noise_V",
+        "Table IV's 5 V scaled by the rated phase voltage's peak (0.0278 × it; config/scaled.py)",
+        _noise(0),
+        uses_estimator("ekf"),
+    ),
+    Derived(
+        "ekf.flux_noise_Wb_per_s",
+        "Table IV's 0.1 Wb/s scaled by psi_rated / T2 (0.0189 × it; config/scaled.py)",
+        _noise(1),
+        uses_estimator("ekf"),
+    ),
+    Derived(
+        "ekf.acceleration_noise_rad_s2",
+        "Table IV's 2000 rad/s² scaled by the rated acceleration n_p T_rated / J (5.56 × it; "
+        "config/scaled.py)",
+        _noise(2),
+        uses_estimator("ekf"),
+    ),
+    Derived(
+        "ekf.R2_drift_ohm_per_s",
+        "Table IV's 0.5 ohm/s scaled by R2 / T2 (0.0536 × it; config/scaled.py)",
+        _noise(3),
+        uses_estimator("ekf"),
+    ),
+    Derived(
+        "ekf.current_noise_A",
+        "Table IV's 0.05 A scaled by the rated peak current (0.00436 × it; config/scaled.py)",
+        _noise(4),
+        uses_estimator("ekf"),
+    ),
+)

@@ -1,7 +1,9 @@
 """The MRAS's adaptation bandwidth by default, from the speed loop's
-(:func:`mras_bandwidth_Hz`), and whether it runs the type-2 adaptation (:func:`mras_type2`,
-which needs it). Its own module: :mod:`imdrive.config.perunit` imports
-:mod:`imdrive.config.mras_type`, and this needs the speed loop's bandwidth from perunit.
+(:func:`mras_bandwidth_Hz`), whether it runs the type-2 adaptation (:func:`mras_type2`,
+which needs it), whether it normalises its error (:func:`mras_normalise`) and the online
+R1 law's frequency bound (:func:`r1_max_freq_Hz`). Its own module:
+:mod:`imdrive.config.perunit` imports :mod:`imdrive.config.mras_type`, and this needs the
+speed loop's bandwidth from perunit.
 """
 
 from __future__ import annotations
@@ -68,3 +70,21 @@ def mras_type2(sc, mras, T2_hat: float) -> bool:
     if mras_type2_for_field_weakening(sc):
         return True
     return mras_ramp_lag_pu(sc, mras_bandwidth_Hz(sc, mras), T2_hat) > MRAS_RAMP_LAG_MAX_PU
+
+
+def r1_max_freq_Hz(mras, f_rated: float) -> float:
+    """The online R1 law's upper stator-frequency bound, Hz: ``mras.R1_max_freq_Hz``, or
+    ``mras.R1_max_freq_pu`` times the machine's rated frequency ``f_rated`` (Hz): 30 Hz on
+    Table IV and the 60 Hz Krause machines, 25 Hz on the 50 Hz ones."""
+    if mras.R1_max_freq_Hz is not None:
+        return mras.R1_max_freq_Hz
+    return mras.R1_max_freq_pu * f_rated
+
+
+def mras_normalise(sc, mras=None) -> bool:
+    """Whether the MRAS normalises its error by the flux reference squared: ``mras.normalise``
+    when set, else on exactly with the field weakening (set or by default)."""
+    from imdrive.config.field_weakening import field_weakening_on
+
+    mras = sc.mras if mras is None else mras
+    return mras.normalise if mras.normalise is not None else field_weakening_on(sc)

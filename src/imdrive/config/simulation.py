@@ -95,8 +95,7 @@ class SimulationSettings:
             "speed magnitude that stops a diverging run",
             "rpm",
             gt=0.0,
-            default_doc="20000/1800 (about 11) × the machine's synchronous speed: 20000 rpm on "
-            "Table IV",
+            derived=True,
         ),
     ] = None
     lost_control_rpm: Annotated[
@@ -106,8 +105,7 @@ class SimulationSettings:
             "(vector control, free speed; 0: not checked)",
             "rpm",
             ge=0.0,
-            default_doc="twice the machine's rated slip speed, at least 1 % of its rated speed "
-            "(158 rpm on Table IV)",
+            derived=True,
         ),
     ] = None
     lost_control_s: Annotated[

@@ -113,7 +113,7 @@ def sim_fields(sc: Scenario, D: Resolved) -> dict:
         Ts=sc.simulation.Ts_s,
         nsub=sc.simulation.substeps,
         i_lim=divergence_current(sc, D),
-        w_lim=D.divergence_speed_rpm * RPM,
+        w_lim=in_effect(sc, "simulation.divergence_speed_rpm") * RPM,
         mode=DRIVE_FOC if sc.drive.mode == "vector" else DRIVE_OPEN_LOOP,
         sensorless=ctl.speed_feedback != "measured",
         delay=ctl.delay_periods,
@@ -248,7 +248,8 @@ def control_fields(sc: Scenario, D: Resolved, mh: dict, psi0: float) -> tuple[di
     if imc:  # internal model control, kernels/current_control.py
         R_a = max(kp_i - R_sigma, 0.0)
         ki_i = 2 * math.pi * ctl.current_bandwidth_Hz * (R_sigma + R_a)
-    kp_w, ki_w = default_speed_gains(m.J_kgm2, k_t, 2 * math.pi * D.speed_bandwidth_Hz)
+    a_s = 2 * math.pi * in_effect(sc, "control.speed_bandwidth_Hz")
+    kp_w, ki_w = default_speed_gains(m.J_kgm2, k_t, a_s)
     ie_rate = _inverter_error_adaptation(sc, D)
     gains = {
         "current_kp": ctl.current_kp if ctl.current_kp is not None else kp_i,

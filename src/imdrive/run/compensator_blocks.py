@@ -38,8 +38,8 @@ def compensator_fields(sc: Scenario, D: Resolved) -> tuple[dict, dict]:
     r = D
     n_comp = D.n_comp
     t_on = tracking_start_s(sc)
-    R2_min = r.R2_min
-    R2_max = r.R2_max
+    R2_min = in_effect(sc, "compensator.R2_min_ohm")
+    R2_max = in_effect(sc, "compensator.R2_max_ohm")
     record = dict(
         enabled=comp.enabled,
         t_on=t_on,
