@@ -26,6 +26,7 @@ RECORD_FIELD = {
     "control.field_weakening": ("control", "fw"),
     "control.speed_gain_flux_scaling": ("control", "w_fw_sched"),
     "control.current_limit_A": ("control", "i_max"),
+    "control.inverter_error_adaptation_per_s": ("control", "ie_rate"),
     "simulation.divergence_current_A": ("sim", "i_lim"),
     "inverter.sign_band_A": ("inverter", "i_band"),
     "sensor.adc_range_A": ("sensor", "adc_range"),

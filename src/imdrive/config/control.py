@@ -285,7 +285,7 @@ class ControlSettings:
             "the dead time the compensation assumes",
             "s",
             ge=0.0,
-            default_doc="inverter.dead_time_s (perfect knowledge)",
+            derived=True,
         ),
     ] = None
     inverter_error_adaptation_per_s: Annotated[
@@ -297,10 +297,7 @@ class ControlSettings:
             "1/s",
             ge=0.0,
             le=100.0,
-            default_doc="1 with the assumed dead-time feed-forward; 0 with a commissioned "
-            "inverter-error table ([controller_model]: measured, it has little left to learn, "
-            "and on the realistic drive the scale's wander of a few % cost the sliding-mode "
-            "MRAS 1-2 rpm at 100-150 rpm)",
+            derived=True,
         ),
     ] = None
     inverter_error_signal: Annotated[

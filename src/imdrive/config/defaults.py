@@ -158,6 +158,18 @@ def _r1_max_freq(sc):
     return r1_max_freq_Hz(sc.mras, sc.machine.rated_frequency_Hz)
 
 
+def _dead_time_compensation(sc) -> float:
+    t = sc.control.dead_time_compensation_s
+    return sc.inverter.dead_time_s if t is None else t
+
+
+def _inverter_error_adaptation(sc) -> float:
+    rate = sc.control.inverter_error_adaptation_per_s
+    if rate is not None:
+        return rate
+    return 0.0 if sc.controller_model.uses_inverter_error else 1.0
+
+
 def _lost_control(sc):
     from imdrive.config.perunit import lost_control_rpm
 
@@ -192,7 +204,27 @@ def _resolved(field: str) -> Callable:
     return value
 
 
+_THE_PLANTS = "the plant's"
+
 _ENTRIES = (
+    Derived("estimator.R1_ohm", _THE_PLANTS, _resolved("R1_hat")),
+    Derived("estimator.R2_ohm", _THE_PLANTS, _resolved("R2_hat")),
+    Derived("estimator.M_H", _THE_PLANTS, _resolved("M_hat")),
+    Derived("estimator.Ll1_H", _THE_PLANTS, _resolved("Ll1_hat")),
+    Derived("estimator.Ll2_H", _THE_PLANTS, _resolved("Ll2_hat")),
+    Derived(
+        "control.dead_time_compensation_s",
+        "inverter.dead_time_s (perfect knowledge)",
+        _dead_time_compensation,
+    ),
+    Derived(
+        "control.inverter_error_adaptation_per_s",
+        "1 with the assumed dead-time feed-forward; 0 with a commissioned inverter-error table "
+        "([controller_model]: measured, it has little left to learn, and on the realistic "
+        "drive the scale's wander of a few % cost the sliding-mode MRAS 1-2 rpm at 100-150 "
+        "rpm)",
+        _inverter_error_adaptation,
+    ),
     Derived(
         "control.field_weakening",
         "on when the speed reference reaches the speed where the rated torque at rated flux "
@@ -368,7 +400,8 @@ DERIVED: dict[str, Derived] = {d.key: d for d in _ENTRIES}
 
 def register_derived(*entries: Derived) -> None:
     """Add the derived settings of a section that lives in a module of its own (an estimator's
-    ``[afo]``, ``[ekf]``, a plug-in's): its settings declare ``derived=True`` and the module
+    ``[afo]``, ``[ekf]``; not a plug-in's ``[plugins.settings.<name>]``, whose settings its
+    own ``records`` resolves): its settings declare ``derived=True`` and the module
     registers one :class:`Derived` entry for each, so the records, ``show --all``,
     ``summary.json`` and the docs find them here as the package's.
 

@@ -46,23 +46,22 @@ class EstimatorSettings:
     """The controller's and estimator's machine model (``[estimator]``); unset: the plant's."""
 
     R1_ohm: Annotated[
-        Float | None, setting("stator resistance", "ohm", gt=0.0, default_doc="the plant's")
+        Float | None,
+        setting("stator resistance", "ohm", gt=0.0, derived=True),
     ] = None
     R2_ohm: Annotated[
         Float | None,
-        setting(
-            "rotor resistance: the initial estimate R̂2", "ohm", gt=0.0, default_doc="the plant's"
-        ),
+        setting("rotor resistance: the initial estimate R̂2", "ohm", gt=0.0, derived=True),
     ] = None
     Ll1_H: Annotated[
-        Float | None, setting("stator leakage inductance", "H", gt=0.0, default_doc="the plant's")
+        Float | None, setting("stator leakage inductance", "H", gt=0.0, derived=True)
     ] = None
     Ll2_H: Annotated[
-        Float | None, setting("rotor leakage inductance", "H", gt=0.0, default_doc="the plant's")
+        Float | None, setting("rotor leakage inductance", "H", gt=0.0, derived=True)
     ] = None
     M_H: Annotated[
         Float | None,
-        setting("magnetising inductance", "H", gt=0.0, default_doc="the plant's"),
+        setting("magnetising inductance", "H", gt=0.0, derived=True),
     ] = None
     R1_ratio: Annotated[
         Float | None,

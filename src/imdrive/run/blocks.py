@@ -157,7 +157,9 @@ def model_fields(sc: Scenario, D: Resolved) -> tuple[dict, dict]:
     """``MODEL_STATE`` (the controller's machine model: its estimates, absolute or as ratios of
     the plant's, :func:`imdrive.config.perunit.resolve`; unset: the plant's) and the
     model's inductances ``R1_hat, R2_hat, M_hat, L1_hat, L2_hat, sigma_L1_hat`` as a dict."""
-    R1h, R2h, Ll1h, Ll2h, Mh = D.R1_hat, D.R2_hat, D.Ll1_hat, D.Ll2_hat, D.M_hat
+    R1h, R2h, Ll1h, Ll2h, Mh = (
+        in_effect(sc, f"estimator.{key}") for key in ("R1_ohm", "R2_ohm", "Ll1_H", "Ll2_H", "M_H")
+    )
     model = dict(R1_hat=R1h, R2_hat=R2h, Ll1_hat=Ll1h, Ll2_hat=Ll2h, M_hat=Mh)
     cm = sc.controller_model
     if D.model_curve:  # the saturation-aware flux model (kernels/model.py)
@@ -190,21 +192,6 @@ def initial_flux(sc: Scenario, D: Resolved) -> float:
     """The rotor-flux reference at t = 0, Wb (that of :func:`flux_reference`)."""
     given = sc.control.flux_ref_Wb
     return given.points[0][1] if given else D.psi_rated
-
-
-def _assumed_dead_time(sc: Scenario) -> float:
-    """The dead time the controller's compensation assumes, s (default: the inverter's)."""
-    t = sc.control.dead_time_compensation_s
-    return sc.inverter.dead_time_s if t is None else t
-
-
-def _inverter_error_adaptation(sc: Scenario, D: Resolved) -> float:
-    """Rate of the online inverter-error scaling, 1/s: the setting, or by default 1 with the
-    assumed dead-time feed-forward and 0 with a commissioned inverter-error table."""
-    rate = sc.control.inverter_error_adaptation_per_s
-    if rate is not None:
-        return rate
-    return 0.0 if D.model_inverter_error else 1.0
 
 
 #: The orientation check (kernels/ifoc.py ``check_orientation``) runs from this stator
@@ -250,7 +237,7 @@ def control_fields(sc: Scenario, D: Resolved, mh: dict, psi0: float) -> tuple[di
         ki_i = 2 * math.pi * ctl.current_bandwidth_Hz * (R_sigma + R_a)
     a_s = 2 * math.pi * in_effect(sc, "control.speed_bandwidth_Hz")
     kp_w, ki_w = default_speed_gains(m.J_kgm2, k_t, a_s)
-    ie_rate = _inverter_error_adaptation(sc, D)
+    ie_rate = in_effect(sc, "control.inverter_error_adaptation_per_s")
     gains = {
         "current_kp": ctl.current_kp if ctl.current_kp is not None else kp_i,
         "current_ki": ctl.current_ki if ctl.current_ki is not None else ki_i,
@@ -270,7 +257,9 @@ def control_fields(sc: Scenario, D: Resolved, mh: dict, psi0: float) -> tuple[di
         R_a=R_a,
         angle_advance=0.5 + (ctl.delay_periods if ctl.delay_compensation else 0),
         dtc_u=(
-            _assumed_dead_time(sc) * inv.switching_frequency_Hz * Vdc_meas
+            in_effect(sc, "control.dead_time_compensation_s")
+            * inv.switching_frequency_Hz
+            * Vdc_meas
             if ctl.dead_time_compensation == "feedforward"
             else 0.0
         ),
