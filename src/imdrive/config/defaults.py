@@ -5,8 +5,9 @@ unset, it follows the machine (its rated speed, current, rotor corner) or the ot
 (the speed profile, the estimator). Each such setting is one :class:`Derived` entry of
 :data:`DERIVED`, which holds
 
-- ``rule``: what the unset value is, in words. It is the setting's default in
-  docs/scenarios.md (its ``default_doc`` is :func:`rule`), so the text is written here once;
+- ``rule``: what the unset value is, in words. The setting declares ``derived=True``
+  (:func:`imdrive.config.validation.setting`) and docs/scenarios.md prints this rule as its
+  default (:func:`rule`), so the text is written here once;
 - ``value(sc)``: the value in effect in scenario ``sc``, the set one or the rule's;
 - ``applies(sc)``: whether the setting acts in ``sc`` at all (the compensator's gains only with
   the compensator on, for instance).
@@ -21,8 +22,14 @@ Who reads it:
 
 The per-unit pairs (an absolute key and its per-unit twin, ``compensator.G_CR_ohm`` and
 ``G_CR_pu``) are turned into SI values by :func:`imdrive.config.perunit.resolve`; the entries
-of those keys read them there. Nothing here imports a settings module at import time (the
-settings classes import :func:`rule`), so every value function imports what it calls.
+of those keys read them there. The estimators in modules of their own register their
+section's entries beside their settings (:func:`register_derived`: ``[afo]``, ``[ekf]``), so
+this module imports nothing of the config at import time, and each value function imports
+the rule it calls (the import-cycle test, tests/package/test_layers.py, holds it to that).
+
+Not here: the drive's sequencing (the speed and load profiles from per-unit, the
+premagnetisation's delay, the torque-limited ramps), which is not one setting's default but
+the profiles the kernels follow, resolved once by :func:`imdrive.config.sequence.sequence`.
 """
 
 from __future__ import annotations
