@@ -75,21 +75,26 @@ def test_the_map_agrees_with_the_time_domain_at_the_rated_point_of_each_machine(
         assert (ok["stable"] == ok["sim_stable"]).all(), (machine, ok)
 
 
-def test_the_map_says_what_its_voltage_limit_means_with_field_weakening():
-    """Above base speed a drive with field weakening reaches what the map calls
-    ``voltage_limit`` (it maps the loop at the reference flux); the map says so, and says
-    nothing for a drive without field weakening."""
+def test_the_map_linearises_field_weakening_at_its_flux_and_says_so():
+    """Above base speed a drive with field weakening holds a point the reference flux cannot
+    reach at a lowered flux: the map linearises it there (``flux_factor`` below 1) and says
+    so; without field weakening the point stays ``voltage_limit`` and the map says nothing."""
     from imdrive.stability.maps import stability_map
 
-    for fw, noted in ((True, True), (False, False)):
+    for fw in (True, False):
         sc = Scenario.read(
             "sensorless",
             ['machine.preset="krause-50hp"', f"control.field_weakening={str(fw).lower()}"],
         )
         rp = rated_point(sc.machine)
         m = stability_map(sc, [0.5 * rp.speed_rpm, 1.5 * rp.speed_rpm], [0.5 * rp.torque_Nm])
-        assert (m["status"] == "voltage_limit").any()
+        below, above = m.iloc[0], m.iloc[1]
+        assert below["status"] == "ok" and below["flux_factor"] == 1.0
         note = m.attrs["note"]
-        assert (note is not None) is noted
-        if noted:
-            assert "field_weakening" in note and "does not linearise" in note
+        if fw:
+            # at 1.5 x the rated speed the flux falls roughly as 1/speed
+            assert above["status"] == "ok" and 0.5 < above["flux_factor"] < 0.8, above
+            assert "flux_factor" in note
+        else:
+            assert above["status"] == "voltage_limit" and above["flux_factor"] == 1.0
+            assert note is None

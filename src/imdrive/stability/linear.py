@@ -188,11 +188,17 @@ class OperatingPoints:
         return ev
 
 
-def solve_operating_points(sc: Scenario, speeds_rpm, torques_Nm) -> OperatingPoints:
+def solve_operating_points(
+    sc: Scenario, speeds_rpm, torques_Nm, flux_factor: float | None = None
+) -> OperatingPoints:
     """Steady states and linearisations of ``sc`` at paired ``speeds_rpm[i], torques_Nm[i]``.
 
     ``sc`` is analysed as given (call :func:`map_scenario` first to switch the compensator off,
     which the maps do). Points the drive cannot hold get a status, never an exception.
+    ``flux_factor`` (a drive with ``control.field_weakening``): the field weakening's flux
+    factor ``k`` at these points, held there (its integrator frozen: the loop is slow and not
+    a state of the reduced map), so the flux reference is ``k psi*`` and the speed PI's gains
+    are scaled as the drive scales them (:mod:`imdrive.kernels.speed_control`).
     """
     speeds = np.atleast_1d(np.asarray(speeds_rpm, dtype=float))
     torques = np.atleast_1d(np.asarray(torques_Nm, dtype=float))
@@ -206,6 +212,10 @@ def solve_operating_points(sc: Scenario, speeds_rpm, torques_Nm) -> OperatingPoi
     w_ref = speeds * RPM
     d = stationary_drive(sc, w_ref, torques)
     c = model_coefficients(d.P, d.S)
+    if flux_factor is not None:
+        d.S.control["fw_cut"][:] = 1.0 - flux_factor
+        d.P.control["fw_rate"][:] = 0.0
+        c["psi_ref"] *= flux_factor
     iq, w_m, ok = continuous_steady_state(c, w_ref, torques)
     status = np.full(n, STATUS_OK, dtype=object)
     status[~ok] = STATUS_NONE
