@@ -35,6 +35,7 @@ RECORD_FIELD = {
     "plant.thermal.Rth2_K_per_W": ("plant", "Rth2"),
     "compensator.G_CR_ohm": ("comp", "G_CR"),
     "compensator.R2_min_ohm": ("comp", "R2_min"),
+    "compensator.gating": ("comp", "gate"),
     "compensator.R2_max_ohm": ("comp", "R2_max"),
     "compensator.gain_E_per_Wb": ("comp", "G_E"),
     "injection.frequency_Hz": ("comp", "inj_freq"),

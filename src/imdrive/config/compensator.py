@@ -144,7 +144,7 @@ class CompensatorSettings:
         setting(
             "freeze R̂2 during speed and load transients and in voltage saturation, and move "
             "the injection frequency away from the stator frequency (kernels/compensator.py)",
-            default_doc="on with the injection ([injection]), off without (the paper's e_d0 input)",
+            derived=True,
         ),
     ] = None
     gate_speed_rpm: Annotated[

@@ -133,7 +133,7 @@ class ControlSettings:
         setting(
             "rotor-flux reference (> 0)",
             "Wb",
-            default_doc="the machine's rated flux ({rated_flux_Wb} Wb for {preset})",
+            derived=True,
         ),
     ] = None
     speed_bandwidth_Hz: Annotated[

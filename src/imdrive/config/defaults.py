@@ -177,6 +177,34 @@ def _inverter_error_adaptation(sc) -> float:
     return 0.0 if sc.controller_model.uses_inverter_error else 1.0
 
 
+def _gating(sc) -> bool:
+    from imdrive.config.compensator import demodulated_input
+    from imdrive.config.perunit import resolve
+
+    g = sc.compensator.gating
+    return g if g is not None else demodulated_input(sc.injection, resolve(sc))
+
+
+def _flux_ref(sc) -> float:
+    """The flux reference at the start (a profile when set: its first value), Wb."""
+    given = sc.control.flux_ref_Wb
+    return given.points[0][1] if given else sc.machine.rated_flux_Wb
+
+
+def _saturation(n: int) -> Callable:
+    """``Lm0`` (``n = 0``, H) or ``psi_sat`` (1, Wb) of the plant's magnetising curve."""
+
+    def value(sc) -> float:
+        return sc.plant.saturation.curve(sc.machine)[n]
+
+    value.__qualname__ = f"_saturation_{n}"
+    return value
+
+
+def _saturating(sc) -> bool:
+    return sc.plant.saturation.enabled
+
+
 def _lost_control(sc):
     from imdrive.config.perunit import lost_control_rpm
 
@@ -219,6 +247,24 @@ _ENTRIES = (
     Derived("estimator.M_H", _THE_PLANTS, _resolved("M_hat")),
     Derived("estimator.Ll1_H", _THE_PLANTS, _resolved("Ll1_hat")),
     Derived("estimator.Ll2_H", _THE_PLANTS, _resolved("Ll2_hat")),
+    Derived(
+        "control.flux_ref_Wb",
+        "the machine's rated flux ({rated_flux_Wb} Wb for {preset})",
+        _flux_ref,
+    ),
+    Derived("plant.saturation.Lm0_H", "M_H/rated_ratio", _saturation(0), _saturating),
+    Derived(
+        "plant.saturation.psi_sat_Wb",
+        "psi_rated (rated_ratio/(1 - rated_ratio))^(1/S)",
+        _saturation(1),
+        _saturating,
+    ),
+    Derived(
+        "compensator.gating",
+        "on with the injection ([injection]), off without (the paper's e_d0 input)",
+        _gating,
+        _compensator,
+    ),
     Derived(
         "control.dead_time_compensation_s",
         "inverter.dead_time_s (perfect knowledge)",

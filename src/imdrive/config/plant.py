@@ -155,7 +155,7 @@ class SaturationSettings:
     ] = 0.9
     Lm0_H: Annotated[
         Float | None,
-        setting("unsaturated magnetising inductance", "H", gt=0.0, default_doc="M_H/rated_ratio"),
+        setting("unsaturated magnetising inductance", "H", gt=0.0, derived=True),
     ] = None
     psi_sat_Wb: Annotated[
         Float | None,
@@ -163,7 +163,7 @@ class SaturationSettings:
             "saturation flux of the curve",
             "Wb",
             gt=0.0,
-            default_doc="psi_rated (rated_ratio/(1 - rated_ratio))^(1/S)",
+            derived=True,
         ),
     ] = None
 

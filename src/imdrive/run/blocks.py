@@ -185,13 +185,12 @@ def _padded(values) -> np.ndarray:
 
 def flux_reference(sc: Scenario) -> Profile:
     """The rotor-flux reference profile, Wb (default: the machine's rated flux)."""
-    return sc.control.flux_ref_Wb or Profile.constant(sc.machine.rated_flux_Wb)
+    return sc.control.flux_ref_Wb or Profile.constant(in_effect(sc, "control.flux_ref_Wb"))
 
 
 def initial_flux(sc: Scenario, D: Resolved) -> float:
     """The rotor-flux reference at t = 0, Wb (that of :func:`flux_reference`)."""
-    given = sc.control.flux_ref_Wb
-    return given.points[0][1] if given else D.psi_rated
+    return in_effect(sc, "control.flux_ref_Wb")
 
 
 #: The orientation check (kernels/ifoc.py ``check_orientation``) runs from this stator

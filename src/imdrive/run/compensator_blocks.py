@@ -162,7 +162,7 @@ def headroom_rate_per_s(
 def _gating(sc, r) -> dict:
     """The compensator's gating and frequency-schedule parameters (off: zeros)."""
     comp = sc.compensator
-    on = comp.gating if comp.gating is not None else demodulated_input(sc.injection, r)
+    on = in_effect(sc, "compensator.gating")
     out = {}
     inj = sc.injection
     # the amplitude backs off near the voltage limit whenever the field weakening is on
