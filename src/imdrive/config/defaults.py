@@ -109,18 +109,6 @@ def _speed_gain_flux_scaling(sc):
     return speed_gain_flux_scaling(sc)
 
 
-def _current_limit(sc):
-    from imdrive.config.perunit import current_limit_A
-
-    return current_limit_A(sc)
-
-
-def _divergence_current(sc):
-    from imdrive.config.perunit import divergence_current_A
-
-    return divergence_current_A(sc)
-
-
 def _sign_band(sc):
     from imdrive.config.perunit import sign_band_A
 
@@ -300,12 +288,12 @@ _ENTRIES = (
         "control.current_limit_A",
         "1.5 × the rated peak current, √2 × the nameplate's rms current "
         "({current_limit_A} A for {preset})",
-        _current_limit,
+        _resolved("current_limit_A"),
     ),
     Derived(
         "simulation.divergence_current_A",
         "70 × the rated peak current ({divergence_current_A} A for {preset})",
-        _divergence_current,
+        _resolved("divergence_current_A"),
         _always,
     ),
     Derived(
