@@ -90,3 +90,53 @@ def test_the_observer_restarts_after_the_test_and_holds_regeneration_near_zero_f
     assert not m["lost_control"]
     # the speed held at its reference within the drive's tolerance band of a few rpm
     assert abs(m["speed_error_rpm"]) < 2.0
+
+
+def _own_law_start(machine: str, law: str):
+    """The sensorless drive whose estimator adapts R2 itself (``estimator.R2_adaptation``,
+    the flux-command injection on), the standstill test from R1_hat(0) = 1.1 R1 and
+    R2_hat(0) = 0.8 R2, ramping to 0.3 of the rated speed without load: R1_hat / R1 after
+    the test, R2_hat / R2_hat(0) at the last logged sample before the speed reference moved,
+    and the run's status."""
+    base = Scenario.read("sensorless", [f'machine.preset="{machine}"'])
+    T2 = base.machine.T2_s
+    ov = [
+        f'control.speed_feedback="{law}"',
+        f'estimator.R2_adaptation="{law}"',
+        "flux_injection.amplitude=0.1",
+        "mras.R1_standstill=true",
+        "estimator.R1_ratio=1.1",
+        "estimator.R2_ratio=0.8",
+        "control.speed_ref_pu={initial=0,changes=[{at=0.1,to=0.3,over=1}]}",
+        "load.torque_pu={initial=0,changes=[]}",
+        f"simulation.t_end_s={12 * T2 + 2.5}",
+    ]
+    sc = base.with_overrides(ov)
+    res = simulate(sc)
+    moved = (res["speed_ref_rpm"] > 0.0).argmax()
+    R2_0 = 0.8 * sc.machine.R2_ohm
+    return (
+        res["R1_hat_ohm"][-1] / sc.machine.R1_ohm,
+        res["R2_hat_ohm"][moved - 1] / R2_0,
+        res["R1_id_status_code"][-1],
+        res.verdict["verdict"],
+    )
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("law", ["afo", "ekf"])
+@pytest.mark.parametrize("machine", ["paper-table-iv", "krause-50hp", "aalto-2.2kw"])
+def test_an_estimators_own_R2_law_and_its_injection_wait_for_the_test(machine, law):
+    """The flux-command injection pauses while the test fits the DC build-up, and R2_hat is
+    held through it (kernels/stages.py, ``r1_test_running``). Measured 2026-11-30 before:
+    the injection's swing in the fit left R1_hat +5.7, +6.3 and +2.0 % off (Table IV, Krause
+    50 hp, Aalto), and the observer's R2 law, reading the R1 error of the build-up, had
+    moved R2_hat to 0.5, 1.02 and 0.5 R2_hat(0) (the clamp) as the ramp began, the EKF's to
+    1.38, 1.31 and 1.61; the observer drive then ended R2_hat 60 %, 60 % and 31 % off."""
+    R1_ratio, R2_moved, status, verdict = _own_law_start(machine, law)
+    assert status == 1
+    # the ideal inverter: the fit's own error, 0.01-0.03 % measured
+    assert R1_ratio == pytest.approx(1.0, abs=0.001)
+    assert R2_moved == pytest.approx(1.0, abs=1e-12)
+    if law == "ekf":  # the filter then tracks R2 (the observer's law: docs/estimators.md)
+        assert verdict == "ok"

@@ -301,6 +301,13 @@ def measure(feat, pp, psen, x, ctl, prof, t, k, i_next_ab, have_next, scr):
 
 
 @njit(cache=True, inline="always")
+def r1_test_running(pc, ctl, w_ref):
+    """Whether the standstill R1 test is under way: enabled, not done, the speed reference
+    at zero (:func:`imdrive.kernels.r1_standstill.r1_standstill`)."""
+    return standstill_r1(pc) and ctl.dc_phase < 3.0 and w_ref == 0.0
+
+
+@njit(cache=True, inline="always")
 def estimate(feat, sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smpl, Vdc_meas, pc):
     """The injection, the selected estimator, the detection and the R2 compensator.
 
@@ -322,6 +329,9 @@ def estimate(feat, sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smp
     # R1 adaptation held from the compensator's start until it first updates and whenever
     # its gating freezes it (transients)
     hold_R1 = pk.enabled and pk.gate and (t_cyc < pk.t_on or cmp.frozen != 0.0)
+    # the standstill R1 test runs through this sample if it ran through the last one (it ends
+    # after the estimator, at the first sample the speed reference moved)
+    testing = r1_test_running(pc, ctl, ctl.w_ref_prev)
     # and, whatever the compensator, while the speed reference moves and the drive settles:
     # the law reads the flux error as a resistance error, and a ramp's is the estimator's lag
     if w_ref != ctl.w_ref_prev:
@@ -334,7 +344,10 @@ def estimate(feat, sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smp
         smp.v_prev_ab, smp.i_prev_ab, smpl.i_meas_ab, smpl.theta_k, ctl.w_e, ctl.i_ref_dq,
         w_ref, i_inj, hold_R1, Ts, t, ctl.dc_restart,
     )  # fmt: skip
+    R2_before = mdl.R2_hat
     w_r_hat, e_dq0 = estimator_step(pe, mdl, est, inp)
+    if testing:  # an estimator's own R2 law waits for R1_hat: while the flux builds up it
+        mdl.R2_hat = R2_before  # reads the R1 error as an R2 error
     R1_after = mdl.R1_hat
     R2_after = mdl.R2_hat
     if standstill_r1(pc):  # the standstill R1 test, whatever the estimator (after it: the
@@ -384,7 +397,9 @@ def control(feat, sim, pc, x, mdl, ctl, smp, prof, smpl, estm, foc):
                 M_h, L1_h, _, _ = model_inductances(mdl)
                 k_max = pc.fw_v * pc.v_max * M_h / (abs(ctl.w_e) * L1_h * psi_ref)
             psi_ref *= field_weakening(pc, ctl, estm.v_fw, Ts, k_max)
-        if sim.flux_inj_amp != 0.0:  # excitation for R2 adaptation (Kubota & Matsuse 1994)
+        # excitation for R2 adaptation (Kubota & Matsuse 1994), not while the standstill R1
+        # test fits the DC flux build-up
+        if sim.flux_inj_amp != 0.0 and not r1_test_running(pc, ctl, w_ref):
             psi_ref *= 1.0 + sim.flux_inj_amp * math.sin(2.0 * math.pi * sim.flux_inj_freq * t)
         w_fb = estm.w_r_hat / pc.n_p if sim.sensorless else x.w_m
         if pc.ie_veq and pc.ie_rate > 0.0 and has_feedforward(pc):  # the inverter error

@@ -239,12 +239,14 @@ def ekf_step(p, m, s, v_prev_alpha, v_prev_beta, i_alpha, i_beta, Ts):
 def ekf_restart(m, s, i_ab):
     """Restart the state from the magnetised standstill (``EstimatorInput.restart``, as
     :func:`imdrive.kernels.estimators.afo.afo_restart`): the current ``i_ab``, the rotor flux
-    ``M_hat i_ab``, the speed zero; the covariance is kept."""
+    ``M_hat i_ab``, the speed zero, R2 the controller's R2_hat (which the engine held through
+    the test: kernels/stages.py); the covariance is kept."""
     s.x[0] = i_ab.real
     s.x[1] = i_ab.imag
     s.x[2] = m.M_hat * i_ab.real
     s.x[3] = m.M_hat * i_ab.imag
     s.x[4] = 0.0
+    s.x[5] = m.R2_hat
     s.w_r_hat = 0.0
 
 
