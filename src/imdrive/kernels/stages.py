@@ -402,6 +402,10 @@ def control(feat, sim, pc, x, mdl, ctl, smp, prof, smpl, estm, foc):
         if sim.flux_inj_amp != 0.0 and not r1_test_running(pc, ctl, w_ref):
             psi_ref *= 1.0 + sim.flux_inj_amp * math.sin(2.0 * math.pi * sim.flux_inj_freq * t)
         w_fb = estm.w_r_hat / pc.n_p if sim.sensorless else x.w_m
+        if sim.sensorless and r1_test_running(pc, ctl, w_ref):
+            # the estimate is built on the R1_hat the test is identifying: the speed loop and
+            # the frame hold the standstill the reference asks for until it has
+            w_fb = w_ref
         if pc.ie_veq and pc.ie_rate > 0.0 and has_feedforward(pc):  # the inverter error
             # left, for the online scale of the compensation (none without it)
             inverter_residual(feat, pc, ctl, mdl, smp.v_prev_ab, smp.i_prev_ab, smpl.i_meas_ab, Ts)
