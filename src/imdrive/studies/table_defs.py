@@ -285,6 +285,7 @@ study_table("library-tour", "machines.md", "data/library_tour.csv", "tour", "lin
 from imdrive.studies import (  # noqa: E402, F401  (register theirs)
     compensator_tables,
     r2_law_tables,
+    realistic_envelope,
     robust_tables,
     stability_tables,
 )
