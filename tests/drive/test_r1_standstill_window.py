@@ -105,23 +105,13 @@ def _realistic_standstill(machine, r2_ratio, magnetise_s):
     return res["R1_hat_ohm"][-1] / sc.machine.R1_ohm, res["R1_id_status_code"][-1]
 
 
-#: Aalto 2.2 kW from R2_hat(0) = 1.4 R2: 1.188 R1 against 1.224 from R2 (2.9 %). Measured
-#: since round 7: until then injection-fig5's clamps stayed in ohm (0.408-1.224) on another
-#: machine, and the thermal model's clamp pinned R2_hat at 1.224 ohm (0.53 R2) from the first
-#: period whatever R2_hat(0) was, so the Aalto cases all ran from 0.53 R2
-_AALTO_HIGH = pytest.mark.xfail(
-    reason="R1_hat from 1.4 R2 on Aalto 2.2 kW is 2.9 % below the one from R2 (to look at)",
-    strict=True,
-)
-
-
 @pytest.mark.parametrize(
     ("machine", "r2_ratio"),
     [
         ("paper-table-iv", 0.6),
         ("paper-table-iv", 1.2),
         ("aalto-2.2kw", 0.6),
-        pytest.param("aalto-2.2kw", 1.4, marks=_AALTO_HIGH),
+        ("aalto-2.2kw", 1.4),
     ],
 )
 def test_on_a_saturating_machine_the_window_follows_the_decay_measured(machine, r2_ratio):
@@ -129,13 +119,19 @@ def test_on_a_saturating_machine_the_window_follows_the_decay_measured(machine, 
     # mean of the block-wise T2 (0.117 s against 0.087 s on Table IV) the window opened too late
     # for the 0.5 s magnetisation from 1.2 R2 on Table IV and from every R2_hat(0) on the Aalto
     # machine (status 2, R1_hat left). Identified now, and to what it is from R2_hat(0) = R2:
-    # R1 plus the bridge's residual at the magnetising current (Table IV 1.873-1.883 R1 from
-    # 0.6-1.2 R2; Aalto 1.224 from R2, 1.241 from 0.6 R2, 1.188 from 1.4 R2: _AALTO_HIGH)
+    # R1 plus the bridge's residual at the magnetising current. Since the drive holds still
+    # through the test (2026-11-30) its current stays on the alpha axis, where the bridge's
+    # error is largest: on Table IV that is above the test's clamp, 2 R1, from every R2_hat(0)
+    # (1.873-1.883 R1 while the frame wandered with the speed estimate), and the case checks
+    # only the identification; Aalto 1.2645 from R2, 1.2678 from 0.6 R2 and 1.2653 from 1.4 R2
+    # (1.224, 1.241 and 1.188 while the rotor turned: from 1.4 R2 2.9 % apart, an xfail)
     ratio, status = _realistic_standstill(machine, r2_ratio, 0.5)
     assert status == 1
     exact, exact_status = _realistic_standstill(machine, 1.0, 0.5)
     assert exact_status == 1
     assert ratio == pytest.approx(exact, rel=0.02)
+    if machine == "aalto-2.2kw":  # inside the clamps: the agreement means something
+        assert 1.0 < ratio < 1.99
 
 
 def test_a_run_that_could_not_identify_says_so_in_its_status():
