@@ -116,6 +116,7 @@ INTRA = {
     "analysis": (
         "circuit",
         "foc",
+        "drive_steady_state",
         "figures",
         "inertia",
         "nameplate_lee",

@@ -29,6 +29,28 @@ def test_the_stored_runs_cover_the_whole_library_and_grid():
     assert set(t["verdict"]) <= {"converged", "not converged", "lost"}
 
 
+def test_a_drive_that_tracks_R2_is_judged_by_its_R2_whatever_its_preset():
+    """``tracks_r2`` reads the scenario: its compensator or its estimator's own R2 law. By the
+    drive's name (until 2026-11-30) an alias of ``sensorless`` with the observer's R2 law was
+    judged by the detuning law of a drive that holds R2_hat; stored CSVs, which have no
+    ``tracks_r2`` column, are still judged by the preset their drive names."""
+    from imdrive.config.scenario import Scenario
+
+    own = ['control.speed_feedback="afo"', 'estimator.R2_adaptation="afo"']
+    assert not study.tracks_r2(Scenario.read("sensorless", []))
+    assert study.tracks_r2(Scenario.read("sensorless", [*own, "flux_injection.amplitude=0.1"]))
+    assert study.tracks_r2(Scenario.read("injection-robust", []))
+    # R2_hat 10 % off, the speed where a drive holding R2_hat would run: which verdict
+    row = dict(
+        status=0, lost_control=False, rated_speed_rpm=1720.0, R2_error_pct=10.0,
+        R2_error_window_pct=10.0, speed_error_rpm=0.5, detuning_law_rpm=0.5,
+    )  # fmt: skip
+    assert study.verdict({**row, "drive": "own", "tracks_r2": True}) == "not converged"
+    assert study.verdict({**row, "drive": "own", "tracks_r2": False}) == "converged"
+    assert study.verdict({**row, "drive": "sensorless"}) == "converged"
+    assert study.verdict({**row, "drive": "injection-robust-afo"}) == "not converged"
+
+
 @pytest.mark.slow
 def test_reduced_grid_on_two_machines():
     t = study.run(
