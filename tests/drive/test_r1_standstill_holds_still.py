@@ -18,22 +18,10 @@ import pytest
 
 from imdrive.config.scenario import Scenario
 from imdrive.run.simulate import simulate
+from imdrive.studies.realistic_envelope import REALISTIC
 
 #: The realistic presets' drive without the sensors' noise (the 12-bit ADC kept).
-REALISTIC_NOISELESS = [
-    'inverter.model="switching"',
-    "inverter.dead_time_s=2e-6",
-    "inverter.device_drop_V=1.0",
-    "control.delay_periods=1",
-    "control.delay_compensation=true",
-    "sensor.gain_a=1.0025",
-    "sensor.gain_b=0.9975",
-    "sensor.offset_a_A=0.02",
-    "sensor.offset_b_A=-0.02",
-    "sensor.adc_bits=12",
-    "plant.saturation.enabled=true",
-    "controller_model.ideal=true",
-]
+REALISTIC_NOISELESS = [o for o in REALISTIC if not o.startswith("sensor.noise_rms_A")]
 
 
 @pytest.mark.slow
