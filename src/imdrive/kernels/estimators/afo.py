@@ -55,19 +55,20 @@ the flux changes, which the engine's flux-command injection (``[flux_injection]`
 The projection is this project's decoupling choice. Both write the controller's model
 (``MODEL_STATE``), which the observer itself and the IFOC slip use.
 
-The R2 law reads R2 through the voltage equation, whose ``R1 i`` drop is much the larger
-term at low stator frequency, so it needs R1_hat better than a drive can know it (measured
+The R2 law reads R2 through the voltage equation, whose ``R1 i`` drop is much the larger term
+at low stator frequency, so it needs R1_hat better than a drive can know it (measured
 2026-11-30 on ``injection-robust``'s timeline with this law and a flux injection of 0.1). On
 Table IV at zero stator frequency (75 rpm regenerating the rated torque) from R2_hat = R2:
 R1_hat exact, R2_hat 0.3 % off at the end; 0.02 % low, R2_hat and the speed in a limit cycle
-(+-2.5 %, 72-76 rpm); 0.02 % high, R2_hat down to 0.69 R2; 0.2 % and 1 % low, at its clamp.
-At 0.3 of the rated speed without load, R1_hat 0.03 % low left R2_hat 3.3 % (Table IV), 1.5 %
-(Krause 50 hp) and 0.3 % (Aalto 2.2 kW) off. The standstill R1 test's own fit error is
-0.01-0.03 % on the average inverter: with it the zero-frequency study (84 runs) converged in
-37 and lost 1, the machine envelope (336) converged in 287 and lost none, against 72 and 320
-with R1_hat exact. The EKF's R2 state, which takes R1's error as process noise, ended within
-1.6 % from R1_hat 2-6 % off in the same starts (tests/drive/test_r1_standstill_any_estimator.py),
-but within 5 % in only 33 of the zero-frequency study's 84 runs (none lost).
+(+-2.5 %, 72-76 rpm); 0.02 % high, R2_hat swinging down to 0.85 R2 (the speed to 86 rpm); 0.2 %
+and 1 % low, at its clamp. At 0.3 of the rated speed without load, R1_hat 0.03 % low left
+R2_hat 3.3 % (Table IV), 1.5 % (Krause 50 hp) and 0.3 % (Aalto 2.2 kW) off. The standstill R1
+test's own fit error is 0.01-0.03 % on the average inverter: with it the zero-frequency study
+(84 runs) converged in 37 and lost 1, the machine envelope (336) converged in 287 and lost
+none, against 72 and 320 with R1_hat exact. The EKF's R2 state, which takes R1's error as
+process noise, ended within 1.6 % from R1_hat 2-6 % off in the same starts
+(tests/drive/test_r1_standstill_any_estimator.py), but within 5 % in only 33 of the
+zero-frequency study's 84 runs (none lost).
 
 Discretisation: one RK4 step per control period with the voltage held (known exactly) and the
 correction held; with exact parameters the true state is then a fixed point of the observer to
