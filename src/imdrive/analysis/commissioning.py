@@ -30,11 +30,15 @@ def section_toml(tables: dict[str, list[float]]) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     """``python -m imdrive.analysis.commissioning PRESET_OR_FILE``: print the section."""
-    args = sys.argv[1:] if argv is None else argv
-    if len(args) != 1:
-        print("usage: python -m imdrive.analysis.commissioning PRESET_OR_FILE", file=sys.stderr)
-        return 2
-    print(section_toml(ideal_commissioning(Scenario.read(args[0]))), end="")
+    import argparse
+
+    ap = argparse.ArgumentParser(
+        prog="python -m imdrive.analysis.commissioning",
+        description="Print the [controller_model] an ideal commissioning gives.",
+    )
+    ap.add_argument("scenario", metavar="PRESET_OR_FILE")
+    args = ap.parse_args(sys.argv[1:] if argv is None else argv)
+    print(section_toml(ideal_commissioning(Scenario.read(args.scenario))), end="")
     return 0
 
 

@@ -212,10 +212,17 @@ def markdown() -> str:
 
 
 def main(argv=None) -> int:
-    argv = sys.argv[1:] if argv is None else argv
+    """``python -m imdrive.run.outputs [--check]``: write docs/outputs.md (or check it)."""
+    import argparse
+
+    ap = argparse.ArgumentParser(
+        prog="python -m imdrive.run.outputs", description="Write docs/outputs.md."
+    )
+    ap.add_argument("--check", action="store_true", help="exit 1 if the page is stale")
+    args = ap.parse_args(sys.argv[1:] if argv is None else argv)
     path = Path(__file__).resolve().parents[3] / "docs" / "outputs.md"
     text = markdown()
-    if "--check" in argv:
+    if args.check:
         if not path.exists() or path.read_text() != text:
             print(f"{path} is stale: run python -m imdrive.run.outputs", file=sys.stderr)
             return 1

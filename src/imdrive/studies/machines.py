@@ -538,22 +538,29 @@ def update_drive(drive: str) -> pd.DataFrame:
 def main(argv=None) -> int:
     """``python -m imdrive.studies.machines OUT_CSV``, ``--markdown CSV`` or ``--drive NAME``
     (docstring, :func:`update_drive`)."""
-    argv = sys.argv[1:] if argv is None else argv
-    if len(argv) == 2 and argv[0] == "--markdown":
-        sys.stdout.write(markdown(pd.read_csv(argv[1])))
+    import argparse
+
+    ap = argparse.ArgumentParser(
+        prog="python -m imdrive.studies.machines", description=__doc__.splitlines()[0]
+    )
+    what = ap.add_mutually_exclusive_group(required=True)
+    what.add_argument("out_csv", nargs="?", help="run the whole grid and write it here")
+    what.add_argument("--markdown", metavar="CSV", help="print the table of a stored CSV")
+    what.add_argument("--drive", metavar="NAME", help="measure one drive's rows of the docs' CSV")
+    args = ap.parse_args(sys.argv[1:] if argv is None else argv)
+    if args.markdown:
+        sys.stdout.write(markdown(pd.read_csv(args.markdown)))
         return 0
-    if len(argv) == 2 and argv[0] == "--drive":
-        new = update_drive(argv[1])
+    if args.drive:
+        new = update_drive(args.drive)
         print(f"{len(new)} runs: {new['verdict'].value_counts().to_dict()}", file=sys.stderr)
         return 0
-    if len(argv) != 1:
-        print(__doc__.splitlines()[0], "\nusage: OUT_CSV | --markdown CSV", file=sys.stderr)
-        return 2
     table = run()
-    Path(argv[0]).parent.mkdir(parents=True, exist_ok=True)
-    table.to_csv(argv[0], index=False, float_format="%.9g")
+    out = Path(args.out_csv)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    table.to_csv(out, index=False, float_format="%.9g")
     sys.stdout.write(markdown(table))
-    if Path(argv[0]).resolve() == CSV and PAGE.exists():  # the docs' own table: refresh it
+    if out.resolve() == CSV and PAGE.exists():  # the docs' own table: refresh it
         PAGE.write_text(page_with_table(PAGE.read_text(), markdown(pd.read_csv(CSV))))
     print(f"{len(table)} runs: {table['verdict'].value_counts().to_dict()}", file=sys.stderr)
     return 0

@@ -261,8 +261,15 @@ def bias_markdown(bias: pd.DataFrame) -> str:
 
 
 def main(argv=None) -> int:
-    argv = sys.argv[1:] if argv is None else argv
-    out = Path(argv[0] if argv else "out/realistic")
+    """``python -m imdrive.studies.realistic [OUT_DIR]``: the three studies, their CSVs and
+    the verdicts' page in ``OUT_DIR`` (default ``out/realistic``)."""
+    import argparse
+
+    ap = argparse.ArgumentParser(
+        prog="python -m imdrive.studies.realistic", description=__doc__.splitlines()[0]
+    )
+    ap.add_argument("out_dir", nargs="?", default="out/realistic", help="(default %(default)s)")
+    out = Path(ap.parse_args(sys.argv[1:] if argv is None else argv).out_dir)
     out.mkdir(parents=True, exist_ok=True)
     comp = compensation_runs()
     det = detuning_runs()
