@@ -362,6 +362,7 @@ def r1_standstill(
         _two_levels_end(p, m, s, Ts_sub)
     elif s.dc_n * Ts_sub >= R1_DC_MIN_WINDOW and s.dc_ii > 0.0:
         m.R1_hat = min(max(_window_solve(s), p.R1_dc_min), p.R1_dc_max)
+        m.R1_gate = m.R1_hat
         m.R1_id = True
         s.dc_status = 1.0
         s.dc_restart = True
@@ -435,6 +436,7 @@ def _two_levels_end(p, m, s, Ts):
         if abs(s.dc_iA - i_B) > 0.1 * i_B:
             r1 = (s.dc_rA * s.dc_iA - r_B * i_B) / (s.dc_iA - i_B)
             m.R1_hat = min(max(r1, p.R1_dc_min), p.R1_dc_max)
+            m.R1_gate = m.R1_hat
             m.u0_id = (r_B - m.R1_hat) * i_B
             m.i_id = i_B
             m.ie_new = True
@@ -443,6 +445,7 @@ def _two_levels_end(p, m, s, Ts):
             return
     if s.dc_phase >= 1.0:
         m.R1_hat = min(max(s.dc_rA, p.R1_dc_min), p.R1_dc_max)
+        m.R1_gate = m.R1_hat
         m.R1_id = True
         s.dc_status = 3.0
         s.dc_phase = 3.0
