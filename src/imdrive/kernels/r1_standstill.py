@@ -188,6 +188,7 @@ def sub_block_periods(p, Ts):
 
 @njit(cache=True)
 def _clear_sub_block(s):
+    """Start a new sub-block: its sums from zero."""
     s.dc_su_alpha = 0.0
     s.dc_su_beta = 0.0
     s.dc_si_alpha = 0.0
