@@ -44,5 +44,6 @@ def test_compensation_csv_is_what_the_code_computes():
                 assert a == b
             elif not (math.isnan(float(a)) and math.isnan(float(b))):
                 assert float(a) == pytest.approx(float(b), rel=1e-6, abs=1e-12), (
-                    f"{preset} {col}: {a} now, {b} stored: run 'imdrive paper --out out/paper' and copy its files to docs/figures"
+                    f"{preset} {col}: {a} now, {b} stored: run 'imdrive paper --out out/paper'"
+                    " and copy its files to docs/figures"
                 )
