@@ -164,8 +164,9 @@ def adapt_inverter_error(p, s, m, u_d, u_q, i_d, i_q, th, w_e, Ts):
     dk = -p.ie_rate * prod / (SIXTH_HARMONIC_HALF * u_c * gain) * Ts
     dk_new = min(max(s.ie_dk + dk, -0.75), 1.0)
     if p.ie_r1 and m.R1_id:  # only a share the identification took in can be given back
-        m.R1_hat = max(m.R1_hat - (dk_new - s.ie_dk) * s.ie_c0, 0.05 * m.R1_hat)
-        m.R1_gate = max(m.R1_gate - (dk_new - s.ie_dk) * s.ie_c0, 0.05 * m.R1_gate)
+        dR1 = (dk_new - s.ie_dk) * s.ie_c0  # the identified R1's too: the gate's (ifoc.py)
+        m.R1_hat = max(m.R1_hat - dR1, 0.05 * m.R1_hat)
+        m.R1_gate = max(m.R1_gate - dR1, 0.05 * m.R1_gate)
     s.ie_dk = dk_new
 
 

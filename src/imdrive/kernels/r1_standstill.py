@@ -339,6 +339,7 @@ def r1_standstill(
     two = p.R1_dc_levels == 2
     if two and s.dc_phase >= 3.0:  # the two-level test is made once, at the first start
         return
+    Ts_sub = sub_block_periods(p, Ts) * Ts  # the sub-block, the test's sample
     if still and i2 > 1.0:
         s.dc_t += Ts
         s.dc_run_t += Ts
@@ -347,7 +348,6 @@ def r1_standstill(
         s.dc_si_alpha += i_m_alpha
         s.dc_si_beta += i_m_beta
         s.dc_sn += 1.0
-        Ts_sub = sub_block_periods(p, Ts) * Ts
         if s.dc_sn * Ts >= Ts_sub - 0.5 * Ts:
             _sub_block_sample(p, s, Ts_sub)
         if two:
@@ -357,7 +357,6 @@ def r1_standstill(
             m.dc_hold_max = p.R1_dc_hold
         return
     m.dc_busy = False
-    Ts_sub = sub_block_periods(p, Ts) * Ts
     _clear_sub_block(s)
     if two:
         _two_levels_end(p, m, s, Ts_sub)

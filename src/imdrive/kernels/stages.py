@@ -397,12 +397,13 @@ def control(feat, sim, pc, x, mdl, ctl, smp, prof, smpl, estm, foc):
                 M_h, L1_h, _, _ = model_inductances(mdl)
                 k_max = pc.fw_v * pc.v_max * M_h / (abs(ctl.w_e) * L1_h * psi_ref)
             psi_ref *= field_weakening(pc, ctl, estm.v_fw, Ts, k_max)
+        testing = r1_test_running(pc, ctl, w_ref)
         # excitation for R2 adaptation (Kubota & Matsuse 1994), not while the standstill R1
         # test fits the DC flux build-up
-        if sim.flux_inj_amp != 0.0 and not r1_test_running(pc, ctl, w_ref):
+        if sim.flux_inj_amp != 0.0 and not testing:
             psi_ref *= 1.0 + sim.flux_inj_amp * math.sin(2.0 * math.pi * sim.flux_inj_freq * t)
         w_fb = estm.w_r_hat / pc.n_p if sim.sensorless else x.w_m
-        if sim.sensorless and r1_test_running(pc, ctl, w_ref):
+        if sim.sensorless and testing:
             # the estimate is built on the R1_hat the test is identifying: the speed loop and
             # the frame hold the standstill the reference asks for until it has
             w_fb = w_ref
