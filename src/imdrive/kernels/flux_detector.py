@@ -12,8 +12,8 @@ and the current model driven by the running estimator's speed plus a correction
 
     p lam_i = (-1/T2_hat + j (w_r_hat + dw)) lam_i + (M/T2_hat) i,
 
-both through the low-pass ``1/(s + wc)`` (the MRAS's ``wc``, which the detection's filter
-compensation undoes: :func:`imdrive.kernels.detection.compensated_product`). Their difference,
+both through the low-pass ``1/(s + wc)`` (the MRAS's ``wc``, whose leak of the d error into
+q the slip decoupling undoes: :func:`imdrive.kernels.detection.slip_coupling`). Their difference,
 turned into the controller's frame, is the flux error ``e_dq0`` the detection demodulates.
 
 **The speed correction.** In the current model a speed error and an R2 error are one and the
