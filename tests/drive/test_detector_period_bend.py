@@ -19,7 +19,7 @@ import warnings
 import numpy as np
 import pytest
 
-import imdrive.run.compensator_blocks as blocks
+import imdrive.run.compensator_blocks as compensator_blocks
 from imdrive import simulate_batch
 from imdrive.run.simulate import simulate
 from imdrive.studies import machines as envm
@@ -56,7 +56,7 @@ def test_the_detector_is_the_mras_s_own_pair_of_models(monkeypatch):
         )  # fmt: skip
         own = simulate(sc).metrics()
         # every estimator treated as one that gives no flux error: the detector forms it
-        monkeypatch.setattr(blocks, "gives_flux_error", lambda speed_feedback: False)
+        monkeypatch.setattr(compensator_blocks, "gives_flux_error", lambda speed_feedback: False)
         formed = simulate(sc).metrics()
     r_own, r_formed = own["R2_error_pct"], formed["R2_error_pct"]
     assert abs(r_own) < 0.2, r_own

@@ -357,6 +357,15 @@ def r1_standstill(
             m.dc_hold_max = p.R1_dc_hold
         return
     m.dc_busy = False
+    # the running drive has had no standstill sample since the last end: nothing to end
+    if two or s.dc_t > 0.0 or s.dc_sn > 0.0:
+        _run_end(p, m, s, two, Ts_sub)
+
+
+@njit(cache=True)
+def _run_end(p, m, s, two, Ts_sub):
+    """A standstill run ended (:func:`r1_standstill`): R1_hat from its window (one level)
+    or from both levels (:func:`_two_levels_end`), its status, and the sums from zero."""
     _clear_sub_block(s)
     if two:
         _two_levels_end(p, m, s, Ts_sub)
