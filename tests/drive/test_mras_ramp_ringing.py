@@ -60,6 +60,6 @@ def test_the_mode_is_at_the_stator_frequency_and_lightly_damped(speed_rpm, feedb
 
 
 def test_stability_maps_refuse_estimators_they_do_not_model():
-    sc = Scenario.read("sensorless").with_overrides(["control.speed_feedback=afo"])
+    sc = Scenario.read("sensorless").with_overrides(["control.speed_feedback=ekf"])
     with pytest.raises(ConfigError, match="control.speed_feedback"):
         operating_point(sc, 150.0, 5.0)

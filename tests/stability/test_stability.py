@@ -57,7 +57,7 @@ def _long_run(preset, speed, torque, t_end=6.0, extra=()):
     st, _ = run_drive(a.params, S, 0, a.n_steps, np.empty(0, dtype=LOG), 0, 0, False, NO_REC)
     assert st == S_OK
     z = np.empty(kl.N_Z)
-    kl.pack_state(S, 0, z)
+    kl.pack_state(a.params, S, 0, z)
     return sc, z
 
 

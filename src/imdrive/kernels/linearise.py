@@ -15,7 +15,10 @@ are the drive's steady states; its Jacobian at one is the exact small-signal mod
 angle, and the mechanical angle, winding temperatures and energy accumulators, which never feed
 back, are not states: temperatures are held at the state's values).
 
-The reduced state ``z`` (:data:`N_Z` reals, synchronous frame of the controller; SI units):
+The reduced state ``z`` (SI units, synchronous frame of the controller): the plant's and the
+controller's :data:`N_D` states, then the estimator's own (its ``ReducedState``,
+:mod:`imdrive.kernels.estimators.registry`: the MRAS's, the adaptive observer's; an estimator
+without one is refused by the maps):
 
 ====== ============================== =================================================
 index  field                          block
@@ -28,20 +31,12 @@ index  field                          block
 9      ``int_w``                      speed PI integral, A
 10, 11 ``int_dq``                     current PI integrals, V
 12     ``psi_hat``                    the controller's rotor-flux model, Wb
-13, 14 ``lam_v_ab``                   MRAS reference model (filtered), Wb
-15, 16 ``lam_i_ab``                   MRAS adjustable model, Wb
-17, 18 ``lam_f_ab``                   MRAS adjustable model, filtered, Wb
-19     ``int_e``                      MRAS integral of the error, Wb^2 s
-20     ``w_r_hat``                    MRAS speed estimate, electrical rad/s
-21     ``int_w``                      type-2 MRAS's second integrator, rad (0 while it
-                                      is held, below its stator frequency, or type 1)
+13...  the estimator's                MRAS (22 in all): ``lam_v``, ``lam_i``,
+                                      ``lam_f`` (d, q), ``int_e``, ``w_r_hat``, the
+                                      type-2 integral (0 where held); adaptive
+                                      observer (21 in all): ``i_hat``, ``lam``, ``e``
+                                      (d, q), ``int_e``, ``w_r_hat``
 ====== ============================== =================================================
-
-The type-2 MRAS (``mras.acceleration_tracking``) adds its second integrator to the state
-where it runs; where it is held (below ``b2_wmin`` of stator frequency) its value is a
-constant offset of the speed estimate that does not change the small-signal model, and the
-state is held at 0 (its row of the Jacobian is zero: an eigenvalue 0, not the neutral 1 of a
-value that never moves).
 
 The two inputs are the speed reference (mechanical rad/s) and the load torque (N m), slots 0
 of the profiles ``PR_SPEED_REF`` and ``PR_LOAD`` (the caller makes both profiles constant).
@@ -56,11 +51,18 @@ from numba import njit
 
 from imdrive.kernels.engine import LOG, S_OK
 from imdrive.kernels.engine_call import call_engine, engine_address
+from imdrive.kernels.estimators.common import to_frame
+from imdrive.kernels.estimators.reduced import (
+    estimator_reduce,
+    estimator_restore,
+    reduced_state_of,
+)
 from imdrive.kernels.profiles import PR_LOAD, PR_SPEED_REF
 from imdrive.kernels.recording import RECORDING
 from imdrive.kernels.threads import over_threads, slots
 
-N_Z = 22
+N_D = 13  # the plant's and the controller's states; the estimator's follow
+N_Z = 22  # the MRAS drive's reduced state (any drive's: len(state_scale(S)))
 N_U = 2
 
 # status of a point (also used by imdrive.stability)
@@ -68,49 +70,44 @@ P_OK = 0
 P_NO_CONVERGENCE = 1  # Newton did not reach the fixed point
 P_DIVERGED = 2  # the one-period map left the engine's bounds (NaN, current, speed)
 
-#: typical magnitude of each state, for finite-difference steps and the residual norm
-Z_SCALE = np.array(
+#: typical magnitude of the plant's and the controller's states, for finite-difference steps
+#: and the residual norm (the estimator's: its ``ReducedState.scale``)
+DRIVE_SCALE = np.array(
     [
         0.1, 0.1, 0.1, 0.1, 1.0,  # plant
         1.0, 1.0, 0.1, 0.1,  # sample
         0.1, 1.0, 1.0, 0.1,  # control
-        0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 1e-4, 1.0, 1.0,  # mras
     ]
 )  # fmt: skip
+#: the MRAS drive's scales (kept for callers of the 22-state map; any drive's: state_scale)
+Z_SCALE = np.concatenate([DRIVE_SCALE, [0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 1e-4, 1.0, 1.0]])
+
+
+def state_scale(S) -> np.ndarray:
+    """Typical magnitude of every state of the reduced state of ``S``'s drive (its length is
+    the reduced state's; the estimator's from its ``ReducedState.scale``)."""
+    return np.concatenate([DRIVE_SCALE, reduced_state_of(S).scale])
 
 
 @njit(cache=True)
-def _rot(c, a, b):
-    """``e^{-j theta} (a + j b)`` with ``c = (cos theta, sin theta)``, as two floats."""
-    return c[0] * a + c[1] * b, -c[1] * a + c[0] * b
-
-
-@njit(cache=True)
-def pack_state(S, i, z, b2=0.0):
-    """Write the reduced state of drive ``i`` (rotated into the controller's frame) into ``z``;
-    ``b2``: its MRAS's second-integrator corner (``P.est[i].b2``; 0: type 1)."""
+def pack_state(P, S, i, z):
+    """Write the reduced state of drive ``i`` (rotated into the controller's frame) into ``z``
+    (the estimator's states by its ``ReducedState.reduce``)."""
     x = S.plant[i]
     smp = S.sample[i]
     ctl = S.control[i]
-    est = S.est[i]  # an MRAS drive: the only estimator the reduced state carries
     th = ctl.theta_e
     c = (math.cos(th), math.sin(th))
-    z[0], z[1] = _rot(c, x.psi_s_ab.real, x.psi_s_ab.imag)
-    z[2], z[3] = _rot(c, x.psi_r_ab.real, x.psi_r_ab.imag)
+    z[0], z[1] = to_frame(c, x.psi_s_ab)
+    z[2], z[3] = to_frame(c, x.psi_r_ab)
     z[4] = x.w_m
-    z[5], z[6] = _rot(c, smp.v_prev_ab.real, smp.v_prev_ab.imag)
-    z[7], z[8] = _rot(c, smp.i_prev_ab.real, smp.i_prev_ab.imag)
+    z[5], z[6] = to_frame(c, smp.v_prev_ab)
+    z[7], z[8] = to_frame(c, smp.i_prev_ab)
     z[9] = ctl.int_w
     z[10] = ctl.int_dq.real
     z[11] = ctl.int_dq.imag
     z[12] = ctl.psi_hat
-    z[13], z[14] = _rot(c, est.lam_v_ab.real, est.lam_v_ab.imag)
-    z[15], z[16] = _rot(c, est.lam_i_ab.real, est.lam_i_ab.imag)
-    z[17], z[18] = _rot(c, est.lam_f_ab.real, est.lam_f_ab.imag)
-    z[19] = est.int_e
-    z[20] = est.w_r_hat
-    # the second integrator where it runs (type 2, above its stator frequency), else held at 0
-    z[21] = est.int_w if est.int_w_run and b2 > 0.0 else 0.0
+    estimator_reduce(P.est[i], S.est[i], c, z, N_D)
 
 
 @njit(cache=True)
@@ -119,7 +116,6 @@ def unpack_state(z, S, i):
     x = S.plant[i]
     smp = S.sample[i]
     ctl = S.control[i]
-    est = S.est[i]  # an MRAS drive: the only estimator the reduced state carries
     x.psi_s_ab = complex(z[0], z[1])
     x.psi_r_ab = complex(z[2], z[3])
     x.w_m = z[4]
@@ -129,12 +125,7 @@ def unpack_state(z, S, i):
     ctl.int_w = z[9]
     ctl.int_dq = complex(z[10], z[11])
     ctl.psi_hat = z[12]
-    est.lam_v_ab = complex(z[13], z[14])
-    est.lam_i_ab = complex(z[15], z[16])
-    est.lam_f_ab = complex(z[17], z[18])
-    est.int_e = z[19]
-    est.w_r_hat = z[20]
-    est.int_w = z[21]
+    estimator_restore(z, N_D, S.est[i])
 
 
 @njit(cache=True)
@@ -166,19 +157,21 @@ def rotated_map(P, S, i, z, zout, th1, th2, engine):
     x.theta1 = th1
     x.theta2 = th2
     status, _ = _engine(P, S, i, 1, 0, engine)
-    pack_state(S, i, zout, P.est[i].b2)
+    pack_state(P, S, i, zout)
     return status
 
 
 @njit(cache=True)
-def _jacobian(P, S, i, z, th1, th2, A, Bu, fp, fm, zp, engine):
-    """Central finite differences of :func:`rotated_map` in ``z`` (``A``) and the inputs (``Bu``).
+def _jacobian(P, S, i, z, zs, th1, th2, A, Bu, fp, fm, zp, engine):
+    """Central finite differences of :func:`rotated_map` in ``z`` (``A``) and the inputs (``Bu``);
+    ``zs``: the states' scales (:func:`state_scale`).
 
     Returns the worst engine status met.
     """
     bad = S_OK
-    for j in range(N_Z):
-        h = 1e-6 * (abs(z[j]) + Z_SCALE[j])
+    n = z.shape[0]
+    for j in range(n):
+        h = 1e-6 * (abs(z[j]) + zs[j])
         zp[:] = z
         zp[j] = z[j] + h
         s1 = rotated_map(P, S, i, zp, fp, th1, th2, engine)
@@ -186,7 +179,7 @@ def _jacobian(P, S, i, z, th1, th2, A, Bu, fp, fm, zp, engine):
         s2 = rotated_map(P, S, i, zp, fm, th1, th2, engine)
         if s1 != S_OK or s2 != S_OK:
             bad = max(s1, s2)
-        for r in range(N_Z):
+        for r in range(n):
             A[r, j] = (fp[r] - fm[r]) / (2.0 * h)
     pv = P.prof_v[i]
     for k in range(N_U):
@@ -200,16 +193,16 @@ def _jacobian(P, S, i, z, th1, th2, A, Bu, fp, fm, zp, engine):
         pv[slot, 0] = u0
         if s1 != S_OK or s2 != S_OK:
             bad = max(s1, s2)
-        for r in range(N_Z):
+        for r in range(n):
             Bu[r, k] = (fp[r] - fm[r]) / (2.0 * h)
     return bad
 
 
 @njit(cache=True)
-def _residual_norm(f, z):
+def _residual_norm(f, z, zs):
     worst = 0.0
-    for j in range(N_Z):
-        d = abs(f[j] - z[j]) / (abs(z[j]) + Z_SCALE[j])
+    for j in range(z.shape[0]):
+        d = abs(f[j] - z[j]) / (abs(z[j]) + zs[j])
         if not math.isfinite(d):
             return math.inf
         worst = max(worst, d)
@@ -255,7 +248,7 @@ def _newton_step(A, r, dz, M):
 
 
 @njit(cache=True)
-def solve_point(P, S, i, z, th1, th2, A, Bu, tol, max_iter, engine):
+def solve_point(P, S, i, z, zs, th1, th2, A, Bu, tol, max_iter, engine):
     """Newton's method on ``rotated_map(z) - z`` from ``z`` (in place), then the Jacobians.
 
     Each iteration solves ``(A - I) dz = z - F(z)`` with the central-difference Jacobian ``A``
@@ -265,14 +258,16 @@ def solve_point(P, S, i, z, th1, th2, A, Bu, tol, max_iter, engine):
     ----------
     P, S : DriveParams, DriveState
         ``S`` row ``i`` is scratch.
-    z : float64[N_Z]
-        Initial guess; the fixed point on return.
+    z : float64[n]
+        Initial guess; the fixed point on return (``n``: the drive's reduced state).
+    zs : float64[n]
+        The states' scales (:func:`state_scale`).
     th1, th2 : float
         Frozen winding temperatures, degC.
-    A : float64[N_Z, N_Z], Bu : float64[N_Z, N_U]
+    A : float64[n, n], Bu : float64[n, N_U]
         Outputs: ``dF/dz`` and ``dF/du`` at the fixed point.
     tol : float
-        Largest scaled residual ``|F_j - z_j| / (|z_j| + Z_SCALE_j)`` accepted.
+        Largest scaled residual ``|F_j - z_j| / (|z_j| + zs_j)`` accepted.
     max_iter : int
     engine : int
         The engine's address (:func:`map_engine`).
@@ -285,23 +280,24 @@ def solve_point(P, S, i, z, th1, th2, A, Bu, tol, max_iter, engine):
         Scaled residual at the returned ``z``.
     iterations : int
     """
-    f = np.empty(N_Z)
-    fp = np.empty(N_Z)
-    fm = np.empty(N_Z)
-    zp = np.empty(N_Z)
-    zt = np.empty(N_Z)
-    dz = np.empty(N_Z)
-    M = np.empty((N_Z, N_Z))
+    n = z.shape[0]
+    f = np.empty(n)
+    fp = np.empty(n)
+    fm = np.empty(n)
+    zp = np.empty(n)
+    zt = np.empty(n)
+    dz = np.empty(n)
+    M = np.empty((n, n))
     st = rotated_map(P, S, i, z, f, th1, th2, engine)
     if st != S_OK:
         return P_DIVERGED, math.inf, 0
-    res = _residual_norm(f, z)
+    res = _residual_norm(f, z, zs)
     it = 0
     while res > tol and it < max_iter:
         it += 1
-        _jacobian(P, S, i, z, th1, th2, A, Bu, fp, fm, zp, engine)
-        for r in range(N_Z):
-            for c in range(N_Z):
+        _jacobian(P, S, i, z, zs, th1, th2, A, Bu, fp, fm, zp, engine)
+        for r in range(n):
+            for c in range(n):
                 if not math.isfinite(A[r, c]):
                     return P_DIVERGED, res, it
         if not _newton_step(A, z - f, dz, M):
@@ -309,10 +305,10 @@ def solve_point(P, S, i, z, th1, th2, A, Bu, tol, max_iter, engine):
         lam = 1.0
         accepted = False
         for _ in range(9):
-            for j in range(N_Z):
+            for j in range(n):
                 zt[j] = z[j] + lam * dz[j]
             st = rotated_map(P, S, i, zt, fp, th1, th2, engine)
-            r_new = _residual_norm(fp, zt) if st == S_OK else math.inf
+            r_new = _residual_norm(fp, zt, zs) if st == S_OK else math.inf
             if r_new < res:
                 accepted = True
                 break
@@ -324,18 +320,20 @@ def solve_point(P, S, i, z, th1, th2, A, Bu, tol, max_iter, engine):
         res = r_new
     if res > tol:
         return P_NO_CONVERGENCE, res, it
-    st = _jacobian(P, S, i, z, th1, th2, A, Bu, fp, fm, zp, engine)
+    st = _jacobian(P, S, i, z, zs, th1, th2, A, Bu, fp, fm, zp, engine)
     if st != S_OK:
         return P_DIVERGED, res, it
     return P_OK, res, it
 
 
 @njit(cache=True, nogil=True)
-def _solve_some(P, S, Z, TH, A, Bu, status, residual, iterations, tol, max_iter, engine, first, n):
+def _solve_some(
+    P, S, Z, zs, TH, A, Bu, status, residual, iterations, tol, max_iter, engine, first, n
+):
     """:func:`solve_point` for drives ``first, first + n, ...`` (one thread's share)."""
     for i in range(first, Z.shape[0], n):
         st, res, it = solve_point(
-            P, S, i, Z[i], TH[i, 0], TH[i, 1], A[i], Bu[i], tol, max_iter, engine
+            P, S, i, Z[i], zs, TH[i, 0], TH[i, 1], A[i], Bu[i], tol, max_iter, engine
         )
         status[i] = st
         residual[i] = res
@@ -347,12 +345,13 @@ def solve_points(P, S, Z, TH, A, Bu, status, residual, iterations, tol, max_iter
     over the cores (:func:`imdrive.kernels.threads.over_threads`); ``engine``: the engine's
     address (:func:`map_engine`; default: looked up here)."""
     engine = map_engine(P, S) if engine is None else engine
+    zs = state_scale(S)
     n = slots(Z.shape[0])
 
     def share(first):
         _solve_some(
-            P, S, Z, TH, A, Bu, status, residual, iterations, float(tol), int(max_iter), engine,
-            first, n,
+            P, S, Z, zs, TH, A, Bu, status, residual, iterations, float(tol), int(max_iter),
+            engine, first, n,
         )  # fmt: skip
 
     over_threads(share, n)
@@ -376,7 +375,7 @@ def _propagate(P, S, i, z, n_steps, th1, th2, zout, engine):
     x.theta1 = th1
     x.theta2 = th2
     status, _ = _engine(P, S, i, n_steps, 0, engine)
-    pack_state(S, i, zout, P.est[i].b2)
+    pack_state(P, S, i, zout)
     return status
 
 
@@ -385,30 +384,31 @@ def step_check(P, S, Z0, Z1, TH, n_steps, n_win, peaks, status, engine=None):
 
     ``Z0`` is the starting reduced state (a fixed point, perturbed), ``Z1`` the fixed point of
     the drive's own (stepped) references, the state a stable loop settles to. The distance is
-    ``max_j |z_j - Z1_j| / (|Z1_j| + Z_SCALE_j)`` of the reduced state (rotated into the
-    controller's frame every period); ``peaks[i, w]`` is its largest value over periods
-    ``w n_win ... (w + 1) n_win - 1``. ``status[i]`` is the engine status (a diverged drive
-    keeps NaN in the windows it did not reach). ``engine``: the engine's address
+    ``max_j |z_j - Z1_j| / (|Z1_j| + s_j)`` (``s``: :func:`state_scale`) of the reduced state
+    (rotated into the controller's frame every period); ``peaks[i, w]`` is its largest value
+    over periods ``w n_win ... (w + 1) n_win - 1``. ``status[i]`` is the engine status (a
+    diverged drive keeps NaN in the windows it did not reach). ``engine``: the engine's address
     (:func:`map_engine`; default: looked up here).
     """
     engine = map_engine(P, S) if engine is None else engine
+    zs = state_scale(S)
     n = slots(Z0.shape[0])
 
     def share(first):
-        _check_some(P, S, Z0, Z1, TH, int(n_steps), int(n_win), peaks, status, engine, first, n)
+        _check_some(P, S, Z0, Z1, zs, TH, int(n_steps), int(n_win), peaks, status, engine, first, n)
 
     over_threads(share, n)
 
 
 @njit(cache=True, nogil=True)
-def _check_some(P, S, Z0, Z1, TH, n_steps, n_win, peaks, status, engine, first, n):
+def _check_some(P, S, Z0, Z1, zs, TH, n_steps, n_win, peaks, status, engine, first, n):
     """:func:`step_check` for drives ``first, first + n, ...`` (one thread's share)."""
     for i in range(first, Z0.shape[0], n):
         unpack_state(Z0[i], S, i)
         x = S.plant[i]
         x.theta1 = TH[i, 0]
         x.theta2 = TH[i, 1]
-        z = np.empty(N_Z)
+        z = np.empty(Z0.shape[1])
         for w in range(peaks.shape[1]):
             peaks[i, w] = np.nan
         st = S_OK
@@ -416,10 +416,10 @@ def _check_some(P, S, Z0, Z1, TH, n_steps, n_win, peaks, status, engine, first, 
             st, _ = _engine(P, S, i, 1, k, engine)
             if st != S_OK:
                 break
-            pack_state(S, i, z, P.est[i].b2)
+            pack_state(P, S, i, z)
             e = 0.0
-            for j in range(N_Z):
-                e = max(e, abs(z[j] - Z1[i, j]) / (abs(Z1[i, j]) + Z_SCALE[j]))
+            for j in range(z.shape[0]):
+                e = max(e, abs(z[j] - Z1[i, j]) / (abs(Z1[i, j]) + zs[j]))
             w = k // n_win
             if w < peaks.shape[1]:
                 if not (peaks[i, w] >= e):

@@ -18,7 +18,9 @@ import numpy as np
 from imdrive.config.scenario import Scenario
 from imdrive.errors import ConfigError
 from imdrive.kernels.engine import DriveParams, DriveState
+from imdrive.kernels.estimators.registry import kernel, kernel_names
 from imdrive.kernels.linearise import (
+    N_D,
     N_U,
     N_Z,
     P_DIVERGED,
@@ -27,7 +29,9 @@ from imdrive.kernels.linearise import (
     Z_SCALE,
     pack_state,
     propagate,
+    reduced_state_of,
     solve_points,
+    state_scale,
     step_check,
 )
 from imdrive.kernels.profiles import (
@@ -42,6 +46,7 @@ from imdrive.run.build import build_arrays
 from imdrive.run.estimators import estimator_of
 
 __all__ = [
+    "N_D",
     "N_PROF",
     "N_U",
     "N_Z",
@@ -60,7 +65,10 @@ __all__ = [
     "model_coefficients",
     "pack_state",
     "propagate",
+    "reduced_estimators",
+    "reduced_state_of",
     "solve_points",
+    "state_scale",
     "stationary_drive",
     "step_check",
 ]
@@ -83,12 +91,13 @@ def stationary_drive(sc: Scenario, speeds_rad_s, torques_Nm) -> StationaryDrive:
     if sc.drive.mode != "vector":
         raise ConfigError("drive.mode", "stability maps need the vector (IFOC) drive")
     if not estimator_of(sc).kernel.reduced_state:
-        # the reduced state (imdrive.kernels.linearise) carries the MRAS's states only; the
-        # other estimators' states would be missing from the map (a NaN Jacobian, not a result)
+        # an estimator whose states the reduced state (imdrive.kernels.linearise) does not
+        # carry would be missing from the map (a NaN Jacobian, not a result)
+        mapped = ", ".join(f'"{k}"' for k in reduced_estimators())
         raise ConfigError(
             "control.speed_feedback",
-            f'stability maps cover "mras" and "measured": the reduced state of the map does '
-            f'not carry the states of "{sc.control.speed_feedback}"',
+            f'stability maps cover {mapped} and "measured": "{sc.control.speed_feedback}" '
+            "gives the map no reduced state (its states are not in the linearised loop)",
         )
     if sc.plant.speed_mode == "imposed":
         raise ConfigError("plant.speed_mode", "stability maps need the mechanical model")
@@ -133,6 +142,11 @@ def stationary_drive(sc: Scenario, speeds_rad_s, torques_Nm) -> StationaryDrive:
         prof_n=np.ones((n, N_PROF), dtype=np.int64),
         table_idx=np.zeros(n, dtype=np.int64),
     )
+    for k in _RESISTANCE_RATES:
+        # the map holds the resistance estimates, as it holds the compensator's: an online
+        # R1 or R2 law would move them between the map's evaluations, outside its state
+        if k in P.est.dtype.names:
+            P.est[k] = 0.0
     S = DriveState(*(rep(f) for f in a.state0))
     TH = np.repeat(np.array([[S.plant["theta1"][0], S.plant["theta2"][0]]]), n, axis=0)
     return StationaryDrive(
@@ -143,6 +157,15 @@ def stationary_drive(sc: Scenario, speeds_rad_s, torques_Nm) -> StationaryDrive:
         v_max=float(a.params.control["v_max"][0]),
         i_max=float(a.params.control["i_max"][0]),
     )
+
+
+#: The estimators' parameter fields of an online resistance law (MRAS: R1; observer: R1, R2).
+_RESISTANCE_RATES = ("k_R1", "k_R2")
+
+
+def reduced_estimators() -> tuple[str, ...]:
+    """Names of the registered estimators the stability maps linearise."""
+    return tuple(n for n in kernel_names() if kernel(n).reduced_state)
 
 
 def model_coefficients(P: DriveParams, S: DriveState) -> dict:
@@ -163,11 +186,8 @@ def model_coefficients(P: DriveParams, S: DriveState) -> dict:
     c["sL1_hat"] = c["L1_hat"] - c["M_hat"] ** 2 / c["L2_hat"]
     c["psi_ref"] = float(pv[PR_FLUX_REF, 0])
     c["sensorless"] = bool(P.sim[0]["sensorless"])
-    c["wc"] = float(P.est[0]["wc"])  # an MRAS drive (stationary_drive refuses the others)
-    c["wc_k"] = float(P.est[0]["wc_k"])
-    c["wc_min"] = float(P.est[0]["wc_min"])
-    c["K2"] = float(P.est[0]["K2"])
-    c["b2"] = float(P.est[0]["b2"])  # the type-2 MRAS's second integrator (0: type 1)
-    c["b2_wmin"] = float(P.est[0]["b2_wmin"])
+    for k in ("wc", "wc_k", "wc_min", "K2", "b2", "b2_wmin"):  # an MRAS drive's (as before)
+        if k in P.est.dtype.names:
+            c[k] = float(P.est[0][k])
     c["decouple"] = bool(P.control[0]["decouple"])
     return c

@@ -6,7 +6,8 @@ Method
 is constant in the controller's synchronous frame at the sample instants (the drive is
 rotation-invariant; :mod:`imdrive.kernels.linearise`). The operating point is the fixed point
 ``z* = F(z*)`` of the one-period map ``F`` of the discrete closed loop seen in that frame (the
-engine's own period: RK4 plant, MRAS, IFOC, inverter), found by Newton's method on ``F(z) - z``
+engine's own period: RK4 plant, estimator, IFOC, inverter), found by Newton's method on
+``F(z) - z``
 with a central-difference Jacobian. Newton needs a good start; it comes from the continuous
 steady state of the loop with imposed currents, solved for the two unknowns ``iq*`` and the
 true speed ``w_m`` (:func:`continuous_steady_state`):
@@ -29,7 +30,10 @@ true speed ``w_m`` (:func:`continuous_steady_state`):
   friction and fan loads; a test checks the two agree). The ``1/w_e`` term is the classic
   difficulty of voltage-model estimators near zero stator frequency (Ohtani, Takada, Tanaka,
   IEEE Trans. Ind. Appl. 28(1), 1992; Kubota, Matsuse, Nakano, IEEE Trans. Ind. Appl. 29(2),
-  1993): with an R1 error there is no steady state at ``w_e = 0``.
+  1993): with an R1 error there is no steady state at ``w_e = 0``. The adaptive observer's
+  drive starts from the same point (with R̂ = R its own rest, no current error, is the same
+  orientation), its states from its ``ReducedState.steady``; Newton then finds its own
+  fixed point.
 
 *Linearisation.* The Jacobians ``A = dF/dz``, ``B = dF/du`` at ``z*`` (``u`` = speed
 reference, load torque) are the exact small-signal model of the discrete closed loop at the
@@ -48,6 +52,7 @@ import numpy as np
 
 from imdrive.config.scenario import Scenario
 from imdrive.errors import ConfigError
+from imdrive.kernels.estimators import mras
 from imdrive.run import linear as rl
 from imdrive.run.linear import (  # noqa: F401  (re-exported: old names)
     StationaryDrive,
@@ -67,14 +72,15 @@ _coefficients = model_coefficients
 
 RPM = 2.0 * math.pi / 60.0  # rad/s per rpm
 
-#: names of the reduced state (see imdrive.kernels.linearise), synchronous frame, SI units
-STATE_NAMES = (
+#: names of the plant's and the controller's states in the reduced state (see
+#: imdrive.kernels.linearise), synchronous frame, SI units; the estimator's follow
+DRIVE_STATE_NAMES = (
     "psi_s_d", "psi_s_q", "psi_r_d", "psi_r_q", "w_m",
     "v_prev_d", "v_prev_q", "i_prev_d", "i_prev_q",
     "int_w", "int_d", "int_q", "psi_hat",
-    "lam_v_d", "lam_v_q", "lam_i_d", "lam_i_q", "lam_f_d", "lam_f_q", "int_e", "w_r_hat",
-    "int_w2",
 )  # fmt: skip
+#: names of the MRAS drive's reduced state (any drive's: :attr:`OperatingPoints.state_names`)
+STATE_NAMES = DRIVE_STATE_NAMES + mras.REDUCED_NAMES
 INPUT_NAMES = ("speed_ref_rpm", "load_torque_Nm")
 OUTPUT_NAMES = ("speed_rpm", "speed_est_rpm", "i_d_A", "i_q_A")
 
@@ -151,11 +157,11 @@ class OperatingPoints:
         The requested points (speed reference, load torque).
     status : ndarray of str
         ``ok``, ``current_limit``, ``voltage_limit``, ``no_steady_state`` or ``diverged``.
-    z : ndarray (N, N_Z)
-        Fixed points (:data:`STATE_NAMES`), NaN where no steady state.
-    A : ndarray (N, N_Z, N_Z)
+    z : ndarray (N, n)
+        Fixed points (:attr:`state_names`), NaN where no steady state.
+    A : ndarray (N, n, n)
         ``dF/dz``: the discrete small-signal model, one period Ts.
-    B : ndarray (N, N_Z, 2)
+    B : ndarray (N, n, 2)
         ``dF/du`` for ``u`` = (speed reference in mechanical rad/s, load torque in N m).
     residual : ndarray
         Scaled fixed-point residual.
@@ -165,6 +171,11 @@ class OperatingPoints:
         Control period, s.
     drive : StationaryDrive
         The records (row ``i`` is point ``i``), for :func:`propagate`.
+    state_names : tuple of str
+        The reduced state's names: :data:`DRIVE_STATE_NAMES`, then the estimator's
+        (``ReducedState.names``; the MRAS drive's: :data:`STATE_NAMES`).
+    speed_state : str
+        The name of the speed estimate among them.
     """
 
     speed_ref_rpm: np.ndarray
@@ -178,10 +189,12 @@ class OperatingPoints:
     Ts: float
     drive: StationaryDrive = field(repr=False)
     coeffs: dict = field(repr=False, default_factory=dict)
+    state_names: tuple[str, ...] = STATE_NAMES
+    speed_state: str = "w_r_hat"
 
     def eigenvalues(self) -> np.ndarray:
-        """Eigenvalues of every ``A`` (N, N_Z), z-plane; NaN rows where status is not ok."""
-        ev = np.full((len(self.status), rl.N_Z), np.nan + 0j)
+        """Eigenvalues of every ``A`` (N, n), z-plane; NaN rows where status is not ok."""
+        ev = np.full(self.A.shape[:2], np.nan + 0j)
         ok = self.status == STATUS_OK
         if ok.any():
             ev[ok] = np.linalg.eigvals(self.A[ok])
@@ -226,12 +239,14 @@ def solve_operating_points(
         V_mag = np.abs(c["R1"] * I + 1j * w_e * psi_s)
     status[ok & (I_mag > d.i_max)] = STATUS_CURRENT
     status[ok & (I_mag <= d.i_max) & (V_mag > d.v_max)] = STATUS_VOLTAGE
-    Z = np.zeros((n, rl.N_Z))
+    red = rl.reduced_state_of(d.S)
+    n_z = rl.N_D + len(red.names)
+    Z = np.zeros((n, n_z))
     good = status == STATUS_OK
     if good.any():
-        Z[good] = _initial_state(c, d.Ts, iq[good], w_m[good], w_ref[good])
-    A = np.full((n, rl.N_Z, rl.N_Z), np.nan)
-    B = np.full((n, rl.N_Z, rl.N_U), np.nan)
+        Z[good] = _initial_state(c, d.Ts, iq[good], w_m[good], w_ref[good], d.P, d.S)
+    A = np.full((n, n_z, n_z), np.nan)
+    B = np.full((n, n_z, rl.N_U), np.nan)
     res = np.full(n, np.nan)
     its = np.zeros(n, dtype=np.int64)
     idx = np.flatnonzero(good)
@@ -248,12 +263,15 @@ def solve_operating_points(
             # the type-2 MRAS's second integrator runs at the operating point's stator
             # frequency, read from the controller's (not a state of the reduced map)
             d.S.est["int_w_run"][idx] = second_integrator_runs(c, w_e[idx])
-            d.S.control["w_e"][idx] = w_e[idx]
+        # the controller's last stator frequency, which the estimator reads (the MRAS's
+        # second integrator, the observer's adaptation share and its direct orientation):
+        # the operating point's
+        d.S.control["w_e"][idx] = w_e[idx]
         sub_P = rl.DriveParams(*(f[idx] if f.ndim >= 1 and f.shape[0] == n else f for f in d.P))
         sub_S = rl.DriveState(*(f[idx].copy() for f in d.S))
         Zs = np.ascontiguousarray(Z[idx])
-        As = np.empty((len(idx), rl.N_Z, rl.N_Z))
-        Bs = np.empty((len(idx), rl.N_Z, rl.N_U))
+        As = np.empty((len(idx), n_z, n_z))
+        Bs = np.empty((len(idx), n_z, rl.N_U))
         sts = np.empty(len(idx), dtype=np.int64)
         rs = np.empty(len(idx))
         its_s = np.empty(len(idx), dtype=np.int64)
@@ -295,6 +313,8 @@ def solve_operating_points(
         Ts=d.Ts,
         drive=d,
         coeffs=c,
+        state_names=DRIVE_STATE_NAMES + tuple(red.names),
+        speed_state=red.speed,
     )
 
 
@@ -302,15 +322,16 @@ def solve_operating_points(
 # one operating point, for users
 
 
-def output_matrix(c: dict) -> np.ndarray:
-    """``C`` (4, N_Z): speed (rpm), speed estimate (rpm), i_d, i_q (A) from the reduced state.
+def output_matrix(c: dict, names=STATE_NAMES, speed: str = "w_r_hat") -> np.ndarray:
+    """``C`` (4, n): speed (rpm), speed estimate (rpm), i_d, i_q (A) from the reduced state
+    ``names`` (the MRAS drive's by default), whose speed estimate is ``speed``.
 
     The currents are the plant's stator current at the sample, in the controller's frame:
     ``i_s = (L2 psi_s - M psi_r) / (L1 L2 - M^2)``.
     """
-    C = np.zeros((4, rl.N_Z))
+    C = np.zeros((4, len(names)))
     C[0, 4] = 1.0 / RPM
-    C[1, 20] = 1.0 / (c["n_p"] * RPM)
+    C[1, list(names).index(speed)] = 1.0 / (c["n_p"] * RPM)
     D = c["L1"] * c["L2"] - c["M"] ** 2
     for r, (s, p) in enumerate(((0, 2), (1, 3))):
         C[2 + r, s] = c["L2"] / D
@@ -352,7 +373,7 @@ class OperatingPoint:
     status : str
         ``ok`` or why there is no usable steady state (see :data:`STATUS_OK` ...).
     z : ndarray
-        Fixed point of the rotated one-period map, :data:`STATE_NAMES` (SI units: Wb, rad/s,
+        Fixed point of the rotated one-period map, :attr:`state_names` (SI units: Wb, rad/s,
         A, V).
     A, B, C : ndarray
         ``z[k+1] = z* + A dz[k] + B du[k]``, ``dy = C dz``; ``u`` in rpm and N m (B is scaled
@@ -377,9 +398,15 @@ class OperatingPoint:
         return float(self.z[4] / RPM)
 
     @property
+    def state_names(self) -> tuple[str, ...]:
+        """Names of the reduced state (:attr:`OperatingPoints.state_names`)."""
+        return self._ops.state_names
+
+    @property
     def speed_est_rpm(self) -> float:
-        """MRAS speed estimate at the operating point, rpm."""
-        return float(self.z[20] / (self._ops.coeffs["n_p"] * RPM))
+        """The estimator's speed estimate at the operating point, rpm."""
+        k = self.state_names.index(self._ops.speed_state)
+        return float(self.z[k] / (self._ops.coeffs["n_p"] * RPM))
 
     @property
     def current_dq_A(self) -> complex:
@@ -416,7 +443,7 @@ class OperatingPoint:
         """The small-signal model as a discrete-time state-space system at ``Ts``.
 
         Inputs :data:`INPUT_NAMES` (speed reference in rpm, load torque in N m), outputs
-        :data:`OUTPUT_NAMES`, states :data:`STATE_NAMES` (deviations from the operating point).
+        :data:`OUTPUT_NAMES`, states :attr:`state_names` (deviations from the operating point).
         A python-control ``StateSpace`` (named signals, ``control.bode_plot``,
         ``control.step_response``) when python-control is installed (``pip install
         imdrive[control]``), else a ``scipy.signal.StateSpace`` with the names in its attributes
@@ -436,7 +463,7 @@ class OperatingPoint:
             sys = StateSpace(self.A, self.B, self.C, D, dt=self.Ts)
             sys.input_names = list(INPUT_NAMES)
             sys.output_names = list(OUTPUT_NAMES)
-            sys.state_names = list(STATE_NAMES)
+            sys.state_names = list(self.state_names)
             return sys
         return control.ss(
             self.A,
@@ -446,7 +473,7 @@ class OperatingPoint:
             self.Ts,
             inputs=list(INPUT_NAMES),
             outputs=list(OUTPUT_NAMES),
-            states=list(STATE_NAMES),
+            states=list(self.state_names),
             name=f"imdrive {self.speed_ref_rpm:g} rpm {self.torque_Nm:g} Nm",
         )
 
@@ -459,7 +486,7 @@ class OperatingPoint:
         Parameters
         ----------
         dz : array_like
-            Initial deviation from ``z``, :data:`STATE_NAMES` (SI units: Wb, rad/s, A, V).
+            Initial deviation from ``z``, :attr:`state_names` (SI units: Wb, rad/s, A, V).
         n_steps : int
             Control periods to run.
         du : tuple of float
@@ -478,13 +505,13 @@ class OperatingPoint:
         P.prof_v[0, rl.PR_LOAD, 0] += du[1]
         try:
             S = rl.DriveState(*(f.copy() for f in d.S))
-            out = np.empty(rl.N_Z)
+            out = np.empty(len(self.z))
             z0 = np.ascontiguousarray(self.z + np.asarray(dz, dtype=float))
             st = rl.propagate(P, S, 0, z0, int(n_steps), d.TH[0, 0], d.TH[0, 1], out)
         finally:
             P.prof_v[0, [rl.PR_SPEED_REF, rl.PR_LOAD], 0] = saved
         if st != 0:
-            return np.full(rl.N_Z, np.nan)
+            return np.full(len(self.z), np.nan)
         return out - self.z
 
 
@@ -510,7 +537,7 @@ def operating_point(sc: Scenario, speed_rpm: float, torque_Nm: float) -> Operati
         Fixed point, ``A``, ``B``, ``C`` and status.
     """
     ops = solve_operating_points(map_scenario(sc), [speed_rpm], [torque_Nm])
-    C = output_matrix(ops.coeffs)
+    C = output_matrix(ops.coeffs, ops.state_names, ops.speed_state)
     B = ops.B[0].copy()
     B[:, 0] *= RPM  # per rpm of speed reference
     return OperatingPoint(

@@ -306,7 +306,7 @@ def simulate_steps(
     P.prof_v[:, rl.PR_SPEED_REF, 0] += step_rpm * RPM
     z_old = ops.z[idx]
     rng = np.random.default_rng(seed)
-    Z0 = z_old + 1e-6 * rng.standard_normal(z_old.shape) * (np.abs(z_old) + rl.Z_SCALE)
+    Z0 = z_old + 1e-6 * rng.standard_normal(z_old.shape) * (np.abs(z_old) + rl.state_scale(S))
     Z1 = np.where((stepped.status[idx] == STATUS_OK)[:, None], stepped.z[idx], z_old)
     n_win = max(int(round(0.05 / ops.Ts)), 1)
     n_steps = int(round(horizon_s / ops.Ts))

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from imdrive.kernels.estimators import mras
 from imdrive.run import linear as rl
 
 # ------------------------------------------------------------------------------------------
@@ -84,11 +85,12 @@ def continuous_steady_state(c: dict, w_ref, T_L, n_iter: int = 40):
     return iq, w_m, ok & np.isfinite(iq) & np.isfinite(w_m)
 
 
-def _initial_state(c: dict, Ts: float, iq, w_m, w_ref) -> np.ndarray:
-    """Reduced states (N, N_Z) of the continuous steady state, as seen at a sample instant."""
+def _initial_state(c: dict, Ts: float, iq, w_m, w_ref, P, S) -> np.ndarray:
+    """Reduced states (N, n) of the continuous steady state, as seen at a sample instant: the
+    plant's and the controller's, then the estimator's from its ``ReducedState.steady``
+    (``P``, ``S``: the drive's records)."""
     I, psi_s, psi_r, w_e, _ = _plant_in_frame(c, iq, w_m, w_ref)
     n = len(iq)
-    z = np.zeros((n, rl.N_Z))
     i_d = I.real
     v = c["R1"] * I + 1j * w_e * psi_s
     # the voltage held over the last period and the last sample, in this sample's frame
@@ -101,36 +103,21 @@ def _initial_state(c: dict, Ts: float, iq, w_m, w_ref) -> np.ndarray:
             c["sL1_hat"] * i_d + c["M_hat"] / c["L2_hat"] * psi_hat
         )
     int_dq = v - ff
-    w_r_hat = c["n_p"] * (w_ref if c["sensorless"] else w_m)
-    T2h = c["L2_hat"] / c["R2_hat"]
-    lam_i = c["M_hat"] * I / (1.0 + 1j * (w_e - w_r_hat) * T2h)
-    wc = np.full(n, c["wc"])
-    if c.get("wc_k", 0.0) > 0:  # the corner following the stator frequency (estimators/mras.py)
-        wc = np.minimum(c["wc"], np.maximum(c["wc_min"], c["wc_k"] * np.abs(w_e)))
-    filt = 1j * w_e / (1j * w_e + wc) if c["wc"] > 0 else np.ones(n)
-    lam_f = lam_i * filt
-    den = 1j * w_e + wc
-    den = np.where(np.abs(den) < 1e-9, 1e-9, den)
-    lam_v = (c["L2_hat"] / c["M_hat"]) * ((v - c["R1_hat"] * I) - 1j * w_e * c["sL1_hat"] * I) / den
+    z = np.zeros((n, rl.N_D))
     for k, val in ((0, psi_s), (2, psi_r), (5, v_prev), (7, i_prev), (10, int_dq)):
         z[:, k] = val.real
         z[:, k + 1] = val.imag
     z[:, 4] = w_m
     z[:, 9] = iq
     z[:, 12] = psi_hat
-    for k, val in ((13, lam_v), (15, lam_i), (17, lam_f)):
-        z[:, k] = val.real
-        z[:, k + 1] = val.imag
-    z[:, 19] = w_r_hat / c["K2"] if c["K2"] != 0 else 0.0
-    z[:, 20] = w_r_hat
-    run = second_integrator_runs(c, w_e)  # type 2: the PI's output 0, the estimate its own
-    z[run, 19] = 0.0
-    z[run, 21] = np.broadcast_to(w_r_hat, (n,))[run] / max(c.get("b2", 0.0), 1e-300)
-    return z
+    w_r_hat = c["n_p"] * (w_ref if c["sensorless"] else w_m)
+    steady = rl.reduced_state_of(S).steady
+    est = steady(dict(c, v=v), P.est[0], I, w_e, np.broadcast_to(w_r_hat, (n,)))
+    return np.concatenate([z, est], axis=1)
 
 
 def second_integrator_runs(c: dict, w_e) -> np.ndarray:
     """Where the type-2 MRAS's second integrator runs at the stator frequency ``w_e`` (rad/s):
-    ``b2 > 0`` and ``|w_e| >= b2_wmin`` (kernels/estimators/mras.py; its hysteresis below is
-    the held state's, which the steady state does not reach from above)."""
-    return (c.get("b2", 0.0) > 0.0) & (np.abs(w_e) >= c.get("b2_wmin", 0.0))
+    ``b2 > 0`` and ``|w_e| >= b2_wmin`` of ``c`` (an MRAS drive's constants,
+    :func:`imdrive.run.linear.model_coefficients`; kernels/estimators/mras.py)."""
+    return mras.second_integrator_runs({k: c.get(k, 0.0) for k in ("b2", "b2_wmin")}, w_e)

@@ -77,9 +77,11 @@ the plant integrator's accuracy, so no discretisation bias appears in the speed 
 
 from __future__ import annotations
 
+import numpy as np
 from numba import njit
 
-from imdrive.kernels.estimators.registry import register_kernel
+from imdrive.kernels.estimators.common import to_frame
+from imdrive.kernels.estimators.registry import ReducedState, register_kernel
 from imdrive.kernels.model import model_inductances
 from imdrive.kernels.records import c16, f8, i8, record_dtype
 
@@ -321,4 +323,60 @@ def afo_flux(s):
     return s.lam_ab
 
 
-KERNEL = register_kernel("afo", AFO_PARAMS, AFO_STATE, afo_estimate, flux=afo_flux)
+# --- the observer's states in the stability maps' reduced drive state (kernels/linearise.py) --
+
+#: Names and typical magnitudes of the observer's states in the reduced state (controller's
+#: frame): its current and rotor flux at the sample, the current error that drives the next
+#: period's correction, the adaptation's integral and the speed estimate (the next period's
+#: model runs at it). ``eps`` is not read again, ``R1_0``/``R2_0`` are constants.
+REDUCED_NAMES = (
+    "i_hat_d", "i_hat_q", "lam_d", "lam_q", "e_d", "e_q", "int_e", "w_r_hat",
+)  # fmt: skip
+REDUCED_SCALE = (0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 1e-4, 1.0)
+
+
+@njit(cache=True)
+def afo_reduce(p, s, c, z, k):
+    """The observer's states into ``z[k:k + 8]`` (``ReducedState.reduce``)."""
+    z[k], z[k + 1] = to_frame(c, s.i_hat_ab)
+    z[k + 2], z[k + 3] = to_frame(c, s.lam_ab)
+    z[k + 4], z[k + 5] = to_frame(c, s.e_ab)
+    z[k + 6] = s.int_e
+    z[k + 7] = s.w_r_hat
+
+
+@njit(cache=True)
+def afo_restore(z, k, s):
+    """``z[k:k + 8]`` back into the observer's state (``ReducedState.restore``)."""
+    s.i_hat_ab = complex(z[k], z[k + 1])
+    s.lam_ab = complex(z[k + 2], z[k + 3])
+    s.e_ab = complex(z[k + 4], z[k + 5])
+    s.int_e = z[k + 6]
+    s.w_r_hat = z[k + 7]
+
+
+def afo_steady(c, p, I, w_e, w_r_hat):
+    """The observer's states in the continuous steady state (``ReducedState.steady``): its
+    current the stator current ``I`` (no error), its flux the rotor model's at the estimate,
+    ``M_hat I / (1 + j (w_e - w_r_hat) T2_hat)``, and the adaptation's integral ``w_r_hat /
+    Ki`` (``eps = 0``)."""
+    n = len(I)
+    z = np.zeros((n, len(REDUCED_NAMES)))
+    lam = c["M_hat"] * I / (1.0 + 1j * (w_e - w_r_hat) * (c["L2_hat"] / c["R2_hat"]))
+    z[:, 0], z[:, 1] = I.real, I.imag
+    z[:, 2], z[:, 3] = lam.real, lam.imag
+    z[:, 6] = w_r_hat / p["Ki"] if p["Ki"] != 0 else 0.0
+    z[:, 7] = w_r_hat
+    return z
+
+
+KERNEL = register_kernel(
+    "afo",
+    AFO_PARAMS,
+    AFO_STATE,
+    afo_estimate,
+    flux=afo_flux,
+    reduced=ReducedState(
+        REDUCED_NAMES, REDUCED_SCALE, afo_reduce, afo_restore, afo_steady, "w_r_hat"
+    ),
+)

@@ -129,3 +129,11 @@ def flux_frequency(lam_old, lam_new, Ts):
         return 0.0
     turn = lam_new * lam_old.conjugate()
     return math.atan2(turn.imag, turn.real) / Ts
+
+
+@njit(cache=True, inline="always")
+def to_frame(c, x):
+    """``e^{-j th} x`` as two floats (real, imaginary), with ``c = (cos th, sin th)``: a
+    stationary-frame space vector in the frame at angle ``th`` (the stability maps' reduced
+    state, :mod:`imdrive.kernels.linearise`)."""
+    return c[0] * x.real + c[1] * x.imag, -c[1] * x.real + c[0] * x.imag

@@ -132,6 +132,7 @@ from __future__ import annotations
 import cmath
 import math
 
+import numpy as np
 from numba import njit
 
 from imdrive.kernels.estimators import mras_stabilise as stab
@@ -140,8 +141,9 @@ from imdrive.kernels.estimators.common import (  # noqa: F401 (flux_frequency: a
     flux_frequency,
     lowpass_coefficients,
     period_mean_offset,
+    to_frame,
 )
-from imdrive.kernels.estimators.registry import register_kernel
+from imdrive.kernels.estimators.registry import ReducedState, register_kernel
 from imdrive.kernels.model import model_inductances
 from imdrive.kernels.records import b1, c16, f8, record_dtype
 
@@ -406,6 +408,82 @@ def mras_finite(s):
     return ok and math.isfinite(s.w_r_hat) and c(s.e_dq0)
 
 
+# --- the MRAS's states in the stability maps' reduced drive state (kernels/linearise.py) -----
+
+#: Names and typical magnitudes of the MRAS's states in the reduced state (controller's frame).
+REDUCED_NAMES = (
+    "lam_v_d", "lam_v_q", "lam_i_d", "lam_i_q", "lam_f_d", "lam_f_q", "int_e", "w_r_hat",
+    "int_w2",
+)  # fmt: skip
+REDUCED_SCALE = (0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 1e-4, 1.0, 1.0)
+
+
+@njit(cache=True)
+def mras_reduce(p, s, c, z, k):
+    """The MRAS's states into ``z[k:k + 9]`` (``ReducedState.reduce``). The type-2 second
+    integrator is a state where it runs; where it is held (below ``b2_wmin`` of stator
+    frequency) its value is a constant offset of the estimate that does not change the
+    small-signal model, so it is held at 0 (an eigenvalue 0, not the neutral 1 of a value
+    that never moves)."""
+    z[k], z[k + 1] = to_frame(c, s.lam_v_ab)
+    z[k + 2], z[k + 3] = to_frame(c, s.lam_i_ab)
+    z[k + 4], z[k + 5] = to_frame(c, s.lam_f_ab)
+    z[k + 6] = s.int_e
+    z[k + 7] = s.w_r_hat
+    z[k + 8] = s.int_w if s.int_w_run and p.b2 > 0.0 else 0.0
+
+
+@njit(cache=True)
+def mras_restore(z, k, s):
+    """``z[k:k + 9]`` back into the MRAS's state (``ReducedState.restore``)."""
+    s.lam_v_ab = complex(z[k], z[k + 1])
+    s.lam_i_ab = complex(z[k + 2], z[k + 3])
+    s.lam_f_ab = complex(z[k + 4], z[k + 5])
+    s.int_e = z[k + 6]
+    s.w_r_hat = z[k + 7]
+    s.int_w = z[k + 8]
+
+
+def second_integrator_runs(p, w_e):
+    """Where the type-2 MRAS's second integrator runs at the stator frequency ``w_e`` (rad/s):
+    ``b2 > 0`` and ``|w_e| >= b2_wmin`` of parameter record ``p`` (:func:`mras_estimate`; its
+    hysteresis below is the held state's, which the steady state does not reach from above)."""
+    return (p["b2"] > 0.0) & (np.abs(w_e) >= p["b2_wmin"])
+
+
+def mras_steady(c, p, I, w_e, w_r_hat):
+    """The MRAS's states in the continuous steady state (``ReducedState.steady``).
+
+    The adjustable model at the estimate, ``lam_i = M_hat I / (1 + j (w_e - w_r_hat) T2_hat)``;
+    both models through the filter ``j w_e / (j w_e + wc)`` at the corner in effect there; the
+    reference model from the stator voltage ``v = R1 I + j w_e psi_s`` (``c["v"]``); the PI's
+    integral ``w_r_hat / K2`` (type 1), or the second integrator ``w_r_hat / b2`` with the PI's
+    output 0 where it runs (type 2).
+    """
+    n = len(I)
+    z = np.zeros((n, len(REDUCED_NAMES)))
+    T2h = c["L2_hat"] / c["R2_hat"]
+    lam_i = c["M_hat"] * I / (1.0 + 1j * (w_e - w_r_hat) * T2h)
+    wc = np.full(n, float(p["wc"]))
+    if p["wc_k"] > 0:  # the corner following the stator frequency (module docstring)
+        wc = np.minimum(p["wc"], np.maximum(p["wc_min"], p["wc_k"] * np.abs(w_e)))
+    filt = 1j * w_e / (1j * w_e + wc) if p["wc"] > 0 else np.ones(n)
+    den = 1j * w_e + wc
+    den = np.where(np.abs(den) < 1e-9, 1e-9, den)
+    emf = (c["v"] - c["R1_hat"] * I) - 1j * w_e * c["sL1_hat"] * I
+    lam_v = (c["L2_hat"] / c["M_hat"]) * emf / den
+    for j, val in enumerate((lam_v, lam_i, lam_i * filt)):
+        z[:, 2 * j] = val.real
+        z[:, 2 * j + 1] = val.imag
+    w_r_hat = np.broadcast_to(w_r_hat, (n,))
+    z[:, 6] = w_r_hat / p["K2"] if p["K2"] != 0 else 0.0
+    z[:, 7] = w_r_hat
+    run = np.broadcast_to(second_integrator_runs(p, w_e), (n,))
+    z[run, 6] = 0.0
+    z[run, 8] = w_r_hat[run] / max(float(p["b2"]), 1e-300)
+    return z
+
+
 KERNEL = register_kernel(
     "mras",
     MRAS_PARAMS,
@@ -414,5 +492,7 @@ KERNEL = register_kernel(
     log_fields=OWN_LOG_FIELDS,
     log=log_mras_own,
     finite=mras_finite,
-    reduced_state=True,
+    reduced=ReducedState(
+        REDUCED_NAMES, REDUCED_SCALE, mras_reduce, mras_restore, mras_steady, "w_r_hat"
+    ),
 )

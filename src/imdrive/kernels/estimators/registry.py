@@ -32,6 +32,11 @@ The contract
     estimator that observes the flux (the AFO, the EKF): the drive orients its frame on it
     above 0.1 of the rated stator frequency (direct field orientation,
     :mod:`imdrive.kernels.ifoc`); without it the frame integrates the slip (indirect).
+``reduced`` (optional, a :class:`ReducedState`)
+    The estimator's states in the stability maps' reduced drive state
+    (:mod:`imdrive.kernels.linearise`): their names, scales, the two functions that write them
+    into the state vector (rotated into the controller's frame) and back, and their continuous
+    steady state, Newton's start. Without it the maps refuse the estimator in one line.
 
 Caching
 -------
@@ -46,6 +51,7 @@ loaded as another module does not find a loop compiled against the first).
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -104,6 +110,54 @@ class EstimatorInput(NamedTuple):
 
 
 @dataclass(frozen=True)
+class ReducedState:
+    """An estimator's states in the stability maps' reduced drive state.
+
+    The map (:mod:`imdrive.kernels.linearise`) runs the drive one control period from a state
+    vector in the controller's frame; its first entries are the plant's and the controller's,
+    then the estimator's, written by ``reduce`` and read back by ``restore``. Every state that
+    carries over from one period to the next must be there (a missing one is held at a stale
+    value and the Jacobian is wrong); nothing else should be (a value that never changes is a
+    neutral eigenvalue 1, which reads as marginal stability).
+
+    Attributes
+    ----------
+    names : tuple of str
+        Its states' names (space vectors as two entries, ``_d``/``_q``: the controller's
+        frame), SI units.
+    scale : tuple of float
+        Each state's typical magnitude (finite-difference steps, the fixed point's residual).
+    reduce : numba dispatcher
+        ``reduce(p, s, c, z, k)``: writes the states of parameter and state records ``p``,
+        ``s`` into ``z[k:k + len(names)]``, stationary-frame vectors rotated by ``e^{-j th}``
+        with ``c = (cos th, sin th)`` (:func:`imdrive.kernels.estimators.common.to_frame`).
+    restore : numba dispatcher
+        ``restore(z, k, s)``: writes them back into ``s`` (the frame angle is then 0: the
+        stationary frame is the controller's).
+    steady : callable
+        ``steady(c, p, I, w_e, w_r_hat) -> ndarray (n, len(names))``: the states in the
+        continuous steady state of the loop with imposed currents (Newton's start; Newton then
+        finds the discrete loop's fixed point), from the model's constants ``c``
+        (:func:`imdrive.run.linear.model_coefficients`), the parameter record ``p`` (row 0),
+        the stator current ``I`` in the controller's frame, A, the stator frequency ``w_e``
+        and the speed estimate ``w_r_hat``, electrical rad/s (arrays of ``n`` points).
+    speed : str
+        The name of the speed estimate among ``names`` (the maps' ``speed_est_rpm`` output).
+    """
+
+    names: tuple[str, ...]
+    scale: tuple[float, ...]
+    reduce: object
+    restore: object
+    steady: object
+    speed: str = "w_r_hat"
+
+    def __post_init__(self):
+        if len(self.names) != len(self.scale) or self.speed not in self.names:
+            raise ValueError("ReducedState: one scale per name, and the speed among the names")
+
+
+@dataclass(frozen=True)
 class EstimatorKernel:
     """The compiled half of an estimator: its records and its numba functions.
 
@@ -120,10 +174,10 @@ class EstimatorKernel:
         settings half (:class:`imdrive.estimators.Estimator`).
     log, finite : numba dispatcher or None
         Optional (module docstring).
-    reduced_state : bool
-        Whether the stability maps' reduced drive state carries it (only the MRAS today).
     flux : numba dispatcher or None
         Optional: its rotor-flux estimate, which the drive orients on (module docstring).
+    reduced : ReducedState or None
+        Optional: its states in the stability maps' reduced drive state (module docstring).
     """
 
     name: str
@@ -133,9 +187,14 @@ class EstimatorKernel:
     log_fields: tuple[str, ...] = ()
     log: object = None
     finite: object = None
-    reduced_state: bool = False
     flux: object = None
+    reduced: ReducedState | None = None
     source: str = field(default="", compare=False)
+
+    @property
+    def reduced_state(self) -> bool:
+        """Whether the stability maps' reduced drive state carries it (``reduced`` is set)."""
+        return self.reduced is not None
 
 
 _REGISTRY = Registry("estimator")
@@ -154,6 +213,7 @@ def register_kernel(
     finite=None,
     reduced_state: bool = False,
     flux=None,
+    reduced: ReducedState | None = None,
 ) -> EstimatorKernel:
     """Register an estimator's compiled half under ``name`` and return it.
 
@@ -170,7 +230,9 @@ def register_kernel(
     log, finite, flux : numba dispatcher, optional
         See the module docstring.
     reduced_state : bool
-        Whether the stability maps' reduced state carries it.
+        Deprecated, no effect: the maps carry an estimator that gives ``reduced``.
+    reduced : ReducedState, optional
+        Its states in the stability maps' reduced drive state (module docstring).
 
     Returns
     -------
@@ -179,6 +241,13 @@ def register_kernel(
         docstring).
         Registering the same name again replaces the entry (a re-imported user module).
     """
+    if reduced_state and reduced is None:
+        warnings.warn(
+            "register_kernel(reduced_state=True) has no effect: give the estimator's states "
+            "to the stability maps with reduced=ReducedState(...)",
+            DeprecationWarning,
+            stacklevel=2,
+        )
     tag = _source_tag(step)
     tagged = _tagged(np.dtype(state), name, tag)
     kernel = EstimatorKernel(
@@ -189,8 +258,8 @@ def register_kernel(
         log_fields=tuple(log_fields),
         log=log,
         finite=finite,
-        reduced_state=reduced_state,
         flux=flux,
+        reduced=reduced,
         source=tag,
     )
     return _REGISTRY.add(kernel)
