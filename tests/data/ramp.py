@@ -20,12 +20,16 @@ BRIDGE = {
 def ramp_scenario(
     machine: str, speed_pu: float, overrides: dict, *, load_pu_available: float | None = None
 ) -> Scenario:
-    """``injection-robust`` on ``machine`` (its model-based R2 law): the
+    """``injection-robust`` on ``machine`` (its model-based R2 law) on the MRAS, the estimator
+    these mechanisms were built and measured on (the preset runs the adaptive observer since
+    2026-11-30; ``overrides`` may set ``control.speed_feedback``): the
     speed reference ramped from 0.5 s over 3 s to ``speed_pu`` x the rated speed, injection
     and compensator from 5 s, then ``overrides``;
     with ``load_pu_available`` a load step at 4 s to that fraction of the torque the machine
     delivers at that speed (:func:`imdrive.sweep.model.available_torque_Nm`)."""
-    base = Scenario.read("injection-robust", [f'machine.preset="{machine}"'])
+    base = Scenario.read(
+        "injection-robust", [f'machine.preset="{machine}"', 'control.speed_feedback="mras"']
+    )
     rp = rated_point(base.machine)
     sc = base.with_overrides(
         {

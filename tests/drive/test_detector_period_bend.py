@@ -51,7 +51,7 @@ def test_the_detector_is_the_mras_s_own_pair_of_models(monkeypatch):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         (sc,), _ = envm.scenarios(
-            ["paper-table-iv"], drives=["injection-robust"], speeds=(2.0,), loads=(-0.5,),
+            ["paper-table-iv"], drives=["injection-robust-mras"], speeds=(2.0,), loads=(-0.5,),
             ratios=(0.7,),
         )  # fmt: skip
         own = simulate(sc).metrics()

@@ -41,7 +41,7 @@ def test_default_follows_the_speed_reference_into_field_weakening(machine):
 @pytest.mark.slow
 @pytest.mark.parametrize("machine", ["paper-table-iv", "krause-3hp"])
 def test_estimate_follows_the_field_weakening_ramp(machine):
-    (sc,), _ = scenarios([machine], drives=["injection-robust"], speeds=[2.0], loads=[0.0],
+    (sc,), _ = scenarios([machine], drives=["injection-robust-mras"], speeds=[2.0], loads=[0.0],
                          ratios=[1.0])  # fmt: skip
     sc = sc.with_overrides({"simulation.log_every": 10})
     slip = rated_slip_rpm(sc)

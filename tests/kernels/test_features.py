@@ -42,7 +42,9 @@ def test_the_groups_partition_the_features():
 
 
 def test_a_batch_compiles_what_any_of_its_drives_runs():
-    arrays = [build_arrays(Scenario.read(n)) for n in ("sensorless", "injection-robust")]
+    # one estimator (a batch groups its drives by estimator): the recommended drive on the MRAS
+    drives = (("sensorless", ()), ("injection-robust", ('control.speed_feedback="mras"',)))
+    arrays = [build_arrays(Scenario.read(n, list(o))) for n, o in drives]
     params, _ = stack_drives(arrays)
     assert params.features.shape == (2,)
     assert set(params.features.dtype.names[1:]) == TRACKING

@@ -23,9 +23,15 @@ def _robust(machine, *overrides):
         return Scenario.read("injection-robust", [f'machine.preset="{machine}"', *overrides])
 
 
+def _robust_mras(machine, *overrides):
+    """The recommended drive on the MRAS, whose online R1 law these tests are about (the
+    preset runs the adaptive observer since 2026-11-30)."""
+    return _robust(machine, 'control.speed_feedback="mras"', *overrides)
+
+
 @pytest.mark.parametrize("machine", ["paper-table-iv", "krause-500hp", "geyer-3.3kv"])
 def test_r1_rate_keeps_its_ratio_to_the_injection(machine):
-    sc = _robust(machine)
+    sc = _robust_mras(machine)
     arrays = build_arrays(sc)
     k_R1 = float(arrays.params.est["k_R1"][0])
     assert arrays.derived["mras_R1_rate_per_s"] == pytest.approx(k_R1)
@@ -39,11 +45,11 @@ def test_r1_rate_keeps_its_ratio_to_the_injection(machine):
 
 def test_r1_rate_in_the_old_key_replaces_the_presets_per_unit_rate():
     # the key of the last release on the preset that states its per-unit twin (config/pairs.py)
-    sc = _robust("paper-table-iv", "mras.R1_rate_per_s=0.5")
+    sc = _robust_mras("paper-table-iv", "mras.R1_rate_per_s=0.5")
     assert sc.mras.R1_rate_pu is None
     assert float(build_arrays(sc).params.est["k_R1"][0]) == 0.5
     with pytest.raises(ConfigError, match="mras.R1_rate_pu"):  # both in one layer: refused
-        _robust("paper-table-iv", "mras.R1_rate_per_s=0.3", "mras.R1_rate_pu=0.02")
+        _robust_mras("paper-table-iv", "mras.R1_rate_per_s=0.3", "mras.R1_rate_pu=0.02")
 
 
 @pytest.mark.parametrize(
@@ -51,12 +57,12 @@ def test_r1_rate_in_the_old_key_replaces_the_presets_per_unit_rate():
     [("paper-table-iv", 30.0), ("krause-50hp", 30.0), ("aalto-2.2kw", 25.0), ("geyer-3.3kv", 25.0)],
 )
 def test_r1_law_bound_is_half_the_rated_frequency(machine, f_max):
-    sc = _robust(machine)
+    sc = _robust_mras(machine)
     assert sc.machine.rated_frequency_Hz == 2.0 * f_max
     # exactly the 30 Hz the law was measured with on Table IV (the preset baseline)
     assert float(build_arrays(sc).params.est["R1_fmax"][0]) == f_max
     # the absolute twin of the last release still sets it
-    sc = _robust(machine, "mras.R1_max_freq_Hz=20")
+    sc = _robust_mras(machine, "mras.R1_max_freq_Hz=20")
     assert float(build_arrays(sc).params.est["R1_fmax"][0]) == 20.0
 
 

@@ -22,6 +22,10 @@ from imdrive.run.simulate import simulate
 ESTIMATORS = ("mras", "smo-mras", "reactive-mras", "afo", "ekf")
 #: the own law of tests/drive/test_own_r2_law.py (a relaxation on the window's measurement)
 MODULE = str(__import__("pathlib").Path(__file__).parents[1] / "data" / "own_r2_law.py")
+#: the recommended drive on the MRAS, whose recordings these tests replay (the preset runs
+#: the adaptive observer since 2026-11-30; its round trip: the test over every estimator)
+MRAS = 'control.speed_feedback="mras"'
+
 LAW = [f'plugins.modules=["{MODULE}"]', 'compensator.step_law="relax"']
 
 
@@ -77,7 +81,9 @@ def test_a_plug_in_law_replays_and_tracks_on_other_estimators(machine, tmp_path)
     exactly, and on the other estimators' flux errors R2 within 1 %. Their estimates differ
     from the drive's: the law's gate reads the drive's recorded speed feedback (on its own
     estimate the EKF's gate held R2_hat 20 % off for the whole replay on the Aalto machine)."""
-    res = recorded(tmp_path, "injection-robust", *LAW, f'machine.preset="{machine}"', plugins=True)
+    res = recorded(
+        tmp_path, "injection-robust", *LAW, f'machine.preset="{machine}"', MRAS, plugins=True
+    )
     rep = replay(tmp_path / "run", estimators="mras,afo,ekf")
     assert "'relax' law" in rep.summary["R2_law"]
     assert_law_round_trip(res, rep, "mras")
@@ -91,7 +97,7 @@ def test_a_plug_in_law_replays_and_tracks_on_other_estimators(machine, tmp_path)
 
 @pytest.mark.slow
 def test_r2_law_off_auto_without_excitation_and_on_refused(tmp_path, capsys):
-    res = recorded(tmp_path, "injection-robust", "simulation.t_end_s=6.0")
+    res = recorded(tmp_path, "injection-robust", "simulation.t_end_s=6.0", MRAS)
     run = tmp_path / "run"
     off = replay(run, r2_law="off")
     e = off.summary["estimators"]["mras"]
@@ -108,11 +114,11 @@ def test_r2_law_off_auto_without_excitation_and_on_refused(tmp_path, capsys):
     csv.write_text(
         ",".join(keep) + "\n" + "\n".join(",".join(f"{x:.17g}" for x in r) for r in rows) + "\n"
     )
-    auto = replay(csv, "injection-robust")
+    auto = replay(csv, res.scenario)
     assert not auto.summary["estimators"]["mras"]["R2_law"]
     assert "i_inj_A" in auto.summary["R2_law"]
     with pytest.raises(ConfigError, match="--r2-law.*i_inj_A"):
-        replay(csv, "injection-robust", r2_law="on")
+        replay(csv, res.scenario, r2_law="on")
     # no law in the scenario: "on" refused by the CLI, one line, exit 2, nothing written
     out = tmp_path / "rep"
     rc = main(["replay", str(run), "--scenario", "sensorless", "--r2-law", "on", "--out", str(out)])
@@ -125,7 +131,7 @@ def test_r2_law_off_auto_without_excitation_and_on_refused(tmp_path, capsys):
 def test_an_injection_not_the_drives_is_said(tmp_path, capsys):
     """Replayed with another injection frequency than the drive's, the law demodulates out of
     step: the summary and the console say so."""
-    res = recorded(tmp_path, "injection-robust", "simulation.t_end_s=6.0")
+    res = recorded(tmp_path, "injection-robust", "simulation.t_end_s=6.0", MRAS)
     f = res.scenario.injection.frequency_pu
     other = res.scenario.with_overrides({"injection.frequency_pu": 1.5 * f})
     with pytest.warns(ConfigWarning, match="injection differs"):

@@ -246,7 +246,7 @@ def test_no_low_frequency_note_where_it_explains_nothing():
 def test_the_low_frequency_note_names_what_held_there_unless_it_is_in_use():
     from imdrive.run.status import low_frequency_note
 
-    mras = _regenerating("krause-50hp", 0.05)
+    mras = _regenerating("krause-50hp", 0.05, feedback="mras")
     row = _row(mras, R2_hat_final_ohm=1.2 * mras.machine.R2_ohm)
     assert '"afo" held these points' in low_frequency_note(mras, row, lost=True)
     # the sensorless preset with the observer's speed, at the same point
