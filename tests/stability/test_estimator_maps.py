@@ -9,6 +9,8 @@ plain observer and not with the drive's scheduled gain.
 
 from __future__ import annotations
 
+import contextlib
+
 import numpy as np
 import pytest
 
@@ -19,10 +21,28 @@ from imdrive.kernels import linearise as kl
 from imdrive.kernels.engine import LOG, S_OK, run_drive
 from imdrive.kernels.recording import RECORDING
 from imdrive.run.build import build_arrays, copy_state
-from imdrive.stability.linear import DRIVE_STATE_NAMES, map_scenario, operating_point
+from imdrive.stability import linear as sl
+from imdrive.stability.linear import (
+    DRIVE_STATE_NAMES,
+    map_scenario,
+    operating_point,
+    solve_operating_points,
+)
 from imdrive.stability.maps import stability_map, validate_map
 
 MACHINES = ("paper-table-iv", "aalto-2.2kw", "krause-50hp")
+
+
+@contextlib.contextmanager
+def monkeypatch_settle(n_T2: float):
+    """Newton's restart from the settled drive (``_SETTLE_T2`` rotor time constants) set to
+    ``n_T2`` (0: off) for the duration."""
+    old = sl._SETTLE_T2
+    sl._SETTLE_T2 = n_T2
+    try:
+        yield
+    finally:
+        sl._SETTLE_T2 = old
 
 
 def _afo(machine, *extra):
@@ -130,3 +150,25 @@ def test_an_estimator_without_reduced_state_is_refused_naming_those_mapped():
     msg = str(e.value)
     assert "control.speed_feedback" in msg and '"ekf"' in msg
     assert '"mras"' in msg and '"afo"' in msg
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    "machine, speed_pu, torque_pu",
+    [("paper-table-iv", 0.65, -1.7), ("aalto-2.2kw", 0.65, -1.6), ("krause-3hp", 0.96, -1.7)],
+)
+def test_newton_restarts_from_where_the_drive_settles(machine, speed_pu, torque_pu):
+    """The recommended drive (the observer, R̂1 = 1.1 R1, R̂2 = 1.2 R2) regenerating 1.6-1.7
+    times the rated torque at speed: from the continuous guess (the MRAS's rest) Newton does
+    not converge, the map said "no steady state"; run from the guess the drive settles, and
+    Newton from there finds the fixed point, a stable one, where the drive stays."""
+    sc = map_scenario(Scenario.read("injection-robust", [f'machine.preset="{machine}"']))
+    n_rpm, T_Nm = _rated(sc)
+    point = ([speed_pu * n_rpm], [torque_pu * T_Nm])
+    with monkeypatch_settle(0.0):
+        assert solve_operating_points(sc, *point).status[0] == "no_steady_state"
+    op = operating_point(sc, *(v[0] for v in point))
+    assert op.status == "ok" and op.stable
+    scale = np.abs(op.z) + kl.state_scale(op._ops.drive.S)
+    # the fixed point is where the drive stays: 2 s from it move it by less than 1e-9
+    assert np.max(np.abs(op.propagate(np.zeros(len(op.z)), 20000)) / scale) < 1e-9
