@@ -51,6 +51,7 @@ from numba import njit
 
 from imdrive.kernels.engine import LOG, S_OK
 from imdrive.kernels.engine_call import call_engine, engine_address
+from imdrive.kernels.estimators import mras
 from imdrive.kernels.estimators.common import to_frame
 from imdrive.kernels.estimators.reduced import (
     estimator_reduce,
@@ -80,7 +81,7 @@ DRIVE_SCALE = np.array(
     ]
 )  # fmt: skip
 #: the MRAS drive's scales (kept for callers of the 22-state map; any drive's: state_scale)
-Z_SCALE = np.concatenate([DRIVE_SCALE, [0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 1e-4, 1.0, 1.0]])
+Z_SCALE = np.concatenate([DRIVE_SCALE, mras.REDUCED_SCALE])
 
 
 def state_scale(S) -> np.ndarray:
