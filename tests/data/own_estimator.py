@@ -25,17 +25,20 @@ import cmath
 import math
 from typing import Annotated
 
+import numpy as np
 from numba import njit
 
 from imdrive.run.estimators import (
     EstimatorRecords,
     Float,
+    ReducedState,
     c16,
     estimator_settings,
     f8,
     record_dtype,
     register_kernel,
     setting,
+    to_frame,
 )
 
 FLUX_ANGLE_PARAMS = record_dtype(
@@ -82,6 +85,30 @@ def log_flux_angle(row, p, s, n_p):
     row.lam_fa_beta = s.lam_ab.imag
 
 
+@njit(cache=True)
+def reduce_flux_angle(p, s, c, z, k):
+    """Its states for the stability maps, in the controller's frame at ``c = (cos, sin)``."""
+    z[k], z[k + 1] = to_frame(c, s.lam_ab)
+    z[k + 2] = s.w_raw
+    z[k + 3] = s.w_r_hat
+
+
+@njit(cache=True)
+def restore_flux_angle(z, k, s):
+    """And back (the frame angle 0)."""
+    s.lam_ab = complex(z[k], z[k + 1])
+    s.w_raw = z[k + 2]
+    s.w_r_hat = z[k + 3]
+
+
+def steady_flux_angle(c, p, I, w_e, w_r_hat):
+    """Its states at rest: the filtered voltage model's flux, the speed on the estimate."""
+    L2, M = c["L2_hat"], c["M_hat"]
+    emf = c["v"] - c["R1_hat"] * I - 1j * w_e * c["sL1_hat"] * I
+    lam = (L2 / M) * emf / (1j * w_e + p["wc"])
+    return np.column_stack([lam.real, lam.imag, w_r_hat, w_r_hat])
+
+
 KERNEL = register_kernel(
     "flux-angle",
     FLUX_ANGLE_PARAMS,
@@ -89,6 +116,13 @@ KERNEL = register_kernel(
     flux_angle_step,
     log_fields=("lam_fa_alpha", "lam_fa_beta"),
     log=log_flux_angle,
+    reduced=ReducedState(
+        ("lam_d", "lam_q", "w_raw", "w_r_hat"),
+        (0.1, 0.1, 1.0, 1.0),
+        reduce_flux_angle,
+        restore_flux_angle,
+        steady_flux_angle,
+    ),
 )
 
 

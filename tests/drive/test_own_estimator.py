@@ -1,7 +1,7 @@
 """An estimator written outside the package (tests/data/own_estimator.py) runs everywhere the
-package's do: a scenario file, simulate(), a batch of 100 drives, a sweep, the bench; a
-stability map refuses it in one line; the CLI reads it from [plugins] modules. A plug-in is
-opt-in: every read here allows it (allow_plugins=True, --allow-plugins)."""
+package's do: a scenario file, simulate(), a batch of 100 drives, a sweep, the bench, a
+stability map (from the states its module declares); the CLI reads it from [plugins] modules.
+A plug-in is opt-in: every read here allows it (allow_plugins=True, --allow-plugins)."""
 
 from __future__ import annotations
 
@@ -110,13 +110,25 @@ def test_batch_of_100_drives_follows_the_detuning_law_and_matches_single_runs():
     assert np.array_equal(batch.results[37].signals["speed_rpm"], one.signals["speed_rpm"])
 
 
-def test_a_stability_map_refuses_it_in_one_line():
-    from imdrive.stability.maps import stability_map
+@pytest.mark.parametrize("speed_rpm, torque_Nm", [(1000.0, 6.0), (800.0, -6.0), (1200.0, 12.0)])
+def test_a_stability_map_linearises_it_from_its_own_reduced_state(speed_rpm, torque_Nm):
+    """Its module gives the map its states (``ReducedState``: the voltage-model flux, the raw
+    and the filtered speed); the fixed point is where the drive stays, and the linear model
+    follows the nonlinear loop to 1e-3 over 1-400 periods."""
+    from imdrive.kernels import linearise as kl
+    from imdrive.stability.linear import operating_point
 
-    with pytest.raises(ConfigError) as exc:
-        stability_map(_scenario(), [500.0], [0.0])
-    msg = str(exc.value)
-    assert "\n" not in msg and "flux-angle" in msg and msg.startswith("control.speed_feedback")
+    op = operating_point(_scenario(), speed_rpm, torque_Nm)
+    assert op.status == "ok" and op.stable
+    assert op.state_names[-4:] == ("lam_d", "lam_q", "w_raw", "w_r_hat")
+    scale = np.abs(op.z) + kl.state_scale(op._ops.drive.S)
+    assert np.max(np.abs(op.propagate(np.zeros(len(op.z)), 20000)) / scale) < 1e-9
+    rng = np.random.default_rng(3)
+    for n in (1, 10, 100, 400):
+        dz = 1e-6 * rng.standard_normal(len(op.z)) * scale
+        lin = np.linalg.matrix_power(op.A, n) @ dz
+        rel = np.linalg.norm((op.propagate(dz, n) - lin) / scale) / np.linalg.norm(lin / scale)
+        assert rel < 1e-3, (n, rel)
 
 
 def test_a_sweep_runs_it(tmp_path):

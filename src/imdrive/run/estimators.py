@@ -4,8 +4,10 @@ An estimator has two halves registered under one name, the value of
 ``control.speed_feedback`` that selects it:
 
 * the compiled half -- parameter and state record dtypes, a numba ``step(p, model, s, inp)``
-  returning ``(w_r_hat, e_dq0)``, optional log and finiteness functions --
-  :func:`register_kernel` (:mod:`imdrive.kernels.estimators.registry` has the contract);
+  returning ``(w_r_hat, e_dq0)``, optional log and finiteness functions, and optionally its
+  states for the stability maps (a :class:`ReducedState`; :func:`to_frame` rotates a
+  stationary-frame vector into the controller's frame) -- :func:`register_kernel`
+  (:mod:`imdrive.kernels.estimators.registry` has the contract);
 * the Python half -- a settings class whose ``records(ctx)`` turns its settings and the
   controller's machine model into the records' values (the gain design) --
   :func:`estimator_settings` (:mod:`imdrive.config.estimators`).
@@ -33,9 +35,11 @@ from imdrive.config.plugins import import_plugins
 from imdrive.config.validation import Bool, Float, Int, setting
 from imdrive.errors import ConfigError
 from imdrive.kernels.estimators import registry
+from imdrive.kernels.estimators.common import to_frame
 from imdrive.kernels.estimators.registry import (
     ESTIMATOR_INPUT,
     EstimatorKernel,
+    ReducedState,
     register_kernel,
 )
 from imdrive.kernels.records import b1, c16, f8, i8, new_record, record_dtype
@@ -49,6 +53,7 @@ __all__ = [
     "EstimatorRecords",
     "Float",
     "Int",
+    "ReducedState",
     "b1",
     "build_estimator",
     "c16",
@@ -60,6 +65,7 @@ __all__ = [
     "record_dtype",
     "register_kernel",
     "setting",
+    "to_frame",
 ]
 
 

@@ -328,7 +328,10 @@ def _estimator_log(row, p, s, n_p):
     k = _lookup(s)
     if k is None:
         return None
-    if k.log is None:
+    fields = getattr(row, "fields", None)
+    if k.log is None or (fields is not None and not set(k.log_fields) <= set(fields)):
+        # no log function, or a log record without its fields: the stability maps' engine
+        # logs nothing and runs on the package's record (kernels/linearise.py)
 
         def nothing(row, p, s, n_p):
             pass
