@@ -17,8 +17,8 @@ back, are not states: temperatures are held at the state's values).
 
 The reduced state ``z`` (SI units, synchronous frame of the controller): the plant's and the
 controller's :data:`N_D` states, then the estimator's own (its ``ReducedState``,
-:mod:`imdrive.kernels.estimators.registry`: the MRAS's, the adaptive observer's; an estimator
-without one is refused by the maps):
+:mod:`imdrive.kernels.estimators.registry`: the MRAS's, the adaptive observer's, the
+reactive-power MRAS's; an estimator without one is refused by the maps):
 
 ====== ============================== =================================================
 index  field                          block
@@ -35,7 +35,8 @@ index  field                          block
                                       ``lam_f`` (d, q), ``int_e``, ``w_r_hat``, the
                                       type-2 integral (0 where held); adaptive
                                       observer (21 in all): ``i_hat``, ``lam``, ``e``
-                                      (d, q), ``int_e``, ``w_r_hat``
+                                      (d, q), ``int_e``, ``w_r_hat``; reactive-power
+                                      MRAS (17): ``lam`` (d, q), ``int_e``, ``w_r_hat``
 ====== ============================== =================================================
 
 The two inputs are the speed reference (mechanical rad/s) and the load torque (N m), slots 0

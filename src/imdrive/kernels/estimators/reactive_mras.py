@@ -27,10 +27,11 @@ changes sign in regeneration.
 
 from __future__ import annotations
 
+import numpy as np
 from numba import njit
 
-from imdrive.kernels.estimators.common import current_model_step
-from imdrive.kernels.estimators.registry import register_kernel
+from imdrive.kernels.estimators.common import current_model_step, to_frame
+from imdrive.kernels.estimators.registry import ReducedState, register_kernel
 from imdrive.kernels.model import model_inductances
 from imdrive.kernels.records import c16, f8, record_dtype
 
@@ -114,6 +115,48 @@ def reactive_mras_estimate(p, m, s, inp):
     return s.w_r_hat, 0j
 
 
+# --- its states in the stability maps' reduced drive state (kernels/linearise.py) ----------
+
+#: The adjustable model's flux, the adaptation's integral and the speed estimate (the next
+#: period's model runs at it), controller's frame; ``q_ref``, ``q_hat`` are not read again.
+REDUCED_NAMES = ("lam_d", "lam_q", "int_e", "w_r_hat")
+REDUCED_SCALE = (0.1, 0.1, 1e-2, 1.0)
+
+
+@njit(cache=True)
+def reactive_mras_reduce(p, s, c, z, k):
+    """Its states into ``z[k:k + 4]`` (``ReducedState.reduce``)."""
+    z[k], z[k + 1] = to_frame(c, s.lam_ab)
+    z[k + 2] = s.int_e
+    z[k + 3] = s.w_r_hat
+
+
+@njit(cache=True)
+def reactive_mras_restore(z, k, s):
+    """``z[k:k + 4]`` back into its state (``ReducedState.restore``)."""
+    s.lam_ab = complex(z[k], z[k + 1])
+    s.int_e = z[k + 2]
+    s.w_r_hat = z[k + 3]
+
+
+def reactive_mras_steady(c, p, I, w_e, w_r_hat):
+    """Its states at rest: the current model's flux at the estimate, ``M_hat I / (1 + j (w_e -
+    w_r_hat) T2_hat)``, and the integral ``w_r_hat / K2`` (no error)."""
+    lam = c["M_hat"] * I / (1.0 + 1j * (w_e - w_r_hat) * (c["L2_hat"] / c["R2_hat"]))
+    k2 = float(p["K2"])
+    return np.column_stack([lam.real, lam.imag, w_r_hat / k2 if k2 != 0 else 0 * w_r_hat, w_r_hat])
+
+
 KERNEL = register_kernel(
-    "reactive-mras", REACTIVE_MRAS_PARAMS, REACTIVE_MRAS_STATE, reactive_mras_estimate
+    "reactive-mras",
+    REACTIVE_MRAS_PARAMS,
+    REACTIVE_MRAS_STATE,
+    reactive_mras_estimate,
+    reduced=ReducedState(
+        REDUCED_NAMES,
+        REDUCED_SCALE,
+        reactive_mras_reduce,
+        reactive_mras_restore,
+        reactive_mras_steady,
+    ),
 )
