@@ -18,6 +18,7 @@ from imdrive.run import linear as rl
 from imdrive.stability.linear import (
     RPM,
     STATUS_OK,
+    _rows,
     map_scenario,
     solve_operating_points,
 )
@@ -300,9 +301,7 @@ def simulate_steps(
     idx = np.flatnonzero(ok)
     if not len(idx):
         return sim_stable, growth, ops
-    d = ops.drive
-    P = rl.DriveParams(*(f[idx].copy() if f.shape[0] == n else f for f in d.P))
-    S = rl.DriveState(*(f[idx].copy() for f in d.S))
+    P, S, TH = _rows(ops.drive, idx)  # copies: the stepped reference is written into P
     P.prof_v[:, rl.PR_SPEED_REF, 0] += step_rpm * RPM
     z_old = ops.z[idx]
     rng = np.random.default_rng(seed)
@@ -318,7 +317,7 @@ def simulate_steps(
         S,
         np.ascontiguousarray(Z0),
         np.ascontiguousarray(Z1),
-        d.TH[idx].copy(),
+        TH,
         n_steps,
         n_win,
         peaks,
