@@ -66,14 +66,15 @@ def test_calibrating_the_current_sensors_keeps_the_observer_near_zero_frequency(
     # dead time and device drop (nothing compensated) it holds it uncalibrated too
     lost, err = _afo_70rpm_regenerating("sensorless")
     assert not lost and abs(err) < 1.0
-    lost, err = _afo_70rpm_regenerating("sensorless-realistic")
-    assert not lost and abs(err) < 8.0, err
-    # calibrated to within 0.05 % either way (the DC test finds it within 0.02 %)
+    lost, err = _afo_70rpm_regenerating("sensorless-realistic")  # measured -0.48 rpm at 6 s
+    assert not lost and abs(err) < 3.0, err
+    # calibrated to within 0.05 % either way (the DC test finds it within 0.02 %): -0.31,
+    # -0.67 rpm
     for ratio in (0.9975 / 1.0025 * 1.0005, 0.9975 / 1.0025 * 0.9995):
         lost, err = _afo_70rpm_regenerating(
             "sensorless-realistic", f"controller_model.current_gain_b_per_a={ratio}"
         )
-        assert not lost and abs(err) < 8.0, err
+        assert not lost and abs(err) < 3.0, err
     lost, _ = _afo_70rpm_regenerating(
         "sensorless-realistic", "controller_model.current_gain_b_per_a=1"
     )
