@@ -59,6 +59,7 @@ def test_realistic_drive_is_identified_within_the_goals(tmp_path):
     assert abs(err["J_kgm2"]) <= 0.10
     assert abs(err["Lm_H"]) <= 0.03
     assert abs(err["u_err_V"]) <= 0.05
+    assert abs(err["current_gain_b_per_a"]) <= 5e-4  # measured 1.4e-4 (tests/commission/test_dc)
     summary = json.loads((tmp_path / "summary.json").read_text())
     for key in ("R1_ohm", "R2_ohm", "sigma_L1_H", "L1_H", "J_kgm2"):
         assert summary["identified"][key] > 0 and summary["true"][key] > 0
@@ -66,6 +67,9 @@ def test_realistic_drive_is_identified_within_the_goals(tmp_path):
     assert set(summary["identified"]["inverter_error"]) == {"i_A", "u_V"}
     data = tomllib.loads((tmp_path / "identified.toml").read_text())
     assert data["estimator"]["R1_ohm"] == pytest.approx(res.identified["R1_ohm"])
+    ratio = res.identified["current_gain_b_per_a"]
+    assert data["controller_model"]["current_gain_b_per_a"] == pytest.approx(ratio)
+    assert data["controller_model"]["ideal"] is False  # the identified tables, not the plant's
     from imdrive.run.simulate import simulate
 
     run = simulate(Scenario.read(str(tmp_path / "identified.toml")))  # imdrive run's scenario

@@ -89,3 +89,19 @@ def test_the_realistic_drive_runs_on_another_machine_with_only_the_machine_chang
 
     res = simulate(Scenario.read("sensorless-realistic", [f'machine.preset="{machine}"']))
     assert res.verdict["verdict"] == "ok", res.verdict["verdict_text"]
+
+
+def test_the_sensors_relative_gain_is_the_plants_and_follows_it():
+    """``controller_model.current_gain_b_per_a`` unset: the plant's ``g_b/g_a`` with
+    ``ideal = true``, derived at use (a change of the sensors' gains is followed), 1 without;
+    a value given is kept, 1 included (the drive uncalibrated)."""
+    from imdrive.config.commissioning_ideal import current_gain_b_per_a
+
+    sc = Scenario.read("sensorless-realistic")
+    assert current_gain_b_per_a(sc) == pytest.approx(0.9975 / 1.0025, rel=1e-12)
+    moved = sc.with_overrides({"sensor.gain_b": 1.01})
+    assert current_gain_b_per_a(moved) == pytest.approx(1.01 / 1.0025, rel=1e-12)
+    assert current_gain_b_per_a(sc.with_overrides({"controller_model.ideal": False})) == 1.0
+    kept = sc.with_overrides({"controller_model.current_gain_b_per_a": 1.0})
+    assert current_gain_b_per_a(kept) == 1.0
+    assert current_gain_b_per_a(Scenario.read("sensorless")) == 1.0  # ideal sensors

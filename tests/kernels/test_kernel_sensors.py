@@ -101,3 +101,21 @@ def test_noise_statistics():
     # the normal's fourth moment (3) and tail mass beyond 2 sigma (4.55 %)
     assert np.mean(g**4) == pytest.approx(3.0, abs=0.15)
     assert np.mean(np.abs(g) > 2.0) == pytest.approx(0.0455, abs=0.006)
+
+
+def test_the_controllers_calibration_reads_both_phases_with_the_gains_geometric_mean():
+    # controller_model.current_gain_b_per_a = k: the readings times sqrt(k) and 1/sqrt(k)
+    g_a, g_b = 1.0025, 0.9975
+    k = g_b / g_a
+    p = _sensors(
+        phase_model=True,
+        gain_a=g_a,
+        gain_b=g_b,
+        cal_a=math.sqrt(k) - 1.0,
+        cal_b=1.0 / math.sqrt(k) - 1.0,
+    )
+    g = math.sqrt(g_a * g_b)
+    for i in [(8.0, -3.0), (-2.0, 11.0)]:
+        assert measure_current(p, *i, 0) == pytest.approx((g * i[0], g * i[1]), rel=1e-12)
+    uncal = measure_current(_sensors(phase_model=True, gain_a=g_a, gain_b=g_b), 0.0, 10.0, 0)
+    assert abs(uncal[1] / 10.0 - g) > 1e-3  # uncalibrated: beta reads with neither gain

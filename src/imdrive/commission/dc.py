@@ -26,6 +26,16 @@ current. Ten time constants: a level's flux transient, about ``R2 dI`` in volts 
 is then below 1e-3 of the level's voltage over the averaging window (the settling check,
 :data:`SETTLED_TOL`).
 
+The same levels give the current sensors' relative gain ``g_b/g_a``. The controller holds
+its *measured* current on the alpha axis (``m_a = I``, ``m_b = -I/2``), so with
+``m_x = g_x i_x`` the true current has a beta part ``(I/sqrt 3)(1/g_a - 1/g_b)``, and the
+beta voltage's slope over the plateau levels, per alpha voltage slope ``R1/g_a``, is
+``r = (1 - g_a/g_b)/sqrt 3``: ``g_b/g_a = 1/(1 - sqrt(3) r)``. The inverter's loss has no
+beta part on the plateau (phases b and c carry equal, saturated losses), and the offsets
+move only the intercepts. A relative gain error makes a negative-sequence current error,
+which the dead-time compensation and the observers then misplace
+(``controller_model.current_gain_b_per_a``).
+
 What limits the accuracy: the rotor-flux transient after each step (its voltage
 ``(M/L2) dpsi_r/dt`` decays with the rotor time constant; the level is averaged over its last
 40 % and refused if its two halves differ, :data:`SETTLED_TOL`); the current sensors' gain
@@ -82,6 +92,10 @@ class DcResult:
         The per-phase inverter-error table, from ``(0, 0)``: phase current, A; voltage lost, V.
     I_A, V_V : numpy.ndarray
         The measured levels: alpha current, A, and commanded alpha voltage, V.
+    V_beta_V : numpy.ndarray
+        The commanded beta voltage at each level, V.
+    gain_b_per_a : float
+        The current sensors' relative gain ``g_b/g_a`` (module docstring).
     duration_s : float
         Simulated duration of the test.
     """
@@ -93,6 +107,8 @@ class DcResult:
     I_A: np.ndarray
     V_V: np.ndarray
     duration_s: float
+    V_beta_V: np.ndarray
+    gain_b_per_a: float
 
 
 def dc_test(sc, npl: Nameplate, model: dict, T2: float) -> DcResult:
@@ -130,7 +146,7 @@ def dc_test(sc, npl: Nameplate, model: dict, T2: float) -> DcResult:
         plant=HELD_ROTOR,
     )
     res = run_test(scenario=scen, test="dc")
-    I_lv, V_lv = [], []
+    I_lv, V_lv, Vb_lv = [], [], []
     for k, f in enumerate(LEVELS_PU):
         t1 = (k + 1) * dwell
         t0 = t1 - AVERAGE_FRACTION * dwell
@@ -158,6 +174,7 @@ def dc_test(sc, npl: Nameplate, model: dict, T2: float) -> DcResult:
             )
         I_lv.append(float(np.mean(i.real)))
         V_lv.append(V)
+        Vb_lv.append(float(np.mean(v.imag)))
     I_lv, V_lv = np.array(I_lv), np.array(V_lv)
     target = np.array(LEVELS_PU) * npl.I_rated_A
     short = np.abs(I_lv - target) > 0.02 * npl.I_rated_A
@@ -168,7 +185,7 @@ def dc_test(sc, npl: Nameplate, model: dict, T2: float) -> DcResult:
             f"the current controllers did not reach {target[k]:.3g} A (measured "
             f"{I_lv[k]:.3g} A at {LEVELS_PU[k]:g} x rated current)",
         )
-    return _evaluate(I_lv, V_lv, t_end, npl)
+    return _evaluate(I_lv, V_lv, np.array(Vb_lv), t_end, npl)
 
 
 def unfold(nodes_i: np.ndarray, e: np.ndarray, weight: np.ndarray) -> np.ndarray:
@@ -194,8 +211,11 @@ def unfold(nodes_i: np.ndarray, e: np.ndarray, weight: np.ndarray) -> np.ndarray
     return steps @ d
 
 
-def _evaluate(I_lv: np.ndarray, V_lv: np.ndarray, duration: float, npl: Nameplate) -> DcResult:
-    """R1 and the plateau from the upper levels; the per-phase table unfolded below."""
+def _evaluate(
+    I_lv: np.ndarray, V_lv: np.ndarray, Vb_lv: np.ndarray, duration: float, npl: Nameplate
+) -> DcResult:
+    """R1 and the plateau from the upper levels; the per-phase table unfolded below; the
+    sensors' relative gain from the beta voltage's slope over the upper levels."""
     upper = np.array(LEVELS_PU) >= PLATEAU_PU
     R1, e_inf = np.polyfit(I_lv[upper], V_lv[upper], 1)
     if not R1 > 0.0:
@@ -209,6 +229,7 @@ def _evaluate(I_lv: np.ndarray, V_lv: np.ndarray, duration: float, npl: Nameplat
             "V(I) is not a straight line over the upper levels (the inverter's loss has no "
             f"plateau above {PLATEAU_PU:g} x rated current)",
         )
+    r = np.polyfit(I_lv[upper], Vb_lv[upper], 1)[0] / R1  # beta slope per alpha slope
     e = V_lv - R1 * I_lv  # alpha-axis error at each level
     e[upper] = e_inf  # the plateau: the fitted intercept, noise averaged over the levels
     nodes_i = np.concatenate(([0.0], I_lv))
@@ -221,4 +242,6 @@ def _evaluate(I_lv: np.ndarray, V_lv: np.ndarray, duration: float, npl: Nameplat
         I_A=I_lv,
         V_V=V_lv,
         duration_s=duration,
+        V_beta_V=Vb_lv,
+        gain_b_per_a=float(1.0 / (1.0 - np.sqrt(3.0) * r)),
     )

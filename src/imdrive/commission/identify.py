@@ -38,7 +38,8 @@ class CommissioningResult:
     ----------
     identified : dict
         ``R1_ohm``, ``R2_ohm``, ``sigma_L1_H``, ``L1_H``, ``Ll_H``, ``M_H``, ``J_kgm2``,
-        ``magnetising`` (``psi_Wb``, ``Lm_H``), ``inverter_error`` (``i_A``, ``u_V``).
+        ``magnetising`` (``psi_Wb``, ``Lm_H``), ``inverter_error`` (``i_A``, ``u_V``),
+        ``current_gain_b_per_a`` (the current sensors' relative gain).
     true : dict
         The plant's values of the same quantities (the simulator's; a real drive has none).
     relative_error : dict
@@ -112,6 +113,7 @@ def identify(sc: Scenario) -> CommissioningResult:
         "T2_step_s": T2,
         "magnetising": {"psi_Wb": psi.tolist(), "Lm_H": Lm.tolist()},
         "inverter_error": {"i_A": dc.i_A.tolist(), "u_V": dc.u_V.tolist()},
+        "current_gain_b_per_a": dc.gain_b_per_a,
     }
     true = truth(sc, psi)
     durations = {
@@ -161,6 +163,7 @@ def truth(sc: Scenario, psi_m: np.ndarray) -> dict:
         "M_H": m.M_H,
         "J_kgm2": m.J_kgm2,
         "magnetising": {"psi_Wb": list(map(float, psi_m)), "Lm_H": Lm.tolist()},
+        "current_gain_b_per_a": sc.sensor.gain_b / sc.sensor.gain_a,
         "inverter_error_plateau_V": inv.dead_time_s * inv.switching_frequency_Hz * inv.Vdc_V
         + inv.device_drop_V,
     }
@@ -169,7 +172,8 @@ def truth(sc: Scenario, psi_m: np.ndarray) -> dict:
 def relative_errors(ident: dict, true: dict, psi_rated: float) -> dict:
     """``identified/true - 1`` of each quantity (module docstring of the result)."""
     out = {
-        k: ident[k] / true[k] - 1.0 for k in ("R1_ohm", "R2_ohm", "sigma_L1_H", "L1_H", "J_kgm2")
+        k: ident[k] / true[k] - 1.0
+        for k in ("R1_ohm", "R2_ohm", "sigma_L1_H", "L1_H", "J_kgm2", "current_gain_b_per_a")
     }
     psi = np.array(ident["magnetising"]["psi_Wb"])
     err = np.array(ident["magnetising"]["Lm_H"]) / np.array(true["magnetising"]["Lm_H"]) - 1.0
@@ -189,7 +193,8 @@ def identified_scenario(sc: Scenario, res: CommissioningResult) -> dict:
     runs wherever it is moved): ``[estimator]`` R1, R2, leakages, M; the speed PI's gains
     from the identified J; the inverter's error as the dead-time feed-forward's assumed dead
     time (when the scenario compensates it) and, where the scenario has the section,
-    ``[controller_model]``'s tables.
+    ``[controller_model]``'s tables and the current sensors' relative gain (with ``ideal =
+    false``: these, not the plant's).
     """
     from imdrive.config.perunit import speed_bandwidth_Hz
     from imdrive.design.gains import default_speed_gains
@@ -223,10 +228,14 @@ def identified_scenario(sc: Scenario, res: CommissioningResult) -> dict:
         )
     if "controller_model" in SECTIONS:
         cm = d.setdefault("controller_model", {})
+        # the identified model, not the plant's: ideal = true would replace the tables on
+        # reading (until 2026-11-30 a commissioned realistic preset ran the ideal tables)
+        cm["ideal"] = False
         cm["magnetising_psi_Wb"] = ident["magnetising"]["psi_Wb"]
         cm["magnetising_Lm_H"] = ident["magnetising"]["Lm_H"]
         cm["inverter_error_i_A"] = ident["inverter_error"]["i_A"]
         cm["inverter_error_u_V"] = ident["inverter_error"]["u_V"]
+        cm["current_gain_b_per_a"] = ident["current_gain_b_per_a"]
     return d
 
 

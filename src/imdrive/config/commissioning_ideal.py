@@ -17,7 +17,10 @@ the plant's own models:
   ``u = t_d f_sw Vdc + V_drop`` for a current of either sign (:mod:`imdrive.kernels.inverter`:
   one delayed edge per carrier period and leg, the drop of the conducting device), reached at
   the current ``inverter.sign_band_A`` (below it the current's ripple and the sensors' noise
-  make the sign uncertain; the DC test's smallest current) and constant beyond.
+  make the sign uncertain; the DC test's smallest current) and constant beyond;
+* **current sensors' relative gain**: ``g_b/g_a`` of the plant's two phase sensors (the DC
+  test finds it from the beta voltage, :mod:`imdrive.commission.dc`), derived at use by
+  :func:`current_gain_b_per_a` rather than stored with the tables.
 
 Values are rounded to 6 significant digits, as the tables a preset states: the realistic
 presets' tables were written by this function, and ``ideal = true`` gives them to the bit.
@@ -65,7 +68,8 @@ def ideal_commissioning(sc, flux_pu=FLUX_PU) -> dict[str, list[float]]:
 
     Returns the section's keys: ``magnetising_psi_Wb``, ``magnetising_Lm_H`` (omitted without
     saturation: the constant ``M̂`` is then the plant's), ``inverter_error_i_A`` and
-    ``inverter_error_u_V`` (omitted when the inverter loses nothing).
+    ``inverter_error_u_V`` (omitted when the inverter loses nothing). The sensors' relative
+    gain is :func:`current_gain_b_per_a`.
     """
     out: dict[str, list[float]] = {}
     if sc.plant.saturation.enabled:
@@ -89,7 +93,8 @@ TABLE_KEYS = ("magnetising_psi_Wb", "magnetising_Lm_H", "inverter_error_i_A", "i
 def resolve_ideal(sc) -> None:
     """``controller_model.ideal = true``: set the scenario's tables to
     :func:`ideal_commissioning` of its plant (called while the scenario is validated, after
-    the machine's defaults). Given tables that differ are replaced, with a warning."""
+    the machine's defaults). Given tables that differ are replaced, with a warning. The
+    sensors' relative gain is derived at use (:func:`current_gain_b_per_a`)."""
     cm = sc.controller_model
     if not cm.ideal:
         return
@@ -106,3 +111,14 @@ def resolve_ideal(sc) -> None:
             stacklevel=4,
         )
     object.__setattr__(sc, "controller_model", replace(cm, **tables))
+
+
+def current_gain_b_per_a(sc) -> float:
+    """The current sensors' relative gain ``g_b/g_a`` the controller's calibration uses:
+    ``controller_model.current_gain_b_per_a`` when given (kept with ``ideal = true``: 1 runs
+    the drive uncalibrated), else the plant's with ``ideal = true`` (derived here, at use,
+    so that it follows a change of the sensors' gains), else 1."""
+    cm = sc.controller_model
+    if cm.current_gain_b_per_a is not None:
+        return cm.current_gain_b_per_a
+    return sc.sensor.gain_b / sc.sensor.gain_a if cm.ideal else 1.0

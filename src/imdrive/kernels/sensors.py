@@ -12,6 +12,10 @@ Current sensors
         i_x,meas = Q(g_x i_x + o_x + n_x),   Q(u) = clip(q round(u/q), -range, range - q),
         q = 2 range / 2^bits
 
+    and the controller scales the readings by its calibration ``1 + cal_x``
+    (``sqrt(g_b/g_a)`` and ``sqrt(g_a/g_b)`` as commissioning measured the ratio: both phases
+    then read with the gains' geometric mean, the common gain they had on average).
+
 DC-link voltage sensor
     The controller turns voltages into duty cycles with ``Vdc_meas = g_dc Vdc``; a gain error
     scales every applied voltage by ``1/g_dc``.
@@ -38,6 +42,11 @@ SENSOR_PARAMS = record_dtype(
         ("adc_range", f8),  # ADC full scale, ±A
         ("seed", i8),  # noise seed
         ("vdc_gain", f8),  # gain of the DC-link voltage sensor
+        # the controller's calibration of the two readings, which it multiplies by 1 + cal_a
+        # and 1 + cal_b (sqrt(g_b/g_a) - 1 and sqrt(g_a/g_b) - 1 as commissioning measured
+        # the ratio: both then read with the gains' geometric mean; 0: none)
+        ("cal_a", f8),
+        ("cal_b", f8),
     ]
 )
 
@@ -139,8 +148,9 @@ def phase_sensors(p, i_s_alpha, i_s_beta, n_a, n_b):
     if p.noise_rms > 0.0:
         ma += p.noise_rms * n_a
         mb += p.noise_rms * n_b
-    ma = quantise(ma, p.adc_bits, p.adc_range)
-    mb = quantise(mb, p.adc_bits, p.adc_range)
+    # the controller's scaling of counts to amperes: its calibration
+    ma = quantise(ma, p.adc_bits, p.adc_range) * (1.0 + p.cal_a)
+    mb = quantise(mb, p.adc_bits, p.adc_range) * (1.0 + p.cal_b)
     # two sensors, i_c = -i_a - i_b: alpha = i_a, beta = (i_a + 2 i_b)/sqrt(3)
     return ma + p.i_offset_ab.real, (ma + 2.0 * mb) / math.sqrt(3.0) + p.i_offset_ab.imag
 

@@ -21,6 +21,7 @@ import math
 
 import numpy as np
 
+from imdrive.config.commissioning_ideal import current_gain_b_per_a
 from imdrive.config.controller_model import inverter_error_half, magnetising_table
 from imdrive.config.defaults import in_effect
 from imdrive.config.perunit import Resolved
@@ -136,11 +137,16 @@ def inverter_fields(sc: Scenario) -> dict:
 
 
 def sensor_fields(sc: Scenario) -> dict:
-    """``SENSOR_PARAMS``: current sensors (offsets, gains, noise, ADC) and the DC-link gain."""
+    """``SENSOR_PARAMS``: current sensors (offsets, gains, noise, ADC), the DC-link gain and
+    the controller's calibration of phase b (``controller_model.current_gain_b_per_a``)."""
     sen = sc.sensor
+    # both readings to the gains' geometric mean: the relative error goes, the common one
+    # (which the drive cannot know) stays what the two sensors had on average
+    ratio = current_gain_b_per_a(sc)
+    cal_a, cal_b = math.sqrt(ratio) - 1.0, 1.0 / math.sqrt(ratio) - 1.0
     return dict(
         i_offset_ab=complex(sen.i_offset_alpha_A, sen.i_offset_beta_A),
-        phase_model=sen.per_phase,
+        phase_model=sen.per_phase or ratio != 1.0,  # a calibration applies per phase
         gain_a=sen.gain_a,
         gain_b=sen.gain_b,
         offset_a=sen.offset_a_A,
@@ -150,6 +156,8 @@ def sensor_fields(sc: Scenario) -> dict:
         adc_range=in_effect(sc, "sensor.adc_range_A"),
         seed=sen.seed,
         vdc_gain=sen.vdc_gain,
+        cal_a=cal_a,
+        cal_b=cal_b,
     )
 
 

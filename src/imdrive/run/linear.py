@@ -15,6 +15,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from imdrive.config.commissioning_ideal import current_gain_b_per_a
 from imdrive.config.scenario import Scenario
 from imdrive.errors import ConfigError
 from imdrive.kernels.engine import DriveParams, DriveState
@@ -115,7 +116,7 @@ def stationary_drive(sc: Scenario, speeds_rad_s, torques_Nm) -> StationaryDrive:
             "inverter.dead_time_s",
             "dead time and device drops act per phase: no fixed point (set both to 0)",
         )
-    if sc.sensor.per_phase or sc.sensor.vdc_gain != 1.0:
+    if sc.sensor.per_phase or sc.sensor.vdc_gain != 1.0 or current_gain_b_per_a(sc) != 1.0:
         raise ConfigError(
             "sensor", "per-phase sensor errors break rotation invariance (no fixed point)"
         )
