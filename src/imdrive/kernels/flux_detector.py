@@ -104,7 +104,7 @@ def detector_flux_error(p, s, m, inp, w_r_hat):
     i_mean = 0.5 * (i0 + i1) + i_bend
     kv = L2 / M
     d_v = kv * (Ts * (inp.v_ab - m.R1_hat * i_mean) - sigma_L1 * (i1 - i0))
-    d_sat = saturation_increment(kv, sigma_L1, s.dt_kv, s.dt_sL, lam_old, i1)
+    d_sat = saturation_increment(kv, sigma_L1, s.dt_kv, s.dt_sL, lam_old, i0)
     if d_sat != 0j:  # a saturating model (unsaturated: the same numbers, bit for bit)
         d_v += d_sat
     s.dt_kv = kv

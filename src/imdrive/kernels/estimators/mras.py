@@ -259,7 +259,7 @@ def mras_step(
 
     # reference (voltage) model, eq. (1)
     kv = L2 / M
-    d_sat = saturation_increment(kv, sigma_L1, s.kv, s.sL, lam_old, i1)
+    d_sat = saturation_increment(kv, sigma_L1, s.kv, s.sL, lam_old, i0)
     s.kv = kv
     s.sL = sigma_L1
     d_alpha = kv * (Ts * (v_prev_alpha - R1 * i_mean_alpha) - sigma_L1 * (i_alpha - i_prev_alpha))
