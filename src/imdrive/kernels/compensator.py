@@ -172,6 +172,8 @@ COMPENSATOR_STATE = record_dtype(
         ("dt_lam_f", c16),  # its filtered current model, Wb
         ("dt_w", f8),  # its speed adaptation: the correction to the estimator's, rad/s
         ("dt_int", f8),  # the adaptation error's integral, Wb^2 s
+        ("dt_kv", f8),  # L2/M of the last period (0: none yet)
+        ("dt_sL", f8),  # sigma L1 of the last period, H
         ("on", b1),  # the compensator has started (its start in the duty cycle's time)
         ("t_start", f8),  # the run's time it started, s
         ("law", NO_LAW_STATE),  # the plug-in law's state record (the placeholder's otherwise)

@@ -6,7 +6,8 @@ that error over (its reference and adjustable models, ``e_dq0``); for any other 
 detection forms it itself, from the same two models of Schauder's MRAS (C. Schauder, IEEE
 Trans. Ind. Appl. 28(5), 1992): the voltage model
 
-    p lam_v = (L2/M) (v - R1_hat i - sigma L1 p i)
+    p lam_v = (L2/M) (v - R1_hat i - sigma L1 p i)     (+ the saturating model's terms,
+                                                     estimators.common.saturation_increment)
 
 and the current model driven by the running estimator's speed plus a correction
 
@@ -70,6 +71,7 @@ from imdrive.kernels.estimators.common import (
     current_model_step,
     lowpass_coefficients,
     period_mean_offset,
+    saturation_increment,
 )
 from imdrive.kernels.model import model_inductances
 
@@ -100,7 +102,13 @@ def detector_flux_error(p, s, m, inp, w_r_hat):
     lam_new = current_model_step(lam_old, w_d, m.R2_hat, L2, M, i0 + i_bend, i1 + i_bend, Ts)
     g, k_in = lowpass_coefficients(p.cpl_wc, Ts)
     i_mean = 0.5 * (i0 + i1) + i_bend
-    d_v = (L2 / M) * (Ts * (inp.v_ab - m.R1_hat * i_mean) - sigma_L1 * (i1 - i0))
+    kv = L2 / M
+    d_v = kv * (Ts * (inp.v_ab - m.R1_hat * i_mean) - sigma_L1 * (i1 - i0))
+    d_sat = saturation_increment(kv, sigma_L1, s.dt_kv, s.dt_sL, lam_old, i0)
+    if d_sat != 0j:  # a saturating model (unsaturated: the same numbers, bit for bit)
+        d_v += d_sat
+    s.dt_kv = kv
+    s.dt_sL = sigma_L1
     s.dt_lam_v = g * s.dt_lam_v + k_in * d_v
     s.dt_lam_f = g * s.dt_lam_f + k_in * (lam_new - lam_old)
     s.dt_lam_i = lam_new

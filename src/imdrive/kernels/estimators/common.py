@@ -98,6 +98,33 @@ def current_model_step(lam, w_r, R2, L2, M, i0, i1, Ts):
 
 
 @njit(cache=True, inline="always")
+def saturation_increment(kv, sigma_L1, kv_prev, sigma_prev, lam, i0):
+    """What a saturating model adds to the voltage model's increment over a period, Wb.
+
+    The voltage model's rotor flux is ``lam = (L2/M)(psi_s - sigma L1 i)``; its increment
+    ``(L2/M)(Ts (v - R1 i) - sigma L1 di)`` holds while ``L2/M`` and ``sigma L1`` are constant.
+    On a saturation-aware model (``[controller_model]``'s magnetising curve) they follow the
+    flux, which the R2 injection moves every period, and the increment has two more terms::
+
+        d(L2/M) (psi_s - sigma L1 i) - (L2/M) i d(sigma L1)
+            = (d(L2/M) / (L2/M)) lam - (L2/M) i d(sigma L1)
+
+    with ``lam`` the rotor flux (the current model's) and ``i`` the current at the period's
+    start, ``i0`` (with them the increment is exact: the difference of ``lam`` at the two
+    ends). ``kv``, ``sigma_L1``: this period's ``L2/M`` and ``sigma L1`` (H); ``kv_prev``,
+    ``sigma_prev``: the last period's (``kv_prev`` 0: none yet). Exactly 0 on a constant
+    model. Measured (saturation alone, R2 injection, 0.2 of the rated speed, regenerating /
+    motoring the rated torque): without these terms the observer drive's R̂2 ended +1.4 /
+    -0.1 % on Table IV and +2.2 / -0.2 % on the Aalto 2.2 kW machine; with them +0.1 / +0.5 %
+    and +0.5 / +0.6 %, a bias that no longer depends on the load
+    (tests/kernels/test_saturation_increment.py).
+    """
+    if kv_prev <= 0.0 or (kv == kv_prev and sigma_L1 == sigma_prev):
+        return 0j
+    return ((kv - kv_prev) / kv_prev) * lam - kv * (sigma_L1 - sigma_prev) * i0
+
+
+@njit(cache=True, inline="always")
 def lowpass_coefficients(wc, Ts):
     """Pole ``g`` and input gain ``k_in`` of Schauder's low-pass ``1/(s + wc)`` over one
     period of a held input: ``x[k+1] = g x[k] + k_in Ts u[k]``, ``g = exp(-wc Ts)``,

@@ -141,6 +141,7 @@ from imdrive.kernels.estimators.common import (  # noqa: F401 (flux_frequency: a
     flux_frequency,
     lowpass_coefficients,
     period_mean_offset,
+    saturation_increment,
     to_frame,
 )
 from imdrive.kernels.estimators.registry import ReducedState, register_kernel
@@ -182,6 +183,8 @@ MRAS_STATE = record_dtype(
         ("wc_now", f8),  # the filter's corner this period (p.wc_k > 0), rad/s
         ("w_flux", f8),  # the adjustable model's flux frequency, low-passed over p.wc_tau, rad/s
         ("dlam_i_ab", c16),  # adjustable model's change over the last period, Wb
+        ("kv", f8),  # the voltage model's L2/M of the last period (0: none yet)
+        ("sL", f8),  # and its sigma L1, H
     ]
     + stab.STABILISE_STATE
 )
@@ -256,8 +259,14 @@ def mras_step(
 
     # reference (voltage) model, eq. (1)
     kv = L2 / M
+    d_sat = saturation_increment(kv, sigma_L1, s.kv, s.sL, lam_old, i0)
+    s.kv = kv
+    s.sL = sigma_L1
     d_alpha = kv * (Ts * (v_prev_alpha - R1 * i_mean_alpha) - sigma_L1 * (i_alpha - i_prev_alpha))
     d_beta = kv * (Ts * (v_prev_beta - R1 * i_mean_beta) - sigma_L1 * (i_beta - i_prev_beta))
+    if d_sat != 0j:  # a saturating model (unsaturated: the same numbers, bit for bit)
+        d_alpha += d_sat.real
+        d_beta += d_sat.imag
     lam_v_alpha = g * s.lam_v_ab.real + k_in * d_alpha
     lam_v_beta = g * s.lam_v_ab.imag + k_in * d_beta
     lam_f_alpha = g * s.lam_f_ab.real + k_in * dlam.real
