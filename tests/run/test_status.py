@@ -100,13 +100,15 @@ def test_causes_are_named_in_time_order(sc):
     )
     v = verdict(sc, row)
     text = v["verdict_text"]
-    assert v["verdict"] == "held" and v["verdict_at_s"] == 4.3
+    # the text in time order; the verdict the loss of control, which outranks the hold before
+    # it (a lost run never reads "held")
+    assert v["verdict"] == "lost-control" and v["verdict_at_s"] == 6.0
     assert text.index("R2 held since t = 4.3 s (voltage limit)") < text.index("lost control")
     assert text.index("lost control at t = 6 s") < text.index("diverged at t = 7 s")
     assert text.index("diverged") < text.index("R2_hat off by +12 %")
-    # without the hold, the loss of control comes first, before the divergence
-    row.update(R2_held_since_s=NAN)
-    assert verdict(sc, row)["verdict"] == "lost-control"
+    # the divergence alone (no loss of control before it) is the verdict, after the hold
+    row.update(lost_control_at_s=NAN)
+    assert verdict(sc, row)["verdict"] == "diverged"
 
 
 def test_frozen_means_R2_hat_never_moved(sc):

@@ -107,8 +107,9 @@ SUMMARY_DOCS = {
     "machine_rated": "the machine's rated point: nameplate where given, else derived from the "
     "circuit (voltage, frequency, speed, slip, torque, current, power factor, efficiency, "
     "magnetising current, rotor flux, breakdown torque): imdrive.config.machine.rated_point",
-    "verdict": "the run's status (imdrive.run.status): `verdict` ok, or the first cause of a "
-    "failure (lost-control, diverged, frozen, held, R2-off, R2-unsettled, speed-error), "
+    "verdict": "the run's status (imdrive.run.status): `verdict` ok, or the cause of a "
+    "failure (lost-control, diverged, frozen, held, R2-off, R2-unsettled, speed-error): a loss "
+    "of control or divergence whenever there is one, else the first in time, "
     "`verdict_text` every "
     "cause in time order, `verdict_at_s`; the speed error in rated slips and its tolerance; "
     "the share of the compensator's time R2_hat was held, since when and why (voltage limit, "

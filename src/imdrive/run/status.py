@@ -175,6 +175,10 @@ def low_frequency_note(sc, row: dict, lost: bool) -> str:
     )
 
 
+#: The verdicts that end a run's meaning: the verdict whenever they occur, before the
+#: first cause otherwise.
+FATAL = ("lost-control", "diverged")
+
 VERDICTS = (
     "ok",
     "lost-control",
@@ -309,8 +313,9 @@ def verdict(sc, row: dict) -> dict:
     dict
         :data:`STATUS_COLUMNS`: the speed error in per-unit of the rated slip speed, the
         tolerance (rpm), the verdict (one of :data:`VERDICTS`), whether it is ``ok`` (a
-        boolean column, for the heatmaps' shares), its text and the time of its first cause, s
-        (NaN for ``ok``).
+        boolean column, for the heatmaps' shares), its text and the time of its cause, s
+        (NaN for ``ok``). The verdict is the first cause in time, or the loss of control
+        (divergence) whenever there is one.
     """
     tol_rpm = speed_tolerance_rpm(sc)
     slip = rated_slip_rpm(sc)
@@ -385,12 +390,15 @@ def verdict(sc, row: dict) -> dict:
     r1_note = {2: f"; {R1_NOT_IDENTIFIED}", 3: f"; {R1_ONE_LEVEL}"}.get(row.get("R1_id_status"), "")
     r1_note += sequence_notes(sc, row, t_end)
     if events:
-        out["verdict"] = events[0][1]
+        # the first cause, but a loss of control or a divergence outranks what came before it
+        # (an R2_hat held, then control lost, is a lost run: its verdict said "held")
+        fatal = [e for e in events if e[1] in FATAL]
+        first = fatal[0] if fatal else events[0]
+        out["verdict"] = first[1]
         out["verdict_ok"] = False
         out["verdict_text"] = "; ".join(e[2] for e in events) + r1_note
-        lost = any(e[1] in ("lost-control", "diverged") for e in events)
-        out["verdict_text"] += low_frequency_note(sc, row, lost)
-        out["verdict_at_s"] = events[0][0]
+        out["verdict_text"] += low_frequency_note(sc, row, bool(fatal))
+        out["verdict_at_s"] = first[0]
         return out
     out["verdict"] = "ok"
     out["verdict_ok"] = True
