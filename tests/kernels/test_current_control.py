@@ -52,7 +52,7 @@ def _q_error_after_step(imc: bool, after_s: float) -> tuple[float, float]:
     errs = []
     for k in range(k_step + 400):
         psi = PSI * (1.05 if k >= k_step else 1.0)
-        v_a, v_b = foc_step(p, m, s, i_ab.real, i_ab.imag, W_M, W_M, PSI, 0.0, TS, 0j)
+        v_a, v_b = foc_step(p, m, s, i_ab.real, i_ab.imag, W_M, W_M, PSI, 0.0, TS, 0j, 0.0)
         if k >= k_step:
             errs.append(s["i_ref_dq"].imag - s["i_s_dq"].imag)
         v = complex(v_a, v_b)

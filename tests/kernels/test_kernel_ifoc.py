@@ -54,7 +54,7 @@ def _magnetised(iq_cmd):
 def test_slip_is_R2_hat_over_L2_times_iq_over_id(R2_hat, iq):
     p, m, s = _params(kp_w=0.1), _model(R2_hat), _magnetised(iq)
     w_m = 100.0
-    foc_step(p, m, s, 0.0, 0.0, w_m, w_m, PSI, 0.0, TS, 0j)
+    foc_step(p, m, s, 0.0, 0.0, w_m, w_m, PSI, 0.0, TS, 0j, 0.0)
     id_ref = PSI / M
     assert s["i_ref_dq"] == pytest.approx(complex(id_ref, iq), rel=1e-12)
     slip = (R2_hat / L2) * iq / id_ref
@@ -69,14 +69,14 @@ def test_decoupling_feed_forward_is_the_steady_state_voltage_less_the_resistive_
     field angle half a period ahead."""
     iq, w_m = 5.0, 80.0
     p, m, s = _params(decouple=True, angle_advance=0.5), _model(), _magnetised(iq)
-    va, vb = foc_step(p, m, s, 0.0, 0.0, w_m, w_m, PSI, 0.0, TS, 0j)
+    va, vb = foc_step(p, m, s, 0.0, 0.0, w_m, w_m, PSI, 0.0, TS, 0j, 0.0)
     w_e = s["w_e"]
     id_ref = PSI / M
     v_dq = complex(-w_e * SIGMA_L1 * iq, w_e * (SIGMA_L1 * id_ref + M / L2 * PSI))
     v_ab = v_dq * np.exp(1j * 0.5 * w_e * TS)
     assert complex(va, vb) == pytest.approx(v_ab, rel=1e-12)
     s2 = _magnetised(iq)
-    assert foc_step(_params(), m, s2, 0.0, 0.0, w_m, w_m, PSI, 0.0, TS, 0j) == (0.0, 0.0)
+    assert foc_step(_params(), m, s2, 0.0, 0.0, w_m, w_m, PSI, 0.0, TS, 0j, 0.0) == (0.0, 0.0)
 
 
 def test_measured_current_is_rotated_into_the_field_frame():
@@ -84,7 +84,7 @@ def test_measured_current_is_rotated_into_the_field_frame():
     s["theta_e"] = 0.7
     i_dq = complex(3.0, -2.0)
     i_ab = i_dq * np.exp(1j * 0.7)
-    foc_step(p, m, s, i_ab.real, i_ab.imag, 0.0, 0.0, PSI, 0.0, TS, 0j)
+    foc_step(p, m, s, i_ab.real, i_ab.imag, 0.0, 0.0, PSI, 0.0, TS, 0j, 0.0)
     assert s["i_s_dq"] == pytest.approx(i_dq, rel=1e-12)
 
 
@@ -100,14 +100,14 @@ def test_an_observed_flux_sets_the_frame_above_the_threshold(w_e, observed):
     th = 1.1 if observed else 0.7
     i_dq = complex(3.0, -2.0)
     i_ab = i_dq * np.exp(1j * th)
-    foc_step(p, m, s, i_ab.real, i_ab.imag, 0.0, 0.0, PSI, 0.0, TS, psi_obs)
+    foc_step(p, m, s, i_ab.real, i_ab.imag, 0.0, 0.0, PSI, 0.0, TS, psi_obs, 0.0)
     assert s["i_s_dq"] == pytest.approx(i_dq, rel=1e-12)
     assert s["theta_e"] == pytest.approx(th + s["w_e"] * TS, rel=1e-12)
     # an estimate below half the reference flux (magnetising) leaves the integrated angle
     p, m, s = _params(dfo_wmin=50.0), _model(), _magnetised(0.0)
     s["theta_e"], s["w_e"] = 0.7, w_e
     i_ab = i_dq * np.exp(1j * 0.7)
-    foc_step(p, m, s, i_ab.real, i_ab.imag, 0.0, 0.0, PSI, 0.0, TS, 0.4 * psi_obs)
+    foc_step(p, m, s, i_ab.real, i_ab.imag, 0.0, 0.0, PSI, 0.0, TS, 0.4 * psi_obs, 0.0)
     assert s["i_s_dq"] == pytest.approx(i_dq, rel=1e-12)
 
 
@@ -115,16 +115,16 @@ def test_current_limit_gives_the_d_axis_priority():
     i_max = 10.0
     p, m = _params(i_max=i_max, kp_w=50.0), _model()
     s = _magnetised(0.0)
-    foc_step(p, m, s, 0.0, 0.0, 0.0, 300.0, PSI, 0.0, TS, 0j)  # a large speed error
+    foc_step(p, m, s, 0.0, 0.0, 0.0, 300.0, PSI, 0.0, TS, 0j, 0.0)  # a large speed error
     id_ref = PSI / M
     assert s["i_ref_dq"].real == id_ref
     assert s["i_ref_dq"].imag == pytest.approx(math.sqrt(i_max**2 - id_ref**2), rel=1e-12)
     assert abs(s["i_ref_dq"]) == pytest.approx(i_max, rel=1e-12)
     s = _magnetised(0.0)
-    foc_step(p, m, s, 0.0, 0.0, 300.0, 0.0, PSI, 0.0, TS, 0j)
+    foc_step(p, m, s, 0.0, 0.0, 300.0, 0.0, PSI, 0.0, TS, 0j, 0.0)
     assert s["i_ref_dq"].imag == pytest.approx(-math.sqrt(i_max**2 - id_ref**2), rel=1e-12)
     s = _magnetised(0.0)
-    foc_step(p, m, s, 0.0, 0.0, 0.0, 300.0, 4.0, 0.0, TS, 0j)  # id* alone beyond the limit
+    foc_step(p, m, s, 0.0, 0.0, 0.0, 300.0, 4.0, 0.0, TS, 0j, 0.0)  # id* alone beyond the limit
     assert s["i_ref_dq"] == complex(i_max, 0.0)
 
 
@@ -135,7 +135,7 @@ def test_speed_pi_anti_windup_restarts_from_the_limit():
     p, m = _params(kp_w=kp, ki_w=ki, i_max=i_max), _model()
     s = _magnetised(0.0)
     err = 30.0
-    foc_step(p, m, s, 0.0, 0.0, 0.0, err, PSI, 0.0, TS, 0j)
+    foc_step(p, m, s, 0.0, 0.0, 0.0, err, PSI, 0.0, TS, 0j, 0.0)
     iq_lim = s["i_ref_dq"].imag
     assert iq_lim == pytest.approx(math.sqrt(i_max**2 - (PSI / M) ** 2))
     assert s["int_w"] == pytest.approx(iq_lim - kp * err + ki * TS * err, rel=1e-12)

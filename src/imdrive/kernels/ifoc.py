@@ -186,7 +186,7 @@ def open_loop_voltage(s, v_amp, f_Hz, Ts):
 
 
 @njit(cache=True)
-def foc_step(p, m, s, i_alpha, i_beta, w_fb_m, w_ref_m, psi_ref, i_inj, Ts, psi_obs_ab):
+def foc_step(p, m, s, i_alpha, i_beta, w_fb_m, w_ref_m, psi_ref, i_inj, Ts, psi_obs_ab, psi_mag):
     """One period of field-oriented speed control, indirect or, on an estimator's flux,
     direct (updates ``s``).
 
@@ -209,9 +209,10 @@ def foc_step(p, m, s, i_alpha, i_beta, w_fb_m, w_ref_m, psi_ref, i_inj, Ts, psi_
         Component added to the flux-current reference id* (the injected sinusoid), A.
     Ts : float
         Control period, s.
-    psi_obs_ab : complex
-        The speed estimator's rotor-flux estimate, stationary frame, Wb (``0j``: it has none;
-        the frame then integrates the slip alone; module docstring).
+    psi_obs_ab, psi_mag : complex, float
+        The speed estimator's rotor-flux estimate, stationary frame, Wb (``0j``: none, the
+        frame integrates the slip; module docstring), and a flux magnitude an R̂2 error does
+        not move, for the magnetising curve (Wb; 0: the flux model's; an encoder drive's).
 
     Returns
     -------
@@ -297,8 +298,7 @@ def foc_step(p, m, s, i_alpha, i_beta, w_fb_m, w_ref_m, psi_ref, i_inj, Ts, psi_
     s.w_e = w_e
     s.i_ref_dq = complex(id_ref, iq_ref)
     s.i_s_dq = complex(i_d, i_q)
-    # saturation-aware model: M_hat at the magnetising flux of the new flux estimate
-    update_magnetising(m, s.psi_hat, s.i_ref_dq)
+    update_magnetising(m, psi_mag if psi_mag > 0.0 else s.psi_hat, s.i_ref_dq)  # M_hat(psi_m)
     return v_alpha, v_beta
 
 

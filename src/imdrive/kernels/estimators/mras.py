@@ -493,6 +493,14 @@ def mras_steady(c, p, I, w_e, w_r_hat):
     return z
 
 
+@njit(cache=True)
+def mras_flux_magnitude(s):
+    """The adjustable model's rotor-flux magnitude, Wb: the machine's whatever R̂2, once the
+    speed adaptation has turned the model onto the voltage model's angle (the registry's
+    ``flux_magnitude``; an encoder drive's magnetising curve reads it)."""
+    return abs(s.lam_i_ab)
+
+
 KERNEL = register_kernel(
     "mras",
     MRAS_PARAMS,
@@ -504,4 +512,5 @@ KERNEL = register_kernel(
     reduced=ReducedState(
         REDUCED_NAMES, REDUCED_SCALE, mras_reduce, mras_restore, mras_steady, "w_r_hat"
     ),
+    flux_magnitude=mras_flux_magnitude,
 )

@@ -32,6 +32,13 @@ The contract
     estimator that observes the flux (the AFO, the EKF): the drive orients its frame on it
     above 0.1 of the rated stator frequency (direct field orientation,
     :mod:`imdrive.kernels.ifoc`); without it the frame integrates the slip (indirect).
+``flux_magnitude(s) -> float`` (optional)
+    The magnitude of a rotor-flux estimate that an R̂2 error does not move, Wb, for the
+    controller's magnetising curve on an encoder drive (``control.speed_feedback =
+    "measured"``, the MRAS beside): the MRAS's adjustable-model flux, whose speed the MRAS
+    adapts until its angle is the voltage model's, so that its magnitude is the machine's
+    whatever R̂2. Without it the controller evaluates ``M̂`` at its own flux model's, which
+    an R̂2 error detunes on an encoder drive (:mod:`imdrive.kernels.ifoc`).
 ``reduced`` (optional, a :class:`ReducedState`)
     The estimator's states in the stability maps' reduced drive state
     (:mod:`imdrive.kernels.linearise`): their names, scales, the two functions that write them
@@ -176,6 +183,9 @@ class EstimatorKernel:
         Optional (module docstring).
     flux : numba dispatcher or None
         Optional: its rotor-flux estimate, which the drive orients on (module docstring).
+    flux_magnitude : numba dispatcher or None
+        Optional: an R̂2-independent rotor-flux magnitude for the magnetising curve on an
+        encoder drive (module docstring).
     reduced : ReducedState or None
         Optional: its states in the stability maps' reduced drive state (module docstring).
     """
@@ -189,6 +199,7 @@ class EstimatorKernel:
     finite: object = None
     flux: object = None
     reduced: ReducedState | None = None
+    flux_magnitude: object = None
     source: str = field(default="", compare=False)
 
     @property
@@ -214,6 +225,7 @@ def register_kernel(
     reduced_state: bool = False,
     flux=None,
     reduced: ReducedState | None = None,
+    flux_magnitude=None,
 ) -> EstimatorKernel:
     """Register an estimator's compiled half under ``name`` and return it.
 
@@ -227,7 +239,7 @@ def register_kernel(
         ``step(p, model, s, inp) -> (w_r_hat, e_dq0)``.
     log_fields : sequence of str
         Log fields it writes (float64).
-    log, finite, flux : numba dispatcher, optional
+    log, finite, flux, flux_magnitude : numba dispatcher, optional
         See the module docstring.
     reduced_state : bool
         Deprecated, no effect: the maps carry an estimator that gives ``reduced``.
@@ -260,6 +272,7 @@ def register_kernel(
         finite=finite,
         flux=flux,
         reduced=reduced,
+        flux_magnitude=flux_magnitude,
         source=tag,
     )
     return _REGISTRY.add(kernel)
@@ -354,6 +367,23 @@ def _estimator_finite(s):
         return lambda s: True
     finite = k.finite
     return lambda s: finite(s)
+
+
+def estimator_flux_magnitude(s):
+    """The estimator's R̂2-independent rotor-flux magnitude, Wb (``0.0``: it has none;
+    compiled code only)."""
+    raise NotImplementedError("estimator_flux_magnitude is called from compiled code only")
+
+
+@overload(estimator_flux_magnitude, inline="always", jit_options={"cache": True})
+def _estimator_flux_magnitude(s):
+    k = _lookup(s)
+    if k is None:
+        return None
+    if k.flux_magnitude is None:
+        return lambda s: 0.0
+    mag = k.flux_magnitude
+    return lambda s: mag(s)
 
 
 @overload(estimator_flux, inline="always", jit_options={"cache": True})
