@@ -169,3 +169,26 @@ def test_dead_time_feedforward_cancels_the_averaged_dead_time_error(i):
     err = pole_error(inv, i[0], i[1], 1.0 / f_sw)
     assert ff == pytest.approx(tuple(-e for e in err), abs=1e-12)
     assert dead_time_feedforward(_params(), *i) == pytest.approx((0.0, 0.0), abs=0.0)
+
+
+def test_the_magnetising_curve_is_read_at_the_flux_magnitude_given():
+    """``psi_mag`` (an encoder drive's R2-independent flux, the MRAS's): the saturation-aware
+    model reads its curve there instead of at the flux model's (0: the flux model's)."""
+    from imdrive.config.scenario import Scenario
+    from imdrive.kernels.model import update_magnetising
+    from imdrive.run.build import build_arrays
+
+    m0 = build_arrays(Scenario.read("sensorless-realistic")).state0.model[0]
+    assert m0["sat_n"] > 0
+    psi = 0.7  # Wb: Table IV's rated flux is 0.716
+    out = {}
+    for psi_mag in (0.0, 1.15 * psi):
+        m = m0.copy()
+        s = _magnetised(3.0)
+        s["psi_hat"] = psi
+        foc_step(_params(kp_w=0.1), m, s, 0.0, 0.0, 100.0, 100.0, psi, 0.0, TS, 0j, psi_mag)
+        ref = m0.copy()  # the update from the same start, at the flux foc_step should use
+        update_magnetising(ref, psi_mag if psi_mag > 0.0 else s["psi_hat"], s["i_ref_dq"])
+        assert m["M_hat"] == ref["M_hat"] and m["L_inc_hat"] == ref["L_inc_hat"]
+        out[psi_mag] = m["M_hat"]
+    assert out[1.15 * psi] < out[0.0]  # deeper in saturation: a smaller secant
