@@ -122,7 +122,7 @@ class Estimate(NamedTuple):
     R1_after: float  # the model's R1_hat right after the estimator's step, ohm (before the
     R2_after: float  # compensator), and its R2_hat: what a recording needs to replay it
     psi_r_ab: complex  # the estimator's rotor-flux estimate, stationary frame, Wb (0j: none)
-    psi_mag: float  # its R2_hat-independent flux magnitude, Wb (0: none; registry)
+    psi_mag: float  # an encoder drive's R2_hat-independent flux magnitude, Wb (0: none)
 
 
 class Command(NamedTuple):
@@ -372,7 +372,9 @@ def estimate(feat, sim, pp, pe, pk, table, x, mdl, ctl, est, cmp, smp, prof, smp
         )  # fmt: skip
         e_dq0 = track_r2(feat, pk, cmp, mdl, table, e_dq0, inp, w_r_hat, ti)
     psi_r_ab = estimator_flux(est)
-    psi_mag = estimator_flux_magnitude(est)
+    # an encoder drive's magnetising curve at the estimator's R2-independent flux (its own
+    # flux model's is detuned by an R2_hat error there; sensorless, it is not): 0 otherwise
+    psi_mag = 0.0 if sim.sensorless else estimator_flux_magnitude(est)
     return Estimate(
         w_r_hat, e_dq0, i_inj, v_use, v_fw, hold_R1, R1_after, R2_after, psi_r_ab, psi_mag
     )
@@ -415,12 +417,9 @@ def control(feat, sim, pc, x, mdl, ctl, smp, prof, smpl, estm, foc):
         if pc.ie_veq and pc.ie_rate > 0.0 and has_feedforward(pc):  # the inverter error
             # left, for the online scale of the compensation (none without it)
             inverter_residual(feat, pc, ctl, mdl, smp.v_prev_ab, smp.i_prev_ab, smpl.i_meas_ab, Ts)
-        # an encoder drive's magnetising curve at the estimator's R2-independent flux (its
-        # own flux model's is detuned by an R2_hat error there; sensorless, it is not)
-        psi_mag = 0.0 if sim.sensorless else estm.psi_mag
         v_ref_alpha, v_ref_beta = foc_step(
             pc, mdl, ctl, i_meas_alpha, i_meas_beta, w_fb, w_ref, psi_ref, estm.i_inj, Ts,
-            estm.psi_r_ab, psi_mag,
+            estm.psi_r_ab, estm.psi_mag,
         )  # fmt: skip
     else:
         v_ref_alpha, v_ref_beta = open_loop_voltage(ctl, prof.v_amp, prof.f, Ts)
