@@ -131,7 +131,8 @@ def _choose_of_three(p, s, fe):
     point switched at every window and held R2_hat). A switch restarts the phase.
     """
     f_now = s.inj_f if s.inj_f > 0.0 else p.inj_freq
-    band = max(p.gate_df, p.cpl_wc / (2.0 * math.pi))
+    corner = min(p.cpl_wc, max(p.cpl_wcfloor, p.cpl_wck * 2.0 * math.pi * fe))
+    band = max(p.gate_df, corner / (2.0 * math.pi))
     d_now = abs(fe - f_now)
     if d_now >= band:
         return
