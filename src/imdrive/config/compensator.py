@@ -19,8 +19,9 @@ from imdrive.config.validation import Bool, Float, Str, setting, settings
 from imdrive.errors import ConfigError
 
 #: The gating's frequency schedule: these multiples of the injection frequency f. Near the
-#: stator frequency the lowest of them at least ``compensator.gate_band_pu`` f from it is
-#: injected (kernels/gating.py). Whole multiples, a decision window of whole periods of f holds
+#: stator frequency the lowest of them at least ``compensator.gate_band_pu`` f from it (and,
+#: where the detection forms its own flux error, from its filter's corner) is injected
+#: (kernels/gating.py). Whole multiples, a decision window of whole periods of f holds
 #: whole periods of each. Every preset and study used 1, 2, 3 f when they could be set apart
 #: (``injection.frequency2_*``, ``frequency3_*``: deprecated).
 HARMONICS = (1, 2, 3)
@@ -201,7 +202,8 @@ class CompensatorSettings:
         setting(
             "gating: the injection frequency is switched to another harmonic of it when "
             "|stator frequency| is within this of it, per-unit of the first injection frequency "
-            "(0: never)",
+            "(0: never); where the R2 detection forms its own flux error (the observer, the "
+            "EKF), at least the corner of its filter, [mras] wc_rad_s (kernels/gating.py)",
             ge=0.0,
             default_doc="0.75 (1.5 Hz of Table IV's 2 Hz)",
         ),
