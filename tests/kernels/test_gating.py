@@ -20,8 +20,7 @@ def _choose(fe, f_now, wc=WC, f1=2.0, df=1.5):
         inj_freq2=2 * f1,
         inj_freq3=3 * f1,
         gate_df=df,
-        cpl_wc=wc,
-        cpl_wcfloor=wc,
+        sched_wc=wc,
     )[0]
     s = new_record(COMPENSATOR_STATE, inj_f=f_now)
     _choose_of_three(p, s[0], fe)
@@ -50,7 +49,7 @@ def test_both_side_bands_clear_the_filter_corner(fe, f_now, chosen):
 
 
 def test_without_the_filter_the_band_is_the_gating_band_alone():
-    # a corner below 0.75 f (the MRAS family hands its error over: cpl_wcfloor 0) leaves
+    # a corner below 0.75 f (the MRAS family hands its error over: sched_wc 0) leaves
     # the schedule as it was: 2 Hz kept at 0.3 Hz (1.7 Hz from it, over 1.5)
     assert _choose(0.3, 2.0, wc=0.0) == 2.0
     assert _choose(0.3, 2.0, wc=2 * math.pi * 1.0) == 2.0

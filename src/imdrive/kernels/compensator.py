@@ -114,8 +114,7 @@ COMPENSATOR_PARAMS = record_dtype(
         ("slip_decouple", b1),  # detection: remove the slip's coupling of e_q0 into e_d0
         ("cpl_wc", f8),  # the MRAS filter cut-off that decoupling undoes, rad/s (0: none)
         ("cpl_wmin", f8),  # decoupling from this |w_e| (full at twice it), rad/s (0: always)
-        ("cpl_wck", f8),  # that filter's corner follows wck |w_e| ... (mras.filter_corner)
-        ("cpl_wcfloor", f8),  # ... not below this, rad/s (the detector's: cpl_wc, wck 0)
+        ("sched_wc", f8),  # the schedule keeps both side bands above this corner, rad/s
         ("kf", b1),  # the Kalman law (r2_kalman.py) instead of the table's levels
         ("kf_r", f8),  # its measurement noise, relative to R2_hat, per decision
         ("kf_q", f8),  # its drift-rate noise, relative to kf_R2, 1/s per sqrt(s)

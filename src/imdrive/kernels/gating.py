@@ -61,15 +61,17 @@ machine): the detected gain was 0.82-1.09 of the analytic one at 0.3 of the rate
 Table IV and Krause 50 hp, loaded either way, at 1, 2 and 3 times the first frequency;
 regenerating the rated torque at 0.05-0.1 of it with a side band below the corner, -0.08 …
 0.41 of it on those two and the Aalto 2.2 kW machine (Krause 50 hp at 0.18 Hz stator
-frequency and 1 and 2 Hz injection: -0.03 and -0.07), and the
-law, reading noise as signal, walked R2_hat away (Krause 50 hp at 0.1 speed: from 1.2 R2 to
-1.43 R2 at the first frequency, back at the third, in a limit cycle). Hence the band
-``max(p.gate_df, p.cpl_wc/2 pi)`` (:func:`_choose_of_three`), 2.4 Hz against the 1.5 Hz of
-0.75 f on Table IV and 0.84 Hz on Krause 50 hp. On the recommended drive (the observer):
-the machine envelope (7 machines x 48 runs) 332 converged against 328, every machine but
-Krause 50 hp (44) at 48 of 48; the zero-frequency study (84 runs) 71 converged against 54;
-``envelope-full`` 480 / 480 ideal and 480 / 461 on the bridge against 480 / 460; the
-realistic envelope unchanged (its stator frequencies lie above the band).
+frequency and 1 and 2 Hz injection: -0.03 and -0.07), and the law, reading noise as
+signal, walked R2_hat away (Krause 50 hp at 0.1 speed: from 1.2 R2 to 1.43 R2 at the first
+frequency, back at the third, in a limit cycle). Hence the band ``max(p.gate_df,
+p.sched_wc/2 pi)`` (:func:`_choose_of_three`; ``p.sched_wc`` the detection's own filter
+corner, 0 where the MRAS family hands over its error: run/compensator_blocks.py), 2.4 Hz
+against the 1.5 Hz of 0.75 f on Table IV and 0.84 Hz on Krause 50 hp. On the recommended
+drive (the observer): the machine envelope (7 machines x 48 runs) 332 converged against
+328, every machine but Krause 50 hp (44) at 48 of 48; the zero-frequency study (84 runs)
+71 converged against 54; ``envelope-full`` 480 / 480 ideal and 480 / 461 on the bridge
+against 480 / 460; the realistic envelope unchanged (its stator frequencies lie above the
+band).
 """
 
 from __future__ import annotations
@@ -120,7 +122,7 @@ def _choose_of_three(p, s, fe):
     """Frequency schedule over three frequencies (``p.inj_freq3 > 0``; updates ``s.inj_f``).
 
     ``fe``: the period mean of ``|f_e|``, Hz. Both side bands ``|f_e +- f_i|`` are to clear
-    the band ``max(p.gate_df, p.cpl_wc/2 pi)``: away from DC, and above the corner of the
+    the band ``max(p.gate_df, p.sched_wc/2 pi)``: away from DC, and above the corner of the
     comparison filter ``s/(s + wc)`` the flux error has passed, where it keeps at least 71 %
     of a side band and turns it by at most 45 degrees (module docstring). The frequency in
     use is kept while it clears the band, otherwise the lowest that does is taken (the
@@ -131,8 +133,7 @@ def _choose_of_three(p, s, fe):
     point switched at every window and held R2_hat). A switch restarts the phase.
     """
     f_now = s.inj_f if s.inj_f > 0.0 else p.inj_freq
-    corner = min(p.cpl_wc, max(p.cpl_wcfloor, p.cpl_wck * 2.0 * math.pi * fe))
-    band = max(p.gate_df, corner / (2.0 * math.pi))
+    band = max(p.gate_df, p.sched_wc / (2.0 * math.pi))
     d_now = abs(fe - f_now)
     if d_now >= band:
         return

@@ -57,7 +57,7 @@ def compensator_fields(sc: Scenario, D: Resolved) -> tuple[dict, dict]:
         inj_t_on=t_on,  # the injection starts with the compensator
         slip_decouple=inj.decouple_slip,
         cpl_wc=flux_filter_rad_s(sc),
-        **_filter_corner_law(sc),
+        **_schedule_corner(sc),
         cpl_wmin=2 * math.pi * sc.machine.rated_frequency_Hz * SLIP_DECOUPLING_FROM_PU,
         **_gating(sc, r),
         **_thermal(sc, D),
@@ -242,19 +242,17 @@ def flux_filter_rad_s(sc: Scenario) -> float:
     return sc.mras.wc_rad_s
 
 
-def _filter_corner_law(sc: Scenario) -> dict:
-    """The corner the injection's schedule keeps both side bands above (kernels/gating.py):
-    ``cpl_wck |w_e|``, not below ``cpl_wcfloor`` nor above ``cpl_wc``
-    (:func:`imdrive.kernels.estimators.mras.filter_corner`), rad/s. The detection's own
-    filter where it forms its flux error (kernels/flux_detector.py: a fixed corner); none
-    where the estimator hands it over (the MRAS family), whose speed adaptation closes its
-    loop through that filter: there the band at the MRAS's corner was measured worse
-    (injection-fig5 at 54 rpm, 1.5 N m: R2_hat 2.7 % off at the third harmonic against
-    under 1 % at the second; the zero-frequency study's MRAS drive 47 converged of 84
-    against 50)."""
+def _schedule_corner(sc: Scenario) -> dict:
+    """``sched_wc``: the corner (rad/s) the injection's schedule keeps both side bands above
+    (kernels/gating.py). The detection's own filter where it forms its flux error
+    (kernels/flux_detector.py, :func:`flux_filter_rad_s`); none (0) where the estimator hands
+    its error over (the MRAS family), whose speed adaptation closes its loop through that
+    filter: there the band at the MRAS's corner was measured worse (injection-fig5 at 54 rpm,
+    1.5 N m: R2_hat 2.7 % off at the third harmonic against under 1 % at the second; the
+    zero-frequency study's MRAS drive 47 converged of 84 against 50)."""
     if sc.compensator.enabled and not gives_flux_error(sc.control.speed_feedback):
-        return {"cpl_wck": 0.0, "cpl_wcfloor": flux_filter_rad_s(sc)}
-    return {"cpl_wck": 0.0, "cpl_wcfloor": 0.0}
+        return {"sched_wc": flux_filter_rad_s(sc)}
+    return {"sched_wc": 0.0}
 
 
 def _kalman(sc, D: Resolved) -> dict:
