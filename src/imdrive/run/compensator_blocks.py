@@ -40,6 +40,8 @@ def compensator_fields(sc: Scenario, D: Resolved) -> tuple[dict, dict]:
     t_on = tracking_start_s(sc)
     R2_min = in_effect(sc, "compensator.R2_min_ohm")
     R2_max = in_effect(sc, "compensator.R2_max_ohm")
+    # the detection forms its own flux error (kernels/flux_detector.py): no estimator hands one
+    det = comp.enabled and not gives_flux_error(sc.control.speed_feedback)
     record = dict(
         enabled=comp.enabled,
         t_on=t_on,
@@ -57,13 +59,19 @@ def compensator_fields(sc: Scenario, D: Resolved) -> tuple[dict, dict]:
         inj_t_on=t_on,  # the injection starts with the compensator
         slip_decouple=inj.decouple_slip,
         cpl_wc=flux_filter_rad_s(sc),
-        **_schedule_corner(sc),
+        # the corner the injection's schedule keeps both side bands above (kernels/gating.py):
+        # the detection's own filter; none where the MRAS family hands its error over, whose
+        # speed adaptation closes its loop through that filter: there the band at its corner
+        # measured worse (injection-fig5 at 54 rpm, 1.5 N m: R2_hat 2.7 % off at the third
+        # harmonic against under 1 % at the second; the zero-frequency study's MRAS drive 47
+        # converged of 84 against 50)
+        sched_wc=flux_filter_rad_s(sc) if det else 0.0,
         cpl_wmin=2 * math.pi * sc.machine.rated_frequency_Hz * SLIP_DECOUPLING_FROM_PU,
         **_gating(sc, r),
         **_thermal(sc, D),
         **_kalman(sc, D),
         **_plugin(sc, D),
-        det=comp.enabled and not gives_flux_error(sc.control.speed_feedback),
+        det=det,
         **_detector_adaptation(sc, D),
     )
     derived = {
@@ -240,19 +248,6 @@ def flux_filter_rad_s(sc: Scenario) -> float:
         if wc is not None:
             return float(wc)
     return sc.mras.wc_rad_s
-
-
-def _schedule_corner(sc: Scenario) -> dict:
-    """``sched_wc``: the corner (rad/s) the injection's schedule keeps both side bands above
-    (kernels/gating.py). The detection's own filter where it forms its flux error
-    (kernels/flux_detector.py, :func:`flux_filter_rad_s`); none (0) where the estimator hands
-    its error over (the MRAS family), whose speed adaptation closes its loop through that
-    filter: there the band at the MRAS's corner was measured worse (injection-fig5 at 54 rpm,
-    1.5 N m: R2_hat 2.7 % off at the third harmonic against under 1 % at the second; the
-    zero-frequency study's MRAS drive 47 converged of 84 against 50)."""
-    if sc.compensator.enabled and not gives_flux_error(sc.control.speed_feedback):
-        return {"sched_wc": flux_filter_rad_s(sc)}
-    return {"sched_wc": 0.0}
 
 
 def _kalman(sc, D: Resolved) -> dict:
