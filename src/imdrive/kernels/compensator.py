@@ -122,6 +122,7 @@ COMPENSATOR_PARAMS = record_dtype(
         ("kf_R2", f8),  # R2_hat(0), ohm
         ("kf_T", f8),  # the decision period, s
         ("det", b1),  # the estimator gives no flux error: the detector's own (flux_detector.py)
+        ("mean_out", b1),  # the flux error's stationary-frame mean removed (detection.py)
         ("det_K1", f8),  # its speed adaptation's PI, 1/(Wb^2 s) (0: the estimator's speed)
         ("det_K2", f8),  # 1/(Wb^2 s^2)
         ("det_wmin", f8),  # held while regenerating below this |w_e| (rated slip), rad/s

@@ -121,7 +121,7 @@ def track(pk, cmp, mdl, table, e_dq0, inp, w_r_hat, ti):
     if pk.det:  # the estimator gives no flux error: the detection forms its own
         e_dq0 = detector_flux_error(pk, cmp, mdl, inp, w_r_hat)
     if pk.inj_amp != 0.0:
-        if pk.det:  # its own flux error: the sensors' offsets out (detection.py)
+        if pk.mean_out:  # the sensors' offsets out (detection.py)
             w_i = 2.0 * math.pi * (cmp.inj_f if cmp.inj_f > 0.0 else pk.inj_freq)
             e_dq0 = stationary_mean_removed(cmp, e_dq0, inp.theta_e, ti.w_e, w_i, ti.Ts)
         T2_hat = incremental_L2(mdl) / mdl.R2_hat
