@@ -22,12 +22,14 @@ Ts = 1e-4
 
 @njit
 def _removed(e_dq, theta, w_e, w_i):
-    """``stationary_mean_removed`` of a fresh state over the samples of ``e_dq``."""
+    """``stationary_mean_removed`` of a fresh state over the samples of ``e_dq`` (controller's
+    frame at the angle ``theta``), turned into the stationary frame and back."""
     state = np.zeros(1, dtype=COMPENSATOR_STATE)
     s = state[0]
     out = np.empty_like(e_dq)
     for k in range(e_dq.shape[0]):
-        out[k] = stationary_mean_removed(s, e_dq[k], theta[k], w_e, w_i, Ts)
+        rot = complex(math.cos(theta[k]), math.sin(theta[k]))  # as r2_tracking.track turns it
+        out[k] = stationary_mean_removed(s, e_dq[k] * rot, w_e, w_i, Ts) * rot.conjugate()
     return out
 
 

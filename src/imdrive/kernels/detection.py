@@ -18,9 +18,9 @@ MEAN_CORNER_PER_SIDE_BAND = 0.02
 
 
 @njit(cache=True)
-def stationary_mean_removed(s, e_dq0, theta_e, w_e, w_i, Ts):
-    """The flux error ``e_dq0`` (controller's frame, Wb) less its mean in the stationary frame
-    (updates ``s.dc_ab``).
+def stationary_mean_removed(s, e_ab, w_e, w_i, Ts):
+    """The flux error ``e_ab`` (stationary frame, Wb) less its mean there (updates
+    ``s.dc_ab``).
 
     A constant error of the measured current -- the current sensors' offsets, 20 mA on the
     realistic presets -- enters both flux models as a constant, so the two models' difference
@@ -53,20 +53,16 @@ def stationary_mean_removed(s, e_dq0, theta_e, w_e, w_i, Ts):
     Parameters
     ----------
     s : COMPENSATOR_STATE record
-    e_dq0 : complex
-        The flux error in the controller's frame, Wb.
-    theta_e : float
-        The controller's angle, electrical rad.
+    e_ab : complex
+        The flux error in the stationary frame, Wb.
     w_e, w_i : float
         The controller's stator frequency and the injection's, rad/s.
     Ts : float
         The control period, s.
     """
-    rot = complex(math.cos(theta_e), math.sin(theta_e))
-    e_ab = e_dq0 * rot
     w_h = MEAN_CORNER_PER_SIDE_BAND * abs(abs(w_e) - w_i)
     s.dc_ab += (1.0 - math.exp(-w_h * Ts)) * (e_ab - s.dc_ab)
-    return (e_ab - s.dc_ab) * rot.conjugate()
+    return e_ab - s.dc_ab
 
 
 #: Largest correction ``wc/|w|`` of the comparison filter ``s/(s + wc)`` (``|H| >= 0.32``)
