@@ -7,7 +7,6 @@ Used by :func:`imdrive.kernels.r2_tracking.track` and
 
 from __future__ import annotations
 
-
 from numba import njit
 
 #: Corner of :func:`stationary_mean_removed`'s mean, per unit of the distance of the
