@@ -33,7 +33,7 @@ def stationary_mean_removed(s, e_ab, w_e, w_i, Ts):
 
     Measured (2026-11-30) on ``injection-robust`` on the realistic drive (switching bridge,
     sensor offsets, noise, 12-bit ADC; 3 machines x 24 cells x 4 noise seeds,
-    :mod:`imdrive.studies.realistic_envelope`): R2_hat within 2 % in 71, 71, 71, 71 of 72
+    :mod:`imdrive.studies.realistic_envelope`): R2_hat within 2 % in 70, 72, 71, 71 of 72
     against 64, 66, 70, 69 without it; with the sensors' offsets taken out of the detection's
     current by an oracle instead, 71, 72, 69, 72. The same drive on the MRAS: 63, 60, 56, 71
     against 58, 54, 56, 66; it is not applied there yet (only to the error the detection forms
