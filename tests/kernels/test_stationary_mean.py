@@ -15,9 +15,14 @@ import pytest
 from numba import njit
 
 from imdrive.kernels.compensator import COMPENSATOR_STATE
-from imdrive.kernels.detection import MEAN_CORNER_PER_SIDE_BAND, stationary_mean_removed
+from imdrive.kernels.detection import (
+    MEAN_CORNER_PER_FILTER,
+    MEAN_CORNER_PER_SIDE_BAND,
+    stationary_mean_removed,
+)
 
 Ts = 1e-4
+WC = 15.0  # the detection filter's corner, rad/s
 
 
 @njit
@@ -29,8 +34,13 @@ def _removed(e_dq, theta, w_e, w_i):
     out = np.empty_like(e_dq)
     for k in range(e_dq.shape[0]):
         rot = complex(math.cos(theta[k]), math.sin(theta[k]))  # as r2_tracking.track turns it
-        out[k] = stationary_mean_removed(s, e_dq[k] * rot, w_e, w_i, Ts) * rot.conjugate()
+        out[k] = stationary_mean_removed(s, e_dq[k] * rot, w_e, w_i, WC, Ts) * rot.conjugate()
     return out
+
+
+def _corner(w_e, w_i):
+    """The mean's corner, rad/s: the side band's share, bounded by the filter's."""
+    return min(MEAN_CORNER_PER_SIDE_BAND * abs(abs(w_e) - w_i), MEAN_CORNER_PER_FILTER * WC)
 
 
 def _in_phase(e_dq, t, w_i, periods):
@@ -66,7 +76,7 @@ def test_an_offset_goes_and_the_r2_signal_stays(f_e, f_i, leaks):
     w_e, w_i = 2 * math.pi * f_e, 2 * math.pi * f_i
     A = 1e-3
     D = 20 * A * complex(0.6, -0.8)
-    settle = 12.0 / (MEAN_CORNER_PER_SIDE_BAND * abs(abs(w_e) - w_i))
+    settle = 12.0 / _corner(w_e, w_i)
     t = np.arange(int(round((settle + 20 * 2 * math.pi / w_i) / Ts))) * Ts
     theta = w_e * t
     phasor = D * np.exp(-1j * theta)
@@ -84,7 +94,7 @@ def test_the_side_bands_keep_their_phase(f_e, f_i, sign):
     the other."""
     w_e, w_i = 2 * math.pi * f_e, 2 * math.pi * f_i
     w_sb = w_e + sign * w_i
-    w_h = MEAN_CORNER_PER_SIDE_BAND * abs(abs(w_e) - w_i)
+    w_h = _corner(w_e, w_i)
     t = np.arange(int(round((10.0 / w_h + 10 * 2 * math.pi / abs(w_sb)) / Ts))) * Ts
     theta = w_e * t
     tone_ab = np.exp(1j * w_sb * t)

@@ -14,9 +14,14 @@ from numba import njit
 #: ``atan(0.02) = 1.1`` degrees and their gain to 0.02 %.
 MEAN_CORNER_PER_SIDE_BAND = 0.02
 
+#: The corner's bound, per unit of the detection filter's corner ``wc``: the error's constant
+#: is the filter's settled output, which the mean must follow more slowly than the filter
+#: settles.
+MEAN_CORNER_PER_FILTER = 0.1
+
 
 @njit(cache=True)
-def stationary_mean_removed(s, e_ab, w_e, w_i, Ts):
+def stationary_mean_removed(s, e_ab, w_e, w_i, wc, Ts):
     """The flux error ``e_ab`` (stationary frame, Wb) less its mean there (updates
     ``s.dc_ab``).
 
@@ -28,12 +33,14 @@ def stationary_mean_removed(s, e_ab, w_e, w_i, Ts):
     side bands ``w_e +- w_i`` of the stationary frame, which the frequency schedule keeps away
     from DC (:mod:`imdrive.kernels.gating`). So the mean is removed in the stationary frame by a
     first-order low-pass estimate whose corner is :data:`MEAN_CORNER_PER_SIDE_BAND` times the
-    nearer side band's distance from DC, ``||w_e| - w_i|``: the high-pass it leaves turns the
-    side bands by at most 1.1 degrees, the slip decoupling's q-to-d correction included.
+    nearer side band's distance from DC, ``||w_e| - w_i|``, and at most
+    :data:`MEAN_CORNER_PER_FILTER` times the filter's ``wc`` (1.5 rad/s behind the 15 rad/s
+    filter, from about 0.3 of the rated speed up): the high-pass it leaves turns the side bands
+    by at most 1.1 degrees, the slip decoupling's q-to-d correction included.
 
     Measured (2026-11-30) on ``injection-robust`` on the realistic drive (switching bridge,
     sensor offsets, noise, 12-bit ADC; 3 machines x 24 cells x 4 noise seeds,
-    :mod:`imdrive.studies.realistic_envelope`): R2_hat within 2 % in 70, 72, 71, 71 of 72
+    :mod:`imdrive.studies.realistic_envelope`): R2_hat within 2 % in 71, 72, 71, 71 of 72
     against 64, 66, 70, 69 without it; with the sensors' offsets taken out of the detection's
     current by an oracle instead, 71, 72, 69, 72. The same drive on the MRAS: 63, 60, 56, 71
     against 58, 54, 56, 66; it is not applied there yet (only to the error the detection forms
@@ -55,11 +62,15 @@ def stationary_mean_removed(s, e_ab, w_e, w_i, Ts):
         The flux error in the stationary frame, Wb.
     w_e, w_i : float
         The controller's stator frequency and the injection's, rad/s.
+    wc : float
+        The corner of the filter behind the flux error, rad/s (its mean's corner is at most
+        :data:`MEAN_CORNER_PER_FILTER` times it).
     Ts : float
         The control period, s.
     """
     # forward Euler: w_h Ts is at most 0.02 (w_e + w_i) Ts, a few thousandths
-    s.dc_ab += MEAN_CORNER_PER_SIDE_BAND * abs(abs(w_e) - w_i) * Ts * (e_ab - s.dc_ab)
+    w_h = min(MEAN_CORNER_PER_SIDE_BAND * abs(abs(w_e) - w_i), MEAN_CORNER_PER_FILTER * wc)
+    s.dc_ab += w_h * Ts * (e_ab - s.dc_ab)
     return e_ab - s.dc_ab
 
 

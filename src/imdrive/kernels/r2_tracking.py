@@ -126,7 +126,7 @@ def track(pk, cmp, mdl, table, e_dq0, inp, w_r_hat, ti):
             e_ab = e_dq0 * rot
         if pk.mean_out:  # the sensors' offsets out (detection.py)
             w_i = 2.0 * math.pi * (cmp.inj_f if cmp.inj_f > 0.0 else pk.inj_freq)
-            e_ab = stationary_mean_removed(cmp, e_ab, ti.w_e, w_i, ti.Ts)
+            e_ab = stationary_mean_removed(cmp, e_ab, ti.w_e, w_i, pk.cpl_wc, ti.Ts)
         e_dq0 = e_ab * rot.conjugate()
     if pk.inj_amp != 0.0:
         T2_hat = incremental_L2(mdl) / mdl.R2_hat
