@@ -52,9 +52,11 @@ def stationary_mean_removed(s, e_ab, w_e, w_i, wc, Ts):
     can sit under the detection filter's corner, sets the corner: at 0.1 of the side band's
     distance (5.7 degrees) the zero-frequency study converged in 67 of 84 runs, at 0.05 in
     69, at 0.02 in 71, as without the removal (72 -> 73 within 5 %); the machine envelope 332
-    of 336 either way. On ``envelope-full``'s bridge, with no offsets to remove, 478 / 459 of
-    480 within goal against 480 / 460: 15 cells crossed the goal's edge, 7 each way, most by
-    a few tenths of a rpm of the speed's (0.05 moved 13 others).
+    of 336 either way. What it costs: on ``envelope-full``'s bridge, with no offsets to remove,
+    480 / 451 of 480 within goal (480 / 456 with the dead-time compensation moved by 1e-9 of
+    itself) against 480 / 460 (480 / 459): the ramp's misses at twice the rated speed, speed
+    errors of 2-6 rpm with R2_hat within 1.7 %, went from 5-6 to 10-12; not yet explained.
+
     Parameters
     ----------
     s : COMPENSATOR_STATE record
