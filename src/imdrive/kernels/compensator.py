@@ -122,6 +122,7 @@ COMPENSATOR_PARAMS = record_dtype(
         ("kf_R2", f8),  # R2_hat(0), ohm
         ("kf_T", f8),  # the decision period, s
         ("det", b1),  # the estimator gives no flux error: the detector's own (flux_detector.py)
+        ("mean_out", b1),  # the flux error's stationary-frame mean removed (detection.py)
         ("det_K1", f8),  # its speed adaptation's PI, 1/(Wb^2 s) (0: the estimator's speed)
         ("det_K2", f8),  # 1/(Wb^2 s^2)
         ("det_wmin", f8),  # held while regenerating below this |w_e| (rated slip), rad/s
@@ -165,6 +166,7 @@ COMPENSATOR_STATE = record_dtype(
         ("inj_new", b1),  # it started since the last decision (Kalman law: a settling period)
         ("cpl_d", f8),  # the part of e_d0 the slip couples in from e_q0, Wb
         ("cpl_ws", f8),  # the slip command it uses, low-passed over T2_hat, rad/s
+        ("dc_ab", c16),  # the flux error's mean in the stationary frame, Wb
         ("kf_P00", f8),  # Kalman law: its covariance, R2, ohm^2 (0: the prior not yet set)
         ("kf_P01", f8),  # R2 and its rate, ohm^2/s
         ("kf_P11", f8),  # the rate, ohm^2/s^2

@@ -15,7 +15,8 @@ and the current model driven by the running estimator's speed plus a correction
 
 both through the low-pass ``1/(s + wc)`` (the MRAS's ``wc``, whose leak of the d error into
 q the slip decoupling undoes: :func:`imdrive.kernels.detection.slip_coupling`). Their difference,
-turned into the controller's frame, is the flux error ``e_dq0`` the detection demodulates.
+turned into the controller's frame (:func:`imdrive.kernels.r2_tracking.track`), is the flux
+error ``e_dq0`` the detection demodulates.
 
 **The speed correction.** In the current model a speed error and an R2 error are one and the
 same slip error, so the running estimator's own speed error (the AFO's with a wrong R2_hat,
@@ -79,7 +80,7 @@ from imdrive.kernels.model import model_inductances
 @njit(cache=True)
 def detector_flux_error(p, s, m, inp, w_r_hat):
     """One period of the detector's two flux models (updates ``s.dt_lam_*``): the flux error
-    in the controller's frame, Wb (complex).
+    in the stationary frame, Wb (complex; the caller turns it into the controller's).
 
     Parameters
     ----------
@@ -123,5 +124,4 @@ def detector_flux_error(p, s, m, inp, w_r_hat):
         e = lv.imag * lf.real - lv.real * lf.imag
         s.dt_int += Ts * e
         s.dt_w = p.det_K1 * e + p.det_K2 * s.dt_int
-    err = s.dt_lam_v - s.dt_lam_f
-    return err * complex(math.cos(inp.theta_e), -math.sin(inp.theta_e))
+    return s.dt_lam_v - s.dt_lam_f

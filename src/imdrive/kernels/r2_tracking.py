@@ -20,6 +20,7 @@ builds it from its state, a replay from the recorded columns
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 from numba import njit
@@ -31,6 +32,7 @@ from imdrive.kernels.compensator import (
     injection_sine,
 )
 from imdrive.kernels.compensator_range import injection_headroom, thermal_step
+from imdrive.kernels.detection import stationary_mean_removed
 from imdrive.kernels.flux_detector import detector_flux_error
 from imdrive.kernels.model import incremental_L2
 
@@ -116,8 +118,16 @@ def track(pk, cmp, mdl, table, e_dq0, inp, w_r_hat, ti):
     complex
         The flux error the detection used, Wb.
     """
-    if pk.det:  # the estimator gives no flux error: the detection forms its own
-        e_dq0 = detector_flux_error(pk, cmp, mdl, inp, w_r_hat)
+    if pk.det or pk.mean_out:  # a stage in the stationary frame
+        rot = complex(math.cos(inp.theta_e), math.sin(inp.theta_e))
+        if pk.det:  # the estimator gives no flux error: the detection forms its own
+            e_ab = detector_flux_error(pk, cmp, mdl, inp, w_r_hat)
+        else:
+            e_ab = e_dq0 * rot
+        if pk.mean_out:  # the sensors' offsets out (detection.py)
+            w_i = 2.0 * math.pi * (cmp.inj_f if cmp.inj_f > 0.0 else pk.inj_freq)
+            e_ab = stationary_mean_removed(cmp, e_ab, ti.w_e, w_i, pk.cpl_wc, ti.Ts)
+        e_dq0 = e_ab * rot.conjugate()
     if pk.inj_amp != 0.0:
         T2_hat = incremental_L2(mdl) / mdl.R2_hat
         demodulate(pk, cmp, e_dq0, ti.sine, ti.w_e, ti.w_sl, T2_hat, ti.Ts)

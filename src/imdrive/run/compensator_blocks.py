@@ -72,6 +72,10 @@ def compensator_fields(sc: Scenario, D: Resolved) -> tuple[dict, dict]:
         **_kalman(sc, D),
         **_plugin(sc, D),
         det=det,
+        # the error's stationary-frame mean removed (kernels/detection.py): on the error the
+        # detection forms itself; the MRAS family's own is left as it was (the docstring of
+        # stationary_mean_removed has what it measured there)
+        mean_out=det and r.inj_amp != 0.0,
         **_detector_adaptation(sc, D),
     )
     derived = {

@@ -57,8 +57,9 @@ LOADS_PU = (-1.0, 0.0, 1.0)
 #: R̂2(0)/R2.
 R2_RATIOS = (0.8, 1.2)
 #: Seeds of the current sensors' noise (``sensor.seed``; the realistic presets' is 1). One seed
-#: decides two to four of the 72 cells either way (measured 2026-11-30: 64, 66, 70 and 69
-#: ``ok`` on seeds 1-4), so the table gives seed 1's count and the range over these.
+#: decided two to four of the 72 cells either way (measured 2026-11-30: 64, 66, 70 and 69
+#: ``ok`` on seeds 1-4; 71, 72, 71 and 71 once the detection removed the sensors'
+#: offsets), so the table gives seed 1's count and the range over these.
 SEEDS = (1, 2, 3, 4)
 
 
