@@ -58,6 +58,7 @@ from imdrive.kernels.fuzzy import lookup
 from imdrive.kernels.gating import (  # noqa: F401  (compensator_gate_sample: old path)
     _gate_decide,
     compensator_gate_sample,
+    injection_frequency_Hz,
 )
 from imdrive.kernels.r2_kalman import kalman_decision, kalman_hold, relative_error
 from imdrive.kernels.r2_law_registry import (
@@ -208,7 +209,7 @@ def injection_sine(p, s, t, Ts):
         s.inj_running = True
         s.inj_new = True
     ph = s.inj_phase
-    f = s.inj_f if s.inj_f > 0.0 else p.inj_freq
+    f = injection_frequency_Hz(p, s)
     nxt = ph + 2.0 * math.pi * f * Ts
     s.inj_phase = nxt - 2.0 * math.pi if nxt >= 2.0 * math.pi else nxt
     return math.sin(ph)

@@ -106,6 +106,13 @@ def compensator_gate_sample(p, s, w_ref, w_fb, iq_ref, v_use, w_e, g_w=1.0):
     s.g_cnt += 1.0
 
 
+@njit(cache=True, inline="always")
+def injection_frequency_Hz(p, s):
+    """The injection's frequency in use, Hz: the schedule's (``s.inj_f``, set by
+    :func:`_choose_of_three`) once it has chosen one, else the first (``p.inj_freq``)."""
+    return s.inj_f if s.inj_f > 0.0 else p.inj_freq
+
+
 @njit(cache=True)
 def _lowest_clear(p, fe, band):
     """The lowest of ``p.inj_freq``, ``p.inj_freq2``, ``p.inj_freq3`` at least ``band`` (Hz)
@@ -132,7 +139,7 @@ def _choose_of_three(p, s, fe):
     itself moves the mean stator frequency: without the margin a thermal ramp through such a
     point switched at every window and held R2_hat). A switch restarts the phase.
     """
-    f_now = s.inj_f if s.inj_f > 0.0 else p.inj_freq
+    f_now = injection_frequency_Hz(p, s)
     band = max(p.gate_df, p.sched_wc / (2.0 * math.pi))
     d_now = abs(fe - f_now)
     if d_now >= band:

@@ -53,6 +53,7 @@ import math
 from numba import njit
 
 from imdrive.kernels.compensator_range import thermal_recalibrate
+from imdrive.kernels.gating import injection_frequency_Hz
 from imdrive.kernels.model import incremental_L2
 from imdrive.kernels.sensitivity import in_phase_sensitivity
 
@@ -77,7 +78,7 @@ def injection_amplitude(p, s):
 def relative_error(p, s, m, E):
     """The relative R2 error ``r = R2_hat/R2 - 1`` one window's detected error ``E`` (Wb)
     measures, ``-E / (L a S)`` (module docstring); 0 where the sensitivity vanishes."""
-    f = s.inj_f if s.inj_f > 0.0 else p.inj_freq
+    f = injection_frequency_Hz(p, s)
     L = m.L_inc_hat if m.sat_n > 0 else m.M_hat
     T2 = incremental_L2(m) / m.R2_hat
     sens = L * injection_amplitude(p, s) * in_phase_sensitivity(2.0 * math.pi * f, T2)

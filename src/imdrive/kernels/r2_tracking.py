@@ -34,6 +34,7 @@ from imdrive.kernels.compensator import (
 from imdrive.kernels.compensator_range import injection_headroom, thermal_step
 from imdrive.kernels.detection import stationary_mean_removed
 from imdrive.kernels.flux_detector import detector_flux_error
+from imdrive.kernels.gating import injection_frequency_Hz
 from imdrive.kernels.model import incremental_L2
 
 
@@ -125,7 +126,7 @@ def track(pk, cmp, mdl, table, e_dq0, inp, w_r_hat, ti):
         else:
             e_ab = e_dq0 * rot
         if pk.mean_out:  # the sensors' offsets out (detection.py)
-            w_i = 2.0 * math.pi * (cmp.inj_f if cmp.inj_f > 0.0 else pk.inj_freq)
+            w_i = 2.0 * math.pi * injection_frequency_Hz(pk, cmp)
             e_ab = stationary_mean_removed(cmp, e_ab, ti.w_e, w_i, pk.cpl_wc, ti.Ts)
         e_dq0 = e_ab * rot.conjugate()
     if pk.inj_amp != 0.0:

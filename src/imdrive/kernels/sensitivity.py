@@ -14,6 +14,7 @@ import math
 
 from numba import njit
 
+from imdrive.kernels.gating import injection_frequency_Hz
 from imdrive.kernels.model import incremental_L2
 
 
@@ -50,7 +51,7 @@ def saturation_sensitivity_ratio(p, s, m):
     if m.sat_n == 0:
         return 1.0
     M = m.M_hat
-    w_i = 2.0 * math.pi * (s.inj_f if s.inj_f > 0.0 else p.inj_freq)
+    w_i = 2.0 * math.pi * injection_frequency_Hz(p, s)
     s_sec = M * in_phase_sensitivity(w_i, (m.Ll2_hat + M) / m.R2_hat)
     s_inc = m.L_inc_hat * in_phase_sensitivity(w_i, incremental_L2(m) / m.R2_hat)
     return s_sec / max(s_inc, 1e-6 * s_sec)
