@@ -41,6 +41,26 @@ from numba import njit
 
 
 @njit(cache=True)
+def responses(w_i, T2, w_sl, w_e, wc):
+    """``(Re[G h0], Re[G h1])``: the decoupled and the slip-coupled in-phase response to a
+    relative R2 error, per unit of ``M a`` (module docstring; arguments as
+    :func:`in_phase_response`)."""
+    z = complex(1.0, w_i * T2)
+    jx = complex(0.0, w_i * T2)
+    h0 = jx / (z * z)
+    sg2 = (w_sl * T2) ** 2
+    h1 = (z * jx - sg2) / (z * (z * z + sg2))
+    G = complex(1.0, 0.0)
+    if wc > 0.0:
+        wp = w_e + w_i
+        wm = w_e - w_i
+        G = 0.5 * (
+            complex(0.0, wp) / complex(wc, wp) + (complex(0.0, wm) / complex(wc, wm)).conjugate()
+        )
+    return (G * h0).real, (G * h1).real
+
+
+@njit(cache=True)
 def in_phase_response(w_i, T2, w_sl, w_e, wc, coupled):
     """The detection's in-phase response to a relative R2 error, per unit of ``M a``
     (dimensionless; module docstring): ``Re[G h0]``, or with ``coupled`` the smaller of
@@ -61,19 +81,5 @@ def in_phase_response(w_i, T2, w_sl, w_e, wc, coupled):
     coupled : bool
         Weigh the slip-coupled response ``h1`` too.
     """
-    z = complex(1.0, w_i * T2)
-    jx = complex(0.0, w_i * T2)
-    h0 = jx / (z * z)
-    G = complex(1.0, 0.0)
-    if wc > 0.0:
-        wp = w_e + w_i
-        wm = w_e - w_i
-        G = 0.5 * (
-            complex(0.0, wp) / complex(wc, wp) + (complex(0.0, wm) / complex(wc, wm)).conjugate()
-        )
-    r0 = (G * h0).real
-    if not coupled:
-        return r0
-    sg2 = (w_sl * T2) ** 2
-    h1 = (z * jx - sg2) / (z * (z * z + sg2))
-    return min(r0, (G * h1).real)
+    r0, r1 = responses(w_i, T2, w_sl, w_e, wc)
+    return min(r0, r1) if coupled else r0
