@@ -72,6 +72,16 @@ drive (the observer): the machine envelope (7 machines x 48 runs) 332 converged 
 71 converged against 54; ``envelope-full`` 480 / 480 ideal and 480 / 461 on the bridge
 against 480 / 460; the realistic envelope unchanged (its stator frequencies lie above the
 band).
+
+**Regenerating below the rated slip frequency, by the modelled response** (since 2026-12-01).
+On the detection's own flux error (:mod:`imdrive.kernels.flux_detector`: the observer, the
+EKF), a decision window in which the detector's speed correction was off (regenerating below
+the rated slip frequency ``p.det_wmin``) chooses the next frequency among the first's
+harmonics by :func:`injection_by_response`: the largest in-phase response of
+:mod:`imdrive.kernels.detection_response`, the comparison filter's effect on the side bands
+included, the slip-coupled response weighed where most of the window was there. The band rule
+above kept frequencies whose measured gain there is negative (docs/machine-envelope.md, *Where
+the detection reads R2*); the response puts the frequency near the rated slip frequency.
 """
 
 from __future__ import annotations
