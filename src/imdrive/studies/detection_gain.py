@@ -65,20 +65,8 @@ def model_gains(w_i, T2, w_sl, w_e, wc) -> tuple[float, float]:
     """The modelled in-phase response per unit of ``S``: decoupled, and the smaller of the
     decoupled and the slip-coupled one, what the frequency schedule weighs while regenerating
     below the rated slip frequency
-    (:func:`imdrive.kernels.detection_response.in_phase_response`, module docstring).
-
-    Parameters
-    ----------
-    w_i : float
-        The injection's angular frequency, rad/s.
-    T2 : float
-        The rotor time constant, s.
-    w_sl : float
-        The slip, electrical rad/s (negative regenerating).
-    w_e : float
-        The stator frequency, electrical rad/s (signed).
-    wc : float
-        The comparison filter's corner, rad/s (0: none).
+    (:func:`imdrive.kernels.detection_response.in_phase_response`, whose arguments these are;
+    module docstring).
     """
     from imdrive.kernels.detection_response import in_phase_response
     from imdrive.kernels.sensitivity import in_phase_sensitivity
