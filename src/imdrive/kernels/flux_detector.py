@@ -78,6 +78,19 @@ from imdrive.kernels.model import model_inductances
 
 
 @njit(cache=True)
+def window_slip(s):
+    """At a decision instant: the window's share of samples with the speed correction off
+    (``s.rl_share``) and the current model's mean slip (``s.w_sl_mean``, electrical rad/s);
+    restarts the sums."""
+    if s.g_dn > 0.0:
+        s.rl_share = s.g_rl / s.g_dn
+        s.w_sl_mean = s.g_ws / s.g_dn
+    s.g_rl = 0.0
+    s.g_ws = 0.0
+    s.g_dn = 0.0
+
+
+@njit(cache=True)
 def detector_flux_error(p, s, m, inp, w_r_hat):
     """One period of the detector's two flux models (updates ``s.dt_lam_*``): the flux error
     in the stationary frame, Wb (complex; the caller turns it into the controller's).
@@ -114,6 +127,11 @@ def detector_flux_error(p, s, m, inp, w_r_hat):
     s.dt_lam_f = g * s.dt_lam_f + k_in * (lam_new - lam_old)
     s.dt_lam_i = lam_new
     regen_low = w_r_hat * inp.i_ref_dq.imag < 0.0 and abs(inp.w_e) < p.det_wmin
+    if s.on:  # the decision window's sums (window_slip)
+        s.g_ws += inp.w_e - w_d
+        s.g_dn += 1.0
+        if regen_low:
+            s.g_rl += 1.0
     if regen_low:  # back to the estimator's speed, at the filter's rate
         k = math.exp(-p.cpl_wc * Ts)
         s.dt_w *= k

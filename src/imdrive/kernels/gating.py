@@ -72,6 +72,16 @@ drive (the observer): the machine envelope (7 machines x 48 runs) 332 converged 
 71 converged against 54; ``envelope-full`` 480 / 480 ideal and 480 / 461 on the bridge
 against 480 / 460; the realistic envelope unchanged (its stator frequencies lie above the
 band).
+
+**Regenerating below the rated slip frequency, by the modelled response** (since 2026-12-01).
+On the detection's own flux error (:mod:`imdrive.kernels.flux_detector`: the observer, the
+EKF), a decision window in which the detector's speed correction was off (regenerating below
+the rated slip frequency ``p.det_wmin``) chooses the next frequency among the first's
+harmonics by :func:`injection_by_response`: the largest in-phase response of
+:mod:`imdrive.kernels.detection_response`, the comparison filter's effect on the side bands
+included, the slip-coupled response weighed where most of the window was there. The band rule
+above kept frequencies whose measured gain there is negative (docs/machine-envelope.md, *Where
+the detection reads R2*); the response puts the frequency near the rated slip frequency.
 """
 
 from __future__ import annotations
@@ -79,6 +89,8 @@ from __future__ import annotations
 import math
 
 from numba import njit
+
+from imdrive.kernels.detection_response import in_phase_response
 
 
 @njit(cache=True)
@@ -124,6 +136,57 @@ def _lowest_clear(p, fe, band):
     return best
 
 
+#: The harmonics of the first frequency :func:`injection_by_response` weighs (the response's
+#: best lies near the rated slip frequency, ``x = |sg|``: the 5th harmonic on Krause 500 hp).
+RESPONSE_HARMONICS = 16
+#: The frequency in use is kept while its response is at least this share of the best's (a
+#: switch costs a settling window).
+KEEP_SHARE = 0.5
+
+
+@njit(cache=True)
+def injection_by_response(p, s):
+    """The frequency schedule while the detection's speed path may carry the R2 error (updates
+    ``s.inj_f``): the harmonic of the first with the largest in-phase response
+    (:func:`imdrive.kernels.detection_response.in_phase_response`), over ``T2`` within two
+    standard deviations of the Kalman law's R2_hat (``s.T2_unc``); the slip-coupled response
+    is weighed where most of the window regenerated below the rated slip frequency. The one in
+    use stays while its response is :data:`KEEP_SHARE` of the best's.
+
+    Regenerating the rated torque below the rated slip frequency the three harmonics' band
+    rule (:func:`_choose_of_three`) kept frequencies whose measured gain is negative
+    (studies/detection_gain.py: Table IV at 1.7 Hz, Krause 50 hp at 0.9 Hz, Krause 500 hp at
+    0.2 Hz), and R2_hat walked away: on ``envelope-full``'s bridge with a thermal ramp, 0.1 of
+    the rated speed regenerating, from 0.7 R2 to +19 %. Measured against that rule (2026-12-01):
+    the zero-frequency study (84 runs) 77 converged and none lost against 71 and 1; the
+    machine envelope 335 of 336 against 332 (Krause 50 hp 47 against 44); ``envelope-full``'s
+    bridge with the ramp 455 of 480 against 451, the rest unchanged; the realistic envelope
+    unchanged, cell by cell.
+    """
+    f_now = injection_frequency_Hz(p, s)
+    coupled = s.rl_share > 0.5 and abs(s.we_mean) < 2.0 * p.det_wmin
+    lo = s.T2_sched / (1.0 + s.T2_unc)
+    hi = s.T2_sched / max(1.0 - s.T2_unc, 0.5)
+    best = -1.0
+    v_best = 0.0
+    v_now = 0.0
+    for k in range(1, RESPONSE_HARMONICS + 1):
+        f = k * p.inj_freq
+        w_i = 2.0 * math.pi * f
+        v = 1e9
+        for T2 in (lo, s.T2_sched, hi):
+            v = min(v, in_phase_response(w_i, T2, s.w_sl_mean, s.we_mean, p.cpl_wc, coupled))
+        if abs(f - f_now) < 1e-9 * f:
+            v_now = v
+        if v > v_best:
+            v_best = v
+            best = f
+    if best < 0.0 or v_now >= KEEP_SHARE * v_best:
+        return
+    s.inj_f = best
+    s.inj_phase = 0.0
+
+
 @njit(cache=True)
 def _choose_of_three(p, s, fe):
     """Frequency schedule over three frequencies (``p.inj_freq3 > 0``; updates ``s.inj_f``).
@@ -139,6 +202,9 @@ def _choose_of_three(p, s, fe):
     itself moves the mean stator frequency: without the margin a thermal ramp through such a
     point switched at every window and held R2_hat). A switch restarts the phase.
     """
+    if s.rl_share > 0.0 and s.T2_sched > 0.0:  # the detection's speed path off a while
+        injection_by_response(p, s)
+        return
     f_now = injection_frequency_Hz(p, s)
     band = max(p.gate_df, p.sched_wc / (2.0 * math.pi))
     d_now = abs(fe - f_now)
@@ -177,6 +243,7 @@ def _gate_decide(p, s, w_e):
     w_mean = s.g_we / s.g_cnt if s.g_cnt > 0.0 else w_e
     fe = abs(w_mean) / (2.0 * math.pi)
     s.fe_mean = fe
+    s.we_mean = w_mean
     if p.inj_freq3 > 0.0:
         _choose_of_three(p, s, fe)
         if s.inj_f != s.inj_f_prev:

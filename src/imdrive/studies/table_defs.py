@@ -279,6 +279,16 @@ study_table(
 )
 
 
+study_table(
+    "detection-gain",
+    "machine-envelope.md",
+    "data/detection_gain.csv",
+    "detection_gain",
+    "markdown_lines",
+    "measure",
+)
+
+
 study_table("library-tour", "machines.md", "data/library_tour.csv", "tour", "lines", "run")
 
 
