@@ -8,6 +8,7 @@ import pytest
 
 from imdrive.kernels.compensator import COMPENSATOR_PARAMS, COMPENSATOR_STATE
 from imdrive.kernels.gating import _choose_of_three
+from imdrive.kernels.model import MODEL_STATE
 from imdrive.kernels.records import new_record
 
 WC = 15.0  # the detection filter's corner, rad/s (2.39 Hz)
@@ -23,7 +24,8 @@ def _choose(fe, f_now, wc=WC, f1=2.0, df=1.5):
         sched_wc=wc,
     )[0]
     s = new_record(COMPENSATOR_STATE, inj_f=f_now)
-    _choose_of_three(p, s[0], fe)
+    m = new_record(MODEL_STATE)  # the band rule reads no model (no window ran regenerating low)
+    _choose_of_three(p, s[0], fe, m[0])
     return float(s[0]["inj_f"])
 
 

@@ -61,7 +61,6 @@ from imdrive.kernels.gating import (  # noqa: F401  (compensator_gate_sample: ol
     compensator_gate_sample,
     injection_frequency_Hz,
 )
-from imdrive.kernels.model import incremental_L2
 from imdrive.kernels.r2_kalman import kalman_decision, kalman_hold, relative_error
 from imdrive.kernels.r2_law_registry import (
     NO_LAW_PARAMS,
@@ -162,8 +161,6 @@ COMPENSATOR_STATE = record_dtype(
         ("rl_share", f8),  # share of the last window with the speed correction off
         ("w_sl_mean", f8),  # the current model's mean slip over the last window, rad/s
         ("we_mean", f8),  # the controller's mean stator frequency over the last window, rad/s
-        ("T2_sched", f8),  # T2_hat at the last decision, s (the schedule's model)
-        ("T2_unc", f8),  # two standard deviations of R2_hat over R2_hat (Kalman law), <= 0.5
         ("g_we", f8),  # sum of the controller's stator frequency over the period, rad/s
         ("fe_mean", f8),  # |stator frequency| over the last decision period, Hz
         ("inj_f_prev", f8),  # frequency in use at the last decision, Hz (three-frequency mode)
@@ -318,12 +315,10 @@ def compensator_step(p, s, m, table, e_d0, t, k, w_e=0.0):
     else:
         E = x
     s.acc = 0.0
-    if p.det:  # the window's speed path and T2_hat, for the frequency schedule (gating.py)
+    if p.det:  # the window's speed path, for the frequency schedule (gating.py)
         window_slip(s)
-        s.T2_sched = incremental_L2(m) / m.R2_hat
-        s.T2_unc = min(2.0 * math.sqrt(max(s.kf_P00, 0.0)) / m.R2_hat, 0.5) if p.kf else 0.0
     if p.gate:
-        flags = _gate_decide(p, s, w_e)
+        flags = _gate_decide(p, s, w_e, m)
         s.frozen = float(flags)
         if flags != 0:
             s.started = False  # no change of E is known across a frozen period

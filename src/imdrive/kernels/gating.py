@@ -91,6 +91,7 @@ import math
 from numba import njit
 
 from imdrive.kernels.detection_response import in_phase_response
+from imdrive.kernels.model import incremental_L2
 
 
 @njit(cache=True)
@@ -145,11 +146,12 @@ KEEP_SHARE = 0.5
 
 
 @njit(cache=True)
-def injection_by_response(p, s):
+def injection_by_response(p, s, m):
     """The frequency schedule while the detection's speed path may carry the R2 error (updates
     ``s.inj_f``): the harmonic of the first with the largest in-phase response
     (:func:`imdrive.kernels.detection_response.in_phase_response`), over ``T2`` within two
-    standard deviations of the Kalman law's R2_hat (``s.T2_unc``); the slip-coupled response
+    standard deviations of the Kalman law's R2_hat (its ``P00``, at most half of it;
+    ``m``: the controller's model, for ``T2_hat``); the slip-coupled response
     is weighed where most of the window regenerated below the rated slip frequency. The one in
     use stays while its response is :data:`KEEP_SHARE` of the best's.
 
@@ -164,9 +166,14 @@ def injection_by_response(p, s):
     unchanged, cell by cell.
     """
     f_now = injection_frequency_Hz(p, s)
+    # most of the window below the rated slip frequency, its mean stator frequency under twice
+    # it (the stator frequency's own ripple crosses the threshold: measured on Krause 3 hp at
+    # 1.25 times it, a flip-flop of two harmonics held R2_hat without it)
     coupled = s.rl_share > 0.5 and abs(s.we_mean) < 2.0 * p.det_wmin
-    lo = s.T2_sched / (1.0 + s.T2_unc)
-    hi = s.T2_sched / max(1.0 - s.T2_unc, 0.5)
+    T2_hat = incremental_L2(m) / m.R2_hat
+    unc = min(2.0 * math.sqrt(max(s.kf_P00, 0.0)) / m.R2_hat, 0.5) if p.kf else 0.0
+    lo = T2_hat / (1.0 + unc)
+    hi = T2_hat / max(1.0 - unc, 0.5)
     best = -1.0
     v_best = 0.0
     v_now = 0.0
@@ -174,7 +181,7 @@ def injection_by_response(p, s):
         f = k * p.inj_freq
         w_i = 2.0 * math.pi * f
         v = 1e9
-        for T2 in (lo, s.T2_sched, hi):
+        for T2 in (lo, T2_hat, hi):
             v = min(v, in_phase_response(w_i, T2, s.w_sl_mean, s.we_mean, p.cpl_wc, coupled))
         if abs(f - f_now) < 1e-9 * f:
             v_now = v
@@ -188,7 +195,7 @@ def injection_by_response(p, s):
 
 
 @njit(cache=True)
-def _choose_of_three(p, s, fe):
+def _choose_of_three(p, s, fe, m):
     """Frequency schedule over three frequencies (``p.inj_freq3 > 0``; updates ``s.inj_f``).
 
     ``fe``: the period mean of ``|f_e|``, Hz. Both side bands ``|f_e +- f_i|`` are to clear
@@ -202,8 +209,8 @@ def _choose_of_three(p, s, fe):
     itself moves the mean stator frequency: without the margin a thermal ramp through such a
     point switched at every window and held R2_hat). A switch restarts the phase.
     """
-    if s.rl_share > 0.0 and s.T2_sched > 0.0:  # the detection's speed path off a while
-        injection_by_response(p, s)
+    if s.rl_share > 0.0:  # the detection's speed path off a while (only with p.det)
+        injection_by_response(p, s, m)
         return
     f_now = injection_frequency_Hz(p, s)
     band = max(p.gate_df, p.sched_wc / (2.0 * math.pi))
@@ -225,7 +232,7 @@ def _choose_of_three(p, s, fe):
 
 
 @njit(cache=True)
-def _gate_decide(p, s, w_e):
+def _gate_decide(p, s, w_e, m):
     """At a decision instant: the gating mask of the period that ends, and the frequency
     schedule (see the module docstring). Resets the period's sums; returns the mask."""
     flags = int(s.g_flags)
@@ -245,7 +252,7 @@ def _gate_decide(p, s, w_e):
     s.fe_mean = fe
     s.we_mean = w_mean
     if p.inj_freq3 > 0.0:
-        _choose_of_three(p, s, fe)
+        _choose_of_three(p, s, fe, m)
         if s.inj_f != s.inj_f_prev:
             s.inj_f_prev = s.inj_f
             flags |= 8
