@@ -8,6 +8,7 @@ import signal
 import subprocess
 import sys
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -137,13 +138,15 @@ R2_ratio = { min = 0.6, max = 1.4 }
     assert set(a.axes[1].values) == {20, 40, 80}
 
 
-def _comp_record(sc) -> dict:
+def _comp_record(sc, without=()) -> dict:
     """The compensator's and injection's parameters the kernels receive (but the MRAS's
-    filter cut-off the detection's decoupling reads: the map keeps the sensorless drive's)."""
+    filter cut-off the detection's decoupling reads: the map keeps the sensorless drive's),
+    less the fields ``without``."""
     from imdrive.run.build import build_arrays
 
     rec = build_arrays(sc).params.comp[0]
-    return {f: rec[f].item() for f in rec.dtype.names if f != "cpl_wc"}
+    skip = {"cpl_wc", *without}
+    return {f: rec[f].item() for f in rec.dtype.names if f not in skip}
 
 
 def test_step_ranges_and_preset_sweep():
@@ -161,16 +164,25 @@ def test_step_ranges_and_preset_sweep():
     # the variants carry the compensation presets' settings
     paper = dm.scenario_for((1.2, 1000, 12.0, "paper"))
     inj = dm.scenario_for((1.2, 1000, 12.0, "injection"))
+    plain = dm.scenario_for((1.0, 50, 0.0, "uncompensated"))
     ref_p = Scenario.read("paper-fig5")
     # the map was measured with the injection presets' first-release tuning
     ref_i = first_release("injection-fig5")
-    # (the same records: the variants state the clamps in ohm, the presets per-unit of
-    # R2_hat(0), which the map's axis varies)
-    assert _comp_record(paper) == _comp_record(ref_p)
-    assert resolve(paper).R2_hat == pytest.approx(ref_p.estimator.R2_ohm, rel=1e-15)
-    assert _comp_record(inj) == _comp_record(ref_i)
+    # the same records but the clamps, and the injection's step in per-unit of R2_hat(0):
+    # the map states none of them in ohm (deprecated spellings), and its clamps are the
+    # defaults, 0.5 and 2 R2_hat(0), so that no start on its axis (0.6 ... 1.4 R2) has a
+    # clamp at or short of R2 (the presets' 1.25 R2_hat(0) is R2 itself from 0.8 R2)
+    clamps = ("R2_min", "R2_max")
+    assert _comp_record(paper, clamps) == _comp_record(ref_p, clamps)
+    R2_hat0 = resolve(paper).R2_hat
+    assert R2_hat0 == pytest.approx(ref_p.estimator.R2_ohm, rel=1e-15)
+    for sc in (paper, inj):
+        rec = _comp_record(sc)
+        assert (rec["R2_min"], rec["R2_max"]) == pytest.approx((0.5 * R2_hat0, 2.0 * R2_hat0))
+    assert _comp_record(inj, (*clamps, "G_CR")) == _comp_record(ref_i, (*clamps, "G_CR"))
+    # its step: the first release's 0.02 ohm at R2_hat(0) = R2, in per-unit of R2_hat(0)
+    assert _comp_record(inj)["G_CR"] == pytest.approx(0.02 * R2_hat0 / resolve(plain).R2_hat)
     assert paper.control == ref_p.control and paper.load == ref_p.load
-    plain = dm.scenario_for((1.0, 50, 0.0, "uncompensated"))
     assert not plain.compensator.enabled and resolve(plain).inj_amp == 0
 
 
@@ -350,3 +362,15 @@ def test_progress_bar_only_on_a_terminal():
     p.close()
     text = tty.getvalue()
     assert text.startswith("\rsweep x [") and "10/10 runs 100%" in text and text.endswith("\n")
+
+
+def test_builtin_sweeps_state_no_deprecated_key():
+    """Every built-in sweep builds and validates its scenarios without a configuration
+    warning: none of them states a deprecated spelling (refused from imdrive 0.3) or replaces
+    one of its base's settings by its other spelling."""
+    from imdrive.errors import ConfigWarning
+
+    for name in sweep_names():
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", ConfigWarning)
+            load_sweep(name)
