@@ -25,7 +25,9 @@ OVERSHOOT_PCT = 4.0
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize(("machine", "speed_pu"), [("aalto-2.2kw", 0.5), ("paper-table-iv", 0.1), ("krause-50hp", 0.5)])
+@pytest.mark.parametrize(
+    ("machine", "speed_pu"), [("aalto-2.2kw", 0.5), ("paper-table-iv", 0.1), ("krause-50hp", 0.5)]
+)
 def test_bounded_overshoot_from_0_7_R2(machine, speed_pu):
     (sc,), _ = scenarios([machine], ["injection-robust"], [speed_pu], [1.0], [0.7])
     assert sc.compensator.step_law == "kalman"
