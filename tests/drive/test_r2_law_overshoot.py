@@ -2,10 +2,11 @@
 
 From R2_hat(0) = 0.7 R2 the first windows read a large negative error up to 1.9 times its
 linear prediction (kernels/r2_kalman.py, ``GAIN_UNCERTAINTY``), so R2_hat overshoots before it
-settles: measured +4.1 % on the 2.2 kW Aalto machine at half speed and rated torque. The
-adaptive law of earlier releases kept under 1 % there; the Kalman law that replaced it is held
-to 5 % and to the same settling, within 0.5 % at the end (the adaptive law's first version
-peaked at +2.6 % and ended +2.1 % on both points).
+settles: measured +2.7 % on the 2.2 kW Aalto machine and +2.9 % on Krause 50 hp at half speed
+and rated torque, +0.8 % on Table IV at 0.1 of the rated speed. With the measured error's
+variance not carried through to R2 (``dz/dr``) it was +3.8 and +5.6 %. The adaptive law of
+earlier releases kept under 1 %; the Kalman law that replaced it is held to 4 % and to the
+same settling, within 0.5 % at the end.
 """
 
 from __future__ import annotations
@@ -20,11 +21,13 @@ from imdrive.run.simulate import simulate
 from imdrive.studies.machines import scenarios
 
 #: The largest excursion above R2 the law keeps to, %
-OVERSHOOT_PCT = 5.0
+OVERSHOOT_PCT = 4.0
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize(("machine", "speed_pu"), [("aalto-2.2kw", 0.5), ("paper-table-iv", 0.1)])
+@pytest.mark.parametrize(
+    ("machine", "speed_pu"), [("aalto-2.2kw", 0.5), ("paper-table-iv", 0.1), ("krause-50hp", 0.5)]
+)
 def test_bounded_overshoot_from_0_7_R2(machine, speed_pu):
     (sc,), _ = scenarios([machine], ["injection-robust"], [speed_pu], [1.0], [0.7])
     assert sc.compensator.step_law == "kalman"

@@ -25,8 +25,10 @@ def test_table_iv_on_the_bridge_through_a_thermal_ramp_regenerating_at_a_tenth_o
     R2_hat(0) = 0.7 R2, R2 +20 % over 30 s, dead-time bridge. The ramp takes the stator
     frequency from 3.1 Hz to below the rated slip frequency (2.6 Hz), where the first
     frequency (1.17 Hz) reads R2 with the wrong sign: R2_hat ran to +8.7 % (R1_hat = 0.9 R1)
-    and +19 % (1.1 R1) until 2026-12-01. Now -1.8 % (within the bridge's 3 % goal) and -3.7 %
-    (flagged ``R2-off``)."""
+    and +19 % (1.1 R1) until 2026-12-01. Then -1.8 % and -3.7 % (flagged ``R2-off``); with the
+    Kalman law's variance carried to R2, -0.85 % at the end and -2.2 % within the final window
+    (within the bridge's 3 % goal; flagged ``R2-unsettled`` by the status's own 2 %) and
+    -3.05 % (flagged). The status is ``ok`` exactly when both are within its 2 %."""
     sw = load_sweep("envelope-full")
     row = sw.inputs(range(run, run + 1)).iloc[0]
     assert (row["speed_pu"], row["load_pu_available"], row["R2_ratio"]) == (0.1, -1.0, 0.7)
@@ -35,7 +37,8 @@ def test_table_iv_on_the_bridge_through_a_thermal_ramp_regenerating_at_a_tenth_o
     m = res.metrics(window_s=0.5)
     assert abs(m["R2_error_pct"]) < bound_pct
     assert abs(m["R2_error_window_pct"]) < bound_pct
-    assert res.verdict["verdict_ok"] == (abs(m["R2_error_pct"]) <= 2.0)
+    settled = max(abs(m["R2_error_pct"]), abs(m["R2_error_window_pct"])) <= 2.0
+    assert res.verdict["verdict_ok"] == settled
 
 
 def _cell(scs):

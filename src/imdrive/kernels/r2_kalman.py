@@ -38,12 +38,17 @@ no dead zone); the drift rate is the second state (a ramp of R2 is followed with
 lag); its damping is the Kalman gain's (no overshoot damping, no drift bound, no unwind
 factor); and a window the gating rejects is a missing measurement: the covariance grows and
 the next accepted measurement weighs more (R2_hat itself is left where it is, or to the rotor
-thermal model). The measurement's variance holds, besides ``noise_pu``, a share
-:data:`GAIN_UNCERTAINTY` of the measured error itself: the linear sensitivity reads a large
-error only roughly (0.6-1.9 times, measured), so a first window 30 % off moves R2_hat by
-about half of what it reads, not all of it. What it costs: from R2_hat(0) = 0.7 R2 at half
-speed and rated torque on the Aalto machine R2_hat overshoots by 4.1 % before it settles
-within 0.5 % (tests/drive/test_r2_law_overshoot.py; the adaptive law: under 1 %).
+thermal model). The variance of the measured error ``r`` holds, besides ``noise_pu``, a share
+:data:`GAIN_UNCERTAINTY` of ``r`` itself: the linear sensitivity reads a large error only
+roughly (0.6-1.9 times, measured). It reaches ``z`` through ``dz/dr = -z/(1 + r)``, so the
+measurement's variance is ``(R2_hat/(1 + r)^2)^2 (noise_pu^2 + (GAIN_UNCERTAINTY r)^2)``: a
+window that reads R2 far above R2_hat (``r`` near -1, ``z`` many times R2_hat) weighs
+little, where the variance of ``r`` alone let one such window on Krause 50 hp near zero
+stator frequency (``studies/zero_frequency.py``, +2 Hz from 0.8 R2) take R2_hat from
+0.80 R2 to its clamp at 2 R2 in one decision. From R2_hat(0) = 0.7 R2 at half speed and
+rated torque R2_hat overshoots by 2.7 % on the Aalto machine and 2.9 % on Krause 50 hp
+before it settles within 0.5 % (3.8 and 5.6 % with the variance of ``r`` alone;
+tests/drive/test_r2_law_overshoot.py; the adaptive law of earlier releases: under 1 %).
 """
 
 from __future__ import annotations
@@ -126,7 +131,8 @@ def kalman_update(p, s, m, E, T):
     r = max(r, -0.9)  # z = R2_hat/(1 + r) stays finite and positive
     R2_pred = m.R2_hat + s.drift * T
     nu = m.R2_hat / (1.0 + r) - R2_pred
-    Rv = (p.kf_r * m.R2_hat) ** 2 + (GAIN_UNCERTAINTY * r * m.R2_hat) ** 2
+    # r's variance carried through z = R2_hat / (1 + r) to first order (dz/dr = -z/(1 + r))
+    Rv = (m.R2_hat / (1.0 + r) ** 2) ** 2 * (p.kf_r**2 + (GAIN_UNCERTAINTY * r) ** 2)
     S = s.kf_P00 + Rv
     K0 = s.kf_P00 / S
     K1 = s.kf_P01 / S
