@@ -41,11 +41,12 @@ def test_a_short_compilation_says_nothing(monkeypatch, tmp_path):
 
 
 def test_the_listener_watches_the_outermost_compilation(monkeypatch):
-    seen = []
+    seen, keys = [], []
 
     class Recorder:
-        def __init__(self, name, stream):
+        def __init__(self, name, stream, key=None):
             seen.append(name)
+            keys.append(key)
 
         def end(self):
             seen.append("end")
@@ -71,6 +72,28 @@ def test_the_listener_watches_the_outermost_compilation(monkeypatch):
     # one notice, for the outermost function only (a listener that an earlier command line of
     # this process attached makes its own, the same)
     assert seen and sorted(seen) == ["end"] * (len(seen) // 2) + ["outer"] * (len(seen) // 2)
+    # its time is kept under the function and its argument types
+    assert keys[0].startswith("outer:") and keys[0] != "outer:"
+
+
+def test_each_specialisation_keeps_its_own_time(monkeypatch, tmp_path):
+    """One function compiled for two argument types (the batch's worker for two estimators):
+    the second is not announced with the first one's time."""
+    monkeypatch.setenv("IMDRIVE_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(_compiling, "SHOW_AFTER_S", 0.05)
+    notice = _compiling._Notice("_worker", io.StringIO(), key="_worker:aaaa")
+    time.sleep(0.3)
+    notice.end()
+    out = io.StringIO()
+    notice = _compiling._Notice("_worker", out, key="_worker:bbbb")
+    time.sleep(0.2)
+    notice.end()
+    assert "(_worker, up to a minute;" in out.getvalue()
+    out = io.StringIO()
+    notice = _compiling._Notice("_worker", out, key="_worker:aaaa")
+    time.sleep(0.2)
+    notice.end()
+    assert "(_worker, about 0 s;" in out.getvalue()
 
 
 def test_the_command_line_enables_it_unless_quiet(monkeypatch):
