@@ -39,3 +39,27 @@ def test_bounded_overshoot_from_0_7_R2(machine, speed_pu):
     assert err[0] == pytest.approx(-30.0, abs=0.01)
     assert err.max() < OVERSHOOT_PCT
     assert abs(err[-1]) < 0.5
+
+
+@pytest.mark.slow
+def test_a_window_reading_R2_far_above_R2_hat_does_not_take_it_to_the_clamp():
+    """Krause 50 hp regenerating the rated torque at +2 Hz of stator frequency from
+    R2_hat(0) = 0.8 R2 (``studies/zero_frequency.py``'s cell): a window there read ``r`` near
+    -1, ``z = R2_hat/(1 + r)`` many times R2_hat, and with the variance of ``r`` alone one
+    decision took R2_hat from 0.80 R2 to its clamp at 2 R2 (2026-12-01). Carried through
+    ``dz/dr`` that window weighs little: R2_hat stays below R2 there (it ends about 40 % low,
+    the injection reading the wrong sign at that point), the drive keeps control and its
+    status says R2_hat is off."""
+    from imdrive.studies import zero_frequency
+
+    scs, _ = zero_frequency.scenarios(
+        machines=["krause-50hp"], frequencies=(2.0,), ratios=(0.8,), drives=("injection-robust",)
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConfigWarning)
+        res = simulate(scs[0])
+    ratio = np.asarray(res["R2_hat_ohm"]) / np.asarray(res["R2_ohm"])
+    assert ratio[0] == pytest.approx(0.8, abs=1e-3)
+    assert ratio.max() < 1.0  # was 2.0: the clamp
+    assert not res.verdict["verdict_ok"] and "R2_hat off" in res.verdict["verdict_text"]
+    assert not res.metrics(window_s=0.5)["lost_control"]
