@@ -162,7 +162,6 @@ COMPENSATOR_STATE = record_dtype(
         ("w_sl_mean", f8),  # the current model's mean slip over the last window, rad/s
         ("we_mean", f8),  # the controller's mean stator frequency over the last window, rad/s
         ("g_we", f8),  # sum of the controller's stator frequency over the period, rad/s
-        ("fe_mean", f8),  # |stator frequency| over the last decision period, Hz
         ("inj_f_prev", f8),  # frequency in use at the last decision, Hz (three-frequency mode)
         ("v_peak_last", f8),  # peak voltage use over the last whole injection period (0: none)
         ("inj_scale", f8),  # estimation headroom: the amplitude's scale with the flux (0: 1)

@@ -249,7 +249,6 @@ def _gate_decide(p, s, w_e, m):
     # ripple)
     w_mean = s.g_we / s.g_cnt if s.g_cnt > 0.0 else w_e
     fe = abs(w_mean) / (2.0 * math.pi)
-    s.fe_mean = fe
     s.we_mean = w_mean
     if p.inj_freq3 > 0.0:
         _choose_of_three(p, s, fe, m)
