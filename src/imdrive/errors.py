@@ -17,6 +17,11 @@ class ConfigError(ValueError):
         self.rule = _one_line(rule)
         super().__init__(f"{self.field}: {self.rule}")
 
+    def __reduce__(self):
+        # pickled with its two arguments: raised in a worker process (a user's
+        # ProcessPoolExecutor) it reaches the parent as itself, not as a BrokenProcessPool
+        return (type(self), (self.field, self.rule))
+
 
 class ConfigWarning(UserWarning):
     """A suspicious but possible input (a rated slip above 10 %, a power factor of 0.3).
@@ -35,6 +40,11 @@ class ConfigWarning(UserWarning):
         self.field = _one_line(field)
         self.rule = _one_line(rule)
         super().__init__(f"{self.field}: {self.rule}")
+
+    def __reduce__(self):
+        # pickled with its two arguments: raised in a worker process (a user's
+        # ProcessPoolExecutor) it reaches the parent as itself, not as a BrokenProcessPool
+        return (type(self), (self.field, self.rule))
 
 
 def _one_line(text: str) -> str:
@@ -63,6 +73,10 @@ class SimulationDiverged(RuntimeError):
         self.signal = signal
         self.result = result
         super().__init__(f"simulation diverged at t = {time_s:.6g} s: {signal}")
+
+    def __reduce__(self):
+        # pickled with its arguments (a worker process's error reaches the parent as itself)
+        return (type(self), (self.time_s, self.signal, self.result))
 
 
 class EnvironmentFailure(RuntimeError):
