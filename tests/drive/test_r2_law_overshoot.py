@@ -42,14 +42,15 @@ def test_bounded_overshoot_from_0_7_R2(machine, speed_pu):
 
 
 @pytest.mark.slow
-def test_a_window_reading_R2_far_above_R2_hat_does_not_take_it_to_the_clamp():
+def test_krause_50hp_near_zero_stator_frequency_from_0_8_R2_converges():
     """Krause 50 hp regenerating the rated torque at +2 Hz of stator frequency from
-    R2_hat(0) = 0.8 R2 (``studies/zero_frequency.py``'s cell): a window there read ``r`` near
-    -1, ``z = R2_hat/(1 + r)`` many times R2_hat, and with the variance of ``r`` alone one
-    decision took R2_hat from 0.80 R2 to its clamp at 2 R2 (2026-12-01). Carried through
-    ``dz/dr`` that window weighs little: R2_hat stays below R2 there (it ends about 40 % low,
-    the injection reading the wrong sign at that point), the drive keeps control and its
-    status says R2_hat is off."""
+    R2_hat(0) = 0.8 R2 (``studies/zero_frequency.py``'s cell). There the detuned drive
+    oscillates at 2.25 Hz; with the variance of ``r`` alone one window took R2_hat to its
+    clamp at 2 R2, with the variance carried through ``dz/dr`` it ended 40 % low (the
+    injection at 2.24 Hz, 0.28 Hz from the stator frequency, reading the oscillation), and
+    since the schedule passes over harmonics within its band of the stator frequency
+    (kernels/gating.py, ``injection_by_response``) it converges: within 2 % at the end, never
+    above R2 by more than the overshoot bound on the way."""
     from imdrive.studies import zero_frequency
 
     scs, _ = zero_frequency.scenarios(
@@ -60,6 +61,6 @@ def test_a_window_reading_R2_far_above_R2_hat_does_not_take_it_to_the_clamp():
         res = simulate(scs[0])
     ratio = np.asarray(res["R2_hat_ohm"]) / np.asarray(res["R2_ohm"])
     assert ratio[0] == pytest.approx(0.8, abs=1e-3)
-    assert ratio.max() < 1.0  # was 2.0: the clamp
-    assert not res.verdict["verdict_ok"] and "R2_hat off" in res.verdict["verdict_text"]
-    assert not res.metrics(window_s=0.5)["lost_control"]
+    assert ratio.max() < 1.0 + OVERSHOOT_PCT / 100.0  # was 2.0: the clamp
+    assert abs(ratio[-1] - 1.0) < 0.02  # was -40 %
+    assert res.verdict["verdict_ok"], res.verdict["verdict_text"]

@@ -101,6 +101,22 @@ def test_a_step_is_closed_without_a_large_overshoot():
     assert abs(errs[3]) < 0.05  # within 5 % after four windows
 
 
+def test_a_window_reading_R2_many_times_R2_hat_weighs_little():
+    """The measured error's variance carried through ``z = R2_hat/(1 + r)``: with a wide prior
+    (R2 known to 30 %, as after held windows) one window that reads ``r = -0.9`` (``z`` ten
+    times R2_hat, the reading that took R2_hat to its clamp on Krause 50 hp near zero stator
+    frequency, 2026-12-01) moves R2_hat by under 2 %, where the variance of ``r`` alone
+    (``(kf_r^2 + (0.6 r)^2) R2_hat^2``) gives a gain of 0.24 and a step of 2.1 R2_hat."""
+    p, s, m = _records()
+    S = in_phase_sensitivity(2 * math.pi * F_INJ, (M + LL2) / R2_0)
+    kalman_update(p, s, m, 0.9 * M * AMP * S, T)
+    assert m["R2_hat"] / R2_0 - 1.0 < 0.02
+    # a reading of the same size the other way (r = +0.9, z = R2_hat/1.9) still counts
+    p, s, m = _records()
+    kalman_update(p, s, m, -0.9 * M * AMP * S, T)
+    assert m["R2_hat"] / R2_0 - 1.0 < -0.05
+
+
 def test_a_gated_window_grows_the_covariance_and_moves_nothing():
     p, s, m = _records()
     for _ in range(50):

@@ -142,12 +142,15 @@ def test_the_MRAS_drives_R2_hat_follows_R1_hat_as_the_voltage_model_says():
 
 def test_the_observers_R2_hat_follows_R1_hat_further_than_the_voltage_model_says():
     """On the observer's drive a 1 % R1_hat error moves R2_hat by more than 5 % at 0 Hz on
-    Table IV and Krause 50 hp (9.8 and 10.4 % per %), and at 2 Hz by more than twice eq.
-    (1)'s ``g`` on the two machines of large ``x = w_sl T2`` (Krause 50 and 500 hp, 19 and
-    3.4 % per % against g = 0.57 and 0.63): its detection's current model runs at the
-    observer's speed, which R1_hat moves too. On the Aalto machine at 0 Hz the R1 error swings
-    the observer's speed 24-27 rpm, and the law holds R2_hat 44-97 % of the time. (With the
-    observer's constant gain: 17-78 % at 0 Hz, over 2 g at 2 Hz on three machines.)"""
+    Table IV and Krause 50 hp (10.7 and 6.8 % per %), and at 2 Hz by more than twice eq.
+    (1)'s ``g`` on Krause 500 hp and the Aalto machine (3.5 and 5.7 % per % against g = 0.63
+    and 2.06): its detection's current model runs at the observer's speed, which R1_hat moves
+    too. Krause 50 hp at 2 Hz follows eq. (1) since the injection's schedule keeps its side
+    bands off DC (0.63 % per % against g = 0.57; 4.8 before, where the injection read the
+    detuned drive's oscillation, kernels/gating.py). On the Aalto machine at 0 Hz the R1
+    error swings the observer's speed 24-27 rpm, and the law holds R2_hat 44-75 % of the
+    time. (With the observer's constant gain: 17-78 % at 0 Hz, over 2 g at 2 Hz on three
+    machines.)"""
     afo = _r1_table().query("estimator == 'afo'")
     zero = afo[afo["f_s_target_Hz"] == 0.0]
     moved0 = {m: study.moved_pct(g) for m, g in zero.groupby("machine")}
@@ -155,8 +158,9 @@ def test_the_observers_R2_hat_follows_R1_hat_further_than_the_voltage_model_says
     aalto = zero[(zero["machine"] == "aalto-2.2kw") & (zero["R1_ratio"] != 1.0)]
     assert (aalto["R2_held_pct"] > 40.0).all()
     at2 = afo[afo["f_s_target_Hz"] == 2.0]
-    over = {m: study.moved_pct(g) > 2 * g["g_predicted"].iloc[0] for m, g in at2.groupby("machine")}
-    assert over["krause-50hp"] and over["krause-500hp"]
+    ratio = {m: study.moved_pct(g) / g["g_predicted"].iloc[0] for m, g in at2.groupby("machine")}
+    assert ratio["krause-500hp"] > 2.0 and ratio["aalto-2.2kw"] > 2.0
+    assert ratio["krause-50hp"] < 1.5
 
 
 @pytest.mark.slow
@@ -174,11 +178,12 @@ def test_reduced_run_reproduces_the_stored_R1_sensitivity():
         ), "run 'python -m imdrive.studies.doctables --run zero-frequency-R1'"
 
 
-@pytest.mark.parametrize("drive, n_min", [("injection-robust", 3), ("injection-robust-mras", 30)])
+@pytest.mark.parametrize("drive, n_min", [("injection-robust", 2), ("injection-robust-mras", 30)])
 def test_the_recommended_drives_misses_near_zero_are_where_R2_is_weakly_observable(drive, n_min):
     """Every run of ``injection-robust`` outside "converged" at -0.5 ... +0.5 Hz is at a point
     where eq. (1) puts a 1 % R1_hat error beyond the 2 % tolerance (its status says so), on
-    the observer (the preset since 2026-11-30: 3 such runs since the Kalman law carries its
+    the observer (the preset since 2026-11-30: 2 such runs since the schedule keeps its side
+    bands off DC, 3 since the Kalman law carries its
     measurement's variance through to R2, 4 since its injection's frequency follows the
     detection's modelled response regenerating below the rated slip frequency, both
     2026-12-01; 8 before, 23 before its side bands were kept above the detection filter's
