@@ -14,7 +14,7 @@ from imdrive.cli import main
 from imdrive.config.perunit import rated_slip_rpm, resolve, speed_tolerance_rpm
 from imdrive.config.rated import rated_point
 from imdrive.config.scenario import Scenario
-from imdrive.run.status import R2_TOLERANCE, held_reasons, verdict
+from imdrive.run.status import R2_TOLERANCE, SPEED_SWING_TOLERANCES, held_reasons, verdict
 
 NAN = math.nan
 
@@ -83,6 +83,40 @@ def test_speed_error_beyond_the_tolerance_is_never_ok(sc):
     assert v["verdict"] == "speed-error"
     assert f"> tol {tol:.3g} rpm" in v["verdict_text"]
     assert verdict(sc, _row(sc, speed_error_rpm=0.99 * tol))["verdict"] == "ok"
+
+
+def test_a_speed_that_swings_over_a_settled_window_is_never_ok(sc):
+    """A limit cycle can hold its mean: the swing, peak to peak, beyond
+    ``SPEED_SWING_TOLERANCES`` tolerances is a speed error whatever the mean; not over a
+    final window that starts before the last change has settled (a ramp at the end)."""
+    tol = speed_tolerance_rpm(sc)
+    big = 1.01 * SPEED_SWING_TOLERANCES * tol
+    v = verdict(sc, _row(sc, speed_ripple_rpm=big))
+    assert v["verdict"] == "speed-error" and "swings" in v["verdict_text"]
+    assert verdict(sc, _row(sc, speed_ripple_rpm=0.99 * big / 1.01))["verdict"] == "ok"
+    # the final window unsettled (the run ends 0.1 s after its last load step)
+    t_last = sc.load.torque_pu.points[-1][0]
+    unsettled = _row(sc, speed_ripple_rpm=big, simulated_s=t_last + 0.1)
+    short = Scenario.read("injection-robust", [f"simulation.t_end_s={t_last + 0.1}"])
+    assert "swings" not in verdict(short, unsettled)["verdict_text"]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("machine", ["paper-table-iv", "aalto-2.2kw", "krause-50hp"])
+def test_an_underdamped_speed_loop_is_flagged(machine):
+    """The speed PI's proportional gain at a sixteenth of the derived one (its integral gain
+    kept): the speed swings 136-197 rpm over the final window. On Table IV the mean error was
+    -1.5 rpm, within the 1.72 rpm tolerance, and the run read ``ok``."""
+    from imdrive import simulate
+    from imdrive.run.build import build_arrays
+
+    base = Scenario.read("sensorless", [f'machine.preset="{machine}"'])
+    kp = float(build_arrays(base).params.control["kp_w"][0])
+    res = simulate(base.with_overrides([f"control.speed_kp={kp / 16}"]))
+    tol = speed_tolerance_rpm(base)
+    assert res.metrics(window_s=0.5)["speed_ripple_rpm"] > SPEED_SWING_TOLERANCES * tol
+    assert res.verdict["verdict"] == "speed-error"
+    assert "speed swings" in res.verdict["verdict_text"]
 
 
 def test_causes_are_named_in_time_order(sc):

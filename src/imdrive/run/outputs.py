@@ -108,7 +108,9 @@ SUMMARY_DOCS = {
     "circuit (voltage, frequency, speed, slip, torque, current, power factor, efficiency, "
     "magnetising current, rotor flux, breakdown torque): imdrive.config.machine.rated_point",
     "verdict": "the run's status (imdrive.run.status): `verdict` ok, or the cause of a "
-    "failure (lost-control, diverged, frozen, held, R2-off, R2-unsettled, speed-error): a loss "
+    "failure (lost-control, diverged, frozen, held, R2-off, R2-unsettled, speed-error: the "
+    "mean speed error beyond its tolerance, or the speed swinging by more than ten times it "
+    "over a settled final window): a loss "
     "of control or divergence whenever there is one, else the first in time, "
     "`verdict_text` every "
     "cause in time order, `verdict_at_s`; the speed error in rated slips and its tolerance; "
