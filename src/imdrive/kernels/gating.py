@@ -171,7 +171,8 @@ def injection_by_response(p, s, m):
     model's best was 2.24 Hz at a stator frequency of 2.52 Hz, the drive oscillated at
     2.25 Hz (its stability map: unstable from R2_hat = 0.8 R2 there; with R2_hat pinned the
     demodulated error read -154 mWb at 2.24 Hz against +3.8 and +6.9 mWb at 1.5 and 3 Hz),
-    and R2_hat ended 40 % low; now -0.5 %. Measured against the rule without it
+    and R2_hat ended 40 % low; now -0.5 % (from 0.75 R2 still -70 %: the drive itself is
+    unstable there, docs/machine-envelope.md). Measured against the rule without it
     (2026-12-01): the zero-frequency study 80 converged and 82 within 5 % of 84, against 78
     and 81; the machine envelope and ``envelope-full`` every verdict the same.
     """

@@ -120,9 +120,9 @@ LOW_FREQUENCY_PU = 0.02
 #: A settled final window whose speed swings by more than this many speed tolerances peak to
 #: peak (``speed_ripple_rpm``) is a speed error whatever its mean: 17 rpm on Table IV (22 % of
 #: its rated slip). Measured: Table IV's ``sensorless`` with ``control.speed_kp = 0.1`` (a
-#: tenth of the derived gain, an underdamped speed loop) swings 190 rpm (110 times) with a
+#: sixteenth of the derived gain, an underdamped speed loop) swings 190 rpm (110 times) with a
 #: mean error of -1.5 rpm, and read ``ok``; Krause 50 hp's observer drive from R2_hat = 0.8 R2
-#: regenerating the rated torque at 140 rpm, in a limit cycle at 2.25 Hz, 30 rpm (17 times).
+#: regenerating the rated torque at 140 rpm, in a limit cycle at 2.25 Hz, 37 rpm (21 times).
 #: Every ``ok`` run of the machine envelope and the zero-frequency study swings at most 0.28
 #: times the tolerance, of the packaged presets 1.8 times (``paper-fig6-realistic``), of the
 #: realistic envelope (switching, sensors' noise, injection) 2.4 times.
