@@ -202,3 +202,42 @@ def test_the_reactive_power_mras_is_mapped_stable_motoring_unstable_regenerating
         lin = np.linalg.matrix_power(op.A, n) @ dz
         rel = np.linalg.norm((op.propagate(dz, n) - lin) / scale) / np.linalg.norm(lin / scale)
         assert rel < 1e-3, (n, rel)
+
+
+@pytest.mark.slow
+def test_the_detuned_observer_drive_is_unstable_where_its_limit_cycle_runs():
+    """Krause 50 hp's observer drive regenerating the rated torque at 140 rpm (+2 Hz of stator
+    frequency with R2_hat = R2, docs/machine-envelope.md): from R2_hat = 0.8 R2 the map is
+    unstable (a 2.2 Hz mode, +0.15 /s; the frame integrates the detuned slip below 0.1 of the
+    rated frequency), from R2 stable; the simulated drive (``sensorless-afo``, the
+    zero-frequency study's timeline) runs a limit cycle at the map's frequency from 0.8 R2,
+    its speed swinging more than 20 tolerances, and is still from R2."""
+    from imdrive import simulate
+    from imdrive.config.perunit import speed_tolerance_rpm
+    from imdrive.studies import zero_frequency
+
+    sc = _afo("krause-50hp")
+    _, T_Nm = _rated(sc)
+    op = operating_point(map_scenario(sc, R2_ratio=0.8), 140.0, -T_Nm)
+    assert op.status == "ok" and not op.stable
+    mode = op.modes()[0]
+    assert 1.8 < mode.frequency_Hz < 2.7 and mode.s.real > 0.05
+    assert operating_point(map_scenario(sc, R2_ratio=1.0), 140.0, -T_Nm).stable
+    tol = speed_tolerance_rpm(sc)
+    for ratio in (0.8, 1.0):
+        (run,), _ = zero_frequency.scenarios(
+            machines=["krause-50hp"],
+            frequencies=(2.0,),
+            ratios=(ratio,),
+            drives=("sensorless-afo",),
+        )
+        res = simulate(run.with_overrides(["simulation.log_every=1"]))
+        t, w = np.asarray(res["time_s"]), np.asarray(res["speed_rpm"])
+        w = w[t >= t[-1] - 8.0]
+        if ratio == 1.0:
+            assert np.ptp(w) < 0.1 * tol
+            continue
+        assert np.ptp(w) > 20 * tol
+        spectrum = np.abs(np.fft.rfft((w - w.mean()) * np.hanning(len(w))))
+        f_peak = np.fft.rfftfreq(len(w), run.simulation.Ts_s)[np.argmax(spectrum)]
+        assert f_peak == pytest.approx(mode.frequency_Hz, rel=0.15)
