@@ -1,16 +1,8 @@
 """Errors: bad input (exit code 2 in the CLI) and environment failures (exit code 4)."""
 
 
-class ConfigError(ValueError):
-    """A scenario or parameter value broke a rule.
-
-    Parameters
-    ----------
-    field : str
-        Dotted path of the offending field, e.g. ``machine.R1_ohm``.
-    rule : str
-        The rule it broke, e.g. ``must be > 0``.
-    """
+class _FieldRule:
+    """A field and the rule it broke (or looks wrong by), as one line ``field: rule``."""
 
     def __init__(self, field: str, rule: str):
         self.field = _one_line(field)
@@ -23,7 +15,19 @@ class ConfigError(ValueError):
         return (type(self), (self.field, self.rule))
 
 
-class ConfigWarning(UserWarning):
+class ConfigError(_FieldRule, ValueError):
+    """A scenario or parameter value broke a rule.
+
+    Parameters
+    ----------
+    field : str
+        Dotted path of the offending field, e.g. ``machine.R1_ohm``.
+    rule : str
+        The rule it broke, e.g. ``must be > 0``.
+    """
+
+
+class ConfigWarning(_FieldRule, UserWarning):
     """A suspicious but possible input (a rated slip above 10 %, a power factor of 0.3).
 
     The run goes on; the command line prints it as one line ``imdrive: warning: field: rule``.
@@ -35,16 +39,6 @@ class ConfigWarning(UserWarning):
     rule : str
         What looks wrong, e.g. ``rated slip 14 % is above 10 %``.
     """
-
-    def __init__(self, field: str, rule: str):
-        self.field = _one_line(field)
-        self.rule = _one_line(rule)
-        super().__init__(f"{self.field}: {self.rule}")
-
-    def __reduce__(self):
-        # pickled with its two arguments: raised in a worker process (a user's
-        # ProcessPoolExecutor) it reaches the parent as itself, not as a BrokenProcessPool
-        return (type(self), (self.field, self.rule))
 
 
 def _one_line(text: str) -> str:

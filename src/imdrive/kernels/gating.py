@@ -146,12 +146,13 @@ KEEP_SHARE = 0.5
 
 
 @njit(cache=True)
-def injection_by_response(p, s, m):
+def injection_by_response(p, s, m, fe):
     """The frequency schedule while the detection's speed path may carry the R2 error (updates
     ``s.inj_f``): the harmonic of the first with the largest in-phase response
     (:func:`imdrive.kernels.detection_response.in_phase_response`), over ``T2`` within two
     standard deviations of the Kalman law's R2_hat (its ``P00``, at most half of it;
-    ``m``: the controller's model, for ``T2_hat``); the slip-coupled response
+    ``m``: the controller's model, for ``T2_hat``; ``fe``: the window's mean ``|f_e|``, Hz,
+    as :func:`_choose_of_three` has it); the slip-coupled response
     is weighed where most of the window regenerated below the rated slip frequency. The one in
     use stays while its response is :data:`KEEP_SHARE` of the best's.
 
@@ -188,7 +189,6 @@ def injection_by_response(p, s, m):
     best = -1.0
     v_best = 0.0
     v_now = 0.0
-    fe = abs(s.we_mean) / (2.0 * math.pi)
     for k in range(1, RESPONSE_HARMONICS + 1):
         f = k * p.inj_freq
         if abs(f - fe) < p.gate_df:  # a side band within the band of DC
@@ -224,7 +224,7 @@ def _choose_of_three(p, s, fe, m):
     point switched at every window and held R2_hat). A switch restarts the phase.
     """
     if s.rl_share > 0.0:  # the detection's speed path off a while (only with p.det)
-        injection_by_response(p, s, m)
+        injection_by_response(p, s, m, fe)
         return
     f_now = injection_frequency_Hz(p, s)
     band = max(p.gate_df, p.sched_wc / (2.0 * math.pi))
