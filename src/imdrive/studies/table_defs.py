@@ -160,6 +160,25 @@ LOW_SPEEDS_RPM = (45, 70, 100)
 LOW_SPEED_LOADS_NM = (12, 6, 0, -6, -12)
 
 
+def _case_point(case: str) -> tuple[float, float]:
+    """``(speed, load)`` of a ``steady-<rpm>rpm-<N m>Nm`` case, rpm and N m."""
+    _, rpm, load = case.split("-", 2)
+    return float(rpm.removesuffix("rpm")), float(load.removesuffix("Nm"))
+
+
+def low_speed_stator_frequency_Hz(case: str) -> float:
+    """The steady state's stator frequency of a low-speed bench case on
+    ``sensorless-realistic`` with R2_hat = R2, Hz
+    (:func:`imdrive.analysis.drive_steady_state.stator_frequency_Hz`): where it is within
+    :data:`imdrive.run.status.LOW_FREQUENCY_PU` of the rated frequency of zero, a run's status
+    says it ran near zero stator frequency."""
+    from imdrive.analysis.drive_steady_state import stator_frequency_Hz
+    from imdrive.config.scenario import Scenario
+
+    speed, load = _case_point(case)
+    return stator_frequency_Hz(Scenario.read("sensorless-realistic"), speed, load, 1.0)
+
+
 def _measure_low_speed():
     from imdrive.bench.protocol import ESTIMATORS, Run, steady_cases
     from imdrive.bench.report import run_protocol
@@ -173,24 +192,24 @@ def _measure_low_speed():
         for c in cases
     ]
     table, _, _ = run_protocol(runs=runs, cases=cases, drives=drives)
+    f_s = {c: low_speed_stator_frequency_Hz(c) for c in cases}
+    table["f_s_Hz"] = table["case"].map(f_s)
     return table
 
 
 def _low_speed(df) -> list[str]:
     ests = [e for e in LOW_SPEED_ESTIMATORS if e in set(df.estimator)]
-    out = ["| case | " + " | ".join(ests) + " |", "|---" * (len(ests) + 1) + "|"]
+    out = ["| case | f_s, Hz | " + " | ".join(ests) + " |", "|---" * (len(ests) + 2) + "|"]
     for case in dict.fromkeys(df.case):
-        _, rpm, load = case.split("-", 2)
-        load = float(load.removesuffix("Nm"))
-        name = f"{rpm.removesuffix('rpm')} rpm, " + (
-            "0" if load == 0 else f"{_signed(load, 0)} N m"
-        )
+        rpm, load = _case_point(case)
+        name = f"{rpm:g} rpm, " + ("0" if load == 0 else f"{_signed(load, 0)} N m")
+        f_s = df[df.case == case].f_s_Hz.iloc[0]
         cells = []
         for e in ests:
             r = df[(df.case == case) & (df.estimator == e)].iloc[0]
             lost = bool(r.lost_control) or bool(r.diverged)
             cells.append("**lost**" if lost else _signed(r.steady_speed_error_rpm, 1))
-        out.append(f"| {name} | " + " | ".join(cells) + " |")
+        out.append(f"| {name} | {_signed(f_s, 1)} | " + " | ".join(cells) + " |")
     return out
 
 
