@@ -102,14 +102,17 @@ def run_job(name: str) -> None:
         raise ConfigError("job", f"unknown job {name!r} (known: {', '.join(jobs())})")
 
 
-def _spawn(name: str) -> tuple[str, float, str]:
+def _spawn(name: str, alone: bool = True) -> tuple[str, float, str]:
     t0 = time.perf_counter()
+    env = {**os.environ, "NUMBA_NUM_THREADS": os.environ.get("NUMBA_NUM_THREADS", "1")}
+    if not alone:  # jobs side by side fill the cores: no cold-start helper each (run/prefetch.py)
+        env["IMDRIVE_PREFETCH"] = "0"
     res = subprocess.run(
         [sys.executable, "-m", "imdrive", "warm-up", "--job", name],
         capture_output=True,
         text=True,
         # compiling is one thread's work; the jobs themselves are the parallelism
-        env={**os.environ, "NUMBA_NUM_THREADS": os.environ.get("NUMBA_NUM_THREADS", "1")},
+        env=env,
     )
     err = "" if res.returncode == 0 else (res.stderr.strip().splitlines() or ["?"])[-1]
     return name, time.perf_counter() - t0, err
@@ -167,7 +170,8 @@ def warm_up(names=None, processes: int | None = None, log=None) -> dict[str, flo
     times, failed = {}, []
     for batch in (first, rest):
         with ThreadPoolExecutor(max(1, min(processes, len(batch) or 1))) as pool:
-            for name, dt, err in pool.map(_spawn, batch):
+            alone = len(batch) == 1 or processes == 1
+            for name, dt, err in pool.map(lambda n, a=alone: _spawn(n, a), batch):
                 times[name] = dt
                 if err:
                     failed.append(f"{name}: {err}")

@@ -1,0 +1,142 @@
+"""The cold-start helper (:mod:`imdrive.run.prefetch`): the blocks it compiles are the ones the
+drive loop then loads from the cache instead of compiling, and it starts only when the loop
+must compile."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import textwrap
+
+import pytest
+
+from imdrive.config.scenario import Scenario
+from imdrive.kernels.engine import run_drive
+from imdrive.run import prefetch
+from imdrive.run.build import build_arrays, copy_state
+from imdrive.run.simulate import new_log, simulate
+
+#: What :func:`imdrive.kernels.prefetch.late_blocks` calls.
+LATE = {
+    "integrate_segment",
+    "log_plant",
+    "log_control",
+    "log_compensator",
+    "inverter_segments",
+    "foc_step",
+}
+
+RECORDS = textwrap.dedent("""
+    import pickle, sys
+    from imdrive.config.scenario import Scenario
+    from imdrive.run.build import build_arrays
+    from imdrive.run.simulate import new_log
+
+    a = build_arrays(Scenario.read(sys.argv[2], ["simulation.t_end_s=0.05"]))
+    with open(sys.argv[1], "wb") as f:
+        pickle.dump((a.params, a.state0, new_log(1, a.log)), f)
+""")
+
+RUN = textwrap.dedent("""
+    import sys
+    from numba.core import event
+    from imdrive.config.scenario import Scenario
+    from imdrive.run.simulate import simulate
+
+    compiled = []
+
+    class Count(event.Listener):
+        def on_start(self, ev):
+            compiled.append(ev.data["dispatcher"].py_func.__qualname__)
+
+        def on_end(self, ev):
+            pass
+
+    event.register("numba:compile", Count())
+    res = simulate(Scenario.read(sys.argv[1], ["simulation.t_end_s=0.05"]))
+    assert not res.diverged
+    print(" ".join(compiled))
+""")
+
+
+def _first_call(sc):
+    a = build_arrays(sc)
+    log = new_log(3, a.log)
+    return a, (a.params, copy_state(a.state0), 0, 0, log[:0], 1, 0, True, new_rec())
+
+
+def new_rec():
+    import numpy as np
+
+    from imdrive.kernels.recording import RECORDING
+
+    return np.zeros(0, dtype=RECORDING)
+
+
+@pytest.mark.slow  # a cold compile of the late blocks and of the loop: 12-20 s
+@pytest.mark.parametrize(
+    "preset, optional",
+    [("sensorless", set()), ("sensorless-realistic", {"bridge_period", "stator_residual"})],
+)
+def test_the_helpers_blocks_are_what_the_loop_loads(tmp_path, preset, optional):
+    env = {**os.environ, "IMDRIVE_CACHE_DIR": str(tmp_path / "cache"), prefetch.ENV: "0"}
+
+    def py(code, *args):
+        res = subprocess.run(
+            [sys.executable, "-c", code, *args], env=env, capture_output=True, text=True
+        )
+        assert res.returncode == 0, res.stderr[-3000:]
+        return res.stdout.split()
+
+    records = tmp_path / "records.pkl"
+    py(RECORDS, str(records), preset)
+    py(prefetch.HELPER, str(records))  # what start() runs, here to its end
+    assert not records.exists()
+    compiled = set(py(RUN, preset))
+    assert "run_drive" in compiled  # the loop itself was cold
+    late = LATE | optional  # and its late blocks came from the helper
+    assert not compiled & late, compiled & late
+    # and the helper left nothing in the source tree
+    src = os.path.dirname(prefetch.__file__)
+    assert not [f for f in os.listdir(src) if f.endswith((".nbi", ".nbc"))]
+
+
+def test_no_helper_for_a_compiled_loop_or_when_turned_off(monkeypatch):
+    sc = Scenario.read("sensorless", ["simulation.t_end_s=0.01"])
+    simulate(sc)  # compiled (or loaded) in this process now
+    a, first = _first_call(sc)
+    assert prefetch._compiled_or_cached(run_drive, first)
+    assert prefetch.start(run_drive, first, a.params, a.state0, new_log(1, a.log)) is None
+    monkeypatch.setenv(prefetch.ENV, "0")
+    assert prefetch.start(None, (), None, None, None) is None  # off: nothing is even looked at
+
+
+def test_an_unknown_specialisation_is_not_cached():
+    class Stub:  # a dispatcher that has compiled nothing and whose cache knows nothing
+        overloads = {}
+
+        @staticmethod
+        def typeof_pyval(v):
+            from numba import typeof
+
+            return typeof(v)
+
+        class _cache:
+            @staticmethod
+            def _index_key(sig, codegen):
+                return ("key", sig)
+
+            class _cache_file:
+                @staticmethod
+                def _load_index():
+                    return {}
+
+        class targetctx:
+            @staticmethod
+            def codegen():
+                return None
+
+    assert not prefetch._compiled_or_cached(Stub, (1.0, 2))
+    # numba's internals not as expected: assume cached, start nothing
+    assert prefetch._compiled_or_cached(object(), (1.0,))
