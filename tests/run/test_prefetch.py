@@ -35,7 +35,8 @@ RECORDS = textwrap.dedent("""
 
     a = build_arrays(Scenario.read(sys.argv[2], ["simulation.t_end_s=0.05"]))
     with open(sys.argv[1], "wb") as f:
-        pickle.dump((a.params, a.state0, new_log(1, a.log)), f)
+        job = ("imdrive.kernels.prefetch", "late_blocks", (a.params, a.state0, new_log(1, a.log)))
+        pickle.dump([job], f)  # as start_loop() writes it
 """)
 
 RUN = textwrap.dedent("""
@@ -107,9 +108,10 @@ def test_no_helper_for_a_compiled_loop_or_when_turned_off(monkeypatch):
     simulate(sc)  # compiled (or loaded) in this process now
     a, first = _first_call(sc)
     assert prefetch._compiled_or_cached(run_drive, first)
-    assert prefetch.start(run_drive, first, a.params, a.state0, new_log(1, a.log)) is None
+    assert prefetch.start_loop(run_drive, first, a.params, a.state0, new_log(1, a.log)) is None
     monkeypatch.setenv(prefetch.ENV, "0")
-    assert prefetch.start(None, (), None, None, None) is None  # off: nothing is even looked at
+    assert prefetch.start_loop(None, (), None, None, None) is None  # off: nothing looked at
+    assert prefetch.start([(None, ())]) is None
 
 
 def test_an_unknown_specialisation_is_not_cached():
@@ -140,3 +142,32 @@ def test_an_unknown_specialisation_is_not_cached():
     assert not prefetch._compiled_or_cached(Stub, (1.0, 2))
     # numba's internals not as expected: assume cached, start nothing
     assert prefetch._compiled_or_cached(object(), (1.0,))
+
+
+def test_the_batch_helper_compiles_each_groups_call_as_the_batch_makes_it():
+    from numba import typeof
+
+    from imdrive.kernels.batch import new_scratch
+    from imdrive.run import batch
+
+    # a group mixing an average and a realistic drive compiles the blocks of both
+    items = [
+        (i, sc, build_arrays(sc))
+        for i, sc in enumerate(
+            Scenario.read(p, ["simulation.t_end_s=0.01"])
+            for p in ("sensorless", "sensorless-realistic")
+        )
+    ]
+    first = batch._first_call(items, 1, 0.5)
+    params, state, log, out = batch._group_args(items, 7, 0.5)
+    made = (params, state, log, 1, out, 1, 2, new_scratch(2, log.dtype)[1])  # batch_kernel's
+    assert [typeof(a) for a in first] == [typeof(a) for a in made]
+    assert "switching_bridge" in params.features.dtype.names
+
+
+def test_the_batch_helper_starts_from_the_last_group(monkeypatch):
+    seen = []
+    monkeypatch.setattr(prefetch, "start", lambda jobs, check=True: seen.append(jobs))
+    assert prefetch.start_batch("worker", [("a",)]) is None  # one group: nothing to share
+    prefetch.start_batch("worker", [("a",), ("b",), ("c",)])
+    assert seen == [[("worker", ("c",)), ("worker", ("b",))]]

@@ -60,6 +60,7 @@ from imdrive.kernels.batch import (
     BATCH_METRICS,
     METRICS,
     BatchOut,
+    _worker,
     batch_kernel,
     batch_kernel_serial,
     new_scratch,
@@ -69,6 +70,7 @@ from imdrive.kernels.estimators.registry import kernel_of_state
 from imdrive.kernels.profiles import N_PROF
 from imdrive.kernels.r2_law_registry import law_of_records
 from imdrive.kernels.threads import slots
+from imdrive.run import prefetch
 from imdrive.run.metrics import lost_control_check, steady_window_periods
 from imdrive.run.status import STATUS_COLUMNS
 
@@ -213,9 +215,9 @@ def _rows(arrs: list) -> np.ndarray:
     return np.frombuffer(raw, dtype=dt).reshape((-1, *arrs[0].shape[1:])).copy()
 
 
-def _stack(items, log_every: int, n_rows: int, window_s: float, parallel: bool):
-    """Run one group of (index, scenario, DriveArrays) sharing their records' dtypes; return
-    per-drive data."""
+def _group_args(items, n_rows: int, window_s: float):
+    """``(params, state, log, out)`` of the kernel call of one group of (index, scenario,
+    DriveArrays) sharing their records' dtypes, the log ``n_rows`` long and NaN-filled."""
     G = len(items)
     arrays = [a for _, _, a in items]
     params, state = stack_drives(arrays)
@@ -239,6 +241,15 @@ def _stack(items, log_every: int, n_rows: int, window_s: float, parallel: bool):
         lc_bound=lc_bound,
         lc_n=lc_n,
     )
+    return params, state, log, out
+
+
+def _stack(items, log_every: int, n_rows: int, window_s: float, parallel: bool):
+    """Run one group of (index, scenario, DriveArrays) sharing their records' dtypes; return
+    per-drive data."""
+    params, state, log, out = _group_args(items, n_rows, window_s)
+    dtype = log.dtype
+    G = len(items)
     t0 = time.perf_counter()
     if parallel:
         scratch = new_scratch(slots(G), dtype)
@@ -247,6 +258,15 @@ def _stack(items, log_every: int, n_rows: int, window_s: float, parallel: bool):
         batch_kernel_serial(params, state, log, log_every, out, new_scratch(1, dtype)[0])
     wall = time.perf_counter() - t0
     return params, state, log, out, wall
+
+
+def _first_call(items, log_every: int, window_s: float) -> tuple:
+    """The arguments of the batch worker's call for a group, cut to its first drive: their
+    types, the blocks of every drive of the group compiled in (``params.features``), are what
+    :func:`imdrive.run.prefetch.start_batch` compiles for."""
+    params, state, log, out = _group_args(items, 0, window_s)
+    first = [type(r)(*(f[:1] for f in r)) for r in (params, state, out)]
+    return first[0], first[1], log[:1], log_every, first[2], 0, 1, new_scratch(1, log.dtype)[0]
 
 
 def _run_block(block, offset, logs, log_every, window_s, parallel, errors):
@@ -300,6 +320,9 @@ def _run_block(block, offset, logs, log_every, window_s, parallel, errors):
         # one thread
         key = (int(le), a.params.est.dtype, a.params.comp.dtype)
         groups.setdefault(key, []).append((i, sc, a))
+    if len(groups) > 1:  # kernels not yet compiled: a second process compiles from the last
+        calls = [_first_call(items, le, window_s) for (le, _, _), items in groups.items()]
+        prefetch.start_batch(_worker, calls)
     for (le, _, _), items in groups.items():
         n_rows = max(a.n_steps for _, _, a in items) // le + 1 if logs else 0
         params, state, log, out, wall = _stack(items, le, n_rows, window_s, parallel)

@@ -1,18 +1,22 @@
-"""A cold start on two cores: a second process compiles the drive loop's late blocks while
-this one compiles the loop.
+"""Cold starts on two cores: a second process compiles what this one will need later.
 
 A cold ``imdrive run`` spends nearly all its time compiling, on one core: numba types the loop
 and compiles each block the loop calls when it meets the call. When the drive's loop is
-neither compiled in this process nor cached (:func:`start`), a helper process
+neither compiled in this process nor cached (:func:`start_loop`), a helper process
 (:data:`HELPER`) compiles the blocks the loop's stages call last
 (:func:`imdrive.kernels.prefetch.late_blocks`) into the same cache; this process, reaching
-them, loads them from there. A block the helper has not finished is compiled here as before
-(the cache's saves are locked, :func:`imdrive._cache._lock_index_saves`), so the helper can
-only save time. Measured (2026-12-01, 2 cores, ``farm-bench``, runs paired with the helper
-off, medians): a cold ``imdrive run sensorless`` 9.3 s against 12.9 s (5 pairs; ratio 0.76),
+them, loads them from there. A batch whose drives need several kernels not yet compiled (one
+per estimator and R2 law: ``imdrive bench-estimators``, a sweep over estimators) has the
+helper compile them from the last while it compiles and runs them from the first
+(:func:`start_batch`). What the helper has not finished is compiled here as before (the
+cache's saves are locked, :func:`imdrive._cache._lock_index_saves`), so the helper can only
+save time. Measured (2026-12-01, 2 cores, ``farm-bench``, runs paired with the helper off,
+medians): a cold ``imdrive run sensorless`` 9.3 s against 12.9 s (5 pairs; ratio 0.76),
 ``paper-fig5`` 14.3 against 19.3 s, ``sensorless-realistic`` 12.7 against 19.3 s (2 runs
 each); a warm run is unchanged (1.23 against 1.26 s, 10 pairs: the check is one read of the
-loop's cache index). Off with ``IMDRIVE_PREFETCH=0``, and on a single core.
+loop's cache index). The first ``imdrive bench-estimators`` after a warm ``run sensorless``
+(its 5 kernels, one per estimator's records): 42.9 and 45.8 s against 66.3 and 69.8 s (2
+runs each; warm 11.5-13.2 s). Off with ``IMDRIVE_PREFETCH=0``, and on a single core.
 """
 
 from __future__ import annotations
@@ -28,14 +32,16 @@ from pathlib import Path
 #: The environment variable that turns the helper off (``0``).
 ENV = "IMDRIVE_PREFETCH"
 
-#: The helper: ``python -c HELPER FILE`` compiles
-#: :func:`~imdrive.kernels.prefetch.late_blocks` for the records pickled in ``FILE`` (removed
-#: once read). It imports the kernels alone (not this package's ``run`` layer: 0.6 s).
+#: The helper: ``python -c HELPER FILE`` compiles, in their order, the jobs pickled in ``FILE``
+#: (removed once read): ``(module, function, args)``, the compiled function of that module for
+#: the types of ``args``. It imports the kernels alone (not this package's ``run`` layer: 0.6 s).
 HELPER = (
-    "import pickle, sys; from pathlib import Path; path = Path(sys.argv[1]); "
-    "P, S, log = pickle.loads(path.read_bytes()); path.unlink(missing_ok=True); "
-    "from numba import typeof; from imdrive.kernels.prefetch import late_blocks; "
-    "late_blocks.compile((typeof(P), typeof(S), typeof(log)))"
+    "import importlib, pickle, sys; from pathlib import Path; path = Path(sys.argv[1]); "
+    "jobs = pickle.loads(path.read_bytes()); path.unlink(missing_ok=True); "
+    "from numba import typeof\n"
+    "for module, name, args in jobs:\n"
+    "    f = getattr(importlib.import_module(module), name)\n"
+    "    f.compile(tuple(typeof(a) for a in args))"
 )
 
 
@@ -60,26 +66,23 @@ def _compiled_or_cached(dispatcher, args) -> bool:
         return True
 
 
-def start(engine, args, P, S, log) -> subprocess.Popen | None:
-    """Start the helper if ``engine`` (the drive loop) must compile for ``args``.
-
-    Parameters
-    ----------
-    engine : numba dispatcher
-        :func:`imdrive.kernels.engine.run_drive`.
-    args : tuple
-        The arguments of its first call.
-    P, S, log : DriveParams, DriveState, numpy.ndarray
-        The drive's records and its log (their types are what the helper compiles for).
+def start(jobs, check: bool = True) -> subprocess.Popen | None:
+    """Start a helper that compiles ``jobs``, a list of ``(dispatcher, args)``, in their order,
+    into the cache; with ``check``, those already compiled or cached are left out.
 
     Returns
     -------
     subprocess.Popen or None
-        The helper, or None if none was started.
+        The helper, or None if none was started (nothing to compile, one core, or turned off).
     """
     if os.environ.get(ENV, "1") == "0" or _cores() < 2:
         return None
-    if _compiled_or_cached(engine, args):
+    todo = [
+        (d.py_func.__module__, d.py_func.__name__, args)
+        for d, args in jobs
+        if not (check and _compiled_or_cached(d, args))
+    ]
+    if not todo:
         return None
     from imdrive._cache import cache_root
 
@@ -89,7 +92,7 @@ def start(engine, args, P, S, log) -> subprocess.Popen | None:
             dir=cache_root(), prefix="prefetch-", suffix=".pkl", delete=False
         ) as f:  # a name of its own: one process may start several helpers
             path = Path(f.name)
-            pickle.dump((P, S, log[:1]), f, protocol=pickle.HIGHEST_PROTOCOL)
+            pickle.dump(todo, f, protocol=pickle.HIGHEST_PROTOCOL)
         proc = subprocess.Popen(
             [sys.executable, "-c", HELPER, str(path)],
             stdin=subprocess.DEVNULL,
@@ -103,3 +106,24 @@ def start(engine, args, P, S, log) -> subprocess.Popen | None:
     # reaped at exit if it has ended (no zombie left behind); if not, it ends on its own
     atexit.register(proc.poll)
     return proc
+
+
+def start_loop(engine, args, P, S, log) -> subprocess.Popen | None:
+    """Start the helper on the loop's late blocks if ``engine`` (the drive loop,
+    :func:`imdrive.kernels.engine.run_drive`) must compile for ``args``, the arguments of its
+    first call; ``P``, ``S``, ``log``: the drive's records and its log."""
+    if os.environ.get(ENV, "1") == "0" or _compiled_or_cached(engine, args):
+        return None
+    from imdrive.kernels.prefetch import late_blocks
+
+    # late_blocks itself is not cached: it is what it calls that is
+    return start([(late_blocks, (P, S, log[:1]))], check=False)
+
+
+def start_batch(worker, calls) -> subprocess.Popen | None:
+    """Start the helper on the batch ``worker``'s specialisations, ``calls`` (the arguments of
+    each group's call, in the order the batch runs them), from the last: this process compiles
+    them from the first, and the two meet in the middle. Nothing for a single call."""
+    if len(calls) < 2:
+        return None
+    return start([(worker, args) for args in reversed(calls[1:])])

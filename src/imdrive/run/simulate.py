@@ -107,7 +107,7 @@ def simulate(
     # on a cold cache a second process compiles the loop's late blocks meanwhile
     t0 = time.perf_counter()
     first = (a.params, copy_state(a.state0), 0, 0, log[:0], 1, 0, True, rec)
-    prefetch.start(run_drive, first, a.params, a.state0, log)
+    prefetch.start_loop(run_drive, first, a.params, a.state0, log)
     run_drive(*first)
     startup = time.perf_counter() - t0
     t0 = time.perf_counter()
