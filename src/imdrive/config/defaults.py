@@ -485,7 +485,16 @@ def in_effect(sc, key: str):
     KeyError
         ``key`` is not a setting of :data:`DERIVED`.
     """
-    return DERIVED[key].value(sc)
+    memo = getattr(sc, "_in_effect", None)  # a scenario is frozen: each value is computed once
+    if memo is None:
+        memo = {}
+        try:
+            object.__setattr__(sc, "_in_effect", memo)
+        except (AttributeError, TypeError):  # not a Scenario (a stand-in in a test): no memo
+            return DERIVED[key].value(sc)
+    if key not in memo:
+        memo[key] = DERIVED[key].value(sc)
+    return memo[key]
 
 
 def derived_defaults(sc) -> dict[str, object]:

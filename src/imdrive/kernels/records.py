@@ -14,6 +14,8 @@ used; records of arrays passed in as arguments are safe.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from numba import types
 from numba.core import cgutils
@@ -41,12 +43,26 @@ def new_record(dtype: np.dtype, fields: dict | None = None, /, **values) -> np.n
     drives whose MRAS parameters had 20 fields grew by 400 bytes per drive.
     """
     rec = np.zeros(1, dtype=dtype)
-    items = list(fields.items()) if fields else []
-    for name, val in items + list(values.items()):
-        if name not in dtype.names:
-            raise KeyError(f"{name!r} is not a field of {dtype.names}")
-        rec[name] = val
+    if not fields and not values:
+        return rec
+    # one assignment of the whole row: a batch builds nine records per drive, and setting
+    # their 200-odd fields one by one was a tenth of its set-up (0.06 ms per drive)
+    index = _field_index(dtype)
+    row = list(rec[0].item())
+    for part in (fields or {}, values):
+        for name, val in part.items():
+            pos = index.get(name)
+            if pos is None:
+                raise KeyError(f"{name!r} is not a field of {dtype.names}")
+            row[pos] = val
+    rec[0] = tuple(row)
     return rec
+
+
+@functools.cache
+def _field_index(dtype: np.dtype) -> dict:
+    """``{field name: position}`` of a record dtype."""
+    return {name: i for i, name in enumerate(dtype.names)}
 
 
 def new_records(specs: dict) -> dict:
