@@ -167,6 +167,38 @@ def _all_finite(arr: np.ndarray) -> bool:
     return bool(np.isfinite(np.ascontiguousarray(raw[:, idx]).view(np.float64)).all())
 
 
+@functools.lru_cache(maxsize=512)
+def _joint_float_bytes(layout: tuple) -> np.ndarray | None:
+    """Byte offsets of every float64 / complex128 value in the arrays of ``layout``, a tuple of
+    ``(dtype, size)`` laid end to end (None if some float has another width)."""
+    idx: list[np.ndarray] = []
+    start = 0
+    for dtype, size in layout:
+        if dtype.names is None:
+            if dtype.kind in "fc" and dtype.itemsize not in (8, 16):
+                return None
+            one = np.arange(dtype.itemsize if dtype.kind in "fc" else 0, dtype=np.intp)
+        else:
+            one = _float_bytes(dtype)
+            if one is None:
+                return None
+        rows = start + dtype.itemsize * np.arange(size, dtype=np.intp)
+        idx.append((rows[:, None] + one[None, :]).ravel())
+        start += dtype.itemsize * size
+    return np.concatenate(idx) if idx else np.zeros(0, dtype=np.intp)
+
+
+def _all_finite_joint(arrs) -> bool:
+    """:func:`_all_finite` of every array of ``arrs`` at once: one gather of their bytes laid
+    end to end (a drive has about 20 records, and one check each was a fifth of the time
+    ``build_arrays`` took)."""
+    idx = _joint_float_bytes(tuple((a.dtype, a.size) for a in arrs))
+    if idx is None:
+        return all(_all_finite(a) for a in arrs)
+    raw = np.frombuffer(b"".join(np.ascontiguousarray(a).tobytes() for a in arrs), np.uint8)
+    return bool(np.isfinite(raw[idx].view(np.float64)).all())
+
+
 def check_finite(arrays: DriveArrays, sc: Scenario) -> None:
     """Refuse arrays holding a non-finite number: every derived quantity must be finite.
 
@@ -177,8 +209,8 @@ def check_finite(arrays: DriveArrays, sc: Scenario) -> None:
     for name, value in arrays.derived.items():
         if not math.isfinite(float(value)):
             raise _not_finite(name, value, sc, arrays.sources or DERIVED_SOURCE)
-    if all(_all_finite(rec) for records in (arrays.params, arrays.state0) for rec in records):
-        return  # the usual case, in one pass per record (the loop below names a bad field)
+    if _all_finite_joint([rec for records in (arrays.params, arrays.state0) for rec in records]):
+        return  # the usual case, in one pass (the loop below names a bad field)
     for records in (arrays.params, arrays.state0):
         for rec_name, rec in zip(records._fields, records, strict=True):
             fields_ = rec.dtype.names or (None,)
