@@ -261,12 +261,14 @@ def _stack(items, log_every: int, n_rows: int, window_s: float, parallel: bool):
 
 
 def _first_call(items, log_every: int, window_s: float) -> tuple:
-    """The arguments of the batch worker's call for a group, cut to its first drive: their
-    types, the blocks of every drive of the group compiled in (``params.features``), are what
+    """The arguments of the batch worker's call for a group, made of its first drive with the
+    blocks of every drive of the group compiled in (``params.features``, as
+    :func:`stack_drives` has them): their types are what
     :func:`imdrive.run.prefetch.start_batch` compiles for."""
-    params, state, log, out = _group_args(items, 0, window_s)
-    first = [type(r)(*(f[:1] for f in r)) for r in (params, state, out)]
-    return first[0], first[1], log[:1], log_every, first[2], 0, 1, new_scratch(1, log.dtype)[0]
+    params, state, log, out = _group_args(items[:1], 0, window_s)
+    blocks = {n for _, _, a in items for n in a.params.features.dtype.names[1:]}
+    params = params._replace(features=np.ones(1, dtype=features.features_dtype(blocks)))
+    return params, state, log, log_every, out, 0, 1, new_scratch(1, log.dtype)[0]
 
 
 def _run_block(block, offset, logs, log_every, window_s, parallel, errors):
