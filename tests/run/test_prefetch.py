@@ -10,6 +10,7 @@ import sys
 import textwrap
 
 import pytest
+from data.compiles import COUNT_COMPILES
 
 from imdrive.config.scenario import Scenario
 from imdrive.kernels.engine import run_drive
@@ -37,27 +38,6 @@ RECORDS = textwrap.dedent("""
     with open(sys.argv[1], "wb") as f:
         job = ("imdrive.kernels.prefetch", "late_blocks", (a.params, a.state0, new_log(1, a.log)))
         pickle.dump([job], f)  # as start_loop() writes it
-""")
-
-RUN = textwrap.dedent("""
-    import sys
-    from numba.core import event
-    from imdrive.config.scenario import Scenario
-    from imdrive.run.simulate import simulate
-
-    compiled = []
-
-    class Count(event.Listener):
-        def on_start(self, ev):
-            compiled.append(ev.data["dispatcher"].py_func.__qualname__)
-
-        def on_end(self, ev):
-            pass
-
-    event.register("numba:compile", Count())
-    res = simulate(Scenario.read(sys.argv[1], ["simulation.t_end_s=0.05"]))
-    assert not res.diverged
-    print(" ".join(compiled))
 """)
 
 
@@ -94,7 +74,7 @@ def test_the_helpers_blocks_are_what_the_loop_loads(tmp_path, preset, optional):
     py(RECORDS, str(records), preset)
     py(prefetch.HELPER, str(records))  # what start() runs, here to its end
     assert not records.exists()
-    compiled = set(py(RUN, preset))
+    compiled = set(py(COUNT_COMPILES, preset))
     assert "run_drive" in compiled  # the loop itself was cold
     late = LATE | optional  # and its late blocks came from the helper
     assert not compiled & late, compiled & late
