@@ -15,7 +15,9 @@ Measures
    own R2_hat/R2 in [0.6, 1.4], final speed in [100, 1500] rpm and load in [0, 12] N m (a random
    sweep, seed 0), for N in ``--sizes``: wall time of the whole ``simulate_batch()`` call
    (scenarios built from a generator, arrays, kernel, metrics table) and of the kernel alone,
-   and the throughput in drive-control-periods per second, on all cores (numba's threads); the
+   and the throughput in drive-control-periods per second, on all cores (numba's threads;
+   since 2026-12-01 the next block's set-up runs beside the kernels, so the kernel's wall
+   time includes sharing the cores with it, and ``total - kernel`` is what does not overlap); the
    same on one thread for N = 100, for the parallel speed-up.
 3. **Memory per drive** (no logs), in a fresh subprocess per N (N = 2 000, 20 000, 100 000 very
    short drives, t_end = 10 ms, since memory without logs does not depend on the drive length):
