@@ -96,6 +96,22 @@ def test_reduced_run_reproduces_the_stored_runs():
             )
 
 
+def test_the_recommended_drive_ends_within_5_percent_and_loses_no_run():
+    """``injection-robust`` over the study (four machines, -0.5 ... +2 Hz, R2_hat(0) 0.8, 1.0
+    and 1.2 R2): every run ends with R2_hat within 5 %, none loses control, and a run outside
+    "converged" says it ran near zero stator frequency. Krause 500 hp at +1 Hz ended -7.0 and
+    -6.6 % while the law divided by the unfiltered sensitivity; the detection's filter leaves
+    0.15-0.17 of it there (kernels/r2_kalman.py, law_response, 2026-12-01)."""
+    t = pd.read_csv(DOCS / "data" / "zero_frequency.csv")
+    rec = t[t["drive"] == "injection-robust"]
+    assert len(rec) == 84
+    assert (rec["R2_error_pct"].abs() <= 5.0).all(), rec.loc[rec["R2_error_pct"].abs() > 5]
+    assert not rec["lost_control"].any()
+    miss = rec[rec["verdict"] != "converged"]
+    assert miss["verdict_text"].str.contains("near zero stator frequency").all()
+    assert len(miss) <= 2
+
+
 def test_the_observer_drive_is_judged_by_its_R2_hat_as_injection_robust_is():
     """``injection-robust-afo`` tracks R2: its verdict is R2_hat's (within 2 % and the speed
     within tolerance), not the detuning law of a drive that holds R2_hat, which marked its

@@ -223,7 +223,8 @@ class CompensatorSettings:
         AfterValidator(_known_law),  # the paper's table and every registered law (r2_laws.py)
         setting(
             '"table": R̂2 changes by G_CR_ohm × the table\'s level (the paper); "kalman": the '
-            "detected error over its analytic sensitivity, filtered by a Kalman filter on R2 "
+            "detected error over its modelled response (the analytic sensitivity through the "
+            "detection's filter), filtered by a Kalman filter on R2 "
             "and its drift rate (section [kalman], kernels/r2_kalman.py); the table's gains "
             'then have no effect. "adaptive" (deprecated) runs as "kalman"; or a law '
             "registered by a module of [plugins] modules (docs/architecture.md)"

@@ -21,10 +21,11 @@ class KalmanLawSettings:
     """The model-based R2 law (``[kalman]``): every setting relative to R2, so one tuning
     holds on every machine.
 
-    Each decision window's detected flux error is divided by its analytic sensitivity to R2
+    Each decision window's detected flux error is divided by its modelled response to R2
     (the injection's in-phase flux response,
-    :func:`~imdrive.kernels.sensitivity.in_phase_sensitivity`), which measures the relative
-    R2 error; a two-state Kalman filter (R2 and its drift rate) weighs that measurement
+    :func:`~imdrive.kernels.sensitivity.in_phase_sensitivity`, as the detection's comparison
+    filter passes it: :func:`~imdrive.kernels.r2_kalman.law_response`), which measures the
+    relative R2 error; a two-state Kalman filter (R2 and its drift rate) weighs that measurement
     against its prediction. The step size, the ramp following and the damping are its gains;
     no other setting shapes them. Its prior, how far R̂2(0) may be off, is the rotor's own
     resistance swing between ambient and its rated temperature rise

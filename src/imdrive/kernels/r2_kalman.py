@@ -1,5 +1,5 @@
 """A model-based R2 law: a Kalman filter on R2 and its drift rate, fed by the injection's
-detected flux error divided by its analytic sensitivity (``compensator.step_law = "kalman"``).
+detected flux error divided by its modelled response (``compensator.step_law = "kalman"``).
 
 The measurement
 ---------------
@@ -18,6 +18,31 @@ prediction at half speed and half load and at 0.2 speed and rated load on Table 
 Aalto 2.2 kW machine, and 0.59-0.85 at 0.1 speed regenerating at rated torque (where the
 MRAS's filtered voltage model lags): a gain below one only slows the filter, it does not
 bias it.
+
+Through the detection's filter
+------------------------------
+An estimator that gives no flux error (the adaptive observer, the EKF) has the detection form
+its own through Schauder's two models (:mod:`imdrive.kernels.flux_detector`), compared through
+``1/(s + wc)`` in the stationary frame, where the injection's d-axis signal lies in the side
+bands ``w_e +- w_i``. Its in-phase response is ``v = Re[G h0]``
+(:mod:`imdrive.kernels.detection_response`): ``S`` far above ``wc``, a fraction of it, or of
+the other sign, as a side band nears DC; the law divides by ``v``
+(:func:`law_response`). Krause 500 hp regenerating the rated torque at +1 Hz (the
+zero-frequency study): at the 0.19 Hz injection ``v = 0.15-0.17 S`` (the detection measured
+0.03 S with R2_hat pinned, ``studies/detection_gain.py``); dividing by ``S`` R2_hat closed
+20 % in over 100 s and the runs ended at -7.0 and -6.6 %, dividing by ``v`` within 0.25 %
+(2026-12-01). A window whose ``v`` is not positive measures nothing: it is held as a gated
+one, with its own gating bit (:data:`NOT_OBSERVABLE`). The detection's noise reads as ``r``
+through ``1/v``, so the measurement's standard deviation is ``noise_pu S/v``.
+
+Two cases keep ``S``. Where a window ran regenerating below the rated slip frequency with the
+detector's speed correction off, its speed path carries the slip error and the response lies
+between ``Re[G h0]`` and the slip-coupled ``Re[G h1]``, neither of which the detection
+follows: on Krause 500 hp at 0.83 Hz the reading was 7.5 S against 0.9-3.3 S, and dividing by
+the larger model lost control at +0.5 Hz from 0.8 R2 (R2_hat stepped +25, -36, -25 %); with
+``S`` the zero-frequency study converges there. And an estimator that hands its own flux
+error (the MRAS family) filters it at a corner that follows the stator frequency and closes
+its speed adaptation through it, unmodelled here.
 
 The filter
 ----------
@@ -58,6 +83,7 @@ import math
 from numba import njit
 
 from imdrive.kernels.compensator_range import thermal_recalibrate
+from imdrive.kernels.detection_response import responses
 from imdrive.kernels.gating import injection_frequency_Hz
 from imdrive.kernels.model import incremental_L2
 from imdrive.kernels.sensitivity import in_phase_sensitivity
@@ -67,6 +93,10 @@ from imdrive.kernels.sensitivity import in_phase_sensitivity
 #: orientation moves the operating point), so a measured error ``r`` carries a standard
 #: deviation of this share of itself besides ``kf_r``.
 GAIN_UNCERTAINTY = 0.6
+
+#: The gating bit of a window whose modelled response is not positive: it does not measure R2
+#: (:func:`law_response`; run/status.py names it "not observable").
+NOT_OBSERVABLE = 128
 
 
 @njit(cache=True)
@@ -80,13 +110,33 @@ def injection_amplitude(p, s):
 
 
 @njit(cache=True)
+def law_response(p, s, m):
+    """``(v, S)``: the detection's in-phase response to a relative R2 error the law divides
+    by, and the analytic sensitivity ``S``, both per unit of ``L a`` (dimensionless). ``v``
+    is the response through the detector's comparison filter ``p.cpl_wc`` at the window's
+    mean stator frequency and slip (``Re[G h0]``,
+    :func:`imdrive.kernels.detection_response.responses`), not below 0 (0: the window does
+    not measure R2); ``S`` where the estimator hands its own flux error, where the window's
+    speed path may carry the slip error, and without the gating's window means (module
+    docstring, "Through the detection's filter")."""
+    f = injection_frequency_Hz(p, s)
+    w_i = 2.0 * math.pi * f
+    T2 = incremental_L2(m) / m.R2_hat
+    S = in_phase_sensitivity(w_i, T2)
+    coupled = s.rl_share > 0.5 and abs(s.we_mean) < 2.0 * p.det_wmin  # as gating.py has it
+    if not (p.det and p.gate) or coupled:
+        return S, S
+    v, _ = responses(w_i, T2, s.w_sl_mean, s.we_mean, p.cpl_wc)
+    return max(v, 0.0), S
+
+
+@njit(cache=True)
 def relative_error(p, s, m, E):
     """The relative R2 error ``r = R2_hat/R2 - 1`` one window's detected error ``E`` (Wb)
-    measures, ``-E / (L a S)`` (module docstring); 0 where the sensitivity vanishes."""
-    f = injection_frequency_Hz(p, s)
+    measures, ``-E / (L a v)`` (:func:`law_response`); 0 where the window measures none."""
     L = m.L_inc_hat if m.sat_n > 0 else m.M_hat
-    T2 = incremental_L2(m) / m.R2_hat
-    sens = L * injection_amplitude(p, s) * in_phase_sensitivity(2.0 * math.pi * f, T2)
+    v, _ = law_response(p, s, m)
+    sens = L * injection_amplitude(p, s) * v
     if sens <= 0.0:
         return 0.0
     return -E / sens
@@ -127,12 +177,15 @@ def kalman_update(p, s, m, E, T):
     detected error ``E`` (Wb). Updates ``m.R2_hat`` (clamped to ``[R2_min, R2_max]``), the
     drift rate ``s.drift`` (ohm/s) and the covariance; returns the relative error measured."""
     kalman_predict(p, s, T)
+    v, S = law_response(p, s, m)
     r = relative_error(p, s, m, E)
     r = max(r, -0.9)  # z = R2_hat/(1 + r) stays finite and positive
     R2_pred = m.R2_hat + s.drift * T
     nu = m.R2_hat / (1.0 + r) - R2_pred
     # r's variance carried through z = R2_hat / (1 + r) to first order (dz/dr = -z/(1 + r))
-    Rv = (m.R2_hat / (1.0 + r) ** 2) ** 2 * (p.kf_r**2 + (GAIN_UNCERTAINTY * r) ** 2)
+    # the detection's noise reads as r through 1/v: kf_r is its share where v = S
+    noise = p.kf_r * S / v if v > 0.0 else p.kf_r  # (v = 0: kalman_decision holds)
+    Rv = (m.R2_hat / (1.0 + r) ** 2) ** 2 * (noise**2 + (GAIN_UNCERTAINTY * r) ** 2)
     S = s.kf_P00 + Rv
     K0 = s.kf_P00 / S
     K1 = s.kf_P01 / S
@@ -151,6 +204,12 @@ def kalman_decision(p, s, m, E):
     """A decision of the compensator with this law (``p.kf``): :func:`kalman_update` over the
     decision period ``p.kf_T``; a window that measured R2 within 5 % recalibrates the rotor
     thermal model (``p.th_on``). Returns 0 (the table's output level, unused)."""
+    v, _ = law_response(p, s, m)
+    if v <= 0.0:  # the window does not measure R2: held, as a gated one
+        kalman_hold(p, s, m, p.kf_T)
+        s.frozen = float(NOT_OBSERVABLE)
+        s.live = False
+        return 0.0
     r = kalman_update(p, s, m, E, p.kf_T)
     s.live = True
     if p.th_on and abs(r) < 0.05:

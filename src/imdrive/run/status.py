@@ -86,6 +86,7 @@ HELD_CAUSES = {
     1: ("gated transient", "speed reference or speed error moving"),
     2: ("gated transient", "load step"),
     16: ("gated transient", "settling after a gated event"),
+    128: ("not observable", "the detection's modelled response to R2 has no sign here"),
 }
 
 #: Columns the status adds to a metrics row (batch, sweep, ``drive_metrics``).
