@@ -66,7 +66,9 @@ COLUMN_DOCS = {
     "error or reference moving, 2 load (iq*) change, 4 voltage limit, 8 injection frequency "
     "switched, 64 the injection started (a model-based law), 16 within the hold periods after "
     "any of these, 32 the injection backed off near the voltage limit (R2 not observable "
-    "there) (0: R2_hat updated); see imdrive.kernels.gating",
+    "there), 128 the detection's modelled response to R2 not positive (a model-based law; R2 "
+    "not observable there) (0: R2_hat updated); see imdrive.kernels.gating and "
+    "imdrive.kernels.r2_kalman",
     "comp_live_flag": "1 when the compensator's last decision estimated R2_hat from the "
     "detected error; 0 when R2_hat was held (before its start, frozen by the gating: "
     "comp_frozen_flags says why, or its window refilling after a freeze)",
