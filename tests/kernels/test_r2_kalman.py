@@ -74,27 +74,27 @@ def _windowed(f_e_Hz, w_sl=0.0, coupled=False, wc=15.0):
     return p, s, m
 
 
-def test_the_law_divides_by_the_response_through_the_comparison_filter():
-    """Far above the filter's corner the response is the analytic sensitivity (G -> 1); near
-    zero stator frequency it is what detection_response.py gives through the filter, and the
-    measurement inverts that (on Krause 500 hp at +1 Hz, 0.19 Hz injection, the filtered
-    response was 0.17 S and the detection measured 0.03-0.1 S: dividing by S, R2_hat took
-    over 100 s to close 20 %)."""
+def test_the_law_divides_by_the_response_where_both_side_bands_are_under_the_corner():
+    """Where ``|w_e| + w_i`` is under the detection filter's corner (both side bands of the
+    injection under it) the law divides by the response detection_response.py gives through
+    the filter, and the measurement inverts that (Krause 500 hp at +1 Hz with its 0.19 Hz
+    injection: 0.17 S, the detection measured 0.03 S; dividing by S, R2_hat took over 100 s to
+    close 20 %). Elsewhere it keeps S, though the model may give less (Table IV at 0.1 of the
+    rated speed: 0.5-0.85 S, the detection measured 0.92-1.06 S)."""
     w_i, T2 = 2 * math.pi * F_INJ, (M + LL2) / R2_0
     S = in_phase_sensitivity(w_i, T2)
-    p, s, m = _windowed(50.0)
+    p, s, m = _windowed(0.2)  # 2 pi (0.2 + 2) Hz = 13.8 rad/s, under 15
     v, S_law = law_response(p, s, m)
-    assert S_law == pytest.approx(S) and v == pytest.approx(S, rel=0.01)
-    p, s, m = _windowed(1.0)
-    v, _ = law_response(p, s, m)
-    r0, _ = responses(w_i, T2, 0.0, 2 * math.pi * 1.0, 15.0)
-    assert v == pytest.approx(r0) and 0.0 < v < 0.8 * S
+    r0, _ = responses(w_i, T2, 0.0, 2 * math.pi * 0.2, 15.0)
+    assert S_law == pytest.approx(S) and v == pytest.approx(r0) and 0.0 < v < 0.6 * S
     assert relative_error(p, s, m, -M * AMP * v * 0.1) == pytest.approx(0.1)
-    p, s, m = _windowed(1.0, wc=0.0)  # no filter: G = 1
-    assert law_response(p, s, m)[0] == pytest.approx(S)
-    p, s, m = _windowed(1.0)
+    for f_e in (1.0, 5.0, 50.0):  # the upper side band above the corner: S
+        p, s, m = _windowed(f_e)
+        assert law_response(p, s, m) == (S_law, S_law)
+    assert responses(w_i, T2, 0.0, 2 * math.pi * 5.0, 15.0)[0] < 0.8 * S
+    p, s, m = _windowed(0.2)
     p["det"] = False  # the estimator hands its own flux error (the MRAS family): S
-    assert law_response(p, s, m) == (S, S)
+    assert law_response(p, s, m) == (S_law, S_law)
 
 
 def test_a_window_whose_modelled_response_is_not_positive_is_held():
@@ -122,9 +122,9 @@ def test_a_window_whose_modelled_response_is_not_positive_is_held():
 
 def test_a_weak_response_reads_the_detections_noise_larger():
     """The detection's noise reads as ``r`` through ``1/v``: where the filtered response is a
-    fraction of ``S`` (0.45 S at 0.8 Hz of stator frequency here) the measurement's standard
+    fraction of ``S`` (0.47 S at 0.2 Hz of stator frequency here) the measurement's standard
     deviation is ``kf_r S/v``, and the steady covariance is the Riccati equation's with it."""
-    p, s, m = _windowed(0.8)
+    p, s, m = _windowed(0.2)
     v, S = law_response(p, s, m)
     assert 0.3 < v / S < 0.6
     for _ in range(400):

@@ -5,9 +5,12 @@ models of it.
 The model-based law (:mod:`imdrive.kernels.r2_kalman`) turns each window's detected flux error
 ``E`` into a relative R2 error ``r = -E / (L a S)``, with ``S = S(w_i T2)`` the in-phase
 sensitivity of a rotor flux answering the injected flux current alone
-(:func:`imdrive.kernels.sensitivity.in_phase_sensitivity`). This study measures what the
-detection gives instead. Each cell runs ``injection-robust`` (the adaptive observer, the
-detection's own pair of flux models, :mod:`imdrive.kernels.flux_detector`) regenerating the
+(:func:`imdrive.kernels.sensitivity.in_phase_sensitivity`), or, where both of the
+injection's side bands lie under the detection filter's corner, by the *decoupled* model
+below (:func:`imdrive.kernels.r2_kalman.law_response`; Krause 500 hp at +1 Hz, measured gain
+0.03 against 0.15-0.17). This study measures what the detection gives. Each cell runs
+``injection-robust`` (the adaptive observer, the detection's own pair of flux models,
+:mod:`imdrive.kernels.flux_detector`) regenerating the
 rated torque at the stator frequency ``f_s`` (the speed from
 :func:`imdrive.studies.zero_frequency.speed_for_stator_frequency`), twice, with R2_hat pinned at
 :data:`PIN` below and above R2 (both clamps within 1e-4 of R2_hat(0)); the law's own reading of
