@@ -170,7 +170,8 @@ def test_gating_mask_reads_as_reasons():
     assert held_reasons(16) == ["gated transient"]
     assert held_reasons(64 | 16) == ["injection start"]  # the Kalman law's start, settling
     assert held_reasons(64 | 8) == ["stator frequency band", "injection start"]
-    assert held_reasons(128 | 8) == ["stator frequency band", "gating bit 128"]
+    assert held_reasons(128 | 8) == ["stator frequency band", "not observable"]
+    assert held_reasons(256) == ["gating bit 256"]  # a bit the status does not know
     assert held_reasons(NAN) == [] and held_reasons(0) == []
 
 

@@ -51,8 +51,9 @@ names every one. Why R̂2 was held comes from the compensator's gating mask (the
 it (:data:`HELD_CAUSES`): the voltage limit (the injection backed off for headroom or in field
 weakening, or the voltage at the inverter's limit), the stator frequency band (the stator
 frequency near the injection's, where the injected signal is not detectable), the injection's
-start (the model-based law waits for the flux response to settle), or a gated transient (a
-speed or load change, and the settling after it).
+start (the model-based law waits for the flux response to settle), a window in which R2 is
+not observable (the detection's modelled response to an R2 error is not positive), or a gated
+transient (a speed or load change, and the settling after it).
 
 Speed accuracy is also given in per-unit of the machine's rated slip speed
 (``speed_error_pu_slip``): the slip error a wrong R̂2 causes scales with it, so the same
