@@ -10,9 +10,9 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
 from imdrive.kernels.engine import LOG, S_OK, DriveParams, DriveState, run_drive
+from imdrive.kernels.jit import njit
 from imdrive.kernels.recording import RECORDING
 from imdrive.kernels.records import b1, copy_row, f8, i8, record_dtype
 from imdrive.kernels.threads import num_threads, over_threads  # noqa: F401  (num_threads: old path)
@@ -360,7 +360,7 @@ def run_one(P, S, i, n_steps, n_win, log_out, log_every, metrics, scratch, lc_bo
             return status, n_steps
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, entry=True, nogil=True)
 def _worker(P, S, log, log_every, out, first, stride, scratch):
     """Drives ``first, first + stride, ...`` one after the other, sharing ``scratch``: the
     batch's one compiled entry point, the GIL released so that threads run it side by side."""

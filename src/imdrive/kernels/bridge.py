@@ -33,7 +33,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
 from imdrive.kernels.inverter import (
     apply_command,
@@ -42,6 +41,7 @@ from imdrive.kernels.inverter import (
     phase_values,
     pole_voltages_ab,
 )
+from imdrive.kernels.jit import njit
 from imdrive.kernels.machine import (
     THIRD,
     current_coefficients,

@@ -50,8 +50,6 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
-
 from imdrive.kernels.compensator_range import thermal_recalibrate
 from imdrive.kernels.detection import slip_coupling
 from imdrive.kernels.flux_detector import window_slip
@@ -61,6 +59,7 @@ from imdrive.kernels.gating import (  # noqa: F401  (compensator_gate_sample: ol
     compensator_gate_sample,
     injection_frequency_Hz,
 )
+from imdrive.kernels.jit import njit
 from imdrive.kernels.r2_kalman import kalman_decision, kalman_hold, relative_error
 from imdrive.kernels.r2_law_registry import (
     NO_LAW_PARAMS,

@@ -14,8 +14,7 @@ The records are the compensator's (``COMPENSATOR_PARAMS``, ``COMPENSATOR_STATE``
 
 from __future__ import annotations
 
-from numba import njit
-
+from imdrive.kernels.jit import njit
 from imdrive.kernels.model import model_inductances
 
 

@@ -31,7 +31,7 @@ exact R2). With ``"imc"`` the same run holds the frame within 0.1 degree.
 
 from __future__ import annotations
 
-from numba import njit
+from imdrive.kernels.jit import njit
 
 
 @njit(cache=True)

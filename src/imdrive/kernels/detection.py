@@ -7,7 +7,7 @@ Used by :func:`imdrive.kernels.r2_tracking.track` and
 
 from __future__ import annotations
 
-from numba import njit
+from imdrive.kernels.jit import njit
 
 #: Corner of :func:`stationary_mean_removed`'s mean, per unit of the distance of the
 #: injection's nearer side band from DC: the side bands keep their phase to

@@ -37,7 +37,7 @@ the in-phase response is multiplied by ``G = (H(w_e + w_i) + conj H(w_e - w_i)) 
 
 from __future__ import annotations
 
-from numba import njit
+from imdrive.kernels.jit import njit
 
 
 @njit(cache=True)

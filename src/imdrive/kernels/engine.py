@@ -20,7 +20,6 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
 from imdrive.kernels import compensator, ifoc, inverter, machine, model, sensors
 from imdrive.kernels.bridge import switching_period  # noqa: F401  (re-exported: old path)
@@ -28,6 +27,7 @@ from imdrive.kernels.estimators import afo, ekf, mras, reactive_mras, registry  
 from imdrive.kernels.features import row as features_row
 from imdrive.kernels.features import switching_bridge
 from imdrive.kernels.inverter import INV_SWITCHING, MAX_EVENTS  # noqa: F401  (MAX_EVENTS: old path)
+from imdrive.kernels.jit import njit
 from imdrive.kernels.recording import record_after, record_before
 from imdrive.kernels.records import b1, c16, f8, i8, record_dtype
 from imdrive.kernels.stages import (
@@ -174,7 +174,7 @@ DriveParams.__getattr__ = _old_estimator_field
 DriveState.__getattr__ = _old_estimator_field
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, entry=True, error_model="numpy")
 def run_drive(P, S, i, n_steps, log, log_every, k0=0, final=True, rec=None):
     """Simulate drive ``i`` of ``P``/``S`` for ``n_steps`` control periods (``S`` in place).
 

@@ -25,10 +25,11 @@ import inspect
 from collections.abc import Mapping
 
 import numpy as np
-from numba import njit, types
+from numba import types
 from numba.extending import overload
 
 from imdrive.kernels.inverter import INV_SWITCHING
+from imdrive.kernels.jit import njit
 from imdrive.kernels.records import b1, record_dtype
 
 

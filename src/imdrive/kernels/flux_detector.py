@@ -66,14 +66,13 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
-
 from imdrive.kernels.estimators.common import (
     current_model_step,
     lowpass_coefficients,
     period_mean_offset,
     saturation_increment,
 )
+from imdrive.kernels.jit import njit
 from imdrive.kernels.model import model_inductances
 
 

@@ -4,7 +4,8 @@ lookup, and the inner loops of table compilation and rule fitting (see :mod:`imd
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from imdrive.kernels.jit import njit
 
 # Tables I/II: upper bounds of the positive levels 1 ... 5 of the scaled input (the paper's
 # thresholds 0.25, 1, 2, 3, 4, 5, in units of 1e-6 Wb before scaling)
@@ -94,7 +95,7 @@ def _cell(i, j, rules, membership, peaks, method):
     return num / den
 
 
-@njit(cache=True)
+@njit(cache=True, entry=True)
 def _compile(rules, membership, peaks, method):
     out = np.empty((13, 13))
     for i in range(13):
@@ -122,7 +123,7 @@ def _cell_cost(v, target):
     return (1.0 if d > 0.0 else 0.0), d, (v - target) ** 2
 
 
-@njit(cache=True)
+@njit(cache=True, entry=True)
 def _violations(rules):
     # total size of the steps where the output set decreases as E or DE grows
     v = 0
@@ -221,7 +222,7 @@ def _try_move(rules, a, b, c, e, fire, mask, vals, viol, target, membership, pea
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, entry=True)
 def _descend(rules, target, membership, peaks, method, reg, moves):
     """Local search in place on ``rules``: single-rule moves, then pair moves (``moves``).
 

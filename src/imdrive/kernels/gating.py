@@ -88,9 +88,8 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
-
 from imdrive.kernels.detection_response import in_phase_response
+from imdrive.kernels.jit import njit
 from imdrive.kernels.model import incremental_L2
 
 

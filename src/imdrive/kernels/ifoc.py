@@ -56,8 +56,6 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
-
 from imdrive.kernels.current_control import decoupling_voltage
 from imdrive.kernels.features import has_feedforward
 from imdrive.kernels.inverter import (
@@ -74,6 +72,7 @@ from imdrive.kernels.inverter_scale import (  # noqa: F401
     adapt_inverter_error,
     standstill_compensation,
 )
+from imdrive.kernels.jit import njit
 from imdrive.kernels.model import (
     MODEL_TABLE_POINTS,
     model_inductances,

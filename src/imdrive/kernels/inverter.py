@@ -38,8 +38,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from imdrive.kernels.jit import njit
 from imdrive.kernels.records import f8, i8, record_dtype
 
 INV_AVERAGE = 0

@@ -41,8 +41,7 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
-
+from imdrive.kernels.jit import njit
 from imdrive.kernels.model import model_inductances
 
 #: Half the sixth-harmonic coefficient ``c6/2`` of a six-step error across the current

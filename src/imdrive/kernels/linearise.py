@@ -48,7 +48,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
 from imdrive.kernels.engine import LOG, S_OK
 from imdrive.kernels.engine_call import call_engine, engine_address
@@ -59,6 +58,7 @@ from imdrive.kernels.estimators.reduced import (
     estimator_restore,
     reduced_state_of,
 )
+from imdrive.kernels.jit import njit
 from imdrive.kernels.profiles import PR_LOAD, PR_SPEED_REF
 from imdrive.kernels.recording import RECORDING
 from imdrive.kernels.threads import over_threads, slots
@@ -328,7 +328,7 @@ def solve_point(P, S, i, z, zs, th1, th2, A, Bu, tol, max_iter, engine):
     return P_OK, res, it
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, entry=True, nogil=True)
 def _solve_some(
     P, S, Z, zs, TH, A, Bu, status, residual, iterations, tol, max_iter, engine, first, n
 ):
@@ -370,7 +370,7 @@ def propagate(P, S, i, z, n_steps, th1, th2, zout, engine=None):
     return _propagate(P, S, int(i), z, int(n_steps), float(th1), float(th2), zout, engine)
 
 
-@njit(cache=True)
+@njit(cache=True, entry=True)
 def _propagate(P, S, i, z, n_steps, th1, th2, zout, engine):
     unpack_state(z, S, i)
     x = S.plant[i]
@@ -402,7 +402,7 @@ def step_check(P, S, Z0, Z1, TH, n_steps, n_win, peaks, status, engine=None):
     over_threads(share, n)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, entry=True, nogil=True)
 def _check_some(P, S, Z0, Z1, zs, TH, n_steps, n_win, peaks, status, engine, first, n):
     """:func:`step_check` for drives ``first, first + n, ...`` (one thread's share)."""
     for i in range(first, Z0.shape[0], n):

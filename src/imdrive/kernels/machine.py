@@ -46,8 +46,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from imdrive.kernels.jit import njit
 from imdrive.kernels.records import b1, c16, f8, record_dtype
 from imdrive.kernels.saturation import (  # noqa: F401  (re-exported: the model's import path)
     SAT_CELLS,

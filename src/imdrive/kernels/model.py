@@ -7,8 +7,7 @@ state, not parameters: the rotor-resistance compensator adapts ``R2_hat`` online
 value, so a change acts from the next sample on.
 """
 
-from numba import njit
-
+from imdrive.kernels.jit import njit
 from imdrive.kernels.records import b1, f8, i8, record_dtype
 
 #: Most nodes of the controller's magnetising-curve table (``MODEL_STATE.sat_*``).

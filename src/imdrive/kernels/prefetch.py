@@ -17,13 +17,13 @@ of its 12.0 s cold start, compiled alone.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 from imdrive.kernels.compensator import log_compensator
 from imdrive.kernels.estimators.registry import EstimatorInput, estimator_log
 from imdrive.kernels.features import row as features_row
 from imdrive.kernels.ifoc import foc_step, log_control
 from imdrive.kernels.inverter import inverter_segments
+from imdrive.kernels.jit import njit
 from imdrive.kernels.machine import integrate_segment, log_plant
 from imdrive.kernels.r2_law_registry import law_log
 from imdrive.kernels.r2_tracking import TrackingInput

@@ -1,6 +1,6 @@
 """Piecewise-linear time profiles, evaluated in the kernels (:mod:`imdrive.config.profiles`)."""
 
-from numba import njit
+from imdrive.kernels.jit import njit
 
 # profile slots (rows of the drive's profile arrays): piecewise-linear functions of time
 PR_SPEED_REF = 0  # speed reference, mechanical rad/s

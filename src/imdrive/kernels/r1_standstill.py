@@ -50,8 +50,7 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
-
+from imdrive.kernels.jit import njit
 from imdrive.kernels.records import b1, f8
 
 #: Shortest window of the standstill identification, s (shorter runs leave R1_hat alone).

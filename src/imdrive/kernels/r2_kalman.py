@@ -86,11 +86,10 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
-
 from imdrive.kernels.compensator_range import thermal_recalibrate
 from imdrive.kernels.detection_response import responses
 from imdrive.kernels.gating import injection_frequency_Hz
+from imdrive.kernels.jit import njit
 from imdrive.kernels.model import incremental_L2
 from imdrive.kernels.sensitivity import in_phase_sensitivity
 

@@ -23,8 +23,6 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
-from numba import njit
-
 from imdrive.kernels.compensator import (
     compensator_gate_sample,
     compensator_step,
@@ -35,6 +33,7 @@ from imdrive.kernels.compensator_range import injection_headroom, thermal_step
 from imdrive.kernels.detection import stationary_mean_removed
 from imdrive.kernels.flux_detector import detector_flux_error
 from imdrive.kernels.gating import injection_frequency_Hz
+from imdrive.kernels.jit import njit
 from imdrive.kernels.model import incremental_L2
 
 

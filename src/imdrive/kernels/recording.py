@@ -29,8 +29,7 @@ recording) the rows beyond are not written.
 
 from __future__ import annotations
 
-from numba import njit
-
+from imdrive.kernels.jit import njit
 from imdrive.kernels.records import b1, c16, f8, record_dtype
 
 #: One row of a recording, SI units (space vectors complex in the stationary frame ``_ab`` or

@@ -46,13 +46,12 @@ from __future__ import annotations
 import cmath
 import math
 
-from numba import njit
-
 from imdrive.kernels.estimators.registry import (
     EstimatorInput,
     estimator_finite,
     estimator_step,
 )
+from imdrive.kernels.jit import njit
 from imdrive.kernels.r2_tracking import TrackingInput, excitation, track
 from imdrive.kernels.records import b1, c16, f8, record_dtype
 from imdrive.kernels.speed_control import speed_loop_gain
@@ -93,7 +92,7 @@ R_OK = 0
 R_NAN = 1
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, entry=True, nogil=True)
 def fill_rows(rows, t, i_a, i_b, v_a, v_b, ctx, model, prev):
     """Build a chunk's :data:`REPLAY_ROW` rows from the recording's columns, in one pass.
 
@@ -175,7 +174,7 @@ def fill_rows(rows, t, i_a, i_b, v_a, v_b, ctx, model, prev):
     prev[3] = R2_last
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, entry=True, nogil=True, error_model="numpy")
 def replay_estimator(pe, mdl, est, rows, Ts, model_given, w_out, R2_out, trk, k0):
     """Run one estimator, and the R2 law where ``trk`` says so, over the recording's
     ``rows`` (the records updated in place).

@@ -18,7 +18,8 @@ import functools
 import math
 
 import numpy as np
-from numba import njit
+
+from imdrive.kernels.jit import njit
 
 #: Cells of the inverse magnetising-curve table (:func:`saturation_table`).
 SAT_CELLS = 12

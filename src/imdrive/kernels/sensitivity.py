@@ -12,9 +12,8 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
-
 from imdrive.kernels.gating import injection_frequency_Hz
+from imdrive.kernels.jit import njit
 from imdrive.kernels.model import incremental_L2
 
 

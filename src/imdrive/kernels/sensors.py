@@ -24,8 +24,8 @@ DC-link voltage sensor
 import math
 
 import numpy as np
-from numba import njit
 
+from imdrive.kernels.jit import njit
 from imdrive.kernels.records import b1, c16, f8, i8, record_dtype
 
 #: Parameters of the sensors.

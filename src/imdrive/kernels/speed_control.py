@@ -32,7 +32,7 @@ it: R2_hat was frozen 75 % of the time from R2_hat(0) = 0.7 R2 and lagged a heat
 
 from __future__ import annotations
 
-from numba import njit
+from imdrive.kernels.jit import njit
 
 
 @njit(cache=True)

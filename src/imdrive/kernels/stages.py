@@ -30,8 +30,6 @@ import cmath
 import math
 from typing import NamedTuple
 
-from numba import njit
-
 from imdrive.kernels.bridge import CARRY_FIELDS, bridge_period
 from imdrive.kernels.compensator import log_compensator
 from imdrive.kernels.compensator_range import headroom_weakening_input
@@ -61,6 +59,7 @@ from imdrive.kernels.ifoc import (
 )
 from imdrive.kernels.inverter import MAX_EVENTS, MAX_SEGMENTS, inverter_segments, limit_magnitude
 from imdrive.kernels.inverter_scale import start_from_identified, stator_residual
+from imdrive.kernels.jit import njit
 from imdrive.kernels.machine import integrate_segment, log_plant, stator_current
 from imdrive.kernels.model import model_inductances
 from imdrive.kernels.profiles import (

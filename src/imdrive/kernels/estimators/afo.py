@@ -78,10 +78,10 @@ the plant integrator's accuracy, so no discretisation bias appears in the speed 
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 from imdrive.kernels.estimators.common import to_frame
 from imdrive.kernels.estimators.registry import ReducedState, register_kernel
+from imdrive.kernels.jit import njit
 from imdrive.kernels.model import model_inductances
 from imdrive.kernels.records import c16, f8, i8, record_dtype
 

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
+from imdrive.kernels.jit import njit
 
 
 @njit(cache=True)

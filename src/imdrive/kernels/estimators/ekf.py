@@ -29,9 +29,8 @@ follows the controller's ``R2_hat``); the engine writes it into the controller's
 
 from __future__ import annotations
 
-from numba import njit
-
 from imdrive.kernels.estimators.registry import register_kernel
+from imdrive.kernels.jit import njit
 from imdrive.kernels.model import model_inductances
 from imdrive.kernels.records import b1, f8, record_dtype
 

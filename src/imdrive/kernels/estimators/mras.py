@@ -133,7 +133,6 @@ import cmath
 import math
 
 import numpy as np
-from numba import njit
 
 from imdrive.kernels.estimators import mras_stabilise as stab
 from imdrive.kernels.estimators.common import (  # noqa: F401 (flux_frequency: also from here)
@@ -145,6 +144,7 @@ from imdrive.kernels.estimators.common import (  # noqa: F401 (flux_frequency: a
     to_frame,
 )
 from imdrive.kernels.estimators.registry import ReducedState, register_kernel
+from imdrive.kernels.jit import njit
 from imdrive.kernels.model import model_inductances
 from imdrive.kernels.records import b1, c16, f8, record_dtype
 

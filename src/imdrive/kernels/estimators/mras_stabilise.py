@@ -80,9 +80,8 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
-
 from imdrive.kernels.estimators.common import flux_frequency
+from imdrive.kernels.jit import njit
 from imdrive.kernels.records import f8
 
 #: Fields of ``MRAS_PARAMS`` this module owns (appended to the MRAS's own).

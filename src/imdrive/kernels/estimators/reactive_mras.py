@@ -28,10 +28,10 @@ changes sign in regeneration.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 from imdrive.kernels.estimators.common import current_model_step, to_frame
 from imdrive.kernels.estimators.registry import ReducedState, register_kernel
+from imdrive.kernels.jit import njit
 from imdrive.kernels.model import model_inductances
 from imdrive.kernels.records import c16, f8, record_dtype
 

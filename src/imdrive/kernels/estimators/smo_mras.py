@@ -72,14 +72,13 @@ from __future__ import annotations
 import cmath
 import math
 
-from numba import njit
-
 from imdrive.kernels.estimators.common import (
     current_model_step,
     lowpass_coefficients,
     period_mean_offset,
 )
 from imdrive.kernels.estimators.registry import register_kernel
+from imdrive.kernels.jit import njit
 from imdrive.kernels.model import model_inductances
 from imdrive.kernels.records import b1, c16, f8, record_dtype
 

@@ -1,0 +1,89 @@
+"""numba's ``njit`` for the kernels: a block compiled without the wrappers only Python needs.
+
+numba compiles two wrappers around every jitted function besides its native code: one that
+unboxes Python arguments (the CPython wrapper) and one with the C calling convention (the
+cfunc wrapper). A block that only other kernels call never uses either, yet each costs its
+own lowering and machine code, and a block's compile is mostly fixed costs. Measured
+2026-12-02 (numba 0.68, these 2-core machines, a slow day: warm ``run`` 2.4-2.7 s), the
+wrappers left out of every kernel but the Python-called entry points: a cold ``imdrive run
+sensorless`` compiled in 21.1 and 18.8 s of CPU against 25.6 and 25.1 s; the first
+``bench-estimators`` after a warm run took 81.5 s (137 s of CPU) against 101.2 s (170 s);
+30 small record functions alone compiled in 2.2 s against 4.6 s.
+
+A function compiled without its CPython wrapper has no native entry for Python (numba's
+dispatcher would jump to a null address), so :class:`BlockDispatcher` sends a call from
+Python to a twin compiled with the wrappers, cached in a file of its own. Kernels call the
+block itself, so the twin only costs the blocks that tests, reports or analyses call from
+Python. The entry points Python calls on every run (the engine, the batch worker) take
+``entry=True`` and keep their wrappers, one compile for both callers.
+"""
+
+from __future__ import annotations
+
+import functools
+import types as pytypes
+
+import numba
+from numba.core import config
+from numba.core.registry import CPUDispatcher
+
+#: The options that leave the wrappers out.
+NO_WRAPPERS = {"no_cpython_wrapper": True, "no_cfunc_wrapper": True}
+
+
+class BlockDispatcher(CPUDispatcher):
+    """A kernel compiled without its wrappers; called from Python, its twin runs
+    (:meth:`from_python`), with the same code, options and cache folder."""
+
+    def __call__(self, *args, **kwargs):
+        return self.from_python(*args, **kwargs)
+
+    @functools.cached_property
+    def from_python(self) -> CPUDispatcher:
+        """The twin that Python calls: the same function compiled with its wrappers, named
+        ``<name>__from_python`` so that its cache file is not the block's (numba's cache
+        index does not tell the two compiles apart)."""
+        f = self.py_func
+        twin = pytypes.FunctionType(
+            f.__code__, f.__globals__, f.__name__, f.__defaults__, f.__closure__
+        )
+        twin.__kwdefaults__ = f.__kwdefaults__
+        twin.__qualname__ = f.__qualname__ + "__from_python"
+        twin.__module__ = f.__module__
+        twin.__doc__ = f.__doc__
+        options = {k: v for k, v in self.targetoptions.items() if k not in NO_WRAPPERS}
+        options.pop("nopython", None)
+        options.pop("boundscheck", None)
+        return numba.njit(cache=self._cache_enabled, **options)(twin)
+
+    @property
+    def _cache_enabled(self) -> bool:
+        return type(self._cache).__name__ != "NullCache"
+
+
+def njit(func=None, *, cache: bool = False, entry: bool = False, **options):
+    """``numba.njit`` for a kernel: without the wrappers unless ``entry`` (a function Python
+    calls on every run, whose twin would be a second compile of the same code).
+
+    Parameters
+    ----------
+    func : function, optional
+        The function (``@njit``) or None (``@njit(...)``).
+    cache : bool
+        Cache the compiled code (in :mod:`imdrive._cache`'s folder of the module).
+    entry : bool
+        Keep numba's wrappers: Python calls this function itself.
+    **options
+        numba's options (``inline``, ``nogil``, ``error_model``...).
+    """
+
+    def wrap(f):
+        if entry or config.DISABLE_JIT:
+            return numba.njit(cache=cache, **options)(f)
+        targetoptions = {"nopython": True, "boundscheck": None, **options, **NO_WRAPPERS}
+        disp = BlockDispatcher(py_func=f, locals={}, targetoptions=targetoptions)
+        if cache:
+            disp.enable_caching()
+        return disp
+
+    return wrap if func is None else wrap(func)
