@@ -3,12 +3,12 @@
 numba compiles two wrappers around every jitted function besides its native code: one that
 unboxes Python arguments (the CPython wrapper) and one with the C calling convention (the
 cfunc wrapper). A block that only other kernels call never uses either, yet each costs its
-own lowering and machine code, and a block's compile is mostly fixed costs. Measured
-2026-12-02 (numba 0.68, these 2-core machines, a slow day: warm ``run`` 2.4-2.7 s), the
-wrappers left out of every kernel but the Python-called entry points: a cold ``imdrive run
-sensorless`` compiled in 21.1 and 18.8 s of CPU against 25.6 and 25.1 s; the first
-``bench-estimators`` after a warm run took 81.5 s (137 s of CPU) against 101.2 s (170 s);
-30 small record functions alone compiled in 2.2 s against 4.6 s.
+own lowering and machine code, and a block's compile is mostly fixed costs. With the
+wrappers left out of every kernel but the Python-called entry points, 30 small record
+functions compiled in 2.2 s against 4.6 s, and, paired with the commit before on these 2-core
+machines (2026-12-02, benchmarks/README.md, *Kernels without numba's wrappers*), a cold
+``imdrive run sensorless`` took 7.9-8.2 s against 8.8-9.1 s and the first ``bench-estimators``
+after a warm run 37.0-38.2 s against 40.9-41.3 s.
 
 A function compiled without its CPython wrapper has no native entry for Python (numba's
 dispatcher would jump to a null address), so :class:`BlockDispatcher` sends a call from
