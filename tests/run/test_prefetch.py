@@ -55,12 +55,41 @@ def new_rec():
     return np.zeros(0, dtype=RECORDING)
 
 
+#: As RECORDS, for a batch of one group: the job as start_batch() writes it.
+RECORDS_BATCH = textwrap.dedent("""
+    import pickle, sys
+    from imdrive.config.scenario import Scenario
+    from imdrive.run.batch import _first_call
+    from imdrive.run.build import build_arrays
+
+    sc = Scenario.read(sys.argv[2], ["simulation.t_end_s=0.05"])
+    P, S, *_, scratch = _first_call([(0, sc, build_arrays(sc))], 1, 0.5)
+    with open(sys.argv[1], "wb") as f:
+        pickle.dump([("imdrive.kernels.prefetch", "late_blocks", (P, S, scratch[:1]))], f)
+""")
+
+#: As data.compiles.COUNT_COMPILES, for a batch of two drives of one group.
+COUNT_BATCH = COUNT_COMPILES.replace(
+    "from imdrive.run.simulate import simulate", "from imdrive import simulate_batch"
+).replace(
+    'res = simulate(Scenario.read(preset, ["simulation.t_end_s=0.05"]))\nassert not res.diverged',
+    'sc = Scenario.read(preset, ["simulation.t_end_s=0.05"])\n'
+    'assert not simulate_batch([sc, sc]).metrics["diverged"].any()',
+)
+
+
 @pytest.mark.slow  # a cold compile of the late blocks and of the loop: 12-20 s
 @pytest.mark.parametrize(
-    "preset, optional",
-    [("sensorless", set()), ("sensorless-realistic", {"bridge_period", "stator_residual"})],
+    "preset, optional, batch",
+    [
+        ("sensorless", set(), False),
+        ("sensorless-realistic", {"bridge_period", "stator_residual"}, False),
+        ("sensorless-realistic", {"bridge_period", "stator_residual"}, True),
+    ],
 )
-def test_the_helpers_blocks_are_what_the_loop_loads(tmp_path, preset, optional):
+def test_the_helpers_blocks_are_what_the_loop_loads(tmp_path, preset, optional, batch):
+    """A drive's cold loop, or a batch's single cold kernel, loads the late blocks the helper
+    compiled for it (same types: none compiled again)."""
     env = {**os.environ, "IMDRIVE_CACHE_DIR": str(tmp_path / "cache"), prefetch.ENV: "0"}
 
     def py(code, *args):
@@ -71,11 +100,12 @@ def test_the_helpers_blocks_are_what_the_loop_loads(tmp_path, preset, optional):
         return res.stdout.split()
 
     records = tmp_path / "records.pkl"
-    py(RECORDS, str(records), preset)
+    py(RECORDS_BATCH if batch else RECORDS, str(records), preset)
     py(prefetch.HELPER, str(records))  # what start() runs, here to its end
     assert not records.exists()
-    compiled = set(py(COUNT_COMPILES, preset))
+    compiled = set(py(COUNT_BATCH if batch else COUNT_COMPILES, preset))
     assert "run_drive" in compiled  # the loop itself was cold
+    assert not batch or "_worker" in compiled
     late = LATE | optional  # and its late blocks came from the helper
     assert not compiled & late, compiled & late
     # and the helper left nothing in the source tree
@@ -145,9 +175,22 @@ def test_the_batch_helper_compiles_each_groups_call_as_the_batch_makes_it():
     assert "switching_bridge" in params.features.dtype.names
 
 
-def test_the_batch_helper_starts_from_the_last_group(monkeypatch):
-    seen = []
+def test_the_batch_helper_starts_from_the_last_group_or_on_the_one_kernels_late_blocks(
+    monkeypatch,
+):
+    from imdrive.kernels.prefetch import late_blocks
+
+    seen, cached = [], set()
     monkeypatch.setattr(prefetch, "start", lambda jobs, check=True: seen.append(jobs))
-    assert prefetch.start_batch("worker", [("a",)]) is None  # one group: nothing to share
-    prefetch.start_batch("worker", [("a",), ("b",), ("c",)])
-    assert seen == [[("worker", ("c",)), ("worker", ("b",))]]
+    monkeypatch.setattr(prefetch, "_compiled_or_cached", lambda d, args: args[0] in cached)
+    calls = [("Pa", "Sa", "log", "xa"), ("Pb", "Sb", "log", "xb"), ("Pc", "Sc", "log", "xc")]
+    prefetch.start_batch("worker", calls)
+    assert seen[-1] == [("worker", calls[2]), ("worker", calls[1])]
+    cached.update({"Pa", "Pc"})  # one kernel left to compile: the helper takes its late blocks
+    prefetch.start_batch("worker", calls)
+    assert seen[-1] == [(late_blocks, ("Pb", "Sb", "x"))]  # its scratch log's first row
+    cached.add("Pb")
+    assert prefetch.start_batch("worker", calls) is None and len(seen) == 2
+    monkeypatch.setenv(prefetch.ENV, "0")
+    cached.clear()
+    assert prefetch.start_batch("worker", calls) is None and len(seen) == 2

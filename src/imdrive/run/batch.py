@@ -364,9 +364,10 @@ def _build_block(block, offset, logs, log_every, window_s, errors) -> _Block:
         # one thread
         key = (int(le), a.params.est.dtype, a.params.comp.dtype)
         blk.groups.setdefault(key, []).append((i, sc, a))
-    if len(blk.groups) > 1:  # kernels not yet compiled: a second process compiles from the last
-        calls = [_first_call(items, le, window_s) for (le, _, _), items in blk.groups.items()]
-        prefetch.start_batch(_worker, calls)
+    # kernels not yet compiled: a second process compiles from the last (or the one kernel's
+    # late blocks)
+    calls = [_first_call(items, le, window_s) for (le, _, _), items in blk.groups.items()]
+    prefetch.start_batch(_worker, calls)
     return blk
 
 

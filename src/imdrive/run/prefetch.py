@@ -1,22 +1,25 @@
 """Cold starts on two cores: a second process compiles what this one will need later.
 
 A cold ``imdrive run`` spends nearly all its time compiling, on one core: numba types the loop
-and compiles each block the loop calls when it meets the call. When the drive's loop is
-neither compiled in this process nor cached (:func:`start_loop`), a helper process
-(:data:`HELPER`) compiles the blocks the loop's stages call last
-(:func:`imdrive.kernels.prefetch.late_blocks`) into the same cache; this process, reaching
-them, loads them from there. A batch whose drives need several kernels not yet compiled (one
-per estimator and R2 law: ``imdrive bench-estimators``, a sweep over estimators) has the
-helper compile them from the last while it compiles and runs them from the first
-(:func:`start_batch`). What the helper has not finished is compiled here as before (the
-cache's saves are locked, :func:`imdrive._cache._lock_index_saves`), so the helper can only
-save time. Measured (2026-12-01, 2 cores, ``farm-bench``, runs paired with the helper off,
-medians): a cold ``imdrive run sensorless`` 9.3 s against 12.9 s (5 pairs; ratio 0.76),
-``paper-fig5`` 14.3 against 19.3 s, ``sensorless-realistic`` 12.7 against 19.3 s (2 runs
-each); a warm run is unchanged (1.23 against 1.26 s, 10 pairs: the check is one read of the
-loop's cache index). The first ``imdrive bench-estimators`` after a warm ``run sensorless``
-(its 5 kernels, one per estimator's records): 42.9 and 45.8 s against 66.3 and 69.8 s (2
-runs each; warm 11.5-13.2 s). Off with ``IMDRIVE_PREFETCH=0``, and on a single core.
+and compiles each block the loop calls when it meets the call. When the drive's loop is neither
+compiled in this process nor cached (:func:`start_loop`), a helper process (:data:`HELPER`)
+compiles the blocks the loop's stages call last (:func:`imdrive.kernels.prefetch.late_blocks`)
+into the same cache; this process, reaching them, loads them from there. A batch whose drives
+need several kernels not yet compiled (one per estimator and R2 law: ``imdrive
+bench-estimators``, a sweep over estimators) has the helper compile them from the last while it
+compiles and runs them from the first (:func:`start_batch`); a batch with one such kernel (a
+first sweep of the realistic drive) has it compile that kernel's late blocks, as for a drive: a
+first four-drive sweep of ``sensorless-realistic`` after a warm ``run sensorless`` took 11.1
+and 11.3 s against 13.7 and 14.2 s (2 alternated pairs, 2026-12-02; warm 1.9-2.0 s). What the
+helper has not finished is compiled here as before (the cache's saves are locked,
+:func:`imdrive._cache._lock_index_saves`), so the helper can only save time. Measured
+(2026-12-01, 2 cores, ``farm-bench``, runs paired with the helper off, medians): a cold
+``imdrive run sensorless`` 9.3 s against 12.9 s (5 pairs; ratio 0.76), ``paper-fig5`` 14.3
+against 19.3 s, ``sensorless-realistic`` 12.7 against 19.3 s (2 runs each); a warm run is
+unchanged (1.23 against 1.26 s, 10 pairs: the check is one read of the loop's cache index). The
+first ``imdrive bench-estimators`` after a warm ``run sensorless`` (its 5 kernels, one per
+estimator's records): 42.9 and 45.8 s against 66.3 and 69.8 s (2 runs each; warm 11.5-13.2 s).
+Off with ``IMDRIVE_PREFETCH=0``, and on a single core.
 """
 
 from __future__ import annotations
@@ -122,8 +125,18 @@ def start_loop(engine, args, P, S, log) -> subprocess.Popen | None:
 
 def start_batch(worker, calls) -> subprocess.Popen | None:
     """Start the helper on the batch ``worker``'s specialisations, ``calls`` (the arguments of
-    each group's call, in the order the batch runs them), from the last: this process compiles
-    them from the first, and the two meet in the middle. Nothing for a single call."""
-    if len(calls) < 2:
+    each group's call, in the order the batch runs them: the group's records first, its
+    scratch log last), from the last: this process compiles them from the first, and the
+    two meet in the middle. When only one must compile, the helper takes its loop's late
+    blocks instead, as for a single drive (:func:`start_loop`)."""
+    if os.environ.get(ENV, "1") == "0":
         return None
-    return start([(worker, args) for args in reversed(calls[1:])])
+    todo = [args for args in calls if not _compiled_or_cached(worker, args)]
+    if len(todo) == 1:
+        from imdrive.kernels.prefetch import late_blocks
+
+        P, S, scratch = todo[0][0], todo[0][1], todo[0][-1]
+        return start([(late_blocks, (P, S, scratch[:1]))], check=False)
+    if len(todo) < 2:
+        return None
+    return start([(worker, args) for args in reversed(todo[1:])], check=False)
