@@ -114,10 +114,16 @@ def test_the_helpers_blocks_are_what_the_loop_loads(tmp_path, preset, optional, 
 
 
 def test_no_helper_for_a_compiled_loop_or_when_turned_off(monkeypatch):
+    from imdrive.run.batch import _first_call as batch_call
+
     sc = Scenario.read("sensorless", ["simulation.t_end_s=0.01"])
     simulate(sc)  # compiled (or loaded) in this process now
     a, first = _first_call(sc)
     assert prefetch._compiled_or_cached(run_drive, first)
+    # a batch of the same drives calls that loop: its types, as start_batch spells them
+    P, S, *_, scratch = batch_call([(0, sc, a)], 1, 0.5)
+    engine, args = prefetch._engine_call(P, S, scratch)
+    assert engine is run_drive and prefetch._compiled_or_cached(run_drive, args)
     assert prefetch.start_loop(run_drive, first, a.params, a.state0, new_log(1, a.log)) is None
     monkeypatch.setenv(prefetch.ENV, "0")
     assert prefetch.start_loop(None, (), None, None, None) is None  # off: nothing looked at
@@ -180,16 +186,23 @@ def test_the_batch_helper_starts_from_the_last_group_or_on_the_one_kernels_late_
 ):
     from imdrive.kernels.prefetch import late_blocks
 
-    seen, cached = [], set()
+    seen, cached, engines = [], set(), set()
+
+    def compiled_or_cached(d, args):
+        return args[0] in (engines if d is run_drive else cached)
+
     monkeypatch.setattr(prefetch, "start", lambda jobs, check=True: seen.append(jobs))
-    monkeypatch.setattr(prefetch, "_compiled_or_cached", lambda d, args: args[0] in cached)
+    monkeypatch.setattr(prefetch, "_compiled_or_cached", compiled_or_cached)
     calls = [("Pa", "Sa", "log", "xa"), ("Pb", "Sb", "log", "xb"), ("Pc", "Sc", "log", "xc")]
     prefetch.start_batch("worker", calls)
     assert seen[-1] == [("worker", calls[2]), ("worker", calls[1])]
     cached.update({"Pa", "Pc"})  # one kernel left to compile: the helper takes its late blocks
     prefetch.start_batch("worker", calls)
     assert seen[-1] == [(late_blocks, ("Pb", "Sb", "x"))]  # its scratch log's first row
+    engines.add("Pb")  # but not when its loop is compiled (a sweep after a run): no blocks
+    assert prefetch.start_batch("worker", calls) is None and len(seen) == 2
     cached.add("Pb")
+    engines.clear()
     assert prefetch.start_batch("worker", calls) is None and len(seen) == 2
     monkeypatch.setenv(prefetch.ENV, "0")
     cached.clear()

@@ -123,20 +123,30 @@ def start_loop(engine, args, P, S, log) -> subprocess.Popen | None:
     return start([(late_blocks, (P, S, log[:1]))], check=False)
 
 
+def _engine_call(P, S, scratch) -> tuple:
+    """The drive loop and the arguments' types the batch worker calls it with for a group
+    whose first call has records ``P``, ``S`` and scratch log ``scratch``
+    (:func:`imdrive.kernels.batch.run_one`: ``simulate()``'s types)."""
+    import numpy as np
+
+    from imdrive.kernels.engine import run_drive
+    from imdrive.kernels.recording import RECORDING
+
+    return run_drive, (P, S, 0, 0, scratch[:0], 1, 0, True, np.zeros(0, dtype=RECORDING))
+
+
 def start_batch(worker, calls) -> subprocess.Popen | None:
     """Start the helper on the batch ``worker``'s specialisations, ``calls`` (the arguments of
     each group's call, in the order the batch runs them: the group's records first, its
     scratch log last), from the last: this process compiles them from the first, and the
     two meet in the middle. When only one must compile, the helper takes its loop's late
-    blocks instead, as for a single drive (:func:`start_loop`)."""
+    blocks instead if the loop must compile too, as for a single drive (:func:`start_loop`)."""
     if os.environ.get(ENV, "1") == "0":
         return None
     todo = [args for args in calls if not _compiled_or_cached(worker, args)]
     if len(todo) == 1:
-        from imdrive.kernels.prefetch import late_blocks
-
         P, S, scratch = todo[0][0], todo[0][1], todo[0][-1]
-        return start([(late_blocks, (P, S, scratch[:1]))], check=False)
+        return start_loop(*_engine_call(P, S, scratch), P, S, scratch)
     if len(todo) < 2:
         return None
     return start([(worker, args) for args in reversed(todo[1:])], check=False)
