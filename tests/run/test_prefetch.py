@@ -122,8 +122,7 @@ def test_no_helper_for_a_compiled_loop_or_when_turned_off(monkeypatch):
     assert prefetch._compiled_or_cached(run_drive, first)
     # a batch of the same drives calls that loop: its types, as start_batch spells them
     P, S, *_, scratch = batch_call([(0, sc, a)], 1, 0.5)
-    engine, args = prefetch._engine_call(P, S, scratch)
-    assert engine is run_drive and prefetch._compiled_or_cached(run_drive, args)
+    assert prefetch._compiled_or_cached(run_drive, prefetch.engine_call(P, S, scratch))
     assert prefetch.start_loop(run_drive, first, a.params, a.state0, new_log(1, a.log)) is None
     monkeypatch.setenv(prefetch.ENV, "0")
     assert prefetch.start_loop(None, (), None, None, None) is None  # off: nothing looked at

@@ -123,16 +123,18 @@ def start_loop(engine, args, P, S, log) -> subprocess.Popen | None:
     return start([(late_blocks, (P, S, log[:1]))], check=False)
 
 
-def _engine_call(P, S, scratch) -> tuple:
-    """The drive loop and the arguments' types the batch worker calls it with for a group
-    whose first call has records ``P``, ``S`` and scratch log ``scratch``
-    (:func:`imdrive.kernels.batch.run_one`: ``simulate()``'s types)."""
-    import numpy as np
+def engine_call(P, S, log, rec=None) -> tuple:
+    """The arguments of the drive loop's zero-length first call
+    (:func:`imdrive.kernels.engine.run_drive`) on records ``P``, ``S`` with a log of ``log``'s
+    dtype and recording ``rec`` (default none): ``simulate()``'s call, whose types the batch
+    worker's calls have too (:func:`imdrive.kernels.batch.run_one`)."""
+    if rec is None:
+        import numpy as np
 
-    from imdrive.kernels.engine import run_drive
-    from imdrive.kernels.recording import RECORDING
+        from imdrive.kernels.recording import RECORDING
 
-    return run_drive, (P, S, 0, 0, scratch[:0], 1, 0, True, np.zeros(0, dtype=RECORDING))
+        rec = np.zeros(0, dtype=RECORDING)
+    return (P, S, 0, 0, log[:0], 1, 0, True, rec)
 
 
 def start_batch(worker, calls) -> subprocess.Popen | None:
@@ -145,8 +147,10 @@ def start_batch(worker, calls) -> subprocess.Popen | None:
         return None
     todo = [args for args in calls if not _compiled_or_cached(worker, args)]
     if len(todo) == 1:
+        from imdrive.kernels.engine import run_drive
+
         P, S, scratch = todo[0][0], todo[0][1], todo[0][-1]
-        return start_loop(*_engine_call(P, S, scratch), P, S, scratch)
+        return start_loop(run_drive, engine_call(P, S, scratch), P, S, scratch)
     if len(todo) < 2:
         return None
     return start([(worker, args) for args in reversed(todo[1:])], check=False)

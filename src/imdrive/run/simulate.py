@@ -106,7 +106,7 @@ def simulate(
     # a zero-length call loads (or compiles) the kernel, so wall_time_s measures the run alone;
     # on a cold cache a second process compiles the loop's late blocks meanwhile
     t0 = time.perf_counter()
-    first = (a.params, copy_state(a.state0), 0, 0, log[:0], 1, 0, True, rec)
+    first = prefetch.engine_call(a.params, copy_state(a.state0), log, rec)
     prefetch.start_loop(run_drive, first, a.params, a.state0, log)
     run_drive(*first)
     startup = time.perf_counter() - t0
