@@ -12,6 +12,7 @@ from imdrive.run.build import build_arrays
 def test_each_feature_set_is_a_job_and_its_preset_compiles_that_set():
     names = jobs()
     assert names[0] == "drive:mras"
+    assert "batch:all" in names  # a batch of every estimator: their union's one kernel
     wanted = {"r2": features.GROUPS[0], "realistic": features.GROUPS[1]}
     wanted["r2+realistic"] = features.GROUPS[0] + features.GROUPS[1]
     for key, preset in FEATURE_SETS.items():

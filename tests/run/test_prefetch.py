@@ -59,11 +59,12 @@ def new_rec():
 RECORDS_BATCH = textwrap.dedent("""
     import pickle, sys
     from imdrive.config.scenario import Scenario
-    from imdrive.run.batch import _first_call
+    from imdrive.run.batch_groups import first_call
     from imdrive.run.build import build_arrays
 
     sc = Scenario.read(sys.argv[2], ["simulation.t_end_s=0.05"])
-    P, S, *_, scratch = _first_call([(0, sc, build_arrays(sc))], 1, 0.5)
+    a = build_arrays(sc)
+    P, S, *_, scratch = first_call([(0, sc, a)], (1, a.params.est.dtype, None), 0.5)
     with open(sys.argv[1], "wb") as f:
         pickle.dump([("imdrive.kernels.prefetch", "late_blocks", (P, S, scratch[:1]))], f)
 """)
@@ -114,14 +115,14 @@ def test_the_helpers_blocks_are_what_the_loop_loads(tmp_path, preset, optional, 
 
 
 def test_no_helper_for_a_compiled_loop_or_when_turned_off(monkeypatch):
-    from imdrive.run.batch import _first_call as batch_call
+    from imdrive.run.batch_groups import first_call as batch_call
 
     sc = Scenario.read("sensorless", ["simulation.t_end_s=0.01"])
     simulate(sc)  # compiled (or loaded) in this process now
     a, first = _first_call(sc)
     assert prefetch._compiled_or_cached(run_drive, first)
     # a batch of the same drives calls that loop: its types, as start_batch spells them
-    P, S, *_, scratch = batch_call([(0, sc, a)], 1, 0.5)
+    P, S, *_, scratch = batch_call([(0, sc, a)], (1, a.params.est.dtype, None), 0.5)
     assert prefetch._compiled_or_cached(run_drive, prefetch.engine_call(P, S, scratch))
     assert prefetch.start_loop(run_drive, first, a.params, a.state0, new_log(1, a.log)) is None
     monkeypatch.setenv(prefetch.ENV, "0")
@@ -159,25 +160,33 @@ def test_an_unknown_specialisation_is_not_cached():
     assert prefetch._compiled_or_cached(object(), (1.0,))
 
 
-def test_the_batch_helper_compiles_each_groups_call_as_the_batch_makes_it():
+@pytest.mark.parametrize("estimators", [("mras", "mras"), ("mras", "afo")])
+def test_the_batch_helper_compiles_each_groups_call_as_the_batch_makes_it(estimators):
     from numba import typeof
 
     from imdrive.kernels.batch import new_scratch
-    from imdrive.run import batch
+    from imdrive.kernels.estimators import union
+    from imdrive.run.batch_groups import first_call, group_args, united
 
-    # a group mixing an average and a realistic drive compiles the blocks of both
+    # a group mixing an average and a realistic drive compiles the blocks of both; two
+    # estimators, the union of all
     items = [
         (i, sc, build_arrays(sc))
         for i, sc in enumerate(
-            Scenario.read(p, ["simulation.t_end_s=0.01"])
-            for p in ("sensorless", "sensorless-realistic")
+            Scenario.read(p, ["simulation.t_end_s=0.01", f'control.speed_feedback="{e}"'])
+            for p, e in zip(("sensorless", "sensorless-realistic"), estimators, strict=True)
         )
     ]
-    first = batch._first_call(items, 1, 0.5)
-    params, state, log, out = batch._group_args(items, 7, 0.5)
+    groups: dict = {}
+    for it in items:
+        groups.setdefault((1, it[2].params.est.dtype, it[2].params.comp.dtype), []).append(it)
+    ((key, grouped),) = united(groups).items()
+    first = first_call(grouped, key, 0.5)
+    params, state, log, out = group_args(grouped, 7, 0.5, key[1])
     made = (params, state, log, 1, out, 1, 2, new_scratch(2, log.dtype)[1])  # batch_kernel's
     assert [typeof(a) for a in first] == [typeof(a) for a in made]
     assert "switching_bridge" in params.features.dtype.names
+    assert (union.members(params.est.dtype) is not None) == (estimators[0] != estimators[1])
 
 
 def test_the_batch_helper_starts_from_the_last_group_or_on_the_one_kernels_late_blocks(

@@ -3,7 +3,8 @@
 Each compiled entry point is a job: the drive once per registered estimator (the engine is
 specialised by the estimator's records) and, for the MRAS, once per set of optional blocks
 (the engine is specialised by the blocks a drive runs too, kernels/features.py), the batch
-kernel (sweeps, once per estimator: the same for the threads and for dask), the replay once per
+kernel (sweeps, once per estimator: the same for the threads and for dask; ``batch:all``, the
+one of a batch of several estimators, kernels/estimators/union.py), the replay once per
 estimator (the estimator and its R2 law on a recording) and the stability map's. The first
 job compiles the MRAS drive, which the other entry points of the same blocks link in; the
 others then run in parallel processes (numba compiles one function at a time per process).
@@ -44,7 +45,8 @@ FEATURE_SETS = {
 def jobs() -> list[str]:
     """Every job name, the MRAS drive first: ``drive:<estimator>``, ``drive:mras:<set>`` (the
     MRAS drive with each set of optional blocks, :data:`FEATURE_SETS`), ``batch`` (the MRAS's),
-    ``batch:mras:<set>``, ``batch:<estimator>``, ``replay:<estimator>``, ``stability``.
+    ``batch:mras:<set>``, ``batch:<estimator>``, ``batch:all`` (every estimator in one batch:
+    their union's kernel), ``replay:<estimator>``, ``stability``.
     (``batch-serial`` is still accepted: since 2026-11-30 it compiles what ``batch`` does.)"""
     from imdrive.run.estimators import estimator_names
 
@@ -57,6 +59,7 @@ def jobs() -> list[str]:
         "batch",
         *(f"batch:mras:{s}" for s in ("r2", "realistic")),
         *(f"batch:{n}" for n in names if n != "measured"),
+        "batch:all",
         *(f"replay:{n}" for n in replayed),
         "stability",
     ]
@@ -83,8 +86,13 @@ def run_job(name: str) -> None:
     elif kind in ("batch", "batch-serial"):
         from imdrive.run.batch import simulate_batch
 
-        sc = _scenario(estimator or "mras", FEATURE_SETS.get(blocks, "sensorless"))
-        simulate_batch([sc] * 2, parallel=kind == "batch")
+        if estimator == "all":
+            from imdrive.run.estimators import estimator_names
+
+            scs = [_scenario(n) for n in estimator_names() if n != "measured"]
+        else:
+            scs = [_scenario(estimator or "mras", FEATURE_SETS.get(blocks, "sensorless"))] * 2
+        simulate_batch(scs, parallel=kind == "batch")
     elif kind == "replay":
         import tempfile
 

@@ -23,7 +23,7 @@ import numpy as np
 
 from imdrive.kernels import compensator, ifoc, inverter, machine, model, sensors
 from imdrive.kernels.bridge import switching_period  # noqa: F401  (re-exported: old path)
-from imdrive.kernels.estimators import afo, ekf, mras, reactive_mras, registry  # noqa: F401  (the package's estimators register on import)
+from imdrive.kernels.estimators import afo, ekf, mras, reactive_mras, registry, smo_mras, union  # noqa: F401  (the package's estimators register on import; a batch's union of them)
 from imdrive.kernels.features import row as features_row
 from imdrive.kernels.features import switching_bridge
 from imdrive.kernels.inverter import INV_SWITCHING, MAX_EVENTS  # noqa: F401  (MAX_EVENTS: old path)

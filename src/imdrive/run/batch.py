@@ -28,8 +28,10 @@ the kernel time (the dynamics dominate).
 
 The Python side feeds the kernel blocks of ``block_size`` drives (default 512): per block it
 builds and stacks the drives' records (:func:`imdrive.run.build.build_arrays`,
-:func:`stack_drives`), grouped by estimator and R2 law (each has its own records, and the
-kernel is compiled once per estimator) and, with logs, by ``log_every``; each drive runs its
+:func:`~imdrive.run.batch_groups.stack_drives`), grouped by R2 law (each has its own records,
+and the kernel is compiled for them) and, with logs, by ``log_every``; drives of several
+estimators share one kernel on the union of every estimator's records
+(:mod:`imdrive.kernels.estimators.union`), one estimator alone keeps its own; each drive runs its
 own number of periods (its sequence's: the premagnetisation and the torque-limited ramps
 make it the drive's own); profiles with
 different numbers of breakpoints are padded (the kernel reads ``prof_n`` of them); fuzzy tables
@@ -60,23 +62,25 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from imdrive.kernels import features
 from imdrive.kernels.batch import (
     BATCH_METRICS,
     METRICS,
-    BatchOut,
     _worker,
     batch_kernel,
     batch_kernel_serial,
     new_scratch,
 )
-from imdrive.kernels.engine import S_OK, DriveParams, DriveState, log_dtype
-from imdrive.kernels.estimators.registry import kernel_of_state
-from imdrive.kernels.profiles import N_PROF
-from imdrive.kernels.r2_law_registry import law_of_records
+from imdrive.kernels.engine import S_OK, DriveState
+from imdrive.kernels.estimators import union
 from imdrive.kernels.threads import num_threads, slots
 from imdrive.run import prefetch
-from imdrive.run.metrics import lost_control_check, steady_window_periods
+from imdrive.run.batch_groups import (
+    first_call,
+    group_args,
+    own_rows,
+    stack_drives,  # noqa: F401  (its import path of 0.1)
+    united,
+)
 from imdrive.run.status import STATUS_COLUMNS
 
 COLUMNS = (
@@ -167,92 +171,10 @@ class BatchResult:
         return self.control_periods / self.wall_time_s if self.wall_time_s > 0 else math.inf
 
 
-def stack_drives(arrays) -> tuple[DriveParams, DriveState]:
-    """Stack one-drive :class:`DriveArrays` into the (N,)-row records of one kernel call.
-
-    Profiles with different numbers of breakpoints are padded (the kernel reads ``prof_n``
-    of them); fuzzy tables are shared (the distinct tables plus an index per drive).
-    """
-    G = len(arrays)
-    K = max(a.params.prof_t.shape[2] for a in arrays)
-    prof_t = np.zeros((G, N_PROF, K))
-    prof_v = np.zeros((G, N_PROF, K))
-    table_idx = np.empty(G, dtype=np.int64)
-    tables: list[np.ndarray] = []
-    seen: dict[bytes, int] = {}
-    for g, a in enumerate(arrays):
-        k = a.params.prof_t.shape[2]
-        prof_t[g, :, :k] = a.params.prof_t[0]
-        prof_v[g, :, :k] = a.params.prof_v[0]
-        table = a.params.tables[a.params.table_idx[0]]
-        key = table.tobytes()
-        if key not in seen:
-            seen[key] = len(tables)
-            tables.append(table)
-        table_idx[g] = seen[key]
-    records = {
-        name: _rows([getattr(a.params, name) for a in arrays])
-        for name in DriveParams._fields
-        if name not in ("prof_t", "prof_v", "tables", "table_idx", "features")
-    }
-    params = DriveParams(
-        **records,
-        prof_t=prof_t,
-        prof_v=prof_v,
-        tables=np.ascontiguousarray(np.stack(tables)),
-        table_idx=table_idx,
-        features=features.of(records),  # the blocks some drive of the batch runs
-    )
-    state = DriveState(
-        *(_rows([a.state0[j] for a in arrays]) for j in range(len(DriveState._fields)))
-    )
-    return params, state
-
-
-def _rows(arrs: list) -> np.ndarray:
-    """``np.concatenate(arrs)`` along the first axis for arrays of one dtype, as bytes: numpy's
-    own promotes a structured dtype field by field for every array (about 1 ms per drive for
-    the drive's records, a third of a batch's set-up)."""
-    dt = arrs[0].dtype
-    if any(a.dtype is not dt and a.dtype != dt for a in arrs):
-        return np.concatenate(arrs)
-    raw = b"".join(np.ascontiguousarray(a).tobytes() for a in arrs)
-    return np.frombuffer(raw, dtype=dt).reshape((-1, *arrs[0].shape[1:])).copy()
-
-
-def _group_args(items, n_rows: int, window_s: float):
-    """``(params, state, log, out)`` of the kernel call of one group of (index, scenario,
-    DriveArrays) sharing their records' dtypes, the log ``n_rows`` long and NaN-filled."""
-    G = len(items)
-    arrays = [a for _, _, a in items]
-    params, state = stack_drives(arrays)
-    n_win = np.array(
-        [steady_window_periods(sc, window_s, a.Ts, a.n_steps) for _, sc, a in items],
-        dtype=np.int64,
-    )
-    lc = [lost_control_check(sc) for _, sc, _ in items]
-    lc_bound = np.array([b for b, _ in lc])
-    lc_n = np.array(
-        [int(round(d / a.Ts)) for (_, d), a in zip(lc, arrays, strict=True)], dtype=np.int64
-    )
-    dtype = log_dtype(kernel_of_state(params.est.dtype), law_of_records(params.comp.dtype))
-    log = np.full((G, n_rows), np.nan, dtype=dtype)
-    out = BatchOut(
-        n_steps=np.array([a.n_steps for a in arrays], dtype=np.int64),
-        metrics=np.empty(G, dtype=BATCH_METRICS),
-        status=np.empty(G, dtype=np.int64),
-        k_end=np.empty(G, dtype=np.int64),
-        n_win=n_win,
-        lc_bound=lc_bound,
-        lc_n=lc_n,
-    )
-    return params, state, log, out
-
-
-def _stack(items, log_every: int, n_rows: int, window_s: float, parallel: bool):
-    """Run one group of (index, scenario, DriveArrays) sharing their records' dtypes; return
-    per-drive data."""
-    params, state, log, out = _group_args(items, n_rows, window_s)
+def _stack(items, log_every: int, n_rows: int, window_s: float, parallel: bool, est=None):
+    """Run one group of (index, scenario, DriveArrays) sharing their records' dtypes (``est``:
+    :func:`group_args`); return per-drive data."""
+    params, state, log, out = group_args(items, n_rows, window_s, est)
     dtype = log.dtype
     G = len(items)
     t0 = time.perf_counter()
@@ -263,17 +185,6 @@ def _stack(items, log_every: int, n_rows: int, window_s: float, parallel: bool):
         batch_kernel_serial(params, state, log, log_every, out, new_scratch(1, dtype)[0])
     wall = time.perf_counter() - t0
     return params, state, log, out, wall
-
-
-def _first_call(items, log_every: int, window_s: float) -> tuple:
-    """The arguments of the batch worker's call for a group, made of its first drive with the
-    blocks of every drive of the group compiled in (``params.features``, as
-    :func:`stack_drives` has them): their types are what
-    :func:`imdrive.run.prefetch.start_batch` compiles for."""
-    params, state, log, out = _group_args(items[:1], 0, window_s)
-    blocks = {n for _, _, a in items for n in a.params.features.dtype.names[1:]}
-    params = params._replace(features=np.ones(1, dtype=features.features_dtype(blocks)))
-    return params, state, log, log_every, out, 0, 1, new_scratch(1, log.dtype)[0]
 
 
 class _Inline:
@@ -364,9 +275,10 @@ def _build_block(block, offset, logs, log_every, window_s, errors) -> _Block:
         # one thread
         key = (int(le), a.params.est.dtype, a.params.comp.dtype)
         blk.groups.setdefault(key, []).append((i, sc, a))
+    blk.groups = united(blk.groups)
     # kernels not yet compiled: a second process compiles from the last (or the one kernel's
     # late blocks)
-    calls = [_first_call(items, le, window_s) for (le, _, _), items in blk.groups.items()]
+    calls = [first_call(items, key, window_s) for key, items in blk.groups.items()]
     prefetch.start_batch(_worker, calls)
     return blk
 
@@ -378,9 +290,9 @@ def _run_block(blk: _Block, logs, window_s, parallel) -> float:
     from imdrive.run.simulate import logged_rows
 
     kernel_wall = 0.0
-    for (le, _, _), items in blk.groups.items():
+    for (le, est, _), items in blk.groups.items():
         n_rows = max(a.n_steps for _, _, a in items) // le + 1 if logs else 0
-        params, state, log, out, wall = _stack(items, le, n_rows, window_s, parallel)
+        params, state, log, out, wall = _stack(items, le, n_rows, window_s, parallel, est)
         kernel_wall += wall
         for g, (i, sc, a) in enumerate(items):
             blk.m[i] = out.metrics[g]
@@ -390,8 +302,10 @@ def _run_block(blk: _Block, logs, window_s, parallel) -> float:
             blk.r1[i] = state.control[g]["dc_status"]
             if logs:
                 own = log[g][: a.n_steps // le + 1]  # the rows of its own periods
-                lg = logged_rows(own, out.status[g], out.k_end[g], le)
+                lg = logged_rows(own_rows(own, a.log), out.status[g], out.k_end[g], le)
                 final = DriveState(*(f[g : g + 1].copy() for f in state))
+                if final.est.dtype != a.state0.est.dtype:  # a union's: the drive's own
+                    final = final._replace(est=union.from_union(final.est))
                 blk.results[i] = SimulationResult.from_log(
                     sc,
                     lg,

@@ -5,10 +5,11 @@ and compiles each block the loop calls when it meets the call. When the drive's 
 compiled in this process nor cached (:func:`start_loop`), a helper process (:data:`HELPER`)
 compiles the blocks the loop's stages call last (:func:`imdrive.kernels.prefetch.late_blocks`)
 into the same cache; this process, reaching them, loads them from there. A batch whose drives
-need several kernels not yet compiled (one per estimator and R2 law: ``imdrive
-bench-estimators``, a sweep over estimators) has the helper compile them from the last while it
-compiles and runs them from the first (:func:`start_batch`); a batch with one such kernel (a
-first sweep of the realistic drive) has it compile that kernel's late blocks, as for a drive: a
+need several kernels not yet compiled (one per R2 law and decimation of the log; drives that
+differ by estimator share one, :mod:`imdrive.kernels.estimators.union`) has the helper compile
+them from the last while it compiles and runs them from the first (:func:`start_batch`); a
+batch with one such kernel (a first sweep of the realistic drive, a first ``imdrive
+bench-estimators``) has it compile that kernel's late blocks, as for a drive: a
 first four-drive sweep of ``sensorless-realistic`` after a warm ``run sensorless`` took 11.1
 and 11.3 s against 13.7 and 14.2 s (2 alternated pairs, 2026-12-02; warm 1.9-2.0 s). What the
 helper has not finished is compiled here as before (the cache's saves are locked,
@@ -17,9 +18,9 @@ helper has not finished is compiled here as before (the cache's saves are locked
 ``imdrive run sensorless`` 9.3 s against 12.9 s (5 pairs; ratio 0.76), ``paper-fig5`` 14.3
 against 19.3 s, ``sensorless-realistic`` 12.7 against 19.3 s (2 runs each); a warm run is
 unchanged (1.23 against 1.26 s, 10 pairs: the check is one read of the loop's cache index). The
-first ``imdrive bench-estimators`` after a warm ``run sensorless`` (its 5 kernels, one per
-estimator's records): 42.9 and 45.8 s against 66.3 and 69.8 s (2 runs each; warm 11.5-13.2 s).
-Off with ``IMDRIVE_PREFETCH=0``, and on a single core.
+first ``imdrive bench-estimators`` after a warm ``run sensorless``, when it compiled 5 kernels,
+one per estimator's records: 42.9 and 45.8 s against 66.3 and 69.8 s (2 runs each; warm
+11.5-13.2 s). Off with ``IMDRIVE_PREFETCH=0``, and on a single core.
 """
 
 from __future__ import annotations

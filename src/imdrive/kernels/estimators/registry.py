@@ -5,7 +5,8 @@ registered once (:func:`register_kernel`), and the engine calls it through three
 functions, :func:`estimator_step`, :func:`estimator_log` and :func:`estimator_finite`. Numba
 resolves each call at compile time from the *type* of the state record it receives: the drive
 of an estimator carries that estimator's records (``DriveParams.est``, ``DriveState.est``), so
-the loop is compiled once per estimator and holds no branch per estimator. The registry maps
+the loop is compiled once per estimator and holds no branch per estimator (a batch of several
+runs them in one loop on union records, :mod:`.union`). The registry maps
 the state dtype to the functions, which is why every registered state and parameter dtype is made
 unique (a tag field, below).
 
