@@ -290,8 +290,9 @@ def _give_back(S, i, own):
 
 
 @njit(cache=True, inline="always")
-def one_drive(P, S, i, n_steps, n_win, log_out, log_every, metrics, scratch, lc_bound=0.0, lc_n=0):
-    """Run drive ``i`` of the batch (:func:`run_one`) on a copy of its state of its own.
+def one_drive(loop, P, S, i, n_steps, n_win, log_out, log_every, metrics, scratch, lc_bound, lc_n):
+    """Run drive ``i`` of the batch (:func:`run_one`, the drive ``loop``
+    :func:`~imdrive.kernels.engine.run_drive`) on a copy of its state of its own.
 
     The drives' state records lie side by side in ``S``, and the threads run neighbouring
     drives at the same time: updated in place every period, two drives' records sharing a
@@ -300,7 +301,7 @@ def one_drive(P, S, i, n_steps, n_win, log_out, log_every, metrics, scratch, lc_
     """
     own = _own_state(S, i)
     status, k_end = run_one(
-        _drive_params(P, i), own, 0, n_steps, n_win, log_out, log_every, metrics, scratch,
+        loop, _drive_params(P, i), own, 0, n_steps, n_win, log_out, log_every, metrics, scratch,
         lc_bound, lc_n,
     )  # fmt: skip
     _give_back(S, i, own)
@@ -308,7 +309,7 @@ def one_drive(P, S, i, n_steps, n_win, log_out, log_every, metrics, scratch, lc_
 
 
 @njit(cache=True, inline="always")
-def run_one(P, S, i, n_steps, n_win, log_out, log_every, metrics, scratch, lc_bound=0.0, lc_n=0):
+def run_one(loop, P, S, i, n_steps, n_win, log_out, log_every, metrics, scratch, lc_bound, lc_n):
     """Run drive ``i`` at full rate, ``scratch.shape[0] - 1`` periods per engine call, folding
     each chunk into the metrics and copying its decimated rows into ``log_out``.
 
@@ -336,7 +337,7 @@ def run_one(P, S, i, n_steps, n_win, log_out, log_every, metrics, scratch, lc_bo
         # (kernels/engine_call.py): optimised again with its callers here, the engine ran
         # the bench's 2000 one-second drives in 7.4 s of kernel against 10.4-10.8 s through
         # the address (2026-11-30, same results), for 2.5 s more of the first batch's compile
-        status, ke = run_drive(
+        status, ke = loop(
             P, S, np.int64(i), np.int64(steps), scratch, np.int64(1), np.int64(k0),
             np.bool_(final), no_rec,
         )  # fmt: skip
@@ -364,8 +365,29 @@ def run_one(P, S, i, n_steps, n_win, log_out, log_every, metrics, scratch, lc_bo
 def _worker(P, S, log, log_every, out, first, stride, scratch):
     """Drives ``first, first + stride, ...`` one after the other, sharing ``scratch``: the
     batch's one compiled entry point, the GIL released so that threads run it side by side."""
+    _drives(run_drive, P, S, log, log_every, out, first, stride, scratch)
+
+
+@njit  # never run: its types only
+def _no_loop(P, S, i, n_steps, log, log_every, k0, final, rec):
+    """:func:`~imdrive.kernels.engine.run_drive`'s signature and result types, doing nothing."""
+    return np.int64(S_OK), n_steps
+
+
+@njit  # not cached: only what it calls is kept
+def worker_blocks(P, S, log, log_every, out, first, stride, scratch):
+    """What :func:`_worker` calls besides the drive loop, with its argument types (the batch's
+    record helpers, the metrics' accumulator): compiled, never run, by the cold-start helper
+    process while this one compiles the loop (:func:`imdrive.run.prefetch.start_batch`)."""
+    _drives(_no_loop, P, S, log, log_every, out, first, stride, scratch)
+
+
+@njit(cache=True, inline="always")
+def _drives(loop, P, S, log, log_every, out, first, stride, scratch):
+    """:func:`_worker`'s body, the drive ``loop`` an argument (:func:`worker_blocks`)."""
     for n in range(first, P.sim.shape[0], stride):
         s, ke = one_drive(
+            loop,
             P,
             S,
             n,

@@ -33,6 +33,7 @@ from imdrive.kernels.stages import (
     bridge,
     compensate_inverter,
     inverter_residual,
+    run_r1_standstill,
     track_r2,
 )
 
@@ -75,6 +76,9 @@ def late_blocks(P, S, log):
     log_compensator(row, cmp)
     law_log(row, cmp.law)
     inverter_segments(pinv, z, z, z, z, Ts, scr.seg_dt, scr.seg_va, scr.seg_vb)  # modulate
+    # stages.estimate's standstill R1 test, which the loop meets after the estimator: late
+    # where a batch of several estimators types them all first (kernels/estimators/union.py)
+    run_r1_standstill(feat, pc, mdl, ctl, z, z, z, z, z, z, z, ctl.w_e, Ts)
     smpl = Sample(z, 0, 0j, 0j, z)  # stages.control
     compensate_inverter(feat, pc, ctl, mdl, smp, smpl, Ts, z, z, z)
     inverter_residual(feat, pc, ctl, mdl, smp.v_prev_ab, smp.i_prev_ab, smpl.i_meas_ab, Ts)

@@ -112,16 +112,17 @@ def start(jobs, check: bool = True) -> subprocess.Popen | None:
     return proc
 
 
-def start_loop(engine, args, P, S, log) -> subprocess.Popen | None:
+def start_loop(engine, args, P, S, log, then=()) -> subprocess.Popen | None:
     """Start the helper on the loop's late blocks if ``engine`` (the drive loop,
     :func:`imdrive.kernels.engine.run_drive`) must compile for ``args``, the arguments of its
-    first call; ``P``, ``S``, ``log``: the drive's records and its log."""
+    first call; ``P``, ``S``, ``log``: the drive's records and its log; ``then``: jobs of
+    :func:`start` the helper takes after them."""
     if os.environ.get(ENV, "1") == "0" or _compiled_or_cached(engine, args):
         return None
     from imdrive.kernels.prefetch import late_blocks
 
     # late_blocks itself is not cached: it is what it calls that is
-    return start([(late_blocks, (P, S, log[:1]))], check=False)
+    return start([(late_blocks, (P, S, log[:1])), *then], check=False)
 
 
 def engine_call(P, S, log, rec=None) -> tuple:
@@ -143,15 +144,19 @@ def start_batch(worker, calls) -> subprocess.Popen | None:
     each group's call, in the order the batch runs them: the group's records first, its
     scratch log last), from the last: this process compiles them from the first, and the
     two meet in the middle. When only one must compile, the helper takes its loop's late
-    blocks instead if the loop must compile too, as for a single drive (:func:`start_loop`)."""
+    blocks instead if the loop must compile too, as for a single drive (:func:`start_loop`),
+    then what the worker calls besides the loop (:func:`imdrive.kernels.batch.worker_blocks`:
+    this process meets them after compiling the loop, the helper is idle by then)."""
     if os.environ.get(ENV, "1") == "0":
         return None
     todo = [args for args in calls if not _compiled_or_cached(worker, args)]
     if len(todo) == 1:
+        from imdrive.kernels.batch import worker_blocks
         from imdrive.kernels.engine import run_drive
 
         P, S, scratch = todo[0][0], todo[0][1], todo[0][-1]
-        return start_loop(run_drive, engine_call(P, S, scratch), P, S, scratch)
+        then = [(worker_blocks, todo[0])]
+        return start_loop(run_drive, engine_call(P, S, scratch), P, S, scratch, then)
     if len(todo) < 2:
         return None
     return start([(worker, args) for args in reversed(todo[1:])], check=False)
