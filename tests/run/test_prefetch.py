@@ -55,16 +55,21 @@ def new_rec():
     return np.zeros(0, dtype=RECORDING)
 
 
-#: As RECORDS, for a batch of one group: the job as start_batch() writes it.
+#: As RECORDS, for a batch of one group of drives of the estimators ``sys.argv[3]`` (comma
+#: separated): the jobs as start_batch() writes them.
 RECORDS_BATCH = textwrap.dedent("""
     import pickle, sys
     from imdrive.config.scenario import Scenario
-    from imdrive.run.batch_groups import first_call
+    from imdrive.run.batch_groups import first_call, united
     from imdrive.run.build import build_arrays
 
-    sc = Scenario.read(sys.argv[2], ["simulation.t_end_s=0.05"])
-    a = build_arrays(sc)
-    call = first_call([(0, sc, a)], (1, a.params.est.dtype, None), 0.5)
+    groups = {}
+    for i, e in enumerate(sys.argv[3].split(",")):
+        ov = ["simulation.t_end_s=0.05", f'control.speed_feedback="{e}"']
+        a = build_arrays(sc := Scenario.read(sys.argv[2], ov))
+        groups.setdefault((1, a.params.est.dtype, a.params.comp.dtype), []).append((i, sc, a))
+    ((key, items),) = united(groups).items()
+    call = first_call(items, key, 0.5)
     P, S, *_, scratch = call
     with open(sys.argv[1], "wb") as f:
         pickle.dump(
@@ -79,23 +84,27 @@ RECORDS_BATCH = textwrap.dedent("""
 #: What :func:`imdrive.kernels.batch.worker_blocks` calls besides the loop, compiled after it.
 WORKER_LATE = {"accumulate", "summarize", "_give_back"}
 
-#: As data.compiles.COUNT_COMPILES, for a batch of two drives of one group.
+#: As data.compiles.COUNT_COMPILES, for a batch of one group, two drives of each estimator of
+#: ``sys.argv[2]``.
 COUNT_BATCH = COUNT_COMPILES.replace(
     "from imdrive.run.simulate import simulate", "from imdrive import simulate_batch"
 ).replace(
     'res = simulate(Scenario.read(preset, ["simulation.t_end_s=0.05"]))\nassert not res.diverged',
-    'sc = Scenario.read(preset, ["simulation.t_end_s=0.05"])\n'
-    'assert not simulate_batch([sc, sc]).metrics["diverged"].any()',
+    'ov = ["simulation.t_end_s=0.05"]\n'
+    "scs = [Scenario.read(preset, [*ov, f'control.speed_feedback=\"{e}\"']) "
+    'for e in sys.argv[2].split(",") * 2]\n'
+    'assert not simulate_batch(scs).metrics["diverged"].any()',
 )
 
 
-@pytest.mark.slow  # a cold compile of the late blocks and of the loop: 12-20 s
+@pytest.mark.slow  # a cold compile of the late blocks and of the loop: 12-25 s
 @pytest.mark.parametrize(
     "preset, optional, batch",
     [
-        ("sensorless", set(), False),
-        ("sensorless-realistic", {"bridge_period", "stator_residual"}, False),
-        ("sensorless-realistic", {"bridge_period", "stator_residual"}, True),
+        ("sensorless", set(), None),
+        ("sensorless-realistic", {"bridge_period", "stator_residual"}, None),
+        ("sensorless-realistic", {"bridge_period", "stator_residual"}, "mras"),
+        ("sensorless", set(), "mras,afo"),  # one kernel, the union's
     ],
 )
 def test_the_helpers_blocks_are_what_the_loop_loads(tmp_path, preset, optional, batch):
@@ -111,10 +120,12 @@ def test_the_helpers_blocks_are_what_the_loop_loads(tmp_path, preset, optional, 
         return res.stdout.split()
 
     records = tmp_path / "records.pkl"
-    py(RECORDS_BATCH if batch else RECORDS, str(records), preset)
+    py(RECORDS_BATCH if batch else RECORDS, str(records), preset, *([batch] if batch else []))
     py(prefetch.HELPER, str(records))  # what start() runs, here to its end
     assert not records.exists()
-    compiled = set(py(COUNT_BATCH if batch else COUNT_COMPILES, preset))
+    compiled = set(
+        py(COUNT_BATCH if batch else COUNT_COMPILES, preset, *([batch] if batch else []))
+    )
     assert "run_drive" in compiled  # the loop itself was cold
     assert not batch or "_worker" in compiled
     late = LATE | optional | (WORKER_LATE if batch else set())  # came from the helper
@@ -199,29 +210,46 @@ def test_the_batch_helper_compiles_each_groups_call_as_the_batch_makes_it(estima
     assert (union.members(params.est.dtype) is not None) == (estimators[0] != estimators[1])
 
 
-def test_the_batch_helper_starts_from_the_last_group_or_on_the_one_kernels_late_blocks(
-    monkeypatch,
-):
+def _group_call(estimators, preset="sensorless"):
+    """The batch worker's first call for a group of drives of ``estimators``."""
+    from imdrive.run.batch_groups import first_call, united
+
+    groups: dict = {}
+    for i, e in enumerate(estimators):
+        sc = Scenario.read(preset, ["simulation.t_end_s=0.01", f'control.speed_feedback="{e}"'])
+        a = build_arrays(sc)
+        groups.setdefault((1, a.params.est.dtype, a.params.comp.dtype), []).append((i, sc, a))
+    ((key, items),) = united(groups).items()
+    return first_call(items, key, 0.5)
+
+
+def test_the_batch_helper_starts_from_the_last_group_or_on_the_one_kernels_blocks(monkeypatch):
     from imdrive.kernels.batch import worker_blocks
     from imdrive.kernels.prefetch import late_blocks
 
     seen, cached, engines = [], set(), set()
 
     def compiled_or_cached(d, args):
-        return args[0] in (engines if d is run_drive else cached)
+        return id(args[0]) in (engines if d is run_drive else cached)
+
+    def jobs():  # the helper's last jobs: (function, the records they were given)
+        return [(f, a[0]) for f, a in seen[-1]]
 
     monkeypatch.setattr(prefetch, "start", lambda jobs, check=True: seen.append(jobs))
     monkeypatch.setattr(prefetch, "_compiled_or_cached", compiled_or_cached)
-    calls = [("Pa", "Sa", "log", "xa"), ("Pb", "Sb", "log", "xb"), ("Pc", "Sc", "log", "xc")]
+    calls = [_group_call(["mras"]), _group_call(["afo"], "sensorless-realistic")]
+    calls.append(_group_call(["mras", "afo", "ekf"]))  # one group: the union's records
+    Pa, Pb, Pc = (c[0] for c in calls)
     prefetch.start_batch("worker", calls)
-    assert seen[-1] == [("worker", calls[2]), ("worker", calls[1])]
-    cached.update({"Pa", "Pc"})  # one kernel left to compile: the helper takes its late blocks
+    assert jobs() == [("worker", Pc), ("worker", Pb)]
+    cached.update({id(Pa), id(Pc)})  # one kernel left to compile: the helper takes its blocks
     prefetch.start_batch("worker", calls)
-    # its scratch log's first row; then what the worker calls besides the loop
-    assert seen[-1] == [(late_blocks, ("Pb", "Sb", "x")), (worker_blocks, calls[1])]
-    engines.add("Pb")  # but not when its loop is compiled (a sweep after a run): no blocks
+    assert jobs() == [(late_blocks, Pb), (worker_blocks, Pb)]
+    assert seen[-1][0][1][2].shape == (1,)  # the late blocks' log: the scratch log's first row
+    assert seen[-1][1][1] is calls[1]  # the worker's blocks: its own call
+    engines.add(id(Pb))  # but not when its loop is compiled (a sweep after a run): no blocks
     assert prefetch.start_batch("worker", calls) is None and len(seen) == 2
-    cached.add("Pb")
+    cached.add(id(Pb))
     engines.clear()
     assert prefetch.start_batch("worker", calls) is None and len(seen) == 2
     monkeypatch.setenv(prefetch.ENV, "0")
