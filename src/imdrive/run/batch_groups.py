@@ -117,7 +117,8 @@ def united(groups: dict) -> dict:
     """``groups`` with those that differ only by estimator joined into one whose records are
     the union of every registered estimator's (:mod:`imdrive.kernels.estimators.union`): one
     compiled loop for them all, not one per estimator. The first ``imdrive bench-estimators``
-    after a warm ``imdrive run`` (five estimators) compiled 47 s in one process, 30 s so."""
+    after a warm ``imdrive run`` (five estimators) compiled 46.8 s in one process, 22.9 s so
+    (benchmarks/README.md)."""
     by_rest: dict = {}
     for (le, est, comp), items in groups.items():
         by_rest.setdefault((le, comp), []).append((est, items))
