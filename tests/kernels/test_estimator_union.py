@@ -43,9 +43,11 @@ def test_the_union_holds_every_registered_estimator_by_name_and_reads_back_from_
     # the first field names the members: two unions are never taken for one another
     assert params.names[0] == state.names[0] and "ekf" in params.names[0]
     assert union.members(kernel("mras").params) is None
-    log = union.logging(params).log_fields
+    log = union.logged(params).log_fields
     for k in ks:
         assert set(k.log_fields) <= set(log)
+    with pytest.raises(ValueError, match="1 records of no estimator"):  # none left at zeros
+        union.to_union(params, [np.zeros(1, np.dtype([("x", "f8")]))])
 
 
 @pytest.mark.parametrize("est", ESTIMATORS)

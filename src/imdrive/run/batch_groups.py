@@ -99,7 +99,7 @@ def group_args(items, n_rows: int, window_s: float, est: np.dtype | None = None)
     lc_n = np.array(
         [int(round(d / a.Ts)) for (_, d), a in zip(lc, arrays, strict=True)], dtype=np.int64
     )
-    dtype = log_dtype(union.logging(params.est.dtype), law_of_records(params.comp.dtype))
+    dtype = log_dtype(union.logged(params.est.dtype), law_of_records(params.comp.dtype))
     log = np.full((G, n_rows), np.nan, dtype=dtype)
     out = BatchOut(
         n_steps=np.array([a.n_steps for a in arrays], dtype=np.int64),

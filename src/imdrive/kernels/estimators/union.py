@@ -81,7 +81,7 @@ class _Logging(NamedTuple):
     log_fields: tuple[str, ...]
 
 
-def logging(dtype: np.dtype):
+def logged(dtype: np.dtype):
     """What :func:`imdrive.kernels.engine.log_dtype` reads of the estimator of records
     ``dtype``: its kernel, or for a union every member's log fields (each drive's own are
     taken back from them: :func:`imdrive.run.batch.simulate_batch`)."""
@@ -96,12 +96,16 @@ def to_union(dtype: np.dtype, rows: list[np.ndarray]) -> np.ndarray:
     estimators of the union (params or states: as ``dtype``), zeros in the others' places."""
     out = np.zeros(len(rows), dtype=dtype)
     sel = dtype.names[0]
+    placed = 0
     for j in range(len(members(dtype))):
         own = dtype.fields[f"m{j}"][0]
         idx = [g for g, r in enumerate(rows) if r.dtype == own]
         if idx:
             out[sel][idx] = j
             out[f"m{j}"][idx] = np.concatenate([rows[g] for g in idx])
+            placed += len(idx)
+    if placed != len(rows):  # an estimator registered after the union was made
+        raise ValueError(f"{len(rows) - placed} records of no estimator of the union {sel}")
     return out
 
 
