@@ -29,25 +29,25 @@ from numba import types
 from numba.extending import overload
 
 from imdrive.kernels.inverter import INV_SWITCHING
-from imdrive.kernels.jit import njit
+from imdrive.kernels.jit import IMPL, njit
 from imdrive.kernels.records import b1, record_dtype
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", jit_options=IMPL)
 def tracks_r2(pk):
     """The R2 tracking runs: the compensator, its detection or its injection (``pk``: the
     compensator's params)."""
     return pk["enabled"] | pk["det"] | (pk["inj_amp"] != 0.0)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", jit_options=IMPL)
 def switching_bridge(pinv):
     """The plant is fed by the switching bridge (``pinv``: the inverter's params), not the
     average inverter model."""
     return pinv["model"] == INV_SWITCHING
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", jit_options=IMPL)
 def standstill_r1(pc):
     """The standstill R1 test runs while the rotor magnetises (``pc``: the controller's)."""
     return pc["R1_dc"]
@@ -61,7 +61,7 @@ def has_feedforward(pc):
     return (pc["dtc_u"] > 0.0) | (pc["ie_n"] > 0)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", jit_options=IMPL)
 def phase_sensors(psen):
     """The current is measured by per-phase sensors (gains, offsets, noise, ADC), not only an
     offset vector (``psen``: the sensors' params)."""
@@ -142,7 +142,7 @@ def row(features, i):
     raise NotImplementedError("compiled only")
 
 
-@overload(row, inline="always")
+@overload(row, inline="always", jit_options=IMPL)
 def _row(features, i):
     if isinstance(features, types.NoneType):
         return lambda features, i: None
@@ -183,7 +183,7 @@ def compiled(feature: str, off):
             on = isinstance(feat, (types.NoneType, types.Omitted)) or feature in feat.fields
             return impl_on if on else impl_off
 
-        overload(stub, inline="always")(_define(src, run=choose, feat_only=True))
+        overload(stub, inline="always", jit_options=IMPL)(_define(src, run=choose, feat_only=True))
         return stub
 
     return wrap

@@ -30,6 +30,14 @@ from numba.core.registry import CPUDispatcher
 #: The options that leave the wrappers out.
 NO_WRAPPERS = {"no_cpython_wrapper": True, "no_cfunc_wrapper": True}
 
+#: The ``jit_options`` of an ``@overload``'s implementation: numba compiles it in full to
+#: type the call (its code is then inlined, or called from kernels only), so its wrappers
+#: are never used either.
+IMPL = dict(NO_WRAPPERS)
+
+#: As :data:`IMPL`, cached (an implementation defined in a kernel module's source).
+CACHED_IMPL = {"cache": True, **NO_WRAPPERS}
+
 
 class BlockDispatcher(CPUDispatcher):
     """A kernel compiled without its wrappers; called from Python, its twin runs

@@ -47,6 +47,7 @@ from numba import types
 from numba.extending import overload
 from numba.np.numpy_support import as_dtype
 
+from imdrive.kernels.jit import CACHED_IMPL
 from imdrive.kernels.plugin_registry import Registry, source_tag, tagged
 from imdrive.kernels.records import record_dtype
 
@@ -208,7 +209,7 @@ def law_log(row, s):
     raise NotImplementedError("law_log is called from compiled code only")
 
 
-@overload(law_decide, inline="always", jit_options={"cache": True})
+@overload(law_decide, inline="always", jit_options=CACHED_IMPL)
 def _law_decide(p, s, m, w):
     if _is_placeholder(s):
         return lambda p, s, m, w: m.R2_hat  # the package's laws decide in the compensator
@@ -223,7 +224,7 @@ def _law_decide(p, s, m, w):
     return impl
 
 
-@overload(law_hold, inline="always", jit_options={"cache": True})
+@overload(law_hold, inline="always", jit_options=CACHED_IMPL)
 def _law_hold(p, s, m, w):
     k = None if _is_placeholder(s) else _lookup(s)
     if k is None or k.hold is None:
@@ -242,7 +243,7 @@ def _law_hold(p, s, m, w):
     return impl
 
 
-@overload(law_log, inline="always", jit_options={"cache": True})
+@overload(law_log, inline="always", jit_options=CACHED_IMPL)
 def _law_log(row, s):
     k = None if _is_placeholder(s) else _lookup(s)
     if k is None or k.log is None:

@@ -14,6 +14,7 @@ from __future__ import annotations
 from numba.extending import overload
 
 from imdrive.kernels.estimators.registry import ReducedState, _lookup, kernel_of_state
+from imdrive.kernels.jit import CACHED_IMPL
 
 
 def reduced_state_of(S) -> ReducedState:
@@ -35,7 +36,7 @@ def estimator_restore(z, k, s):
     raise NotImplementedError("estimator_restore is called from compiled code only")
 
 
-@overload(estimator_reduce, inline="always", jit_options={"cache": True})
+@overload(estimator_reduce, inline="always", jit_options=CACHED_IMPL)
 def _estimator_reduce(p, s, c, z, k):
     e = _lookup(s)
     if e is None or e.reduced is None:
@@ -44,7 +45,7 @@ def _estimator_reduce(p, s, c, z, k):
     return lambda p, s, c, z, k: reduce(p, s, c, z, k)
 
 
-@overload(estimator_restore, inline="always", jit_options={"cache": True})
+@overload(estimator_restore, inline="always", jit_options=CACHED_IMPL)
 def _estimator_restore(z, k, s):
     e = _lookup(s)
     if e is None or e.reduced is None:

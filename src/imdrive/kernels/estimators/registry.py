@@ -68,6 +68,7 @@ from numba import types
 from numba.extending import overload
 from numba.np.numpy_support import as_dtype
 
+from imdrive.kernels.jit import CACHED_IMPL
 from imdrive.kernels.plugin_registry import Registry, source_tag, tagged
 from imdrive.kernels.records import b1, c16, f8, record_dtype
 
@@ -324,7 +325,7 @@ def estimator_flux(s):
     raise NotImplementedError("estimator_flux is called from compiled code only")
 
 
-@overload(estimator_step, inline="always", jit_options={"cache": True})
+@overload(estimator_step, inline="always", jit_options=CACHED_IMPL)
 def _estimator_step(p, model, s, inp):
     k = _lookup(s)
     if k is None:
@@ -337,7 +338,7 @@ def _estimator_step(p, model, s, inp):
     return impl
 
 
-@overload(estimator_log, inline="always", jit_options={"cache": True})
+@overload(estimator_log, inline="always", jit_options=CACHED_IMPL)
 def _estimator_log(row, p, s, n_p):
     k = _lookup(s)
     if k is None:
@@ -359,7 +360,7 @@ def _estimator_log(row, p, s, n_p):
     return impl
 
 
-@overload(estimator_finite, inline="always", jit_options={"cache": True})
+@overload(estimator_finite, inline="always", jit_options=CACHED_IMPL)
 def _estimator_finite(s):
     k = _lookup(s)
     if k is None:
@@ -376,7 +377,7 @@ def estimator_flux_magnitude(s):
     raise NotImplementedError("estimator_flux_magnitude is called from compiled code only")
 
 
-@overload(estimator_flux_magnitude, inline="always", jit_options={"cache": True})
+@overload(estimator_flux_magnitude, inline="always", jit_options=CACHED_IMPL)
 def _estimator_flux_magnitude(s):
     k = _lookup(s)
     if k is None:
@@ -387,7 +388,7 @@ def _estimator_flux_magnitude(s):
     return lambda s: mag(s)
 
 
-@overload(estimator_flux, inline="always", jit_options={"cache": True})
+@overload(estimator_flux, inline="always", jit_options=CACHED_IMPL)
 def _estimator_flux(s):
     k = _lookup(s)
     if k is None:

@@ -41,6 +41,7 @@ from imdrive.kernels.estimators.registry import (
     kernel_names,
     kernel_of_state,
 )
+from imdrive.kernels.jit import IMPL
 from imdrive.kernels.records import i8
 
 #: The entry points compile the steps of every registered estimator (as the registry's do).
@@ -149,7 +150,7 @@ def _call(f, expr: str, j: int, default: str):
     return (expr, {f"f{j}": f}) if f is not None else (default, {})
 
 
-@overload(estimator_step, inline="always")
+@overload(estimator_step, inline="always", jit_options=IMPL)
 def _union_step(p, model, s, inp):
     return _dispatch(
         s,
@@ -159,7 +160,7 @@ def _union_step(p, model, s, inp):
     )
 
 
-@overload(estimator_log, inline="always")
+@overload(estimator_log, inline="always", jit_options=IMPL)
 def _union_log(row, p, s, n_p):
     fields = set(getattr(row, "fields", None) or ())
 
@@ -170,19 +171,19 @@ def _union_log(row, p, s, n_p):
     return _dispatch(s, "row, p, s, n_p", "union_log", member)
 
 
-@overload(estimator_finite, inline="always")
+@overload(estimator_finite, inline="always", jit_options=IMPL)
 def _union_finite(s):
     return _dispatch(
         s, "s", "union_finite", lambda k, j: _call(k.finite, f"f{j}(s.m{j})", j, "True")
     )
 
 
-@overload(estimator_flux, inline="always")
+@overload(estimator_flux, inline="always", jit_options=IMPL)
 def _union_flux(s):
     return _dispatch(s, "s", "union_flux", lambda k, j: _call(k.flux, f"f{j}(s.m{j})", j, "0j"))
 
 
-@overload(estimator_flux_magnitude, inline="always")
+@overload(estimator_flux_magnitude, inline="always", jit_options=IMPL)
 def _union_flux_magnitude(s):
     return _dispatch(
         s,
