@@ -33,21 +33,21 @@ from imdrive.kernels.jit import IMPL, njit
 from imdrive.kernels.records import b1, record_dtype
 
 
-@njit(cache=True, inline="always", jit_options=IMPL)
+@njit(cache=True, inline="always")
 def tracks_r2(pk):
     """The R2 tracking runs: the compensator, its detection or its injection (``pk``: the
     compensator's params)."""
     return pk["enabled"] | pk["det"] | (pk["inj_amp"] != 0.0)
 
 
-@njit(cache=True, inline="always", jit_options=IMPL)
+@njit(cache=True, inline="always")
 def switching_bridge(pinv):
     """The plant is fed by the switching bridge (``pinv``: the inverter's params), not the
     average inverter model."""
     return pinv["model"] == INV_SWITCHING
 
 
-@njit(cache=True, inline="always", jit_options=IMPL)
+@njit(cache=True, inline="always")
 def standstill_r1(pc):
     """The standstill R1 test runs while the rotor magnetises (``pc``: the controller's)."""
     return pc["R1_dc"]
@@ -61,7 +61,7 @@ def has_feedforward(pc):
     return (pc["dtc_u"] > 0.0) | (pc["ie_n"] > 0)
 
 
-@njit(cache=True, inline="always", jit_options=IMPL)
+@njit(cache=True, inline="always")
 def phase_sensors(psen):
     """The current is measured by per-phase sensors (gains, offsets, noise, ADC), not only an
     offset vector (``psen``: the sensors' params)."""
