@@ -97,3 +97,54 @@ def test_options_reach_numba(entry):
 
     assert np.isinf(ratio(1.0, 0.0))  # numpy's error model: no ZeroDivisionError
     assert isinstance(ratio, BlockDispatcher) is (not entry)
+
+
+_TWO_RECORDS = """
+import sys
+import numpy as np
+import imdrive.kernels.jit  # noqa: F401  (the package's symbol names)
+from numba import njit
+
+@njit(cache=True, _dbg_optnone=True)  # optnone: never inlined into its caller
+def inner(r):
+    return r.a * 2.0
+
+@njit(cache=True)
+def outer(arr):
+    return inner(arr[0])
+
+A = np.ones(1, dtype=[("a", np.float64)])
+A["a"] = 3.0
+B = np.ones(1, dtype=[("b", np.int64), ("a", np.float64)])
+B["a"], B["b"] = 5.0, 77
+which = sys.argv[1]
+for x in {"A": [A], "B": [B], "AB": [A, B], "BA": [B, A]}[which]:
+    print(outer(x))
+"""
+
+
+def test_two_processes_compiling_one_function_for_two_records_give_two_symbols(tmp_path):
+    # each process numbers record types for itself: the same function compiled for another
+    # record in another process, in the same order, had the same symbol name, and a process
+    # that loaded both ran the first for both (7.6e-322 for 10.0 in plain numba)
+    import os
+    import subprocess
+    import sys
+
+    (tmp_path / "two_records.py").write_text(_TWO_RECORDS)
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+
+    def run(which):
+        out = subprocess.run(
+            [sys.executable, "two_records.py", which],
+            cwd=tmp_path,
+            env=env,
+            capture_output=True,
+            text=True,
+            check=True,
+        )
+        return [float(v) for v in out.stdout.split()]
+
+    assert run("A") == [6.0] and run("B") == [10.0]  # two processes, one compile each
+    assert run("AB") == [6.0, 10.0]  # a third loads both from the cache
+    assert run("BA") == [10.0, 6.0]

@@ -16,15 +16,19 @@ Python to a twin compiled with the wrappers, cached in a file of its own. Kernel
 block itself, so the twin only costs the blocks that tests, reports or analyses call from
 Python. The entry points Python calls on every run (the engine, the batch worker) take
 ``entry=True`` and keep their wrappers, one compile for both callers.
+
+Importing this module also names every compiled function by the *content* of its argument
+types (:func:`_content_mangler`), for the reason given there.
 """
 
 from __future__ import annotations
 
 import functools
+import hashlib
 import types as pytypes
 
 import numba
-from numba.core import config
+from numba.core import base, config, funcdesc
 from numba.core.registry import CPUDispatcher
 
 #: The options that leave the wrappers out.
@@ -95,3 +99,25 @@ def njit(func=None, *, cache: bool = False, entry: bool = False, **options):
         return disp
 
     return wrap if func is None else wrap(func)
+
+
+def _content_mangler(self, name, argtypes, *, abi_tags=(), uid=None):
+    """numba's symbol name for a compiled function, tagged with a hash of its argument types
+    as text (a record's text spells its fields, types and offsets).
+
+    numba names a function by its qualified name, a per-process serial number and its
+    argument types, a record type by a code each process numbers for itself. Two processes
+    that compiled the same function for two different records in the same order therefore
+    gave both one symbol; a third that loaded both from the cache linked every caller to the
+    first one loaded, and ran it on the other's records. Reproduced in plain numba (a callee
+    compiled for a one-field record and for a two-field record in two processes: the third
+    returned 7.6e-322 for 10.0), and met in the clean-clone CI of 2026-11-30 (``foc_step``
+    compiled for two features records, 9 tests wrong). The tag keeps the two names apart;
+    ``tests/kernels/test_jit.py`` runs the three processes.
+    """
+    text = repr(tuple(str(t) for t in argtypes)).encode()
+    tag = "c" + hashlib.blake2b(text, digest_size=8).hexdigest()
+    return funcdesc.default_mangler(name, argtypes, abi_tags=(*abi_tags, tag), uid=uid)
+
+
+base.BaseContext.mangler = _content_mangler
