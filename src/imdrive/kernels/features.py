@@ -157,13 +157,18 @@ def compiled(feature: str, off):
     ``feat``: ``block(feat, *args)``. ``off`` returns what the block returns when the branch
     that calls it is not taken (it is called only there, through the feature's predicate).
 
-    Only code inlined into the loop may take ``feat`` (the stages, these wrappers): numba
-    names a compiled function by its arguments' types, a record by a type code each process
-    numbers for itself, so two variants of a separately compiled function that differ only in
-    the features record got one symbol name in processes that compiled in the same order, and
-    a process that loaded both from the cache ran one for the other (``foc_step`` with the
-    scale adaptation gated: the online scale never adapted in 9 tests of the clean-clone CI,
-    2026-11-30; the adaptation is compiled into every drive since, 0.35 s of a cold start).
+    The block runs inside a compiled function of its own, named after it (``bridge_period__on``),
+    which the loop calls; the stand-in is inlined (numba's cost model, ``off_inlined``). They
+    were both inlined until 2026-12-02: numba compiles an inlined implementation once to type
+    the call and again inside the caller, so the realistic drive's loop lowered every block
+    twice (the first ``imdrive bench-estimators`` after a warm run: +12.0, +11.5, +12.6, +12.5
+    s over warm against +14.1, +12.8, +13.7, +14.1 s in four alternated pairs; the kernel's
+    time per period unchanged). A function that takes ``feat`` may be compiled for several
+    features records since numba names compiled functions by their argument types' content
+    (:func:`imdrive.kernels.jit._content_mangler`): before, two variants of ``foc_step`` that
+    differed only in the features record got one symbol name in processes that compiled in
+    the same order, and a process that loaded both from the cache ran one for the other (9
+    tests of the clean-clone CI, 2026-11-30).
     """
     if feature not in FEATURES:
         raise KeyError(f"unknown feature {feature!r}: known are {list(FEATURES)}")
@@ -177,13 +182,21 @@ def compiled(feature: str, off):
         stub.__doc__ = block.__doc__
         stub.__module__ = block.__module__
         impl_on, impl_off = _define(src, run=block), _define(src, run=off)
+        for impl, kind in ((impl_on, "on"), (impl_off, "off")):
+            impl.__module__ = block.__module__
+            impl.__qualname__ = f"{block.__name__}__{kind}"
 
         def choose(feat):  # at typing: the block where the drive compiles the feature
             # None (or a block's argument left out): every block
             on = isinstance(feat, (types.NoneType, types.Omitted)) or feature in feat.fields
             return impl_on if on else impl_off
 
-        overload(stub, inline="always", jit_options=IMPL)(_define(src, run=choose, feat_only=True))
+        def off_inlined(expr, caller, callee):  # numba's cost model: inline the stand-in only
+            return callee.func_ir.func_id.func is impl_off
+
+        overload(stub, inline=off_inlined, jit_options=IMPL)(
+            _define(src, run=choose, feat_only=True)
+        )
         return stub
 
     return wrap

@@ -8,10 +8,12 @@ more on five copies of the batch's own functions (``benchmarks/bench_compile.py`
 2026-12-02). A batch now gives such drives *union* records instead (:func:`union_of`): a
 selector, then every registered estimator's parameter (state) record as a nested record. The
 generic entry points below (``estimator_step``, ``estimator_log``, ``estimator_finite``,
-``estimator_flux``, ``estimator_flux_magnitude``) run the selected one, one branch per
-estimator at each call site; the estimators' own functions are unchanged and compiled into the
-one loop. Numba reads and writes a nested record in place, so each drive runs exactly the code
-and the arithmetic it runs alone, and its results are the same bits (a test).
+``estimator_flux``, ``estimator_flux_magnitude``) run the selected one: each is one compiled
+function that branches on the selector (called, not inlined: numba compiles an inlined
+implementation once to type the call and again in the loop); the estimators' own functions are
+unchanged and compiled into the one loop. Numba reads and writes a nested record in place, so
+each drive runs exactly the code and the arithmetic it runs alone, and its results are the same
+bits (a test).
 
 The union holds every registered estimator, whichever the batch runs, so that batches of
 different subsets (``--estimators mras,afo`` after a full bench, a sweep over two) share one
@@ -150,7 +152,7 @@ def _call(f, expr: str, j: int, default: str):
     return (expr, {f"f{j}": f}) if f is not None else (default, {})
 
 
-@overload(estimator_step, inline="always", jit_options=IMPL)
+@overload(estimator_step, inline="never", jit_options=IMPL)
 def _union_step(p, model, s, inp):
     return _dispatch(
         s,
@@ -160,7 +162,7 @@ def _union_step(p, model, s, inp):
     )
 
 
-@overload(estimator_log, inline="always", jit_options=IMPL)
+@overload(estimator_log, inline="never", jit_options=IMPL)
 def _union_log(row, p, s, n_p):
     fields = set(getattr(row, "fields", None) or ())
 
@@ -171,19 +173,19 @@ def _union_log(row, p, s, n_p):
     return _dispatch(s, "row, p, s, n_p", "union_log", member)
 
 
-@overload(estimator_finite, inline="always", jit_options=IMPL)
+@overload(estimator_finite, inline="never", jit_options=IMPL)
 def _union_finite(s):
     return _dispatch(
         s, "s", "union_finite", lambda k, j: _call(k.finite, f"f{j}(s.m{j})", j, "True")
     )
 
 
-@overload(estimator_flux, inline="always", jit_options=IMPL)
+@overload(estimator_flux, inline="never", jit_options=IMPL)
 def _union_flux(s):
     return _dispatch(s, "s", "union_flux", lambda k, j: _call(k.flux, f"f{j}(s.m{j})", j, "0j"))
 
 
-@overload(estimator_flux_magnitude, inline="always", jit_options=IMPL)
+@overload(estimator_flux_magnitude, inline="never", jit_options=IMPL)
 def _union_flux_magnitude(s):
     return _dispatch(
         s,
