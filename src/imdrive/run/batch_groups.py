@@ -17,6 +17,7 @@ from imdrive.kernels.estimators import union
 from imdrive.kernels.profiles import N_PROF
 from imdrive.kernels.r2_law_registry import law_of_records
 from imdrive.run.metrics import lost_control_check, steady_window_periods
+from imdrive.run.simulate import new_log
 
 
 def stack_drives(arrays, est: np.dtype | None = None) -> tuple[DriveParams, DriveState]:
@@ -100,7 +101,7 @@ def group_args(items, n_rows: int, window_s: float, est: np.dtype | None = None)
         [int(round(d / a.Ts)) for (_, d), a in zip(lc, arrays, strict=True)], dtype=np.int64
     )
     dtype = log_dtype(union.logged(params.est.dtype), law_of_records(params.comp.dtype))
-    log = np.full((G, n_rows), np.nan, dtype=dtype)
+    log = new_log((G, n_rows), dtype)
     out = BatchOut(
         n_steps=np.array([a.n_steps for a in arrays], dtype=np.int64),
         metrics=np.empty(G, dtype=BATCH_METRICS),

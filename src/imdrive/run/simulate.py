@@ -25,13 +25,13 @@ def logged_rows(log: np.ndarray, status: int, k_end: int, log_every: int) -> np.
     return log[~np.isnan(log["time"])]
 
 
-def new_log(n_rows: int, dtype: np.dtype | None = None) -> np.ndarray:
+def new_log(n_rows, dtype: np.dtype | None = None) -> np.ndarray:
     """A kernel log of ``n_rows`` rows, NaN-filled (unwritten rows stay recognisable).
 
     Parameters
     ----------
-    n_rows : int
-        Rows.
+    n_rows : int or tuple of int
+        Rows (a batch's: ``(drives, rows)``).
     dtype : numpy.dtype, optional
         The drive's log record (``DriveArrays.log``; default: an MRAS drive's, ``LOG``).
 
@@ -40,7 +40,16 @@ def new_log(n_rows: int, dtype: np.dtype | None = None) -> np.ndarray:
     numpy.ndarray
         The log records, every value NaN.
     """
-    return np.full(n_rows, np.nan, dtype=LOG if dtype is None else dtype)
+    dtype = np.dtype(LOG if dtype is None else dtype)
+    floats = all(dtype.fields[n][0] == np.float64 for n in dtype.names)
+    if not floats or dtype.itemsize != 8 * len(dtype.names):  # other types, or padding
+        return np.full(n_rows, np.nan, dtype=dtype)
+    # every field a float: filled as one float array; numpy's np.full casts NaN field by
+    # field, element by element (bench-estimators' batch log, 180 drives of 10001 rows,
+    # 605 MB: 0.04 s against 0.17-0.67 s)
+    log = np.empty(n_rows, dtype=dtype)
+    log.view(np.float64).fill(np.nan)
+    return log
 
 
 def kernels_cached() -> bool:
