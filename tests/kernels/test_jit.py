@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import inspect
+import os
+import subprocess
+import sys
 
 import numba
 import numpy as np
@@ -127,10 +130,6 @@ def test_two_processes_compiling_one_function_for_two_records_give_two_symbols(t
     # each process numbers record types for itself: the same function compiled for another
     # record in another process, in the same order, had the same symbol name, and a process
     # that loaded both ran the first for both (7.6e-322 for 10.0 in plain numba)
-    import os
-    import subprocess
-    import sys
-
     (tmp_path / "two_records.py").write_text(_TWO_RECORDS)
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
 
